@@ -1,0 +1,20 @@
+"""fsicas: a flexible cantilever in confined axial flow (bulk-flow model on CasADi).
+
+Data flow: Scene (what) -> build_model (CasADi functions) -> analyses -> results.
+"""
+from .beam import ModalBasis, clamped_free_betas, clamped_free_modes
+from .channel import Profile
+from .fields import FlowFields, flow_fields
+from .model import Model, build_model, parameter_names
+from .scene import Scene, load_scene
+from .steady import SteadyState, SteadyStateError, steady_state, straight_pressure_drop
+from .units import Scales, friction_from_reynolds
+
+__version__ = "0.1.0"
+
+__all__ = [
+    "ModalBasis", "clamped_free_betas", "clamped_free_modes", "Profile", "FlowFields",
+    "flow_fields", "Model", "build_model", "parameter_names", "Scene", "load_scene",
+    "SteadyState", "SteadyStateError", "steady_state", "straight_pressure_drop", "Scales",
+    "friction_from_reynolds",
+]

@@ -1,0 +1,189 @@
+"""The nonlinear beam–bulk-flow model in mass-matrix form ``M(x, p) xdot = F(x, p)``.
+
+State ``x = (r_1..r_N, q_1..q_N, Q_1, Q_2)``: modal velocities, modal displacements and
+the inlet flow rates of channel 1 (above, s_1 = -1) and 2 (below, s_2 = +1). With
+``h_c = H_c + s_c y`` and ``G_c = ∫_0^x dh_c/dt = s_c Σ Phi_n r_n`` the formal solutions
+(paper Eqs. 7–12, corrected per ERRATA, derived in ``docs/model.md``) read
+
+    u_c = (Q_c - G_c) / h_c
+    p_c(x) = P0 - M*/2 K0 u_c0|u_c0| - M* [ ∫_0^x g_c + u_c(x)^2 / 2 ]
+    g_c = (dQ_c/dt - s_c Σ Phi_m dr_m/dt) / h_c + gt_c,   gt_c = u_c (f |u_c| - dh_c/dt) / h_c
+
+and give, per channel c and mode n,
+
+    Q row:   dQ_c/dt ∫1/h_c - s_c Σ_m dr_m/dt ∫Phi_m/h_c
+                 = Δp/M* - (K0 u_c0|u_c0| + KL u_c1|u_c1|)/2 - ∫ gt_c
+    beam:    dr_n/dt + M* Σ_c s_c [dQ_c/dt ∫Psi_n/h_c - s_c Σ_m dr_m/dt ∫Psi_n Phi_m/h_c]
+                 = -2 zeta_n w_n r_n - w_n^2 q_n
+                   - M* Σ_c s_c [K0/2 u_c0|u_c0| Phi_n(1) + ∫ gt_c Psi_n + ∫ u_c^2 phi_n / 2]
+                   + ∫ f_contact phi_n
+    kinematics: dq_n/dt = r_n
+
+All integrals are Gauss–Legendre sums over the scene's nodes. u|u| is C^1, so F is
+smooth except for the contact kink ``max(0, eps - h_c)``.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import casadi as ca
+import numpy as np
+
+from .beam import ModalBasis, clamped_free_modes
+from .quadrature import gauss_legendre
+from .scene import Scene
+
+__all__ = ["Model", "build_model", "parameter_names"]
+
+_FLOW_PARAMS = ("pressure_drop", "mstar", "friction", "k0", "kl")
+_CONTACT_PARAMS = ("contact_stiffness", "contact_eps")
+
+
+def parameter_names(scene: Scene) -> tuple[str, ...]:
+    """Names of the symbolic parameters of the model of ``scene``, in order."""
+    contact = _CONTACT_PARAMS if scene.contact else ()
+    return _FLOW_PARAMS + contact + tuple(f"zeta{n + 1}" for n in range(scene.modes))
+
+
+@dataclass(frozen=True)
+class Model:
+    """CasADi functions of one scene structure; parameters are symbolic inputs.
+
+    ``mass(x, p)`` and ``rhs(x, p)`` give M and F; ``jac_rhs(x, p)`` gives dF/dx.
+    ``tip`` maps x to (y(1), dy/dt(1)). Use :meth:`parameters` for the numeric p.
+    """
+
+    scene: Scene
+    parameter_names: tuple[str, ...]
+    mass: ca.Function
+    rhs: ca.Function
+    jac_rhs: ca.Function
+    jac_rhs_p: ca.Function
+    basis: ModalBasis = field(repr=False)
+    weights: np.ndarray = field(repr=False)
+    tip: ModalBasis = field(repr=False)
+
+    @property
+    def n_modes(self) -> int:
+        return self.scene.modes
+
+    @property
+    def n_state(self) -> int:
+        return 2 * self.scene.modes + 2
+
+    def index(self, name: str) -> int:
+        """Position of parameter ``name`` in p."""
+        try:
+            return self.parameter_names.index(name)
+        except ValueError:
+            raise ValueError(f"unknown parameter {name!r}; the model has {self.parameter_names}")
+
+    def parameters(self, scene: Scene | None = None, pressure_drop: float = 0.0, **override) -> np.ndarray:
+        """Numeric parameter vector from a scene (same structure) plus overrides by name."""
+        s = scene or self.scene
+        values = dict(pressure_drop=pressure_drop, mstar=s.mstar, friction=s.friction, k0=s.k0,
+                      kl=s.kl, contact_stiffness=s.contact_stiffness, contact_eps=s.contact_eps)
+        values.update({f"zeta{n + 1}": z for n, z in enumerate(s.zeta_modes)})
+        for name, value in override.items():
+            self.index(name)
+            values[name] = value
+        return np.array([values[name] for name in self.parameter_names], dtype=float)
+
+    def split(self, x) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(r, q, Q) views of a state vector."""
+        x = np.asarray(x, dtype=float)
+        n = self.n_modes
+        return x[:n], x[n:2 * n], x[2 * n:]
+
+    def deflection(self, x, xs) -> np.ndarray:
+        """Beam deflection y(xs) = Σ phi_n(xs) q_n."""
+        _, q, _ = self.split(x)
+        return clamped_free_modes(self.n_modes, np.asarray(xs, dtype=float)).phi.T @ q
+
+    def xdot(self, x, p) -> np.ndarray:
+        """Solve M xdot = F for the time derivative at (x, p)."""
+        return np.linalg.solve(np.array(self.mass(x, p)), np.array(self.rhs(x, p)).ravel())
+
+
+# -- assembly -------------------------------------------------------------------------
+def build_model(scene: Scene, symbolic: str = "SX") -> Model:
+    """Build the CasADi model of ``scene``'s structure (N, nodes, walls, contact)."""
+    if symbolic not in ("SX", "MX"):
+        raise ValueError(f"symbolic must be 'SX' or 'MX', got {symbolic!r}")
+    sym = getattr(ca, symbolic)
+    names = parameter_names(scene)
+    nodes, weights = gauss_legendre(scene.quad_nodes)
+    basis = clamped_free_modes(scene.modes, nodes)
+    tip = clamped_free_modes(scene.modes, np.array([0.0, 1.0]))
+    n = scene.modes
+    x = sym.sym("x", 2 * n + 2)
+    p = sym.sym("p", len(names))
+    par = {name: p[i] for i, name in enumerate(names)}
+    mass, force = _equations(scene, basis, tip, weights, x, par)
+    rhs = ca.Function("F", [x, p], [force], ["x", "p"], ["F"])
+    mass_f = ca.Function("M", [x, p], [mass], ["x", "p"], ["M"])
+    jac = ca.Function("dFdx", [x, p], [ca.jacobian(force, x)], ["x", "p"], ["dFdx"])
+    jac_p = ca.Function("dFdp", [x, p], [ca.jacobian(force, p)], ["x", "p"], ["dFdp"])
+    return Model(scene=scene, parameter_names=names, mass=mass_f, rhs=rhs, jac_rhs=jac,
+                 jac_rhs_p=jac_p, basis=basis, weights=weights, tip=tip)
+
+
+def _equations(scene, basis, tip, w, x, par):
+    """Symbolic (M, F) of the module docstring."""
+    n = scene.modes
+    r, q, Q = x[:n], x[n:2 * n], x[2 * n:]
+    phi, Phi, Psi = basis.phi, basis.Phi, basis.Psi          # (N, K) constants
+    omega = basis.omega
+    zeta = ca.vertcat(*[par[f"zeta{k + 1}"] for k in range(n)])
+    mstar, f = par["mstar"], par["friction"]
+    y = ca.mtimes(phi.T, q)              # deflection at nodes
+    ydot = ca.mtimes(phi.T, r)
+    run = ca.mtimes(Phi.T, r)            # ∫_0^x dy/dt at nodes
+    y_tip = ca.dot(tip.phi[:, 1], q)
+    run_tip = ca.dot(tip.Phi[:, 1], r)
+    walls = scene.walls
+    mass_rr = ca.DM.eye(n)
+    mass_rQ, mass_Qr, mass_QQ = [], [], []
+    force_beam = -2 * zeta * omega * r - omega**2 * q
+    force_Q = []
+    for c, s in ((0, -1.0), (1, 1.0)):
+        H = walls[c](basis.x)
+        h = H + s * y
+        inv_h = 1.0 / h
+        u = (Q[c] - s * run) * inv_h
+        gt = u * (f * ca.fabs(u) - s * ydot) * inv_h
+        u_in = Q[c] / float(walls[c](0.0))
+        u_out = (Q[c] - s * run_tip) / (float(walls[c](1.0)) + s * y_tip)
+        wh = w * inv_h                                         # quadrature weight / h
+        mass_rQ.append(mstar * s * ca.mtimes(Psi, wh))
+        mass_rr = mass_rr - mstar * ca.mtimes(Psi, ca.mtimes(ca.diag(wh), Phi.T))
+        mass_Qr.append(-s * ca.mtimes(Phi, wh).T)
+        mass_QQ.append(ca.sum1(wh))
+        force_beam -= mstar * s * (par["k0"] / 2 * u_in * ca.fabs(u_in) * tip.Phi[:, 1]
+                                   + ca.mtimes(Psi, w * gt) + ca.mtimes(phi, w * u**2) / 2)
+        force_Q.append(par["pressure_drop"] / mstar
+                       - (par["k0"] * u_in * ca.fabs(u_in) + par["kl"] * u_out * ca.fabs(u_out)) / 2
+                       - ca.dot(w, gt))
+        if scene.contact:
+            force_beam += _contact_force(scene, basis, w, h, s, par)
+    zeros = ca.DM.zeros(n, n)
+    mass = ca.blockcat([
+        [mass_rr, zeros, ca.horzcat(*mass_rQ)],
+        [zeros, ca.DM.eye(n), ca.DM.zeros(n, 2)],
+        [ca.vertcat(mass_Qr[0], mass_Qr[1]), ca.DM.zeros(2, n), ca.diag(ca.vertcat(*mass_QQ))],
+    ])
+    force = ca.vertcat(force_beam, r, *force_Q)
+    return mass, force
+
+
+def _contact_force(scene, basis, w, h, s, par):
+    """Modal projection of the regularized impact load of wall c (paper Eq. 16).
+
+    ``f_c(x) = -s_c k w_1^2 max(0, eps - h_c)`` pushes the beam away from wall c, with
+    k = k* (per unit length, relative to the first-mode stiffness w_1^2) and
+    eps = (eps/H) H*/2.
+    """
+    k = par["contact_stiffness"] * basis.omega[0] ** 2
+    eps = par["contact_eps"] * scene.hstar / 2
+    load = -s * k * ca.fmax(0, eps - h)
+    return ca.mtimes(basis.phi, w * load)

@@ -1,0 +1,187 @@
+"""Scene: a frozen, validated description of one configuration (nondimensional).
+
+Units and symbols are those of :mod:`fsicas.units`. Every field is checked in
+``__post_init__``, so a Scene that exists is a valid one: bad input raises a
+``ValueError`` naming the field before any model is built.
+"""
+from __future__ import annotations
+
+import dataclasses
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from .channel import Profile
+from .quadrature import default_quad_nodes, min_quad_nodes
+from .units import Scales
+
+try:  # Python >= 3.11
+    import tomllib
+except ModuleNotFoundError:  # pragma: no cover
+    import tomli as tomllib
+
+__all__ = ["Scene", "load_scene"]
+
+
+@dataclass(frozen=True)
+class Scene:
+    """One configuration of the beam–channel system.
+
+    mstar: mass ratio rho_f L / (rho_s e) > 0.     ustar: mean inlet velocity (Q1+Q2)/H*.
+    hstar: total gap at the inlet (H1(0)+H2(0))/L.  friction: Fanning coefficient f >= 0.
+    k0, kl: singular head losses at inlet and outlet. zeta: modal damping (scalar or per mode).
+    modes: N.  quad_nodes: Gauss–Legendre nodes (default 2N+20, at least 2N).
+    channel1/channel2: wall profiles (default: straight, hstar/2 each).
+    contact: regularized wall impact on/off; contact_stiffness k* (per unit length,
+    relative to the first-mode stiffness); contact_eps: eps/H with H = hstar/2.
+    """
+
+    mstar: float = 1.0
+    ustar: float = 5.0
+    hstar: float = 0.1
+    friction: float = 0.14
+    k0: float = 0.0
+    kl: float = 1.0
+    zeta: float | tuple[float, ...] = 0.0
+    modes: int = 10
+    quad_nodes: int | None = None
+    channel1: Profile | None = None
+    channel2: Profile | None = None
+    contact: bool = False
+    contact_stiffness: float = 1e6
+    contact_eps: float = 1e-3
+    scales: Scales | None = field(default=None, compare=False)
+
+    def __post_init__(self):
+        _validate(self)
+        if self.quad_nodes is None:
+            object.__setattr__(self, "quad_nodes", default_quad_nodes(self.modes))
+        if not np.isscalar(self.zeta):
+            object.__setattr__(self, "zeta", tuple(float(z) for z in self.zeta))
+
+    # -- derived -------------------------------------------------------------------
+    @property
+    def walls(self) -> tuple[Profile, Profile]:
+        """The two wall profiles, defaults filled in."""
+        half = Profile.constant(self.hstar / 2)
+        return (self.channel1 or half, self.channel2 or half)
+
+    @property
+    def zeta_modes(self) -> np.ndarray:
+        """Damping ratio of each mode, shape (N,)."""
+        return np.broadcast_to(np.asarray(self.zeta, dtype=float), (self.modes,)).copy()
+
+    @property
+    def contact_gap(self) -> float:
+        """Regularization distance eps = (eps/H) * H*/2, in units of L."""
+        return self.contact_eps * self.hstar / 2
+
+    @property
+    def straight(self) -> bool:
+        return all(p.is_constant for p in self.walls)
+
+    @property
+    def symmetric(self) -> bool:
+        w1, w2 = self.walls
+        return w1 == w2
+
+    def replace(self, **changes) -> "Scene":
+        """A new Scene with some fields changed (validated again)."""
+        return dataclasses.replace(self, **changes)
+
+    def to_dict(self) -> dict:
+        d = {f.name: getattr(self, f.name) for f in dataclasses.fields(self) if f.name != "scales"}
+        for name in ("channel1", "channel2"):
+            if d[name] is not None:
+                d[name] = dataclasses.asdict(d[name])
+        if isinstance(d["zeta"], tuple):
+            d["zeta"] = list(d["zeta"])
+        return d
+
+    # -- construction --------------------------------------------------------------
+    @classmethod
+    def from_dict(cls, d: dict) -> "Scene":
+        """Build from a mapping (e.g. a TOML document); unknown keys are an error."""
+        names = {f.name for f in dataclasses.fields(cls)} - {"scales"}
+        unknown = set(d) - names
+        if unknown:
+            raise ValueError(f"unknown scene keys {sorted(unknown)}; allowed: {sorted(names)}")
+        kw = dict(d)
+        for name in ("channel1", "channel2"):
+            if isinstance(kw.get(name), dict):
+                kw[name] = Profile.from_dict(kw[name], name)
+        return cls(**kw)
+
+    @classmethod
+    def from_physical(cls, *, rho_s, E, nu, e, L, rho_f, U0, H1, H2=None, b=1.0,
+                      **nondimensional) -> "Scene":
+        """Scene from SI values (kg/m3, Pa, -, m, m, kg/m3, m/s, m, m, m).
+
+        ``D = E e^3 / (12 (1 - nu^2))``, ``T = L^2 sqrt(rho_s e / D)``,
+        ``M* = rho_f L / (rho_s e)``, ``U* = U0 T / L``, ``H* = (H1 + H2) / L``.
+        H1, H2 are the wall distances at the inlet; other fields pass through.
+        """
+        H2 = H1 if H2 is None else H2
+        scales = Scales.from_physical(rho_s=rho_s, E=E, nu=nu, e=e, L=L, b=b, rho_f=rho_f,
+                                      H1=H1, H2=H2, U0=U0)
+        for key in ("mstar", "ustar", "hstar", "channel1", "channel2"):
+            if key in nondimensional:
+                raise ValueError(f"{key} is derived from the physical values; do not pass it")
+        return cls(mstar=rho_f * L / (rho_s * e), ustar=U0 * scales.time / L,
+                   hstar=(H1 + H2) / L, channel1=Profile.constant(H1 / L),
+                   channel2=Profile.constant(H2 / L), scales=scales, **nondimensional)
+
+
+def load_scene(path, **overrides) -> Scene:
+    """Read a Scene from a TOML file; keyword overrides win over the file."""
+    with open(path, "rb") as fh:
+        data = tomllib.load(fh)
+    data.update({k: v for k, v in overrides.items() if v is not None})
+    return Scene.from_dict(data)
+
+
+# -- validation ------------------------------------------------------------------------
+def _require(ok: bool, message: str) -> None:
+    if not ok:
+        raise ValueError(message)
+
+
+def _finite(name: str, value) -> float:
+    _require(isinstance(value, (int, float, np.floating, np.integer)) and not isinstance(value, bool)
+             and math.isfinite(value), f"{name} must be a finite number, got {value!r}")
+    return float(value)
+
+
+def _validate(s: Scene) -> None:
+    _require(isinstance(s.modes, (int, np.integer)) and not isinstance(s.modes, bool)
+             and s.modes >= 1, f"modes must be an integer >= 1, got {s.modes!r}")
+    _require(_finite("mstar", s.mstar) > 0, f"mstar must be > 0, got {s.mstar}")
+    _finite("ustar", s.ustar)
+    _require(_finite("hstar", s.hstar) > 0, f"hstar must be > 0, got {s.hstar}")
+    _require(_finite("friction", s.friction) >= 0, f"friction must be >= 0, got {s.friction}")
+    _require(_finite("k0", s.k0) >= 0, f"k0 must be >= 0, got {s.k0}")
+    _require(_finite("kl", s.kl) >= 0, f"kl must be >= 0, got {s.kl}")
+    zeta = np.atleast_1d(np.asarray(s.zeta, dtype=float))
+    _require(zeta.size in (1, s.modes), f"zeta must be a scalar or have one value per mode "
+             f"({s.modes}), got {zeta.size} values")
+    _require(bool(np.all(np.isfinite(zeta)) and np.all(zeta >= 0)), "zeta must be finite and >= 0")
+    if s.quad_nodes is not None:
+        _require(isinstance(s.quad_nodes, (int, np.integer)) and s.quad_nodes >= min_quad_nodes(s.modes),
+                 f"quad_nodes must be an integer >= 2*modes = {min_quad_nodes(s.modes)} to resolve "
+                 f"mode {s.modes}, got {s.quad_nodes!r}")
+    for name in ("channel1", "channel2"):
+        profile = getattr(s, name)
+        _require(profile is None or isinstance(profile, Profile), f"{name} must be a Profile or None")
+        if profile is not None:
+            profile.validate(name)
+    if s.channel1 is not None or s.channel2 is not None:
+        w1, w2 = s.walls
+        inlet = float(w1(0.0) + w2(0.0))
+        _require(abs(inlet - s.hstar) <= 1e-12 * s.hstar,
+                 f"hstar ({s.hstar}) must equal H1(0) + H2(0) = {inlet} of the given channels")
+    _require(isinstance(s.contact, (bool, np.bool_)), f"contact must be true or false, got {s.contact!r}")
+    _require(_finite("contact_stiffness", s.contact_stiffness) > 0,
+             f"contact_stiffness must be > 0, got {s.contact_stiffness}")
+    _require(0 < _finite("contact_eps", s.contact_eps) < 1,
+             f"contact_eps (eps/H) must lie in (0, 1), got {s.contact_eps}")
