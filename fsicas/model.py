@@ -179,11 +179,11 @@ def _equations(scene, basis, tip, w, x, par):
 def _contact_force(scene, basis, w, h, s, par):
     """Modal projection of the regularized impact load of wall c (paper Eq. 16).
 
-    ``f_c(x) = -s_c k w_1^2 max(0, eps - h_c)`` pushes the beam away from wall c, with
+    ``f_c(x) = s_c k w_1^2 max(0, eps - h_c)`` pushes the beam away from wall c, with
     k = k* (per unit length, relative to the first-mode stiffness w_1^2) and
     eps = (eps/H) H*/2.
     """
     k = par["contact_stiffness"] * basis.omega[0] ** 2
     eps = par["contact_eps"] * scene.hstar / 2
-    load = -s * k * ca.fmax(0, eps - h)
+    load = s * k * ca.fmax(0, eps - h)
     return ca.mtimes(basis.phi, w * load)

@@ -1,0 +1,61 @@
+"""Command-line contract: one JSON object on stdout, clear errors."""
+import json
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+from fsicas.cli import main
+
+
+def run_json(capsys, argv):
+    code = main(argv)
+    out = capsys.readouterr().out
+    return code, json.loads(out)
+
+
+def test_modes_json(capsys):
+    code, out = run_json(capsys, ["modes", "--modes", "4", "--json"])
+    assert code == 0 and set(out) == {"beta", "omega"}
+    assert out["beta"][0] == pytest.approx(1.875104068711961, rel=1e-13)
+    assert np.allclose(out["omega"], np.square(out["beta"]), rtol=1e-15)
+
+
+def test_steady_json_matches_the_closed_form(capsys):
+    code, out = run_json(capsys, ["steady", "--mstar", "2", "--ustar", "3", "--modes", "5", "--json"])
+    assert code == 0 and set(out) == {"pressure_drop", "Q", "q", "tip_deflection"}
+    assert out["pressure_drop"] == pytest.approx(2 * 9 * (0.5 + 2 * 0.14 / 0.1), rel=1e-14)
+    assert out["Q"] == pytest.approx([0.15, 0.15], rel=1e-14) and len(out["q"]) == 5
+
+
+def test_scene_file_with_overrides(capsys):
+    code, out = run_json(capsys, ["steady", "--scene", "examples/asymmetric.toml", "--ustar", "3",
+                                  "--json"])
+    assert code == 0
+    assert (out["Q"][0] + out["Q"][1]) / 0.1 == pytest.approx(3.0, rel=1e-13)
+    from fsicas import build_model, load_scene, steady_state
+    scene = load_scene("examples/asymmetric.toml", ustar=3.0)
+    model = build_model(scene)
+    assert out["tip_deflection"] == pytest.approx(model.deflection(steady_state(scene, model).x, [1.0])[0],
+                                                  rel=1e-12)
+
+
+def test_bad_option_gives_a_json_error_and_exit_code(capsys):
+    code, out = run_json(capsys, ["steady", "--mstar", "-1", "--json"])
+    assert code == 2 and "mstar" in out["error"]
+
+
+def test_console_script_prints_only_json():
+    done = subprocess.run([sys.executable, "-m", "fsicas.cli", "modes", "--modes", "2", "--json"],
+                          capture_output=True, text=True, check=True)
+    assert json.loads(done.stdout)["omega"][1] == pytest.approx(22.03449156466, rel=1e-10)
+
+
+def test_paper_quick_writes_report(tmp_path, capsys):
+    code, out = run_json(capsys, ["paper", "--quick", "--out", str(tmp_path), "--json"])
+    assert code == 0
+    assert out["steady"]["pressure_drop"] == pytest.approx(out["steady"]["closed_form"], rel=1e-14)
+    assert (tmp_path / "report.json").exists() and (tmp_path / "stability_scan.png").exists()
+    crit = [c for c in out["critical"] if c["ustar_crit"] is not None]
+    assert len(crit) == 3 and all(c["omega"] > 0 for c in crit)

@@ -1,0 +1,199 @@
+"""The nonlinear model against closed forms, the PDEs it came from, FD and symmetry."""
+import numpy as np
+import pytest
+import scipy.integrate
+from scipy.integrate import simpson
+
+from fsicas import (Profile, Scene, build_model, clamped_free_modes, flow_fields, steady_state,
+                    straight_pressure_drop)
+
+TAPERED = dict(channel1=Profile.linear(0.05, 0.035),
+               channel2=Profile.table([0.0, 0.5, 1.0], [0.05, 0.06, 0.045]))
+SCENE = Scene(mstar=2.0, ustar=4.0, modes=4, friction=0.14, k0=0.3, kl=0.8, zeta=0.02, **TAPERED)
+
+
+def random_state(scene, seed, velocity_scale=0.2):
+    """A non-equilibrium state; small modal velocities keep the flow one-directional."""
+    rng = np.random.default_rng(seed)
+    n = scene.modes
+    decay = 1.0 / np.arange(1, n + 1) ** 2
+    r = velocity_scale * rng.normal(size=n) * decay
+    q = 1e-3 * rng.normal(size=n) * decay
+    Q = np.array([0.2, 0.15]) * (1 + 0.1 * rng.normal(size=2))
+    return np.concatenate([r, q, Q])
+
+
+@pytest.fixture(scope="module")
+def model():
+    return build_model(SCENE)
+
+
+# -- closed forms ---------------------------------------------------------------------
+@pytest.mark.parametrize("mstar, ustar, f, k0, kl", [
+    (1.0, 5.0, 0.14, 0.0, 1.0), (0.05, 12.0, 0.3, 0.5, 0.7), (30.0, 0.7, 0.0, 0.0, 1.0),
+    (2.0, -3.0, 0.14, 0.2, 1.0)])
+def test_straight_symmetric_steady_state_is_closed_form(mstar, ustar, f, k0, kl):
+    """Δp = M* U*|U*| ((K0 + KL)/2 + 2 f / H*), Q1 = Q2 = U* H*/2, no deflection."""
+    scene = Scene(mstar=mstar, ustar=ustar, friction=f, k0=k0, kl=kl, modes=6)
+    st = steady_state(scene)
+    expected = mstar * ustar * abs(ustar) * ((k0 + kl) / 2 + 2 * f / 0.1)
+    assert st.pressure_drop == pytest.approx(expected, rel=1e-14, abs=1e-14)
+    assert straight_pressure_drop(scene) == pytest.approx(expected, rel=1e-15)
+    assert np.allclose(st.Q, ustar * 0.05, rtol=1e-14)
+    assert np.max(np.abs(st.q)) < 1e-14
+
+
+# -- the PDEs and boundary conditions ---------------------------------------------------
+def _fields_along_trajectory(model, x0, p, dp, grid, dt):
+    """Fields at t - dt, t, t + dt from a tight independent integration of M xdot = F."""
+    rhs = lambda t, z: model.xdot(z, p)
+    out = []
+    for t_end in (-dt, 0.0, dt):
+        z = x0 if t_end == 0.0 else scipy.integrate.solve_ivp(
+            rhs, (0.0, t_end), x0, method="DOP853", rtol=1e-13, atol=1e-15).y[:, -1]
+        out.append(flow_fields(model.scene, z, model.xdot(z, p), dp, grid))
+    return out
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_formal_solution_satisfies_continuity_momentum_and_bcs(model, seed):
+    """FD in x and t of h, u, p reconstructed independently satisfy Eqs. (4) and (6)."""
+    scene, dp, dt = model.scene, 30.0, 2e-5
+    x0 = random_state(scene, seed)
+    p = model.parameters(pressure_drop=dp)
+    grid = np.linspace(0.0, 1.0, 8001)
+    before, now, after = _fields_along_trajectory(model, x0, p, dp, grid, dt)
+    grad = lambda a: np.gradient(a, grid, edge_order=2)
+    for c in range(2):
+        h, u, pc = now.h[c], now.u[c], now.p[c]
+        h_t = (after.h[c] - before.h[c]) / (2 * dt)
+        flux_t = (after.h[c] * after.u[c] - before.h[c] * before.u[c]) / (2 * dt)
+        continuity = h_t + grad(h * u)
+        momentum = scene.mstar * (flux_t + grad(h * u**2) + scene.friction * u * abs(u)) + h * grad(pc)
+        scale = np.max(np.abs(h * grad(pc)))
+        assert np.max(np.abs(continuity)) < 1e-5 * max(np.max(np.abs(h_t)), 1e-3)
+        assert np.max(np.abs(momentum)) < 1e-5 * scale
+        u0, u1 = u[0], u[-1]
+        assert pc[0] == pytest.approx(dp - scene.mstar / 2 * (u0**2 + scene.k0 * u0 * abs(u0)), rel=1e-13)
+        assert pc[-1] == pytest.approx(-scene.mstar / 2 * (u1**2 - scene.kl * u1 * abs(u1)),
+                                       rel=1e-11, abs=1e-11 * scale)
+
+
+@pytest.mark.parametrize("seed", [0, 4])
+def test_beam_rows_are_the_modal_projection_of_the_pressure_load(model, seed):
+    """dr/dt + 2 zeta w r + w^2 q = ∫ (p2 - p1) phi_n dx, the load from the fields route."""
+    scene, dp = model.scene, 30.0
+    x0 = random_state(scene, seed)
+    p = model.parameters(pressure_drop=dp)
+    xdot = model.xdot(x0, p)
+    grid = np.linspace(0.0, 1.0, 16001)
+    load = flow_fields(scene, x0, xdot, dp, grid).load
+    modes = clamped_free_modes(scene.modes, grid)
+    n = scene.modes
+    lhs = xdot[:n] + 2 * 0.02 * modes.omega * x0[:n] + modes.omega**2 * x0[n:2 * n]
+    rhs = simpson(modes.phi * load, x=grid)
+    assert np.allclose(lhs, rhs, rtol=1e-9, atol=1e-9 * np.max(np.abs(rhs)))
+
+
+def _projection_error(scene, seed, grid):
+    model = build_model(scene)
+    x0 = random_state(scene, seed)
+    p = model.parameters(pressure_drop=30.0)
+    xdot = model.xdot(x0, p)
+    modes = clamped_free_modes(scene.modes, grid)
+    n = scene.modes
+    lhs = xdot[:n] + 2 * 0.02 * modes.omega * x0[:n] + modes.omega**2 * x0[n:2 * n]
+    load = flow_fields(scene, x0, xdot, 30.0, grid).load
+    return np.max(np.abs(lhs - simpson(modes.phi * load, x=grid)))
+
+
+def test_reversing_flow_converges_algebraically_in_quadrature_nodes():
+    """Seed 3 reverses the flow in channel 2: u|u| is only C^1 there, so Gauss–Legendre
+    converges algebraically (theory: about n^-3 for a jump in the second derivative)."""
+    grid = np.linspace(0.0, 1.0, 64001)
+    coarse, fine = (_projection_error(SCENE.replace(quad_nodes=k), 3, grid) for k in (28, 224))
+    observed_order = np.log(coarse / fine) / np.log(224 / 28)
+    assert observed_order > 2.0
+    assert fine < 1e-7 * 20.0
+
+
+# -- derivatives ---------------------------------------------------------------------------
+@pytest.mark.parametrize("seed", [0, 1])
+def test_exact_jacobians_match_central_differences(model, seed):
+    x0 = random_state(model.scene, seed)
+    p0 = model.parameters(pressure_drop=30.0)
+    F = lambda x, p: np.array(model.rhs(x, p)).ravel()
+    J = np.array(model.jac_rhs(x0, p0))
+    Jp = np.array(model.jac_rhs_p(x0, p0))
+    for exact, vary, base in ((J, lambda z: F(z, p0), x0), (Jp, lambda z: F(x0, z), p0)):
+        fd = np.empty_like(exact)
+        for k in range(len(base)):
+            step = 1e-6 * max(1.0, abs(base[k]))
+            e = np.zeros_like(base)
+            e[k] = step
+            fd[:, k] = (vary(base + e) - vary(base - e)) / (2 * step)
+        assert np.max(np.abs(fd - exact)) < 1e-6 * np.max(np.abs(exact))
+
+
+# -- symmetry and the sign of the static deflection ---------------------------------------
+def mirror(x, n):
+    """Flip y (r, q -> -r, -q) and swap the channels (Q1 <-> Q2)."""
+    return np.concatenate([-x[:2 * n], x[2 * n:][::-1]])
+
+
+def test_mirror_symmetry_of_the_dynamics():
+    scene_a = Scene(mstar=1.5, modes=5, channel1=Profile.linear(0.06, 0.05),
+                    channel2=Profile.constant(0.04))
+    scene_b = scene_a.replace(channel1=scene_a.channel2, channel2=scene_a.channel1)
+    ma, mb = build_model(scene_a), build_model(scene_b)
+    p = ma.parameters(pressure_drop=40.0)
+    for seed in range(3):
+        x = random_state(scene_a, seed)
+        assert np.allclose(mb.xdot(mirror(x, 5), p), mirror(ma.xdot(x, p), 5), rtol=1e-12, atol=1e-10)
+    sa, sb = steady_state(scene_a, ma), steady_state(scene_b, mb)
+    assert np.allclose(sb.x, mirror(sa.x, 5), rtol=1e-10, atol=1e-14)
+    assert sb.pressure_drop == pytest.approx(sa.pressure_drop, rel=1e-12)
+
+
+def test_beam_deflects_towards_the_wider_channel():
+    """Equal Δp drives faster flow, hence lower pressure, in the wider channel 1 (y > 0)."""
+    scene = Scene(mstar=1.0, ustar=4.0, modes=8, channel1=Profile.constant(0.055),
+                  channel2=Profile.constant(0.045))
+    model = build_model(scene)
+    st = steady_state(scene, model)
+    assert st.Q[0] > st.Q[1]
+    y = model.deflection(st.x, np.linspace(0.05, 1.0, 20))
+    assert np.all(y > 0)
+    assert (st.Q[0] + st.Q[1]) / scene.hstar == pytest.approx(4.0, rel=1e-14)
+
+
+def test_contact_pushes_the_beam_away_from_the_wall():
+    scene = Scene(modes=3, contact=True, contact_stiffness=1e4, contact_eps=0.2)
+    model = build_model(scene)
+    n, gap = 3, scene.contact_gap
+    x = np.zeros(2 * n + 2)
+    x[2 * n:] = 0.25
+    x[n] = (0.05 - gap / 2) / 2.0     # mode 1 tip at y = 0.05 - gap/2: inside the layer
+    p = model.parameters(pressure_drop=0.0)
+    on = np.array(model.rhs(x, p)).ravel()
+    off = np.array(model.rhs(x, model.parameters(pressure_drop=0.0, contact_stiffness=1e-12))).ravel()
+    grid = np.linspace(0.0, 1.0, 20001)
+    modes = clamped_free_modes(n, grid)
+    violation = np.maximum(0.0, gap - (0.05 - modes.phi[0] * x[n]))
+    expected = -1e4 * modes.omega[0] ** 2 * simpson(modes.phi * violation, x=grid)
+    assert expected[0] < 0
+    assert np.allclose(on[:n] - off[:n], expected, rtol=2e-2)
+
+
+def test_only_what_the_scene_needs_is_built():
+    plain = build_model(Scene(modes=3))
+    assert "contact_stiffness" not in plain.parameter_names
+    assert "fmax" not in str(plain.rhs.instructions_sx() if hasattr(plain.rhs, "instructions_sx") else "")
+    with_contact = build_model(Scene(modes=3, contact=True))
+    assert with_contact.parameter_names[5:7] == ("contact_stiffness", "contact_eps")
+    assert with_contact.rhs.n_instructions() > plain.rhs.n_instructions()
+
+
+def test_steady_state_refuses_a_model_of_another_structure():
+    with pytest.raises(ValueError, match="structure"):
+        steady_state(Scene(modes=4), build_model(Scene(modes=5)))
