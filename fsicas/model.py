@@ -112,7 +112,7 @@ def build_model(scene: Scene, symbolic: str = "SX") -> Model:
         raise ValueError(f"symbolic must be 'SX' or 'MX', got {symbolic!r}")
     sym = getattr(ca, symbolic)
     names = parameter_names(scene)
-    nodes, weights = gauss_legendre(scene.quad_nodes)
+    nodes, weights = gauss_legendre(scene.n_quad)
     basis = clamped_free_modes(scene.modes, nodes)
     tip = clamped_free_modes(scene.modes, np.array([0.0, 1.0]))
     n = scene.modes

@@ -55,12 +55,15 @@ class Scene:
 
     def __post_init__(self):
         _validate(self)
-        if self.quad_nodes is None:
-            object.__setattr__(self, "quad_nodes", default_quad_nodes(self.modes))
         if not np.isscalar(self.zeta):
             object.__setattr__(self, "zeta", tuple(float(z) for z in self.zeta))
 
     # -- derived -------------------------------------------------------------------
+    @property
+    def n_quad(self) -> int:
+        """Quadrature nodes in use: ``quad_nodes`` or the default 2N + 20."""
+        return self.quad_nodes or default_quad_nodes(self.modes)
+
     @property
     def walls(self) -> tuple[Profile, Profile]:
         """The two wall profiles, defaults filled in."""

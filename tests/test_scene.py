@@ -34,7 +34,8 @@ def test_spline_overshoot_below_zero_is_caught():
 
 def test_defaults_fill_in_quadrature_and_walls():
     s = Scene(modes=7)
-    assert s.quad_nodes == 34
+    assert s.quad_nodes is None and s.n_quad == 34
+    assert s.replace(modes=30).n_quad == 80
     w1, w2 = s.walls
     assert w1(0.3) == w2(0.7) == 0.05
     assert s.straight and s.symmetric
