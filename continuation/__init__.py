@@ -1,1 +1,28 @@
-"""Generic continuation and bifurcation analysis of M(x,p) xdot = F(x,p) on CasADi."""
+"""Generic continuation and bifurcation analysis of M(x,p) xdot = F(x,p) on CasADi.
+
+Public API (everything else is private)::
+
+    continuation(problem, algorithm=PALC(), settings=ContinuationSettings()) -> Branch
+    EquilibriumProblem(F, x0, params, active, M=None)
+    HopfCurveProblem.from_point(problem, point, second) / FoldCurveProblem.from_point(...)
+    VectorField(F, M, par_names), first_lyapunov(vf, x, p, omega)
+    Branch, SpecialPoint, ContinuationIterator, PALC, ContinuationSettings,
+    NewtonSettings, EigenSettings
+
+Plotting lives in ``continuation.plotting`` (Matplotlib is imported there only).
+"""
+
+from ._branch import Branch, SpecialPoint
+from ._driver import continuation
+from ._equilibrium import EquilibriumProblem
+from ._lyapunov import first_lyapunov
+from ._palc import ContinuationIterator, Step
+from ._problem import Problem
+from ._settings import ContinuationSettings, EigenSettings, NewtonSettings, PALC
+from ._vectorfield import VectorField
+
+__all__ = [
+    "Branch", "ContinuationIterator", "ContinuationSettings", "EigenSettings",
+    "EquilibriumProblem", "NewtonSettings", "PALC", "Problem",
+    "SpecialPoint", "Step", "VectorField", "continuation", "first_lyapunov",
+]

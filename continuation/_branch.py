@@ -1,0 +1,136 @@
+"""The result of a continuation: points, stability, special points, statistics.
+
+Plain data with NumPy columns; ``save``/``load`` use one ``.npz`` file holding
+arrays plus a JSON header (no pickling).
+"""
+
+from __future__ import annotations
+
+import json
+from dataclasses import dataclass, field
+
+import numpy as np
+
+FORMAT = "continuation.Branch/1"
+
+
+@dataclass(frozen=True)
+class SpecialPoint:
+    """A special point between points ``index - 1`` and ``index`` of a branch.
+
+    kind : 'fold', 'hopf', 'bp' (equilibria); 'bt', 'gh', 'hh', 'zh' (curves).
+    status : 'converged' (located and refined to tolerance) or 'guess'.
+    precision : residual of the refining Newton solve, or the arclength
+        bracket of the location when not refined.
+    data : scalar characteristics, e.g. ``omega`` and ``l1`` at a Hopf point.
+    """
+
+    kind: str
+    index: int
+    x: np.ndarray
+    params: dict
+    status: str
+    precision: float
+    data: dict = field(default_factory=dict)
+    message: str = ""
+
+    def to_json(self) -> dict:
+        return {"kind": self.kind, "index": self.index, "params": self.params,
+                "status": self.status, "precision": self.precision,
+                "data": self.data, "message": self.message}
+
+
+@dataclass(frozen=True)
+class Branch:
+    """Points of a continued curve and what was found along it.
+
+    x : (N, n) states; params : (N, k) parameter values (columns ``par_names``);
+    s : arclength; ds : step that reached each point; iterations, residual :
+    Newton work and final residual per point; eigenvalues : list of N arrays of
+    generalized eigenvalues (sorted by decreasing real part); tests : test
+    function columns; columns : problem-specific columns (e.g. ``omega``);
+    status, message : why the run stopped; failure : residual, iterations and
+    ds of a failed corrector; stats : solver statistics.
+    """
+
+    kind: str
+    par_names: tuple
+    free: tuple
+    x: np.ndarray
+    params: np.ndarray
+    s: np.ndarray
+    ds: np.ndarray
+    iterations: np.ndarray
+    residual: np.ndarray
+    eigenvalues: list
+    tests: dict
+    columns: dict
+    special_points: list
+    status: str
+    message: str
+    failure: dict = field(default_factory=dict)
+    stats: dict = field(default_factory=dict)
+
+    def __len__(self) -> int:
+        return self.x.shape[0]
+
+    def par(self, name: str) -> np.ndarray:
+        """Column of parameter ``name``."""
+        if name not in self.par_names:
+            raise ValueError(f"unknown parameter {name!r}; known: {self.par_names}")
+        return self.params[:, self.par_names.index(name)]
+
+    @property
+    def n_unstable(self) -> np.ndarray:
+        """Number of eigenvalues with positive real part at each point."""
+        return np.array([int(np.sum(ev.real > 0)) for ev in self.eigenvalues])
+
+    @property
+    def stable(self) -> np.ndarray:
+        """True where all computed eigenvalues have negative real part."""
+        return self.n_unstable == 0
+
+    def special(self, kind: str) -> list:
+        """Special points of one kind."""
+        return [p for p in self.special_points if p.kind == kind]
+
+    # -- file I/O ---------------------------------------------------------------
+    def save(self, path) -> None:
+        """Write the branch to ``path`` (.npz with a JSON header)."""
+        sizes = np.array([ev.size for ev in self.eigenvalues], dtype=int)
+        flat = np.concatenate(self.eigenvalues) if self.eigenvalues else np.zeros(0, complex)
+        arrays = {"x": self.x, "params": self.params, "s": self.s, "ds": self.ds,
+                  "iterations": self.iterations, "residual": self.residual,
+                  "eig_sizes": sizes, "eig_values": flat.astype(complex),
+                  "sp_x": np.array([p.x for p in self.special_points]).reshape(
+                      len(self.special_points), -1)}
+        arrays.update({f"test_{k}": v for k, v in self.tests.items()})
+        arrays.update({f"col_{k}": v for k, v in self.columns.items()})
+        header = {"format": FORMAT, "kind": self.kind, "par_names": list(self.par_names),
+                  "free": list(self.free), "status": self.status, "message": self.message,
+                  "failure": {k: v for k, v in self.failure.items() if k != "X"},
+                  "stats": self.stats, "special_points":
+                      [p.to_json() for p in self.special_points]}
+        with open(path, "wb") as fh:
+            np.savez(fh, header=np.array(json.dumps(header)), **arrays)
+
+    @classmethod
+    def load(cls, path) -> "Branch":
+        """Read a branch written by :meth:`save`."""
+        with np.load(path, allow_pickle=False) as data:
+            header = json.loads(str(data["header"]))
+            if header.get("format") != FORMAT:
+                raise ValueError(f"{path} is not a {FORMAT} file")
+            arr = {k: data[k] for k in data.files}
+        splits = np.cumsum(arr["eig_sizes"])[:-1]
+        eigs = list(np.split(arr["eig_values"], splits)) if arr["eig_sizes"].size else []
+        sps = [SpecialPoint(d["kind"], d["index"], arr["sp_x"][i], d["params"],
+                            d["status"], d["precision"], d["data"], d["message"])
+               for i, d in enumerate(header["special_points"])]
+        pick = lambda prefix: {k[len(prefix):]: v for k, v in arr.items()
+                               if k.startswith(prefix)}
+        return cls(header["kind"], tuple(header["par_names"]), tuple(header["free"]),
+                   arr["x"], arr["params"], arr["s"], arr["ds"], arr["iterations"],
+                   arr["residual"], eigs, pick("test_"), pick("col_"), sps,
+                   header["status"], header["message"], header["failure"],
+                   header["stats"])

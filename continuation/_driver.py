@@ -1,0 +1,109 @@
+"""``continuation(problem, algorithm, settings) -> Branch``: a thin loop over
+the PALC step iterator that monitors points, locates special points between
+consecutive ones and collects everything into a :class:`Branch`.
+"""
+
+from __future__ import annotations
+
+import time
+
+import numpy as np
+from tqdm.auto import tqdm
+
+from ._branch import Branch, SpecialPoint
+from ._locate import locate
+from ._palc import ContinuationIterator
+from ._problem import Problem
+from ._settings import PALC, ContinuationSettings
+
+
+def continuation(problem: Problem, algorithm: PALC | None = None,
+                 settings: ContinuationSettings | None = None) -> Branch:
+    """Continue ``problem`` with ``algorithm`` (default PALC) and ``settings``.
+
+    Never raises for numerical non-convergence: the returned branch carries
+    ``status`` ('max_steps', 'bound' or 'failed') and a ``message``.
+    """
+    algorithm = PALC() if algorithm is None else algorithm
+    settings = ContinuationSettings() if settings is None else settings
+    _check(problem, algorithm, settings)
+    t0 = time.perf_counter()
+    it = ContinuationIterator(problem, algorithm, settings)
+    rec = _Recorder(problem)
+    prev = None
+    with tqdm(total=settings.max_steps + 1, disable=not settings.progress,
+              desc=f"{problem.kind} continuation", leave=False) as bar:
+        for step in it:
+            info = problem.monitor(step.X, step.tau, step.lu, settings)
+            if prev is not None and settings.detect:
+                for kind in problem.events(prev[1], info):
+                    rec.special.append(_special(problem, kind, prev, (step, info),
+                                                settings, len(rec.X), rec.stats))
+            rec.add(step, info)
+            prev = (step, info)
+            bar.update()
+    stats = {**it.stats, **rec.stats, "time_total": time.perf_counter() - t0}
+    return rec.branch(it.status, it.message, it.failure, stats)
+
+
+def _check(problem, algorithm, settings):
+    if not isinstance(problem, Problem):
+        raise ValueError(f"problem must be a continuation Problem, got "
+                         f"{type(problem).__name__}")
+    if not isinstance(algorithm, PALC):
+        raise ValueError(f"algorithm must be PALC, got {type(algorithm).__name__}")
+    if not isinstance(settings, ContinuationSettings):
+        raise ValueError(f"settings must be ContinuationSettings, got "
+                         f"{type(settings).__name__}")
+    unknown = set(settings.bounds) - set(problem.vf.par_names)
+    if unknown:
+        raise ValueError(f"settings.bounds names unknown parameters {sorted(unknown)}")
+
+
+def _special(problem, kind, a, b, settings, index, stats) -> SpecialPoint:
+    t0 = time.perf_counter()
+    loc = locate(problem, kind, a, b, settings)
+    desc = problem.describe(kind, loc.X, loc.tau, settings)
+    stats["time_location"] = stats.get("time_location", 0.0) + time.perf_counter() - t0
+    stats["located"] = stats.get("located", 0) + 1
+    status = desc.status if loc.converged else "guess"
+    data = {"bracket": loc.bracket, **desc.data}
+    message = "; ".join(m for m in (loc.message, desc.message) if m)
+    precision = desc.precision if desc.precision > 0 else loc.bracket
+    return SpecialPoint(kind, index, problem.state(desc.X), problem.par_dict(desc.X),
+                        status, float(precision), data, message)
+
+
+class _Recorder:
+    """Accumulates monitored points; builds the Branch at the end."""
+
+    def __init__(self, problem):
+        self.problem = problem
+        self.X, self.steps, self.infos, self.special = [], [], [], []
+        self.stats = {}
+
+    def add(self, step, info):
+        self.X.append(step.X)
+        self.steps.append(step)
+        self.infos.append(info)
+
+    def branch(self, status, message, failure, stats) -> Branch:
+        prob = self.problem
+        X = np.array(self.X).reshape(len(self.X), prob.system.n_unknowns)
+        s = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(X, axis=0), axis=1))]) \
+            if len(X) else np.zeros(0)
+        tests = {k: np.array([i.tests.get(k, 0.0) for i in self.infos])
+                 for k in (self.infos[0].tests if self.infos else {})}
+        tests.update({k: np.array([i.counts.get(k, 0) for i in self.infos], dtype=float)
+                      for k in (self.infos[0].counts if self.infos else {})})
+        cols = [prob.columns(x) for x in self.X]
+        columns = {k: np.array([c[k] for c in cols]) for k in (cols[0] if cols else {})}
+        return Branch(prob.kind, prob.vf.par_names, prob.free,
+                      np.array([prob.state(x) for x in self.X]).reshape(len(X), prob.vf.n),
+                      np.array([prob.params(x) for x in self.X]).reshape(
+                          len(X), len(prob.vf.par_names)),
+                      s, np.array([st.ds for st in self.steps]),
+                      np.array([st.iterations for st in self.steps], dtype=int),
+                      np.array([st.residual for st in self.steps]),
+                      [i.eigenvalues for i in self.infos], tests, columns,
+                      self.special, status, message, failure, stats)

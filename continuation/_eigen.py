@@ -1,0 +1,87 @@
+"""Generalized eigenvalues and eigenvectors of ``J v = lambda M v``.
+
+Small problems use ``scipy.linalg.eig``; large sparse ones use shift-invert
+Arnoldi: with ``(J - sigma M) v = (lambda - sigma) M v`` the operator
+``(J - sigma M)^{-1} M`` has eigenvalues ``mu = 1 / (lambda - sigma)``, so the
+largest ``|mu|`` are the ``lambda`` closest to ``sigma``. Infinite eigenvalues
+(singular ``M``) give ``beta = 0`` / ``mu = 0`` and are dropped.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import scipy.linalg as sla
+import scipy.sparse as sp
+import scipy.sparse.linalg as spla
+
+from ._settings import EigenSettings
+
+
+def eigenvalues(J: sp.spmatrix, M: sp.spmatrix, settings: EigenSettings) -> np.ndarray:
+    """Finite generalized eigenvalues, sorted by decreasing real part."""
+    n = J.shape[0]
+    if n <= settings.dense_max:
+        ev = _dense(J, M)
+    else:
+        ev = _shift_invert(J, M, settings)
+    return ev[np.lexsort((-ev.imag, -ev.real))]
+
+
+def _dense(J, M) -> np.ndarray:
+    Jd = J.toarray() if sp.issparse(J) else np.asarray(J)
+    Md = M.toarray() if sp.issparse(M) else np.asarray(M)
+    w = sla.eig(Jd, Md, right=False, homogeneous_eigvals=True)
+    alpha, beta = w
+    scale = np.maximum(np.abs(alpha), np.abs(beta))
+    finite = np.abs(beta) > 1e-12 * np.where(scale > 0, scale, 1.0)
+    return alpha[finite] / beta[finite]
+
+
+def _shift_invert(J, M, settings: EigenSettings) -> np.ndarray:
+    n = J.shape[0]
+    lu = spla.splu(sp.csc_matrix(J - settings.sigma * M))
+    op = spla.LinearOperator((n, n), matvec=lambda v: lu.solve(M @ v), dtype=float)
+    k = min(settings.nev, n - 2)
+    mu = spla.eigs(op, k=k, which="LM", return_eigenvectors=False,
+                   tol=1e-12, ncv=min(n, max(2 * k + 1, 20)))
+    mu = mu[np.abs(mu) > 1e-14 * np.max(np.abs(mu))]
+    return settings.sigma + 1.0 / mu
+
+
+def count_unstable(ev: np.ndarray) -> int:
+    """Number of eigenvalues with positive real part."""
+    return int(np.sum(ev.real > 0))
+
+
+def count_complex_unstable(ev: np.ndarray, imag_tol: float) -> int:
+    """Number of eigenvalues with positive real part and nonzero imaginary part."""
+    return int(np.sum((ev.real > 0) & (np.abs(ev.imag) > imag_tol)))
+
+
+def nearest(ev: np.ndarray, target: complex) -> complex:
+    """Eigenvalue of ``ev`` closest to ``target``."""
+    return complex(ev[np.argmin(np.abs(ev - target))])
+
+
+def eigenvector(J, M, lam: complex, iterations: int = 3, seed: int = 0) -> np.ndarray:
+    """Right eigenvector ``(J - lam M) q = 0`` by inverse iteration, ``|q| = 1``."""
+    A = sp.csc_matrix(J, dtype=complex) - lam * sp.csc_matrix(M, dtype=complex)
+    return _inverse_iteration(A, iterations, seed)
+
+
+def left_eigenvector(J, M, lam: complex, iterations: int = 3, seed: int = 1) -> np.ndarray:
+    """``phi`` with ``phi^T (J - lam M) = 0`` (no conjugation), ``|phi| = 1``."""
+    A = sp.csc_matrix(J, dtype=complex) - lam * sp.csc_matrix(M, dtype=complex)
+    return _inverse_iteration(sp.csc_matrix(A.T), iterations, seed)
+
+
+def _inverse_iteration(A, iterations: int, seed: int) -> np.ndarray:
+    n = A.shape[0]
+    rng = np.random.default_rng(seed)
+    q = rng.standard_normal(n) + 1j * rng.standard_normal(n)
+    scale = max(abs(A).max(), 1.0)
+    lu = spla.splu(sp.csc_matrix(A + 1e-15 * scale * sp.identity(n)))
+    for _ in range(iterations):
+        q = lu.solve(q)
+        q /= np.linalg.norm(q)
+    return q

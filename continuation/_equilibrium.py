@@ -1,0 +1,193 @@
+"""Equilibria ``F(x, p) = 0`` of ``M(x, p) xdot = F(x, p)`` in one parameter.
+
+Test functions along the branch, for ``X = (x, p)`` and tangent ``tau``:
+
+* fold (limit point): ``tau_p`` changes sign;
+* simple branch point: ``sign det [G_X; tau^T]`` changes;
+* Hopf: the number of eigenvalues of ``J v = lambda M v`` with ``Re > 0`` and
+  ``Im != 0`` changes; it is located on ``Re lambda(s) = 0`` of the crossing
+  eigenvalue.
+
+Folds and Hopf points are then refined by Newton on the square fold/Hopf
+systems of ``_systems`` (one free parameter), and the first Lyapunov
+coefficient is computed at each Hopf point.
+"""
+
+from __future__ import annotations
+
+from typing import Mapping
+
+import casadi as ca
+import numpy as np
+import scipy.sparse as sp
+
+from . import _eigen
+from ._lyapunov import first_lyapunov, hopf_eigenvectors
+from ._newton import newton
+from ._problem import Description, PointInfo, Problem
+from ._systems import system
+from ._vectorfield import VectorField
+
+
+def make_field(F, M, params: Mapping[str, float]) -> VectorField:
+    """``F`` itself if it is a VectorField, else ``VectorField(F, M, names)``."""
+    if isinstance(F, VectorField):
+        if M is not None:
+            raise ValueError("M must be None when F is already a VectorField")
+        return F
+    if not isinstance(params, Mapping):
+        raise ValueError(f"params must be a mapping name -> value, got {type(params).__name__}")
+    if isinstance(F, ca.Function) and F.n_in() == 2 and F.numel_in(1) != len(params):
+        raise ValueError(f"params names {tuple(params)} but F takes p of size "
+                         f"{F.numel_in(1)}")
+    return VectorField(F, M, tuple(params))
+
+
+def param_vector(vf: VectorField, params: Mapping[str, float]) -> np.ndarray:
+    """Values of ``params`` in the order of ``vf.par_names``; all must be given."""
+    if not isinstance(params, Mapping):
+        raise ValueError(f"params must be a mapping name -> value, got {type(params).__name__}")
+    if set(params) != set(vf.par_names):
+        raise ValueError(f"params must name exactly {vf.par_names}, got {tuple(params)}")
+    p = np.array([float(params[k]) for k in vf.par_names])
+    if not np.all(np.isfinite(p)):
+        raise ValueError(f"params must be finite, got {dict(params)}")
+    return p
+
+
+def state_vector(vf: VectorField, x0, label: str = "x0") -> np.ndarray:
+    """``x0`` as a finite float vector of size ``n``."""
+    x = np.array(x0, dtype=float).ravel()
+    if x.size != vf.n or not np.all(np.isfinite(x)):
+        raise ValueError(f"{label} must be a finite vector of size {vf.n}, got {x0!r}")
+    return x
+
+
+class EquilibriumProblem(Problem):
+    """Branch of equilibria ``F(x, p) = 0`` in the parameter ``active``.
+
+    Parameters
+    ----------
+    F : casadi.Function ``(x, p) -> F`` or a prebuilt :class:`VectorField`.
+    x0 : initial guess of the equilibrium (corrected before continuing).
+    params : ``{name: value}`` of all parameters, in the order of ``p``.
+    active : name of the continuation parameter.
+    M : casadi.Function ``(x, p) -> M`` (``None``: identity).
+    """
+
+    kind = "equilibrium"
+
+    def __init__(self, F, x0, params: Mapping[str, float], active: str, *, M=None):
+        vf = make_field(F, M, params)
+        p0 = param_vector(vf, params)
+        x = state_vector(vf, x0)
+        ia = vf.par_index(active)
+        super().__init__(vf, (active,), np.append(x, p0[ia]), p0)
+        self.active = active
+
+    def monitor(self, X, tau, lu, settings) -> PointInfo:
+        base = super().monitor(X, tau, lu, settings)
+        tests = {"fold": float(tau[-1]), **base.tests}
+        counts = {}
+        if settings.compute_eigenvalues:
+            counts["hopf"] = _eigen.count_complex_unstable(base.eigenvalues,
+                                                           settings.eigen.imag_tol)
+        return PointInfo(base.eigenvalues, tests, counts)
+
+    def test_function(self, kind, X_a, info_a, X_b, info_b, settings):
+        if kind == "fold":
+            return lambda X, tau, lu: float(tau[-1])
+        if kind == "hopf":
+            return _hopf_function(self, info_a, info_b, settings)
+        return super().test_function(kind, X_a, info_a, X_b, info_b, settings)
+
+    def describe(self, kind, X, tau, settings) -> Description:
+        if kind == "fold":
+            return _refine_fold(self, X, settings)
+        if kind == "hopf":
+            return _refine_hopf(self, X, settings)
+        return super().describe(kind, X, tau, settings)
+
+
+def _hopf_function(problem, info_a, info_b, settings):
+    """``Re`` of the eigenvalue nearest to the crossing one, as a function of X."""
+    tol = settings.eigen.imag_tol
+    cands = np.concatenate([info_a.eigenvalues, info_b.eigenvalues])
+    cands = cands[cands.imag > tol]
+    ref = cands[np.argmin(np.abs(cands.real))]
+
+    def f(X, tau, lu):
+        ev = problem.eigenvalues(X, settings)
+        ev = ev[ev.imag > tol]
+        return float(_eigen.nearest(ev, ref).real) if ev.size else 0.0
+
+    return f
+
+
+def real_null_vector(J) -> np.ndarray:
+    """Real ``v`` with ``J v ~ 0``, ``|v| = 1``."""
+    q = _eigen.eigenvector(J, sp.identity(J.shape[0], format="csc"), 0.0)
+    q = q * np.exp(-1j * np.angle(q[np.argmax(np.abs(q))]))
+    v = q.real
+    return v / np.linalg.norm(v)
+
+
+def _refine_fold(problem, X, settings) -> Description:
+    """Newton on ``F = 0, J v = 0, c.v = 1`` with the active parameter free."""
+    vf = problem.vf
+    J, _ = problem.matrices(X)
+    v = real_null_vector(J)
+    sysf = system(vf, "fold", problem.free)
+    D = np.concatenate([problem.params(X), v])
+    Y0 = np.concatenate([problem.state(X), v, X[-1:]])
+    res = newton(lambda Y: sysf.residual(Y, D), lambda Y: sysf.jacobian(Y, D), Y0,
+                 settings.newton, polish=3)
+    if not res.converged:
+        return Description(X, "guess", res.residual, {}, "fold refinement: " + res.message)
+    Xr = np.append(res.X[: vf.n], res.X[-1])
+    return Description(Xr, "converged", res.residual, {})
+
+
+def hopf_start(J, M, omega):
+    """Initial ``(v, w, kappa, c)`` of the Hopf system from ``J q = i omega M q``.
+
+    The phase of ``q`` is chosen so that ``Re q . Im q = 0`` and
+    ``|Re q| >= |Im q|``; then ``v = Re q``, ``w = -omega Im q``,
+    ``kappa = omega^2``, ``c = v / |v|^2`` satisfy ``c.v = 1, c.w = 0``.
+    """
+    q, _ = hopf_eigenvectors(sp.csc_matrix(J, dtype=complex),
+                             sp.csc_matrix(M, dtype=complex), omega)
+    q = q * np.exp(-0.5j * np.angle(q @ q))
+    if np.linalg.norm(q.real) < np.linalg.norm(q.imag):
+        q = 1j * q
+    v, w = q.real, -omega * q.imag
+    return v, w, omega ** 2, v / (v @ v)
+
+
+def _refine_hopf(problem, X, settings) -> Description:
+    """Newton on the Hopf system (active parameter free), then ``omega, l1``."""
+    vf = problem.vf
+    J, M = problem.matrices(X)
+    ev = _eigen.eigenvalues(J, M, settings.eigen)
+    ev = ev[ev.imag > settings.eigen.imag_tol]
+    omega0 = float(ev[np.argmin(np.abs(ev.real))].imag)
+    v, w, kappa, c = hopf_start(J, M, omega0)
+    sysh = system(vf, "hopf", problem.free)
+    D = np.concatenate([problem.params(X), c])
+    Y0 = np.concatenate([problem.state(X), v, w, [kappa], X[-1:]])
+    res = newton(lambda Y: sysh.residual(Y, D), lambda Y: sysh.jacobian(Y, D), Y0,
+                 settings.newton, polish=3)
+    if not res.converged:
+        return Description(X, "guess", res.residual, {"omega": omega0},
+                           "Hopf refinement: " + res.message)
+    Xr = np.append(res.X[: vf.n], res.X[-1])
+    omega = float(np.sqrt(res.X[3 * vf.n]))
+    data = {"omega": omega, **_lyapunov_data(vf, Xr[:-1], problem.params(Xr), omega)}
+    return Description(Xr, "converged", res.residual, data)
+
+
+def _lyapunov_data(vf, x, p, omega) -> dict:
+    try:
+        return {"l1": first_lyapunov(vf, x, p, omega)}
+    except RuntimeError as err:  # singular M or J: no normal form
+        return {"l1_error": str(err)}

@@ -1,0 +1,163 @@
+"""Pseudo-arclength continuation as a step iterator.
+
+From a point ``X_k`` with unit tangent ``tau_k`` (``G_X(X_k) tau_k = 0``):
+
+* predictor ``X^0 = X_k + ds tau_k``;
+* corrector: Newton on the bordered system
+  ``G(X) = 0``, ``tau_k . (X - X^0) = 0`` with the sparse matrix
+  ``[G_X(X); tau_k^T]`` factorized by SuperLU;
+* tangent: ``[G_X(X_{k+1}); tau_k^T] t = e_{m+1}``, ``tau_{k+1} = t / |t|``
+  (so ``tau_{k+1} . tau_k > 0``: orientation is kept), or the secant;
+* step control: ``ds <- min(grow ds, ds_max)`` after at most
+  ``easy_iterations`` Newton iterations; on failure ``ds <- shrink ds`` and
+  retry; below ``ds_min`` the run stops with status ``'failed'`` and the last
+  residual in the message.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+import scipy.sparse as sp
+
+from ._newton import NewtonResult, factorize, newton
+from ._settings import PALC, ContinuationSettings
+
+
+@dataclass(frozen=True)
+class Step:
+    """One converged point: ``X``, its tangent and how it was reached."""
+
+    X: np.ndarray
+    tau: np.ndarray
+    ds: float
+    iterations: int
+    residual: float
+    lu: object = field(repr=False, compare=False, default=None)
+
+
+def bordered(J: sp.spmatrix, row: np.ndarray) -> sp.csc_matrix:
+    """``[J; row^T]`` as a square sparse matrix."""
+    return sp.csc_matrix(sp.vstack([J, sp.csr_matrix(row[None, :])]))
+
+
+def correct(problem, X_pred: np.ndarray, tau: np.ndarray, settings) -> NewtonResult:
+    """Newton on ``G(X) = 0, tau . (X - X_pred) = 0`` from ``X_pred``."""
+    X_pred = np.array(X_pred, dtype=float)
+
+    def H(X):
+        return np.append(problem.residual(X), tau @ (X - X_pred))
+
+    return newton(H, lambda X: bordered(problem.jacobian(X), tau), X_pred, settings)
+
+
+def tangent(problem, X: np.ndarray, tau_ref: np.ndarray):
+    """Unit tangent with ``tau . tau_ref > 0`` and the LU of ``[G_X; tau_ref^T]``."""
+    lu = factorize(bordered(problem.jacobian(X), tau_ref))
+    if lu is None:
+        return None, None
+    rhs = np.zeros(X.size)
+    rhs[-1] = 1.0
+    t = lu.solve(rhs)
+    return t / np.linalg.norm(t), lu
+
+
+class ContinuationIterator:
+    """Iterate PALC steps; ``status``/``message`` tell why it stopped.
+
+    ``status`` is ``'running'`` while iterating, then one of ``'max_steps'``,
+    ``'bound'`` (a parameter left ``settings.bounds``), ``'failed'`` (corrector
+    failed at ``ds_min``, or the start point did not converge).
+    """
+
+    def __init__(self, problem, algorithm: PALC, settings: ContinuationSettings):
+        self.problem, self.algorithm, self.settings = problem, algorithm, settings
+        self.status, self.message, self.failure = "running", "", {}
+        self.stats = {"steps": 0, "newton_iterations": 0, "rejected_steps": 0,
+                      "time_steps": 0.0}
+        self.ds = settings.ds
+
+    def __iter__(self):
+        step = self.start()
+        if step is None:
+            return
+        yield step
+        for _ in range(self.settings.max_steps):
+            t0 = time.perf_counter()
+            step = self.advance(step)
+            self.stats["time_steps"] += time.perf_counter() - t0
+            if step is None:
+                return
+            yield step
+        self._stop("max_steps", f"reached max_steps = {self.settings.max_steps}")
+
+    # ------------------------------------------------------------------------
+    def start(self) -> Step | None:
+        """Correct ``X0`` at fixed parameter and orient the first tangent."""
+        prob, X0 = self.problem, self.problem.X0
+        e = np.zeros(X0.size)
+        e[-1] = 1.0
+        res = correct(prob, X0, e, self.settings.newton)
+        if not res.converged:
+            return self._fail("start point did not converge: " + res.message, res, 0.0)
+        tau, lu = tangent(prob, res.X, e)
+        if tau is None:
+            return self._fail("singular Jacobian at the start point (start at a "
+                              "fold or branch point?)", res, 0.0)
+        tau = self.settings.direction * tau
+        lu = factorize(bordered(prob.jacobian(res.X), tau))
+        self.stats["newton_iterations"] += res.iterations
+        return Step(res.X, tau, 0.0, res.iterations, res.residual, lu)
+
+    def advance(self, step: Step) -> Step | None:
+        """One PALC step with retries at smaller ``ds``; ``None`` when stopping."""
+        s = self.settings
+        while True:
+            res = correct(self.problem, step.X + self.ds * step.tau, step.tau, s.newton)
+            self.stats["newton_iterations"] += res.iterations
+            new = self._accept(step, res) if res.converged else None
+            if new is not None:
+                break
+            self.stats["rejected_steps"] += 1
+            if self.ds * s.step_shrink < s.ds_min:
+                return self._fail(f"corrector failed at ds = {self.ds:.3e} (ds_min = "
+                                  f"{s.ds_min:.1e}): {res.message}", res, self.ds)
+            self.ds *= s.step_shrink
+        if self._out_of_bounds(new.X):
+            return None
+        self.stats["steps"] += 1
+        if res.iterations <= s.easy_iterations:
+            self.ds = min(self.ds * s.step_grow, s.ds_max)
+        return new
+
+    def _accept(self, step: Step, res: NewtonResult) -> Step | None:
+        if self.algorithm.tangent == "secant":
+            tau = res.X - step.X
+            tau = tau / np.linalg.norm(tau)
+            lu = factorize(bordered(self.problem.jacobian(res.X), tau))
+        else:
+            tau, lu = tangent(self.problem, res.X, step.tau)
+        if tau is None or lu is None:
+            return None
+        return Step(res.X, tau, self.ds, res.iterations, res.residual, lu)
+
+    def _out_of_bounds(self, X) -> bool:
+        values = self.problem.par_dict(X)
+        for name, (lo, hi) in self.settings.bounds.items():
+            if not lo <= values[name] <= hi:
+                self._stop("bound", f"parameter {name} = {values[name]:.6g} left "
+                                    f"[{lo:.6g}, {hi:.6g}]")
+                return True
+        return False
+
+    def _stop(self, status: str, message: str) -> None:
+        if self.status == "running":
+            self.status, self.message = status, message
+
+    def _fail(self, message: str, res: NewtonResult, ds: float):
+        self._stop("failed", message)
+        self.failure = {"residual": float(res.residual), "iterations": int(res.iterations),
+                        "ds": float(ds), "X": np.array(res.X)}
+        return None

@@ -1,0 +1,174 @@
+"""The continued-problem interface and the equilibrium problem.
+
+A problem is a curve ``G(X) = 0``, ``G: R^(m+1) -> R^m``, whose unknowns
+``X`` end with the free parameters (the last one is *the* continuation
+parameter: direction and fold test refer to it). PALC only uses
+``residual``, ``jacobian`` and ``X0``; the driver additionally asks the
+problem to ``monitor`` points (eigenvalues, test functions), name the
+``events`` between two monitored points, give a smooth ``test_function`` to
+locate them and ``describe`` the located point. Hopf/fold curves (and, later,
+periodic orbits) implement the same interface.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Callable, Mapping
+
+import casadi as ca
+import numpy as np
+import scipy.sparse as sp
+
+from . import _eigen
+from ._settings import ContinuationSettings
+from ._systems import system
+from ._vectorfield import VectorField
+
+
+@dataclass(frozen=True)
+class PointInfo:
+    """What the driver records at one point besides ``X``."""
+
+    eigenvalues: np.ndarray
+    tests: dict = field(default_factory=dict)
+    counts: dict = field(default_factory=dict)
+
+
+@dataclass(frozen=True)
+class Description:
+    """A located special point: refined ``X``, status, precision, data."""
+
+    X: np.ndarray
+    status: str
+    precision: float
+    data: dict
+    message: str = ""
+
+
+class Problem:
+    """Base class: a curve ``G(X; D) = 0`` compiled by CasADi."""
+
+    kind = "abstract"
+
+    def __init__(self, vf: VectorField, free: tuple, X0, D):
+        self.vf = vf
+        self.free = tuple(free)
+        self.free_idx = tuple(vf.par_index(f) for f in self.free)
+        self.X0 = np.array(X0, dtype=float)
+        self.D = np.array(D, dtype=float)
+        self.system = system(vf, self.kind, self.free)
+        if self.X0.size != self.system.n_unknowns:
+            raise ValueError(f"X0 has size {self.X0.size}, the {self.kind} system has "
+                             f"{self.system.n_unknowns} unknowns")
+
+    # -- what PALC needs --------------------------------------------------------
+    def residual(self, X) -> np.ndarray:
+        """``G(X)``."""
+        return self.system.residual(X, self.D)
+
+    def jacobian(self, X) -> sp.csc_matrix:
+        """Exact sparse ``G_X`` of shape ``(m, m+1)``."""
+        return self.system.jacobian(X, self.D)
+
+    # -- state and parameters -----------------------------------------------------
+    def state(self, X) -> np.ndarray:
+        """The equilibrium state ``x`` carried by ``X``."""
+        return np.asarray(X[: self.vf.n], dtype=float)
+
+    def params(self, X) -> np.ndarray:
+        """Full parameter vector ``p`` at ``X`` (free ones taken from ``X``)."""
+        p = self.D[: len(self.vf.par_names)].copy()
+        p[list(self.free_idx)] = X[len(X) - len(self.free):]
+        return p
+
+    def par_dict(self, X) -> dict:
+        """``{name: value}`` of all parameters at ``X``."""
+        return dict(zip(self.vf.par_names, map(float, self.params(X))))
+
+    def matrices(self, X):
+        """``J = F_x`` and ``M`` at the state and parameters of ``X``."""
+        x, p = self.state(X), self.params(X)
+        return self.vf.jac_x(x, p), self.vf.mass(x, p)
+
+    def eigenvalues(self, X, settings: ContinuationSettings) -> np.ndarray:
+        """Generalized eigenvalues of ``J v = lambda M v`` at ``X``."""
+        if not settings.compute_eigenvalues:
+            return np.zeros(0, dtype=complex)
+        J, M = self.matrices(X)
+        return _eigen.eigenvalues(J, M, settings.eigen)
+
+    def columns(self, X) -> dict:
+        """Problem-specific scalar columns recorded per point (default none)."""
+        return {}
+
+    # -- detection hooks (overridden) -----------------------------------------------
+    def monitor(self, X, tau, lu, settings) -> PointInfo:
+        """Eigenvalues and test functions at ``X`` (``lu`` factors ``[G_X; tau^T]``)."""
+        return PointInfo(self.eigenvalues(X, settings), {"bp": _det_sign(lu)})
+
+    def events(self, a: PointInfo, b: PointInfo) -> list:
+        """Kinds of special points between two monitored points."""
+        return [k for k in a.tests if k in b.tests and a.tests[k] * b.tests[k] < 0] + \
+            [k for k in a.counts if k in b.counts and a.counts[k] != b.counts[k]]
+
+    def test_function(self, kind, X_a, info_a, X_b, info_b, settings) -> Callable | None:
+        """Smooth ``f(X, tau, lu)`` vanishing at the event, or None (bisection)."""
+        if kind == "bp":
+            return _bp_function(self, X_a)
+        return None
+
+    def describe(self, kind, X, tau, settings) -> Description:
+        """Refine and characterize a located point (default: as located)."""
+        return Description(X, "converged", 0.0, {})
+
+
+def _det_sign(lu) -> float:
+    """Sign of ``det`` of a matrix from its SuperLU factors ``Pr A Pc = L U``."""
+    if lu is None:
+        return 0.0
+    d = lu.U.diagonal()
+    return float(np.prod(np.sign(d)) * _parity(lu.perm_r) * _parity(lu.perm_c))
+
+
+def _parity(perm) -> int:
+    perm = np.asarray(perm)
+    seen = np.zeros(perm.size, dtype=bool)
+    sign = 1
+    for start in range(perm.size):
+        if seen[start]:
+            continue
+        j, length = start, 0
+        while not seen[j]:
+            seen[j] = True
+            j = perm[j]
+            length += 1
+        sign *= -1 if length % 2 == 0 else 1
+    return sign
+
+
+def _bp_function(problem, X_a):
+    """Smooth branch-point test ``g = 1 / (phi^T A^{-1} psi)``, ``A = [G_X; tau^T]``.
+
+    ``phi, psi`` approximate the right/left singular vectors of ``A`` at the
+    bracket start, so ``g`` changes sign through zero exactly where ``A`` is
+    singular (a simple branch point) and has no pole nearby.
+    """
+    state = {}
+
+    def g(X, tau, lu):
+        if "phi" not in state:
+            state["phi"], state["psi"] = _approx_null(lu, X.size)
+        return 1.0 / float(state["phi"] @ lu.solve(state["psi"]))
+
+    return g
+
+
+def _approx_null(lu, n, iterations=3):
+    rng = np.random.default_rng(0)
+    phi, psi = rng.standard_normal(n), rng.standard_normal(n)
+    for _ in range(iterations):
+        phi = lu.solve(phi)
+        phi /= np.linalg.norm(phi)
+        psi = lu.solve(psi, trans="T")
+        psi /= np.linalg.norm(psi)
+    return phi, psi

@@ -1,0 +1,154 @@
+"""The vector field ``M(x, p) xdot = F(x, p)`` and its exact derivatives.
+
+``F`` and ``M`` are CasADi functions of ``(x, p)``; ``M = None`` means the
+identity. All derivatives are obtained by CasADi algorithmic differentiation:
+
+* ``J = dF/dx`` (sparse), ``F_p = dF/dp``;
+* the multilinear forms used by normal-form coefficients,
+  ``F2(u, v) = D_x^2 F[u, v]``, ``F3(u, v, w) = D_x^3 F[u, v, w]``,
+  ``M1(u) y = (D_x M[u]) y`` and ``M2(u, v) y = (D_x^2 M[u, v]) y``.
+"""
+
+from __future__ import annotations
+
+from functools import cached_property
+
+import casadi as ca
+import numpy as np
+import scipy.sparse as sp
+
+from ._symbolic import as_sx_function, symbol_class, to_csc, to_numpy
+
+
+def _check_function(fun, label: str, n_out_rows: int | None, n_out_cols: int):
+    if not isinstance(fun, ca.Function):
+        raise ValueError(f"{label} must be a casadi.Function, got {type(fun).__name__}")
+    if fun.n_in() != 2 or fun.n_out() != 1:
+        raise ValueError(f"{label} must map (x, p) to one output, has "
+                         f"{fun.n_in()} inputs and {fun.n_out()} outputs")
+    rows, cols = fun.size1_out(0), fun.size2_out(0)
+    if cols != n_out_cols or (n_out_rows is not None and rows != n_out_rows):
+        raise ValueError(f"{label} output has shape ({rows}, {cols}), expected "
+                         f"({n_out_rows if n_out_rows is not None else 'n'}, {n_out_cols})")
+
+
+class VectorField:
+    """``M(x, p) xdot = F(x, p)`` with named parameters, compiled once.
+
+    Parameters
+    ----------
+    F : casadi.Function ``(x[n], p[k]) -> F[n]``.
+    M : casadi.Function ``(x[n], p[k]) -> M[n x n]`` or ``None`` (identity).
+    par_names : the ``k`` names of the entries of ``p``, in order.
+    """
+
+    def __init__(self, F: ca.Function, M: ca.Function | None, par_names):
+        par_names = tuple(str(s) for s in par_names)
+        _check_function(F, "F", None, 1)
+        n = F.size1_in(0)
+        if F.size2_in(0) != 1 or F.size1_out(0) != n:
+            raise ValueError(f"F must map x[{n}] to a column of size {n}, "
+                             f"got output {F.size_out(0)}")
+        if F.numel_in(1) != len(par_names):
+            raise ValueError(f"par_names has {len(par_names)} names but F takes "
+                             f"p of size {F.numel_in(1)}")
+        if len(set(par_names)) != len(par_names):
+            raise ValueError(f"par_names must be unique, got {par_names}")
+        if M is not None:
+            _check_function(M, "M", n, n)
+        self.F = as_sx_function(F)
+        self.M = None if M is None else as_sx_function(M)
+        self.n = n
+        self.par_names = par_names
+        funs = (self.F,) if self.M is None else (self.F, self.M)
+        self.sym = symbol_class(*funs)
+        self._x = self.sym.sym("x", n)
+        self._p = self.sym.sym("p", len(par_names))
+
+    # ---- symbolic building blocks (used by augmented problems) -------------
+    def F_expr(self, x, p):
+        """Symbolic ``F(x, p)``."""
+        return self.F(x, p)
+
+    def M_expr(self, x, p):
+        """Symbolic ``M(x, p)`` (identity when no mass matrix is given)."""
+        return self.sym.eye(self.n) if self.M is None else self.M(x, p)
+
+    def par_index(self, name: str) -> int:
+        """Position of parameter ``name`` in ``p``; ValueError if unknown."""
+        if name not in self.par_names:
+            raise ValueError(f"unknown parameter {name!r}; known: {self.par_names}")
+        return self.par_names.index(name)
+
+    # ---- compiled numeric functions ----------------------------------------
+    @cached_property
+    def _funs(self):
+        x, p = self._x, self._p
+        f = self.F(x, p)
+        jx, jp = ca.jacobian(f, x), ca.jacobian(f, p)
+        m = self.M_expr(x, p)
+        m = self.sym(ca.sparsify(m)) if self.sym is ca.SX else m
+        pat = lambda a: ((a.size1(), a.size2()), *map(np.asarray, a.sparsity().get_ccs()))
+        return {
+            "F": ca.Function("F_num", [x, p], [f]),
+            "Jx": ca.Function("Jx", [x, p], [jx.nz[:]]), "Jx_pat": pat(jx),
+            "Jp": ca.Function("Jp", [x, p], [ca.densify(jp)]),
+            "M": ca.Function("M_num", [x, p], [m.nz[:]]), "M_pat": pat(m),
+        }
+
+    def rhs(self, x, p) -> np.ndarray:
+        """``F(x, p)``."""
+        return to_numpy(self._funs["F"](x, p))
+
+    def jac_x(self, x, p) -> sp.csc_matrix:
+        """Exact sparse ``J = dF/dx``."""
+        return to_csc(to_numpy(self._funs["Jx"](x, p)), self._funs["Jx_pat"])
+
+    def jac_p(self, x, p) -> np.ndarray:
+        """Exact dense ``dF/dp`` of shape ``(n, k)``."""
+        return np.asarray(self._funs["Jp"](x, p).full(), dtype=float)
+
+    def mass(self, x, p) -> sp.csc_matrix:
+        """Sparse ``M(x, p)`` (identity if none was given)."""
+        if self.M is None:
+            return sp.identity(self.n, format="csc")
+        return to_csc(to_numpy(self._funs["M"](x, p)), self._funs["M_pat"])
+
+    # ---- multilinear forms for normal forms --------------------------------
+    @cached_property
+    def _forms(self):
+        S, n = self.sym, self.n
+        x, p = self._x, self._p
+        u, v, w, y = (S.sym(s, n) for s in "uvwy")
+        f = self.F(x, p)
+        f2 = ca.jtimes(ca.jtimes(f, x, u), x, v)
+        f3 = ca.jtimes(f2, x, w)
+        my = ca.mtimes(self.M_expr(x, p), y)
+        m1 = ca.jtimes(my, x, u)
+        m2 = ca.jtimes(m1, x, v)
+        return {
+            "F2": ca.Function("F2", [x, p, u, v], [f2]),
+            "F3": ca.Function("F3", [x, p, u, v, w], [f3]),
+            "M1": ca.Function("M1", [x, p, u, y], [m1]),
+            "M2": ca.Function("M2", [x, p, u, v, y], [m2]),
+        }
+
+    def form(self, name: str, x, p, *vectors) -> np.ndarray:
+        """Evaluate a real multilinear form ``F2, F3, M1, M2`` on complex vectors.
+
+        Complex arguments are expanded by multilinearity into real evaluations.
+        """
+        fun = self._forms[name]
+        return _complex_multilinear(lambda *r: to_numpy(fun(x, p, *r)), vectors)
+
+
+def _complex_multilinear(real_fun, vectors) -> np.ndarray:
+    """``f(z1, ..., zk)`` for a real multilinear ``f`` and complex ``z_i``."""
+    if not vectors:
+        return real_fun().astype(complex)
+    head, rest = np.asarray(vectors[0]), vectors[1:]
+    re = _complex_multilinear(lambda *r: real_fun(head.real, *r), rest)
+    if not np.any(head.imag):
+        return re
+    im = _complex_multilinear(lambda *r: real_fun(head.imag, *r), rest)
+    return re + 1j * im

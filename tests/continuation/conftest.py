@@ -1,0 +1,73 @@
+"""Small models with known answers, shared by the continuation tests."""
+
+import casadi as ca
+
+
+def scalar(expr_fun, n_par=1):
+    x, p = ca.SX.sym("x", 1), ca.SX.sym("p", n_par)
+    return ca.Function("F", [x, p], [expr_fun(x[0], p)])
+
+
+def brusselator():
+    """x' = A - (B+1) x + x^2 y, y' = B x - x^2 y; p = (A, B)."""
+    x, p = ca.SX.sym("x", 2), ca.SX.sym("p", 2)
+    A, B = p[0], p[1]
+    u, v = x[0], x[1]
+    return ca.Function("F", [x, p], [ca.vertcat(A - (B + 1) * u + u ** 2 * v,
+                                                 B * u - u ** 2 * v)])
+
+
+def hopf_normal_form(coef):
+    """x' = mu x - w y + f2 + f3, y' = w x + mu y + g2 + g3; p = (mu, w).
+
+    coef = dict(a1, a2, a3 (x^2, xy, y^2 in f), b1, b2, b3 (in g),
+                c1, c2 (x^3, x y^2 in f), d1, d2 (x^2 y, y^3 in g)).
+    """
+    x, p = ca.SX.sym("x", 2), ca.SX.sym("p", 2)
+    X, Y = x[0], x[1]
+    mu, w = p[0], p[1]
+    k = coef
+    f = k["a1"] * X**2 + k["a2"] * X * Y + k["a3"] * Y**2 + k["c1"] * X**3 + k["c2"] * X * Y**2
+    g = k["b1"] * X**2 + k["b2"] * X * Y + k["b3"] * Y**2 + k["d1"] * X**2 * Y + k["d2"] * Y**3
+    return ca.Function("F", [x, p], [ca.vertcat(mu * X - w * Y + f, w * X + mu * Y + g)])
+
+
+def guckenheimer_holmes_a(k, w):
+    """Guckenheimer-Holmes (3.4.11) coefficient a for x' = -w y + f, y' = w x + g."""
+    fxx, fxy, fyy = 2 * k["a1"], k["a2"], 2 * k["a3"]
+    gxx, gxy, gyy = 2 * k["b1"], k["b2"], 2 * k["b3"]
+    fxxx, fxyy, gxxy, gyyy = 6 * k["c1"], 2 * k["c2"], 2 * k["d1"], 6 * k["d2"]
+    return (fxxx + fxyy + gxxy + gyyy) / 16 + (
+        fxy * (fxx + fyy) - gxy * (gxx + gyy) - fxx * gxx + fyy * gyy) / (16 * w)
+
+
+def mass_model():
+    """M(x) xdot = F(x, p) with c = (1, 1), y = x - c:
+
+    F = (p y1 - y2 - y1 |y|^2 + y1 y2, y1 - y2 |y|^2 + y1^2),
+    M(x) = [[1 + x1^2, x2], [0, 1 + x2^2]]  (M(c) = [[2, 1], [0, 2]]).
+    The equilibrium is x = c for all p. M(c)^{-1} J(p) = [[p/2 - 1/4, -1/2],
+    [1/2, 0]]: trace p/2 - 1/4, det 1/4, so the Hopf point is p = 1/2 with
+    omega = 1/2 (with M = I it would be p = 0, omega = 1).
+    """
+    x, p = ca.SX.sym("x", 2), ca.SX.sym("p", 1)
+    y1, y2 = x[0] - 1, x[1] - 1
+    r2 = y1**2 + y2**2
+    F = ca.Function("F", [x, p], [ca.vertcat(p[0] * y1 - y2 - y1 * r2 + y1 * y2,
+                                             y1 - y2 * r2 + y1**2)])
+    M = ca.Function("M", [x, p], [ca.vertcat(ca.horzcat(1 + x[0]**2, x[1]),
+                                             ca.horzcat(0, 1 + x[1]**2))])
+    return F, M
+
+
+import types
+
+import pytest
+
+
+@pytest.fixture(scope="session")
+def models():
+    """The model builders above, as a namespace (tests import nothing local)."""
+    return types.SimpleNamespace(
+        scalar=scalar, brusselator=brusselator, hopf_normal_form=hopf_normal_form,
+        guckenheimer_holmes_a=guckenheimer_holmes_a, mass_model=mass_model)

@@ -1,0 +1,179 @@
+"""Equilibrium branches: folds, branch points, Hopf points, l1, failures."""
+
+import math
+
+import casadi as ca
+import numpy as np
+import pytest
+
+import continuation as C
+
+
+
+def settings(**kw):
+    base = dict(ds=0.02, ds_max=0.1, max_steps=100)
+    base.update(kw)
+    return C.ContinuationSettings(**base)
+
+
+def test_bratu_type_fold_located_and_passed(models):
+    # 0 = mu e^x - x: fold where mu e^x = x and mu e^x = 1, i.e. x = 1, mu = 1/e.
+    F = models.scalar(lambda x, p: p[0] * ca.exp(x) - x)
+    br = C.continuation(C.EquilibriumProblem(F, [0.0], {"mu": 0.0}, "mu"),
+                        settings=settings(max_steps=60))
+    folds = br.special("fold")
+    assert len(folds) == 1 and folds[0].status == "converged"
+    assert abs(folds[0].x[0] - 1.0) < 1e-10
+    assert abs(folds[0].params["mu"] - math.exp(-1)) < 1e-12
+    mu, x = br.par("mu"), br.x[:, 0]
+    # continued around the fold: beyond it the branch lies on x > 1 with mu decreasing
+    assert x[-1] > 2.0 and mu[-1] < mu.max() - 0.1
+    assert np.all(np.abs(mu * np.exp(x) - x) < 1e-9)
+    # the lower branch is stable (eigenvalue mu e^x - 1 < 0), the upper unstable
+    assert np.all(br.stable[x < 0.99]) and not np.any(br.stable[x > 1.01])
+
+
+def test_closed_curve_without_branch_jumping(models):
+    # x^2 + mu^2 = 1: one and a half turns, folds at mu = +-1 (x = 0).
+    F = models.scalar(lambda x, p: x**2 + p[0]**2 - 1)
+    br = C.continuation(C.EquilibriumProblem(F, [0.9], {"mu": 0.0}, "mu"),
+                        settings=settings(ds=0.05, ds_max=0.1, max_steps=100))
+    x, mu = br.x[:, 0], br.par("mu")
+    assert np.all(np.abs(x**2 + mu**2 - 1) < 1e-10)
+    theta = np.unwrap(np.arctan2(mu, x))
+    steps = np.diff(theta)
+    assert np.all(steps > 0) and np.all(steps < 0.11)  # monotone, no jumps
+    assert theta[-1] - theta[0] > 3 * math.pi           # went around and on
+    folds = br.special("fold")
+    assert len(folds) == 3
+    for f in folds:
+        assert abs(f.x[0]) < 1e-10 and abs(abs(f.params["mu"]) - 1) < 1e-12
+
+
+def test_failed_corrector_is_reported_with_residual(models):
+    F = models.scalar(lambda x, p: x - p[0] ** 2 + 0.3 * x**3)
+    strict = C.NewtonSettings(tol=1e-14, max_iter=1)
+    br = C.continuation(C.EquilibriumProblem(F, [0.0], {"mu": 0.0}, "mu"),
+                        settings=settings(ds=0.1, ds_min=1e-2, newton=strict))
+    assert br.status == "failed"
+    assert br.failure["residual"] > 1e-14 and np.isfinite(br.failure["residual"])
+    assert f"{br.failure['residual']:.3e}" in br.message
+    assert len(br) >= 1 and np.all(np.isfinite(br.x))
+
+
+def test_start_point_failure_is_data(models):
+    F = models.scalar(lambda x, p: x**2 + 1 + p[0] ** 2)
+    br = C.continuation(C.EquilibriumProblem(F, [0.5], {"mu": 0.0}, "mu"))
+    assert br.status == "failed" and len(br) == 0
+    assert br.failure["residual"] >= 1.0
+    assert "start point did not converge" in br.message
+
+
+@pytest.mark.parametrize("expr", [lambda x, p: p[0] * x - x**3,
+                                  lambda x, p: p[0] * x - x**2])
+def test_branch_point_on_trivial_branch(expr, models):
+    F = models.scalar(expr)
+    br = C.continuation(C.EquilibriumProblem(F, [0.0], {"mu": -0.5}, "mu"),
+                        settings=settings(max_steps=30, bounds={"mu": (-1, 0.5)}))
+    bps = br.special("bp")
+    assert br.status == "bound"
+    assert len(bps) == 1 and bps[0].status == "converged"
+    assert abs(bps[0].params["mu"]) < 1e-10 and abs(bps[0].x[0]) < 1e-10
+    assert not br.special("fold")
+
+
+def test_bounds_stop_the_run(models):
+    F = models.scalar(lambda x, p: x - p[0])
+    br = C.continuation(C.EquilibriumProblem(F, [0.0], {"mu": 0.0}, "mu"),
+                        settings=settings(bounds={"mu": (-1.0, 0.35)}))
+    assert br.status == "bound" and "mu" in br.message
+    assert br.par("mu").max() <= 0.35 and br.par("mu").max() > 0.2
+
+
+def test_direction_and_step_growth(models):
+    F = models.scalar(lambda x, p: x - p[0])
+    br = C.continuation(C.EquilibriumProblem(F, [0.0], {"mu": 0.0}, "mu"),
+                        settings=settings(direction=-1, max_steps=20, ds_max=0.08))
+    assert np.all(np.diff(br.par("mu")) < 0)
+    assert br.ds[-1] == pytest.approx(0.08)
+
+
+@pytest.mark.parametrize("k", [
+    dict(a1=0.3, a2=-0.2, a3=0.5, b1=0.1, b2=0.4, b3=-0.3, c1=-1.0, c2=-0.5, d1=-0.2, d2=-0.7),
+    dict(a1=-0.4, a2=0.6, a3=0.1, b1=0.5, b2=-0.3, b3=0.2, c1=0.8, c2=0.3, d1=0.4, d2=0.2),
+])
+def test_hopf_normal_form_lyapunov(k, models):
+    w = 1.0
+    a = models.guckenheimer_holmes_a(k, w)
+    F = models.hopf_normal_form(k)
+    br = C.continuation(C.EquilibriumProblem(F, [0.0, 0.0], {"mu": -0.3, "w": w}, "mu"),
+                        settings=settings(bounds={"mu": (-1, 0.3)}))
+    (h,) = br.special("hopf")
+    assert h.status == "converged"
+    assert abs(h.params["mu"]) < 1e-12 and np.max(np.abs(h.x)) < 1e-12
+    assert abs(h.data["omega"] - 1.0) < 1e-12
+    assert abs(h.data["l1"] - 2 * a / w) < 1e-10
+    assert np.sign(h.data["l1"]) == np.sign(a) != 0
+
+
+def test_lyapunov_scales_with_frequency(models):
+    k = dict(a1=0, a2=0, a3=0, b1=0, b2=0, b3=0, c1=-0.7, c2=-0.7, d1=-0.7, d2=-0.7)
+    vf = C.VectorField(models.hopf_normal_form(k), None, ("mu", "w"))
+    for w in (0.5, 3.0):  # x' = mu x - w y - 0.7 x r^2 ...: l1 = 2 (-0.7) / w
+        assert C.first_lyapunov(vf, np.zeros(2), np.array([0.0, w]), w) == \
+            pytest.approx(-1.4 / w, rel=1e-12)
+
+
+def test_brusselator_hopf_point(models):
+    # J = [[B-1, A^2], [-B, -A^2]]: trace B - 1 - A^2, det A^2 -> B = 1 + A^2, omega = A.
+    A = 1.5
+    br = C.continuation(C.EquilibriumProblem(models.brusselator(), [A, 1 / A], {"A": A, "B": 1.0},
+                                             "B"), settings=settings(bounds={"B": (0, 5)}))
+    (h,) = br.special("hopf")
+    assert abs(h.params["B"] - (1 + A**2)) < 1e-12
+    assert abs(h.data["omega"] - A) < 1e-12
+    assert np.allclose(h.x, [A, (1 + A**2) / A], atol=1e-12)
+    assert br.stable[br.par("B") < 1 + A**2 - 1e-6].all()
+    assert not br.stable[br.par("B") > 1 + A**2 + 1e-6].any()
+
+
+def test_state_dependent_mass_matrix_hopf(models):
+    F, M = models.mass_model()
+    prob = C.EquilibriumProblem(F, [1.0, 1.0], {"p": 0.0}, "p", M=M)
+    br = C.continuation(prob, settings=settings(bounds={"p": (-1, 1)}))
+    (h,) = br.special("hopf")
+    assert h.status == "converged"
+    assert abs(h.params["p"] - 0.5) < 1e-12 and abs(h.data["omega"] - 0.5) < 1e-12
+    ev = br.eigenvalues[0]
+    assert np.all(ev.real < 0)
+
+
+def test_mass_matrix_lyapunov_agrees_with_explicit_form(models):
+    """l1 of M(x) xdot = F equals l1 of xdot = M(x)^{-1} F (independent route)."""
+    F, M = models.mass_model()
+    x, p = ca.SX.sym("x", 2), ca.SX.sym("p", 1)
+    f = ca.Function("f", [x, p], [ca.mtimes(ca.inv(M(x, p)), F(x, p))])
+    xs, ps = np.ones(2), np.array([0.5])
+    l1_mass = C.first_lyapunov(C.VectorField(F, M, ("p",)), xs, ps, 0.5)
+    l1_explicit = C.first_lyapunov(C.VectorField(f, None, ("p",)), xs, ps, 0.5)
+    assert l1_mass == pytest.approx(l1_explicit, rel=1e-10, abs=1e-12)
+    # freezing M at M(c) gives a different value: the state dependence matters
+    Mc = ca.Function("Mc", [x, p], [ca.DM([[2, 1], [0, 2]])])
+    l1_frozen = C.first_lyapunov(C.VectorField(F, Mc, ("p",)), xs, ps, 0.5)
+    assert abs(l1_frozen - l1_mass) > 1e-2
+
+
+def test_scalar_mass_leaves_l1_invariant(models):
+    """xdot = F / m(x), m > 0, is a time rescaling: same orbits, same l1."""
+    k = dict(a1=0.3, a2=-0.2, a3=0.5, b1=0.1, b2=0.4, b3=-0.3, c1=-1.0, c2=-0.5,
+             d1=-0.2, d2=-0.7)
+    F = models.hopf_normal_form(k)
+    x, p = ca.SX.sym("x", 2), ca.SX.sym("p", 2)
+    m = 1 + 0.4 * x[0] - 0.3 * x[1] + x[0] ** 2
+    M = ca.Function("M", [x, p], [m * ca.SX.eye(2)])
+    l1_id = C.first_lyapunov(C.VectorField(F, None, ("mu", "w")), np.zeros(2),
+                             np.array([0.0, 1.0]), 1.0)
+    l1_m = C.first_lyapunov(C.VectorField(F, M, ("mu", "w")), np.zeros(2),
+                            np.array([0.0, 1.0]), 1.0)
+    assert l1_m == pytest.approx(l1_id, rel=1e-11)
+    assert l1_id == pytest.approx(2 * models.guckenheimer_holmes_a(k, 1.0), rel=1e-11)
