@@ -106,8 +106,12 @@ class Model:
 
 
 # -- assembly -------------------------------------------------------------------------
-def build_model(scene: Scene, symbolic: str = "SX") -> Model:
-    """Build the CasADi model of ``scene``'s structure (N, nodes, walls, contact)."""
+def build_model(scene: Scene, symbolic: str = "MX") -> Model:
+    """Build the CasADi model of ``scene``'s structure (N, nodes, walls, contact).
+
+    MX (the default) keeps the constant modal matrices as dense blocks: it builds and
+    evaluates faster than SX at every N measured (docs/performance.md).
+    """
     if symbolic not in ("SX", "MX"):
         raise ValueError(f"symbolic must be 'SX' or 'MX', got {symbolic!r}")
     sym = getattr(ca, symbolic)

@@ -81,12 +81,12 @@ def steady_state(scene: Scene, model: Model | None = None, tol: float = 1e-12) -
 def _system(model: Model):
     """CasADi residual and Jacobian of the steady system in z = (q, Q, Δp) given (p, U*)."""
     n = model.n_modes
-    z = ca.SX.sym("z", n + 3)
-    p = ca.SX.sym("p", len(model.parameter_names))
-    ustar = ca.SX.sym("ustar")
+    z = ca.MX.sym("z", n + 3)
+    p = ca.MX.sym("p", len(model.parameter_names))
+    ustar = ca.MX.sym("ustar")
     i_dp = model.index("pressure_drop")
     p_full = ca.vertcat(p[:i_dp], z[-1], p[i_dp + 1:])
-    x = ca.vertcat(ca.SX.zeros(n), z[:n + 2])
+    x = ca.vertcat(ca.MX.zeros(n), z[:n + 2])
     F = model.rhs(x, p_full)
     hstar = model.scene.hstar
     g = ca.vertcat(F[:n], F[2 * n:], (z[n] + z[n + 1]) / hstar - ustar)
