@@ -13,6 +13,7 @@ Plotting lives in ``continuation.plotting`` (Matplotlib is imported there only).
 """
 
 from ._branch import Branch, SpecialPoint
+from ._curves import FoldCurveProblem, HopfCurveProblem
 from ._driver import continuation
 from ._equilibrium import EquilibriumProblem
 from ._lyapunov import first_lyapunov
@@ -23,6 +24,6 @@ from ._vectorfield import VectorField
 
 __all__ = [
     "Branch", "ContinuationIterator", "ContinuationSettings", "EigenSettings",
-    "EquilibriumProblem", "NewtonSettings", "PALC", "Problem",
+    "EquilibriumProblem", "FoldCurveProblem", "HopfCurveProblem", "NewtonSettings", "PALC", "Problem",
     "SpecialPoint", "Step", "VectorField", "continuation", "first_lyapunov",
 ]

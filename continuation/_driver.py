@@ -37,8 +37,10 @@ def continuation(problem: Problem, algorithm: PALC | None = None,
             info = problem.monitor(step.X, step.tau, step.lu, settings)
             if prev is not None and settings.detect:
                 for kind in problem.events(prev[1], info):
-                    rec.special.append(_special(problem, kind, prev, (step, info),
-                                                settings, len(rec.X), rec.stats))
+                    found = _special(problem, kind, prev, (step, info), settings,
+                                     len(rec.X), rec.stats)
+                    if found is not None:
+                        rec.special.append(found)
             rec.add(step, info)
             prev = (step, info)
             bar.update()
@@ -65,6 +67,9 @@ def _special(problem, kind, a, b, settings, index, stats) -> SpecialPoint:
     loc = locate(problem, kind, a, b, settings)
     desc = problem.describe(kind, loc.X, loc.tau, settings)
     stats["time_location"] = stats.get("time_location", 0.0) + time.perf_counter() - t0
+    if desc.status == "rejected":
+        stats["rejected_events"] = stats.get("rejected_events", 0) + 1
+        return None
     stats["located"] = stats.get("located", 0) + 1
     status = desc.status if loc.converged else "guess"
     data = {"bracket": loc.bracket, **desc.data}

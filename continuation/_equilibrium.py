@@ -4,9 +4,11 @@ Test functions along the branch, for ``X = (x, p)`` and tangent ``tau``:
 
 * fold (limit point): ``tau_p`` changes sign;
 * simple branch point: ``sign det [G_X; tau^T]`` changes;
-* Hopf: the number of eigenvalues of ``J v = lambda M v`` with ``Re > 0`` and
-  ``Im != 0`` changes; it is located on ``Re lambda(s) = 0`` of the crossing
-  eigenvalue.
+* Hopf: the number of eigenvalues of ``J v = lambda M v`` with ``Re > 0``
+  changes by a nonzero even number (a complex pair crossed; a complex pair
+  turning into two real ones keeps the count); it is located on
+  ``Re lambda(s) = 0`` of the crossing eigenvalue, and rejected if the refined
+  point is a neutral saddle (``kappa <= 0``).
 
 Folds and Hopf points are then refined by Newton on the square fold/Hopf
 systems of ``_systems`` (one free parameter), and the first Lyapunov
@@ -90,9 +92,16 @@ class EquilibriumProblem(Problem):
         tests = {"fold": float(tau[-1]), **base.tests}
         counts = {}
         if settings.compute_eigenvalues:
-            counts["hopf"] = _eigen.count_complex_unstable(base.eigenvalues,
-                                                           settings.eigen.imag_tol)
+            counts["hopf"] = _eigen.count_unstable(base.eigenvalues)
         return PointInfo(base.eigenvalues, tests, counts)
+
+    def events(self, a: PointInfo, b: PointInfo) -> list:
+        kinds = [k for k in super().events(a, b) if k != "hopf"]
+        if "hopf" in a.counts and "hopf" in b.counts:
+            jump = a.counts["hopf"] - b.counts["hopf"]
+            if jump != 0 and jump % 2 == 0:
+                kinds.append("hopf")
+        return kinds
 
     def test_function(self, kind, X_a, info_a, X_b, info_b, settings):
         if kind == "fold":
@@ -114,6 +123,8 @@ def _hopf_function(problem, info_a, info_b, settings):
     tol = settings.eigen.imag_tol
     cands = np.concatenate([info_a.eigenvalues, info_b.eigenvalues])
     cands = cands[cands.imag > tol]
+    if not cands.size:
+        return lambda X, tau, lu: 0.0
     ref = cands[np.argmin(np.abs(cands.real))]
 
     def f(X, tau, lu):
@@ -170,6 +181,8 @@ def _refine_hopf(problem, X, settings) -> Description:
     J, M = problem.matrices(X)
     ev = _eigen.eigenvalues(J, M, settings.eigen)
     ev = ev[ev.imag > settings.eigen.imag_tol]
+    if not ev.size:
+        return Description(X, "rejected", 0.0, {}, "no complex eigenvalue: not a Hopf point")
     omega0 = float(ev[np.argmin(np.abs(ev.real))].imag)
     v, w, kappa, c = hopf_start(J, M, omega0)
     sysh = system(vf, "hopf", problem.free)
@@ -181,6 +194,8 @@ def _refine_hopf(problem, X, settings) -> Description:
         return Description(X, "guess", res.residual, {"omega": omega0},
                            "Hopf refinement: " + res.message)
     Xr = np.append(res.X[: vf.n], res.X[-1])
+    if res.X[3 * vf.n] <= 0:
+        return Description(Xr, "rejected", res.residual, {}, "neutral saddle, not Hopf")
     omega = float(np.sqrt(res.X[3 * vf.n]))
     data = {"omega": omega, **_lyapunov_data(vf, Xr[:-1], problem.params(Xr), omega)}
     return Description(Xr, "converged", res.residual, data)
