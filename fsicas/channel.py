@@ -68,7 +68,7 @@ class Profile:
         xs = np.union1d(np.linspace(0.0, 1.0, 2001), self.x)
         hmin = float(np.min(self(xs)))
         if hmin <= 0.0:
-            raise ValueError(f"{name}: wall height must be > 0 on all of [0, 1]; min is {hmin:g}")
+            raise ValueError(f"{name}: the profile must be > 0 on all of [0, 1]; min is {hmin:g}")
 
     def __call__(self, x) -> np.ndarray:
         x = np.asarray(x, dtype=float)

@@ -14,7 +14,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.integrate import cumulative_simpson
 
-from .beam import clamped_free_modes
+from .model import modal_basis
 from .scene import Scene
 
 __all__ = ["FlowFields", "flow_fields"]
@@ -45,7 +45,7 @@ def flow_fields(scene: Scene, state, state_dot, pressure_drop: float, x=None) ->
     state, state_dot = np.asarray(state, float), np.asarray(state_dot, float)
     r, q, Q = state[:n], state[n:2 * n], state[2 * n:]
     rdot, Qdot = state_dot[:n], state_dot[2 * n:]
-    modes = clamped_free_modes(n, x)
+    modes = modal_basis(scene, x)
     y, ydot = modes.phi.T @ q, modes.phi.T @ r
     h, u, p = [], [], []
     for c, s in ((0, -1.0), (1, 1.0)):

@@ -30,10 +30,11 @@ import casadi as ca
 import numpy as np
 
 from .beam import ModalBasis, clamped_free_modes
-from .quadrature import gauss_legendre
+from .beam_fe import default_n_elements, nonuniform_beam_modes
+from .quadrature import composite_gauss_legendre, gauss_legendre
 from .scene import Scene
 
-__all__ = ["Model", "build_model", "parameter_names"]
+__all__ = ["Model", "build_model", "modal_basis", "parameter_names"]
 
 _FLOW_PARAMS = ("pressure_drop", "mstar", "friction", "k0", "kl")
 _CONTACT_PARAMS = ("contact_stiffness", "contact_eps")
@@ -43,6 +44,27 @@ def parameter_names(scene: Scene) -> tuple[str, ...]:
     """Names of the symbolic parameters of the model of ``scene``, in order."""
     contact = _CONTACT_PARAMS if scene.contact else ()
     return _FLOW_PARAMS + contact + tuple(f"zeta{n + 1}" for n in range(scene.modes))
+
+
+def modal_basis(scene: Scene, x) -> ModalBasis:
+    """The scene's beam modes at points x: analytic when uniform, FE when ``thickness`` is set."""
+    x = np.asarray(x, dtype=float)
+    if scene.thickness is None:
+        return clamped_free_modes(scene.modes, x)
+    return nonuniform_beam_modes(scene.modes, x, thickness=scene.thickness)
+
+
+def quadrature_rule(scene: Scene) -> tuple[np.ndarray, np.ndarray]:
+    """Nodes and weights of the model's integrals.
+
+    Analytic modes: one Gauss–Legendre rule of ``scene.n_quad`` nodes. FE modes are
+    piecewise cubic, so the rule is composite and aligned with the elements, with
+    ``ceil(n_quad / elements)`` (at least 4) nodes per element.
+    """
+    if scene.thickness is None:
+        return gauss_legendre(scene.n_quad)
+    elements = default_n_elements(scene.modes)
+    return composite_gauss_legendre(elements, max(4, -(-scene.n_quad // elements)))
 
 
 @dataclass(frozen=True)
@@ -98,7 +120,7 @@ class Model:
     def deflection(self, x, xs) -> np.ndarray:
         """Beam deflection y(xs) = Σ phi_n(xs) q_n."""
         _, q, _ = self.split(x)
-        return clamped_free_modes(self.n_modes, np.asarray(xs, dtype=float)).phi.T @ q
+        return modal_basis(self.scene, xs).phi.T @ q
 
     def xdot(self, x, p) -> np.ndarray:
         """Solve M xdot = F for the time derivative at (x, p)."""
@@ -116,9 +138,9 @@ def build_model(scene: Scene, symbolic: str = "MX") -> Model:
         raise ValueError(f"symbolic must be 'SX' or 'MX', got {symbolic!r}")
     sym = getattr(ca, symbolic)
     names = parameter_names(scene)
-    nodes, weights = gauss_legendre(scene.n_quad)
-    basis = clamped_free_modes(scene.modes, nodes)
-    tip = clamped_free_modes(scene.modes, np.array([0.0, 1.0]))
+    nodes, weights = quadrature_rule(scene)
+    basis = modal_basis(scene, nodes)
+    tip = modal_basis(scene, [0.0, 1.0])
     n = scene.modes
     x = sym.sym("x", 2 * n + 2)
     p = sym.sym("p", len(names))

@@ -33,6 +33,8 @@ class Scene:
     k0, kl: singular head losses at inlet and outlet. zeta: modal damping (scalar or per mode).
     modes: N.  quad_nodes: Gauss–Legendre nodes (default 2N+20, at least 2N).
     channel1/channel2: wall profiles (default: straight, hstar/2 each).
+    thickness: beam thickness e(x)/e(0) (default uniform); a non-uniform beam uses the
+    Hermite-cubic FE modes of :mod:`fsicas.beam_fe`, m = e, EI = e^3 relative to the root.
     contact: regularized wall impact on/off; contact_stiffness k* (per unit length,
     relative to the first-mode stiffness); contact_eps: eps/H with H = hstar/2.
     """
@@ -48,6 +50,7 @@ class Scene:
     quad_nodes: int | None = None
     channel1: Profile | None = None
     channel2: Profile | None = None
+    thickness: Profile | None = None
     contact: bool = False
     contact_stiffness: float = 1e6
     contact_eps: float = 1e-3
@@ -95,7 +98,7 @@ class Scene:
 
     def to_dict(self) -> dict:
         d = {f.name: getattr(self, f.name) for f in dataclasses.fields(self) if f.name != "scales"}
-        for name in ("channel1", "channel2"):
+        for name in ("channel1", "channel2", "thickness"):
             if d[name] is not None:
                 d[name] = dataclasses.asdict(d[name])
         if isinstance(d["zeta"], tuple):
@@ -111,7 +114,7 @@ class Scene:
         if unknown:
             raise ValueError(f"unknown scene keys {sorted(unknown)}; allowed: {sorted(names)}")
         kw = dict(d)
-        for name in ("channel1", "channel2"):
+        for name in ("channel1", "channel2", "thickness"):
             if isinstance(kw.get(name), dict):
                 kw[name] = Profile.from_dict(kw[name], name)
         return cls(**kw)
@@ -173,11 +176,14 @@ def _validate(s: Scene) -> None:
         _require(isinstance(s.quad_nodes, (int, np.integer)) and s.quad_nodes >= min_quad_nodes(s.modes),
                  f"quad_nodes must be an integer >= 2*modes = {min_quad_nodes(s.modes)} to resolve "
                  f"mode {s.modes}, got {s.quad_nodes!r}")
-    for name in ("channel1", "channel2"):
+    for name in ("channel1", "channel2", "thickness"):
         profile = getattr(s, name)
         _require(profile is None or isinstance(profile, Profile), f"{name} must be a Profile or None")
         if profile is not None:
             profile.validate(name)
+    if s.thickness is not None:
+        _require(abs(float(s.thickness(0.0)) - 1.0) <= 1e-12,
+                 f"thickness is relative to the root: thickness(0) must be 1, got {float(s.thickness(0.0))}")
     if s.channel1 is not None or s.channel2 is not None:
         w1, w2 = s.walls
         inlet = float(w1(0.0) + w2(0.0))

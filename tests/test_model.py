@@ -7,6 +7,7 @@ from scipy.integrate import simpson
 
 from fsicas import (Profile, Scene, build_model, clamped_free_modes, flow_fields, steady_state,
                     straight_pressure_drop)
+from fsicas.model import modal_basis
 
 TAPERED = dict(channel1=Profile.linear(0.05, 0.035),
                channel2=Profile.table([0.0, 0.5, 1.0], [0.05, 0.06, 0.045]))
@@ -200,3 +201,41 @@ def test_only_what_the_scene_needs_is_built():
 def test_steady_state_refuses_a_model_of_another_structure():
     with pytest.raises(ValueError, match="structure"):
         steady_state(Scene(modes=4), build_model(Scene(modes=5)))
+
+
+# -- non-uniform beam (FE modes) -------------------------------------------------------------
+def test_tapered_beam_rows_are_the_projection_of_the_load():
+    """With FE modes of a tapered beam the Psi-trick projection still equals ∫(p2 - p1) phi_n."""
+    scene = SCENE.replace(thickness=Profile.linear(1.0, 0.6))
+    model = build_model(scene)
+    x0 = random_state(scene, 0)
+    p = model.parameters(pressure_drop=30.0)
+    xdot = model.xdot(x0, p)
+    grid = np.linspace(0.0, 1.0, 16001)
+    modes = modal_basis(scene, grid)
+    n = scene.modes
+    lhs = xdot[:n] + 2 * 0.02 * modes.omega * x0[:n] + modes.omega**2 * x0[n:2 * n]
+    rhs = simpson(modes.phi * flow_fields(scene, x0, xdot, 30.0, grid).load, x=grid)
+    assert np.allclose(lhs, rhs, rtol=1e-8, atol=1e-8 * np.max(np.abs(rhs)))
+
+
+def test_uniform_thickness_through_fe_reproduces_the_analytic_model():
+    """Two routes to the same beam: FE modes with thickness = 1 vs the analytic modes.
+    The default mesh (48 elements for N = 6) has frequency errors up to ~1e-7 (O(h^4),
+    docs/beam_fe.md), which bounds the agreement."""
+    uniform = Scene(mstar=1.0, ustar=4.0, modes=6, channel1=Profile.constant(0.055),
+                    channel2=Profile.constant(0.045))
+    fe = uniform.replace(thickness=Profile.constant(1.0))
+    a, b = steady_state(uniform), steady_state(fe)
+    assert b.pressure_drop == pytest.approx(a.pressure_drop, rel=1e-8)
+    assert np.allclose(b.q, a.q, rtol=1e-6, atol=1e-6 * np.max(np.abs(a.q)))
+
+
+def test_thinner_tip_raises_the_static_tip_deflection():
+    """A beam thinned towards the tip is more flexible: larger static deflection under the
+    same asymmetric flow (EI falls as e^3 while the load is unchanged)."""
+    uniform = Scene(mstar=1.0, ustar=4.0, modes=8, channel1=Profile.constant(0.055),
+                    channel2=Profile.constant(0.045))
+    tapered = uniform.replace(thickness=Profile.linear(1.0, 0.7))
+    tip = [build_model(s).deflection(steady_state(s).x, [1.0])[0] for s in (uniform, tapered)]
+    assert tip[1] > tip[0] > 0
