@@ -55,7 +55,7 @@ def _fold(vf, free_idx):
     Dp, c = S.sym("p", k), S.sym("c", n)
     p = _params(vf, Dp, pf, free_idx)
     f = vf.F_expr(x, p)
-    G = ca.vertcat(f, ca.jtimes(f, x, v), ca.dot(c, v) - 1)
+    G = [ca.vertcat(f, ca.jtimes(f, x, v)), ca.dot(c, v) - 1]
     return CompiledSystem(ca.vertcat(x, v, pf), ca.vertcat(Dp, c), G, "fold")
 
 
@@ -66,7 +66,7 @@ def _hopf(vf, free_idx):
     Dp, c = S.sym("p", k), S.sym("c", n)
     p = _params(vf, Dp, pf, free_idx)
     f, m = vf.F_expr(x, p), vf.M_expr(x, p)
-    G = ca.vertcat(f, ca.jtimes(f, x, v) - ca.mtimes(m, w),
-                   ca.jtimes(f, x, w) + kappa * ca.mtimes(m, v),
-                   ca.dot(c, v) - 1, ca.dot(c, w))
+    G = [ca.vertcat(f, ca.jtimes(f, x, v) - ca.mtimes(m, w),
+                    ca.jtimes(f, x, w) + kappa * ca.mtimes(m, v)),
+         ca.vertcat(ca.dot(c, v) - 1, ca.dot(c, w))]
     return CompiledSystem(ca.vertcat(x, v, w, kappa, pf), ca.vertcat(Dp, c), G, "hopf")
