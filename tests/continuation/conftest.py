@@ -41,7 +41,7 @@ def guckenheimer_holmes_a(k, w):
         fxy * (fxx + fyy) - gxy * (gxx + gyy) - fxx * gxx + fyy * gyy) / (16 * w)
 
 
-def mass_model():
+def mass_model(with_q=False):
     """M(x) xdot = F(x, p) with c = (1, 1), y = x - c:
 
     F = (p y1 - y2 - y1 |y|^2 + y1 y2, y1 - y2 |y|^2 + y1^2),
@@ -49,14 +49,18 @@ def mass_model():
     The equilibrium is x = c for all p. M(c)^{-1} J(p) = [[p/2 - 1/4, -1/2],
     [1/2, 0]]: trace p/2 - 1/4, det 1/4, so the Hopf point is p = 1/2 with
     omega = 1/2 (with M = I it would be p = 0, omega = 1).
+    with_q: p = (p, q) and M22 = q + x2^2, M(c) = [[2, 1], [0, q + 1]]; then
+    M(c)^{-1} J = [[p/2 - 1/(2(q+1)), -1/2], [1/(q+1), 0]] and the Hopf curve is
+    p = 1/(1+q), omega = (2 (1+q))^{-1/2}.
     """
-    x, p = ca.SX.sym("x", 2), ca.SX.sym("p", 1)
+    x, p = ca.SX.sym("x", 2), ca.SX.sym("p", 2 if with_q else 1)
+    q = p[1] if with_q else 1
     y1, y2 = x[0] - 1, x[1] - 1
     r2 = y1**2 + y2**2
     F = ca.Function("F", [x, p], [ca.vertcat(p[0] * y1 - y2 - y1 * r2 + y1 * y2,
                                              y1 - y2 * r2 + y1**2)])
     M = ca.Function("M", [x, p], [ca.vertcat(ca.horzcat(1 + x[0]**2, x[1]),
-                                             ca.horzcat(0, 1 + x[1]**2))])
+                                             ca.horzcat(0, q + x[1]**2))])
     return F, M
 
 

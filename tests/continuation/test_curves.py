@@ -120,3 +120,32 @@ def test_curve_problem_validation(models):
         C.HopfCurveProblem(vf, [1.0, 2.0], {"A": 1.0, "B": 2.0}, -1.0, ("A", "B"))
     with pytest.raises(ValueError, match="unknown parameter"):
         C.FoldCurveProblem(vf, [1.0, 2.0], {"A": 1.0, "B": 2.0}, ("A", "Q"))
+
+
+def test_hopf_curve_with_state_dependent_mass(models):
+    F, M = models.mass_model(with_q=True)
+    prob = C.EquilibriumProblem(F, [1.0, 1.0], {"p": 0.0, "q": 1.0}, "p", M=M)
+    h = one_hopf(run(prob, bounds={"p": (-1, 1)}))
+    assert abs(h.params["p"] - 0.5) < 1e-12 and abs(h.data["omega"] - 0.5) < 1e-12
+    curve = run(C.HopfCurveProblem.from_point(prob, h, "q"), ds=0.05, ds_max=0.2,
+                bounds={"q": (0.0, 3.0)}, newton=C.NewtonSettings(tol=1e-12))
+    p, q = curve.par("p"), curve.par("q")
+    assert q.max() > 2.8
+    assert np.max(np.abs(p - 1 / (1 + q))) < 1e-10
+    assert np.max(np.abs(curve.columns["omega"] - 1 / np.sqrt(2 * (1 + q)))) < 1e-10
+
+
+def test_sparse_and_dense_eigenvalues_agree():
+    """Shift-invert Arnoldi and dense QZ on a 1-D reaction-diffusion Jacobian."""
+    import scipy.sparse as sp
+    from continuation._eigen import eigenvalues
+    n = 120
+    rng = np.random.default_rng(5)
+    lap = sp.diags([1.0, -2.0, 1.0], [-1, 0, 1], shape=(n, n)) * 50.0
+    J = sp.csc_matrix(lap + sp.diags(rng.uniform(-1, 1, n)) + sp.diags([0.7], [1], (n, n))
+                      - sp.diags([0.7], [-1], (n, n)))
+    M = sp.csc_matrix(sp.diags(1 + rng.uniform(0, 1, n)))
+    dense = eigenvalues(J, M, C.EigenSettings(dense_max=1000))
+    sparse = eigenvalues(J, M, C.EigenSettings(dense_max=10, nev=6, sigma=0.0))
+    nearest = dense[np.argsort(np.abs(dense))[:6]]
+    assert np.allclose(np.sort_complex(nearest), np.sort_complex(sparse), atol=1e-10)
