@@ -74,15 +74,17 @@ def run(N: int, steps: int, tol: float) -> dict:
     t_build = time.perf_counter() - t0
     br = C.continuation(prob, settings=settings)
     AH, wH = exact_hopf(N)
-    hopf = br.special("hopf")[0]  # first mode; later modes may follow
     st = br.stats
     n_steps = st["steps"]
     t_loop = st["time_total"] - st.get("time_location", 0.0)
-    return {"n": 2 * N, "tol": tol, "build": t_build, "steps": n_steps,
-            "step_ms": 1e3 * t_loop / (n_steps + 1),
-            "newton_it": st["newton_iterations"] / (n_steps + 1),
-            "max_res": float(br.residual.max()),
-            "loc_ms": 1e3 * st["time_location"] / st["located"],
+    row = {"n": 2 * N, "tol": tol, "build": t_build, "steps": n_steps, "status": br.status,
+           "step_ms": 1e3 * t_loop / (n_steps + 1),
+           "newton_it": st["newton_iterations"] / (n_steps + 1),
+           "max_res": float(br.residual.max()) if len(br) else float("inf")}
+    if not br.special("hopf"):
+        return {**row, "message": br.message}
+    hopf = br.special("hopf")[0]  # first mode; later modes may follow
+    return {**row, "loc_ms": 1e3 * st["time_location"] / st["located"],
             "err_A": abs(hopf.params["A"] - AH), "err_w": abs(hopf.data["omega"] - wH),
             "prec": hopf.precision, "l1": hopf.data.get("l1", float("nan"))}
 
@@ -110,6 +112,11 @@ def main(argv=None):
           "ms/location | Hopf precision | abs(A-A_H) | abs(w-w_H) | l1 | build s |")
     print("|---|---|---|---|---|---|---|---|---|---|---|---|")
     for r in rows:
+        if "message" in r:
+            print(f"| {r['n']} | {r['tol']:.0e} | {r['steps']} | {r['step_ms']:.2f} | "
+                  f"{r['newton_it']:.2f} | {r['max_res']:.1e} | no Hopf: {r['status']}, "
+                  f"{r['message']} |")
+            continue
         print(f"| {r['n']} | {r['tol']:.0e} | {r['steps']} | {r['step_ms']:.2f} | "
               f"{r['newton_it']:.2f} | {r['max_res']:.1e} | {r['loc_ms']:.1f} | "
               f"{r['prec']:.1e} | {r['err_A']:.1e} | {r['err_w']:.1e} | {r['l1']:.4g} | "
