@@ -35,7 +35,8 @@ def newton(residual: Callable, jacobian: Callable, X0: np.ndarray,
            settings: NewtonSettings, polish: int = 0) -> NewtonResult:
     """Solve ``H(X) = 0`` by ``X <- X - H_X(X)^{-1} H(X)``.
 
-    Converged when ``||H(X)||_inf <= tol``. Stops on a singular Jacobian, a
+    Converged when ``||H(X)||_inf <= tol`` or when an update was at round-off
+    level (``||dX||_inf <= xtol (1 + ||X||_inf)``). Stops on a singular Jacobian, a
     non-finite or diverging residual, or after ``max_iter`` iterations; the
     last residual is always reported. ``polish`` extra iterations after
     convergence are kept while they decrease the residual (used to refine
@@ -43,18 +44,24 @@ def newton(residual: Callable, jacobian: Callable, X0: np.ndarray,
     """
     X = np.array(X0, dtype=float)
     r = residual(X)
-    res = _norm(r)
+    res = res0 = _norm(r)
+    tiny_step = False
     for it in range(settings.max_iter + 1):
-        if res <= settings.tol:
+        if res <= settings.tol or (tiny_step and np.isfinite(res)):
             X, res = _polish(residual, jacobian, X, res, polish)
-            return NewtonResult(X, True, it, res, f"converged in {it} iterations")
-        if not np.isfinite(res) or res > settings.divergence or it == settings.max_iter:
+            how = "" if not tiny_step or res <= settings.tol else \
+                f" (update below xtol; residual {res:.3e} at round-off level)"
+            return NewtonResult(X, True, it, res, f"converged in {it} iterations{how}")
+        if not np.isfinite(res) or res > settings.divergence * (1 + res0) \
+                or it == settings.max_iter:
             break
         lu = factorize(jacobian(X))
         if lu is None:
             return NewtonResult(X, False, it, res,
                                 f"singular Jacobian at iteration {it}, residual {res:.3e}")
-        X = X - lu.solve(r)
+        dX = lu.solve(r)
+        X = X - dX
+        tiny_step = _norm(dX) <= settings.xtol * (1.0 + _norm(X))
         r = residual(X)
         res = _norm(r)
     return NewtonResult(X, False, it, res,

@@ -131,19 +131,15 @@ def _det_sign(lu) -> float:
 
 
 def _parity(perm) -> int:
+    """Sign of a permutation, ``(-1)^(n - cycles)``, cycles counted by pointer
+    doubling (each index learns the smallest index of its cycle)."""
     perm = np.asarray(perm)
-    seen = np.zeros(perm.size, dtype=bool)
-    sign = 1
-    for start in range(perm.size):
-        if seen[start]:
-            continue
-        j, length = start, 0
-        while not seen[j]:
-            seen[j] = True
-            j = perm[j]
-            length += 1
-        sign *= -1 if length % 2 == 0 else 1
-    return sign
+    label, jump = np.arange(perm.size), perm.copy()
+    for _ in range(max(1, int(np.ceil(np.log2(max(perm.size, 2)))))):
+        label = np.minimum(label, label[jump])
+        jump = jump[jump]
+    cycles = int(np.sum(label == np.arange(perm.size)))
+    return -1 if (perm.size - cycles) % 2 else 1
 
 
 def _bp_function(problem, X_a):

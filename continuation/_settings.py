@@ -31,18 +31,25 @@ def _positive_int(obj, *names):
 
 @dataclass(frozen=True)
 class NewtonSettings:
-    """Newton corrector: stop when ``||G(X)||_inf <= tol`` within ``max_iter`` steps.
+    """Newton corrector, at most ``max_iter`` iterations.
 
-    ``divergence`` aborts early when the residual exceeds it (or is not finite).
+    Converged when ``||G(X)||_inf <= tol``, or when the last update is at
+    round-off level, ``||dX||_inf <= xtol (1 + ||X||_inf)`` (a scale-aware test
+    for badly scaled residuals whose round-off floor exceeds ``tol``; set
+    ``xtol = 0`` to disable). The iteration aborts early when the residual
+    exceeds ``divergence * (1 + initial residual)`` or is not finite.
     """
 
     tol: float = 1e-10
     max_iter: int = 10
     divergence: float = 1e8
+    xtol: float = 1e-13
 
     def __post_init__(self):
         _positive(self, "tol", "divergence")
         _positive_int(self, "max_iter")
+        if not (math.isfinite(self.xtol) and self.xtol >= 0):
+            raise ValueError(f"NewtonSettings.xtol must be >= 0, got {self.xtol!r}")
 
 
 @dataclass(frozen=True)

@@ -117,3 +117,46 @@ def test_caller_arrays_not_mutated(models):
     prob = C.EquilibriumProblem(models.brusselator(), x0, {"A": 1.5, "B": 1.5}, "B")
     C.continuation(prob, settings=C.ContinuationSettings(max_steps=5))
     assert np.array_equal(x0, [1.5, 1.0])
+
+
+def test_non_expandable_mx_function():
+    # F contains a linear solve, so it stays an MX function: x0 = a, x1 = b a.
+    x, p = ca.MX.sym("x", 2), ca.MX.sym("p", 2)
+    A = ca.vertcat(ca.horzcat(2 + x[0] ** 2, 0.1), ca.horzcat(0.2, 3))
+    F = ca.Function("F", [x, p], [ca.solve(A, ca.vertcat(p[0] - x[0], p[1] * x[0] - x[1]),
+                                           "lapackqr")])
+    prob = C.EquilibriumProblem(F, [0.4, 0.3], {"a": 0.5, "b": 1.0}, "a")
+    assert prob.vf.sym is ca.MX
+    br = C.continuation(prob, settings=C.ContinuationSettings(max_steps=5))
+    a = br.par("a")
+    assert br.status == "max_steps" and a[-1] > 0.55
+    assert np.allclose(br.x, np.column_stack([a, a]), atol=1e-12)
+
+
+def test_permutation_parity_matches_determinant():
+    from itertools import permutations
+    from continuation._problem import _parity
+    for n in range(1, 6):
+        for perm in permutations(range(n)):
+            assert _parity(perm) == round(np.linalg.det(np.eye(n)[list(perm)]))
+
+
+def test_round_off_floor_handled_by_step_criterion():
+    """A residual with a noise floor 1e-6 >> tol and a stiff Jacobian 1e12: the
+    updates reach round-off level, which the xtol criterion accepts (and reports
+    the true residual); with xtol = 0 the solve fails with its residual."""
+    import scipy.sparse as sp
+    from continuation._newton import newton
+
+    def residual(X):
+        return 1e12 * (X - 0.3) + 1e-6 * np.cos(1e20 * X)
+
+    def jacobian(X):
+        return sp.csc_matrix([[1e12]])
+
+    ok = newton(residual, jacobian, np.array([1.0]), C.NewtonSettings())
+    assert ok.converged and ok.residual > 1e-10 and "round-off" in ok.message
+    assert abs(ok.X[0] - 0.3) < 1e-15
+    bad = newton(residual, jacobian, np.array([1.0]), C.NewtonSettings(xtol=0.0))
+    assert not bad.converged and bad.residual > 1e-10
+    assert f"{bad.residual:.3e}" in bad.message
