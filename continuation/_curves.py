@@ -61,8 +61,7 @@ class HopfCurveProblem(Problem):
         J, M = vf.jac_x(x, p), vf.mass(x, p)
         v, w, kappa, c = hopf_start(J, M, float(omega))
         pf = [p[vf.par_index(f)] for f in free]
-        super().__init__(vf, free, np.concatenate([x, v, w, [kappa], pf]),
-                         np.concatenate([p, c]))
+        super().__init__(vf, free, np.concatenate([x, v, w, [kappa], pf]), p, c)
 
     @classmethod
     def from_point(cls, problem, point, second: str) -> "HopfCurveProblem":
@@ -132,7 +131,7 @@ class FoldCurveProblem(Problem):
         p, x = param_vector(vf, params), state_vector(vf, x, "x")
         v = real_null_vector(vf.jac_x(x, p))
         pf = [p[vf.par_index(f)] for f in free]
-        super().__init__(vf, free, np.concatenate([x, v, pf]), np.concatenate([p, v]))
+        super().__init__(vf, free, np.concatenate([x, v, pf]), p, v)
         self._d = np.random.default_rng(7).standard_normal(vf.n)
 
     @classmethod

@@ -27,7 +27,7 @@ from . import _eigen
 from ._lyapunov import first_lyapunov, hopf_eigenvectors
 from ._newton import newton
 from ._problem import Description, PointInfo, Problem
-from ._systems import system
+from ._systems import bound
 from ._vectorfield import VectorField
 
 
@@ -148,11 +148,9 @@ def _refine_fold(problem, X, settings) -> Description:
     vf = problem.vf
     J, _ = problem.matrices(X)
     v = real_null_vector(J)
-    sysf = system(vf, "fold", problem.free)
-    D = np.concatenate([problem.params(X), v])
+    sysf = bound(vf, "fold", problem.params(X), v, problem.free)
     Y0 = np.concatenate([problem.state(X), v, X[-1:]])
-    res = newton(lambda Y: sysf.residual(Y, D), lambda Y: sysf.jacobian(Y, D), Y0,
-                 settings.newton, polish=3)
+    res = newton(sysf.residual, sysf.jacobian, Y0, settings.newton, polish=3)
     if not res.converged:
         return Description(X, "guess", res.residual, {}, "fold refinement: " + res.message)
     Xr = np.append(res.X[: vf.n], res.X[-1])
@@ -185,11 +183,9 @@ def _refine_hopf(problem, X, settings) -> Description:
         return Description(X, "rejected", 0.0, {}, "no complex eigenvalue: not a Hopf point")
     omega0 = float(ev[np.argmin(np.abs(ev.real))].imag)
     v, w, kappa, c = hopf_start(J, M, omega0)
-    sysh = system(vf, "hopf", problem.free)
-    D = np.concatenate([problem.params(X), c])
+    sysh = bound(vf, "hopf", problem.params(X), c, problem.free)
     Y0 = np.concatenate([problem.state(X), v, w, [kappa], X[-1:]])
-    res = newton(lambda Y: sysh.residual(Y, D), lambda Y: sysh.jacobian(Y, D), Y0,
-                 settings.newton, polish=3)
+    res = newton(sysh.residual, sysh.jacobian, Y0, settings.newton, polish=3)
     if not res.converged:
         return Description(X, "guess", res.residual, {"omega": omega0},
                            "Hopf refinement: " + res.message)

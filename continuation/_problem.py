@@ -21,7 +21,7 @@ import scipy.sparse as sp
 
 from . import _eigen
 from ._settings import ContinuationSettings
-from ._systems import system
+from ._systems import bound
 from ._vectorfield import VectorField
 
 
@@ -46,17 +46,16 @@ class Description:
 
 
 class Problem:
-    """Base class: a curve ``G(X; D) = 0`` compiled by CasADi."""
+    """Base class: a curve ``G(X) = 0``, ``X = (Y, p_free)``, compiled by CasADi."""
 
     kind = "abstract"
 
-    def __init__(self, vf: VectorField, free: tuple, X0, D):
+    def __init__(self, vf: VectorField, free: tuple, X0, p0, D=()):
         self.vf = vf
         self.free = tuple(free)
         self.free_idx = tuple(vf.par_index(f) for f in self.free)
         self.X0 = np.array(X0, dtype=float)
-        self.D = np.array(D, dtype=float)
-        self.system = system(vf, self.kind, self.free)
+        self.system = bound(vf, self.kind, p0, D, self.free)
         if self.X0.size != self.system.n_unknowns:
             raise ValueError(f"X0 has size {self.X0.size}, the {self.kind} system has "
                              f"{self.system.n_unknowns} unknowns")
@@ -64,11 +63,11 @@ class Problem:
     # -- what PALC needs --------------------------------------------------------
     def residual(self, X) -> np.ndarray:
         """``G(X)``."""
-        return self.system.residual(X, self.D)
+        return self.system.residual(X)
 
     def jacobian(self, X) -> sp.csc_matrix:
         """Exact sparse ``G_X`` of shape ``(m, m+1)``."""
-        return self.system.jacobian(X, self.D)
+        return self.system.jacobian(X)
 
     # -- state and parameters -----------------------------------------------------
     def state(self, X) -> np.ndarray:
@@ -77,9 +76,7 @@ class Problem:
 
     def params(self, X) -> np.ndarray:
         """Full parameter vector ``p`` at ``X`` (free ones taken from ``X``)."""
-        p = self.D[: len(self.vf.par_names)].copy()
-        p[list(self.free_idx)] = X[len(X) - len(self.free):]
-        return p
+        return self.system.params(X)
 
     def par_dict(self, X) -> dict:
         """``{name: value}`` of all parameters at ``X``."""

@@ -40,36 +40,68 @@ def to_csc(values: np.ndarray, pattern: tuple) -> sp.csc_matrix:
 
 
 class CompiledSystem:
-    """``G(X; D)`` and its exact sparse Jacobian ``dG/dX``, compiled once.
+    """``G(Y, p; D)`` with exact Jacobians ``G_Y`` (sparse) and ``G_p``, compiled once.
+
+    The continued unknowns are ``X = (Y, p_free)``: which parameters are free is
+    chosen at evaluation time (columns of ``G_p``), so one compiled system per
+    kind serves a one-parameter location and every two-parameter curve.
 
     Parameters
     ----------
-    X : CasADi symbol (column) of the unknowns.
-    D : CasADi symbol of fixed data (parameter values, reference vectors), so
-        that one compiled system serves every fixed value.
-    G : CasADi expression of the residual, a column depending on ``X, D``, or a
-        list of row blocks. Blocks are differentiated separately: a few dense
-        rows (normalizations ``c.v = 1``) would otherwise defeat the graph
-        colouring of the sparse Jacobian and cost seconds at n = 1000.
+    Y : CasADi symbol of the non-parameter unknowns.
+    P : CasADi symbol of the full parameter vector.
+    D : CasADi symbol of fixed data (reference vectors).
+    G : residual expression, or a list of row blocks. Blocks are differentiated
+        separately: a few dense rows (normalizations ``c.v = 1``) would otherwise
+        defeat the graph colouring of the sparse Jacobian (seconds at n = 1000).
     name : used to name the CasADi functions.
     """
 
-    def __init__(self, X, D, G, name: str = "G"):
+    def __init__(self, Y, P, D, G, name: str = "G"):
         blocks = list(G) if isinstance(G, (list, tuple)) else [G]
         G = ca.vertcat(*blocks)
-        jac = ca.vertcat(*[ca.jacobian(g, X) for g in blocks])
-        sparsity = jac.sparsity()
-        colind, row = sparsity.get_ccs()
-        self.pattern = ((G.numel(), X.numel()), np.asarray(colind), np.asarray(row))
-        self.n_unknowns = X.numel()
+        jy = ca.vertcat(*[ca.jacobian(g, Y) for g in blocks])
+        jp = ca.densify(ca.vertcat(*[ca.jacobian(g, P) for g in blocks]))
+        colind, row = jy.sparsity().get_ccs()
+        self.pattern = ((G.numel(), Y.numel()), np.asarray(colind), np.asarray(row))
+        self.n_state = Y.numel()
         self.n_equations = G.numel()
-        self._g = ca.Function(name, [X, D], [G])
-        self._j = ca.Function(name + "_jac", [X, D], [jac.nz[:]])
+        self._g = ca.Function(name, [Y, P, D], [G])
+        self._jy = ca.Function(name + "_jac_y", [Y, P, D], [jy.nz[:]])
+        self._jp = ca.Function(name + "_jac_p", [Y, P, D], [jp])
 
-    def residual(self, X: np.ndarray, D: np.ndarray) -> np.ndarray:
-        """Residual ``G(X; D)``."""
-        return to_numpy(self._g(X, D))
+    def residual(self, Y, P, D) -> np.ndarray:
+        """Residual ``G(Y, p; D)``."""
+        return to_numpy(self._g(Y, P, D))
 
-    def jacobian(self, X: np.ndarray, D: np.ndarray) -> sp.csc_matrix:
-        """Exact sparse Jacobian ``dG/dX`` (m x (m+1) for a curve)."""
-        return to_csc(to_numpy(self._j(X, D)), self.pattern)
+    def jacobian(self, Y, P, D, par_columns) -> sp.csc_matrix:
+        """``[G_Y, G_p[:, par_columns]]`` as one sparse matrix."""
+        jy = to_csc(to_numpy(self._jy(Y, P, D)), self.pattern)
+        jp = np.asarray(self._jp(Y, P, D).full(), dtype=float)[:, list(par_columns)]
+        return sp.hstack([jy, sp.csc_matrix(jp)], format="csc")
+
+
+class BoundSystem:
+    """A compiled system with fixed parameters/data and chosen free parameters.
+
+    ``X = (Y, p_free)``; ``params(X)`` is ``p0`` with the free entries from X.
+    """
+
+    def __init__(self, compiled: CompiledSystem, p0, D, free_idx):
+        self.compiled = compiled
+        self.p0 = np.array(p0, dtype=float)
+        self.D = np.array(D, dtype=float)
+        self.free_idx = tuple(free_idx)
+        self.n_unknowns = compiled.n_state + len(self.free_idx)
+
+    def params(self, X) -> np.ndarray:
+        p = self.p0.copy()
+        p[list(self.free_idx)] = X[len(X) - len(self.free_idx):]
+        return p
+
+    def residual(self, X) -> np.ndarray:
+        return self.compiled.residual(X[: self.compiled.n_state], self.params(X), self.D)
+
+    def jacobian(self, X) -> sp.csc_matrix:
+        return self.compiled.jacobian(X[: self.compiled.n_state], self.params(X), self.D,
+                                      self.free_idx)

@@ -3,9 +3,9 @@
 With ``J = dF/dx`` (as the directional derivative ``J v = d/de F(x + e v)``):
 
 * equilibrium ``X = (x, p_free)``:  ``F(x, p) = 0``;
-* fold (limit point) ``X = (x, v, p_free)``, ``D = (p, c)``:
+* fold (limit point) ``X = (x, v, p_free)``, ``D = c``:
   ``F = 0``, ``J v = 0``, ``c.v - 1 = 0``;
-* Hopf ``X = (x, v, w, kappa, p_free)``, ``D = (p, c)``:
+* Hopf ``X = (x, v, w, kappa, p_free)``, ``D = c``:
   ``F = 0``, ``J v - M w = 0``, ``J w + kappa M v = 0``, ``c.v - 1 = 0``,
   ``c.w = 0``. Then ``(M^{-1}J)^2 v = -kappa v`` on the real invariant plane
   ``span(v, w)``: ``kappa = omega^2 > 0`` at a Hopf point (eigenvalues
@@ -13,60 +13,56 @@ With ``J = dF/dx`` (as the directional derivative ``J v = d/de F(x + e v)``):
   and ``kappa`` changes sign at a Bogdanov-Takens point.
 
 With one free parameter these systems are square (used to locate a point);
-with two they define a curve continued by the same PALC. Compiled systems are
-cached on the VectorField per (kind, free parameters).
+with two they define a curve continued by the same PALC. The free parameters
+are chosen at evaluation time (``BoundSystem``), so each kind is compiled once
+per VectorField and cached there.
 """
 
 from __future__ import annotations
 
 import casadi as ca
 
-from ._symbolic import CompiledSystem
+from ._symbolic import BoundSystem, CompiledSystem
 from ._vectorfield import VectorField
 
 
-def _params(vf: VectorField, Dp, p_free, free_idx):
-    """Parameter vector: fixed values ``Dp`` with the free entries from ``X``."""
-    parts = [p_free[free_idx.index(i)] if i in free_idx else Dp[i]
-             for i in range(len(vf.par_names))]
-    return ca.vertcat(*parts)
-
-
-def system(vf: VectorField, kind: str, free: tuple) -> CompiledSystem:
+def system(vf: VectorField, kind: str) -> CompiledSystem:
     """Compiled augmented system ``kind`` in {'equilibrium','fold','hopf'}."""
-    key = (kind, tuple(free))
     cache = vf.__dict__.setdefault("_systems", {})
-    if key not in cache:
+    if kind not in cache:
         builder = {"equilibrium": _equilibrium, "fold": _fold, "hopf": _hopf}[kind]
-        cache[key] = builder(vf, tuple(vf.par_index(f) for f in free))
-    return cache[key]
+        cache[kind] = builder(vf)
+    return cache[kind]
 
 
-def _equilibrium(vf, free_idx):
-    S, n, k = vf.sym, vf.n, len(vf.par_names)
-    x, pf, Dp = S.sym("x", n), S.sym("pf", len(free_idx)), S.sym("p", k)
-    p = _params(vf, Dp, pf, free_idx)
-    return CompiledSystem(ca.vertcat(x, pf), Dp, vf.F_expr(x, p), "equilibrium")
+def bound(vf: VectorField, kind: str, p0, D, free) -> BoundSystem:
+    """``system(vf, kind)`` with parameters ``p0``, data ``D`` and ``free`` names."""
+    return BoundSystem(system(vf, kind), p0, D, tuple(vf.par_index(f) for f in free))
 
 
-def _fold(vf, free_idx):
-    S, n, k = vf.sym, vf.n, len(vf.par_names)
-    x, v, pf = S.sym("x", n), S.sym("v", n), S.sym("pf", len(free_idx))
-    Dp, c = S.sym("p", k), S.sym("c", n)
-    p = _params(vf, Dp, pf, free_idx)
+def _symbols(vf, *names):
+    return [vf.sym.sym(name, vf.n) for name in names]
+
+
+def _equilibrium(vf):
+    (x,) = _symbols(vf, "x")
+    p, D = vf.sym.sym("p", len(vf.par_names)), vf.sym.sym("D", 0)
+    return CompiledSystem(x, p, D, vf.F_expr(x, p), "equilibrium")
+
+
+def _fold(vf):
+    x, v, c = _symbols(vf, "x", "v", "c")
+    p = vf.sym.sym("p", len(vf.par_names))
     f = vf.F_expr(x, p)
     G = [ca.vertcat(f, ca.jtimes(f, x, v)), ca.dot(c, v) - 1]
-    return CompiledSystem(ca.vertcat(x, v, pf), ca.vertcat(Dp, c), G, "fold")
+    return CompiledSystem(ca.vertcat(x, v), p, c, G, "fold")
 
 
-def _hopf(vf, free_idx):
-    S, n, k = vf.sym, vf.n, len(vf.par_names)
-    x, v, w = S.sym("x", n), S.sym("v", n), S.sym("w", n)
-    kappa, pf = S.sym("kappa"), S.sym("pf", len(free_idx))
-    Dp, c = S.sym("p", k), S.sym("c", n)
-    p = _params(vf, Dp, pf, free_idx)
+def _hopf(vf):
+    x, v, w, c = _symbols(vf, "x", "v", "w", "c")
+    kappa, p = vf.sym.sym("kappa"), vf.sym.sym("p", len(vf.par_names))
     f, m = vf.F_expr(x, p), vf.M_expr(x, p)
     G = [ca.vertcat(f, ca.jtimes(f, x, v) - ca.mtimes(m, w),
                     ca.jtimes(f, x, w) + kappa * ca.mtimes(m, v)),
          ca.vertcat(ca.dot(c, v) - 1, ca.dot(c, w))]
-    return CompiledSystem(ca.vertcat(x, v, w, kappa, pf), ca.vertcat(Dp, c), G, "hopf")
+    return CompiledSystem(ca.vertcat(x, v, w, kappa), p, c, G, "hopf")

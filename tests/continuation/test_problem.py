@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 
 import continuation as C
-from continuation._systems import system
+from continuation._systems import bound
 
 
 def fd_jacobian(fun, X, h=1e-6):
@@ -32,11 +32,12 @@ def test_mass_and_hopf_system_jacobians(models):
     x, p = rng.standard_normal(2), np.array([0.3])
     assert np.max(np.abs(vf.jac_x(x, p).toarray() -
                          fd_jacobian(lambda y: vf.rhs(y, p), x))) < 1e-8
-    hopf = system(vf, "hopf", ("p",))
-    D = np.concatenate([p, rng.standard_normal(2)])
+    hopf = bound(vf, "hopf", p, rng.standard_normal(2), ("p",))
     X = rng.standard_normal(hopf.n_unknowns)
-    exact = hopf.jacobian(X, D).toarray()
-    assert np.max(np.abs(exact - fd_jacobian(lambda Y: hopf.residual(Y, D), X))) < 1e-7
+    assert hopf.n_unknowns == 3 * 2 + 2
+    exact = hopf.jacobian(X).toarray()
+    assert exact.shape == (8, 8)
+    assert np.max(np.abs(exact - fd_jacobian(hopf.residual, X))) < 1e-7
     # mass matrix evaluated exactly
     assert np.allclose(vf.mass(x, p).toarray(),
                        [[1 + x[0] ** 2, x[1]], [0, 1 + x[1] ** 2]], atol=1e-15)
