@@ -121,11 +121,9 @@ class EquilibriumProblem(Problem):
 def _hopf_function(problem, info_a, info_b, settings):
     """``Re`` of the eigenvalue nearest to the crossing one, as a function of X."""
     tol = settings.eigen.imag_tol
-    cands = np.concatenate([info_a.eigenvalues, info_b.eigenvalues])
-    cands = cands[cands.imag > tol]
-    if not cands.size:
+    ref = _crossing_eigenvalue(info_a.eigenvalues, info_b.eigenvalues, tol)
+    if ref is None:
         return lambda X, tau, lu: 0.0
-    ref = cands[np.argmin(np.abs(cands.real))]
 
     def f(X, tau, lu):
         ev = problem.eigenvalues(X, settings)
@@ -133,6 +131,29 @@ def _hopf_function(problem, info_a, info_b, settings):
         return float(_eigen.nearest(ev, ref).real) if ev.size else 0.0
 
     return f
+
+
+def _crossing_eigenvalue(ev_a, ev_b, tol):
+    """The complex eigenvalue (Im > 0) whose real part changes sign from a to b.
+
+    Each eigenvalue at b is paired with the nearest at a; among the pairs whose real parts
+    have opposite signs the closest pair wins, and its midpoint is returned. Choosing the
+    eigenvalue of smallest |Re| instead would pick a lightly damped bystander (e.g. an
+    undamped high-frequency mode) whose real part never crosses zero.
+    """
+    a, b = ev_a[ev_a.imag > tol], ev_b[ev_b.imag > tol]
+    if not a.size or not b.size:
+        return None
+    best = None
+    for lam_b in b:
+        lam_a = a[np.argmin(np.abs(a - lam_b))]
+        if np.sign(lam_a.real) != np.sign(lam_b.real):
+            if best is None or abs(lam_a - lam_b) < abs(best[0] - best[1]):
+                best = (lam_a, lam_b)
+    if best is None:
+        both = np.concatenate([a, b])
+        return both[np.argmin(np.abs(both.real))]
+    return 0.5 * (best[0] + best[1])
 
 
 def real_null_vector(J) -> np.ndarray:
