@@ -28,7 +28,6 @@ and ``A q = i omega q``. The value depends on the scaling ``|q| = 1``; for
 
 from __future__ import annotations
 
-import numpy as np
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 

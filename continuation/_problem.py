@@ -13,9 +13,8 @@ periodic orbits) implement the same interface.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import Callable, Mapping
+from typing import Callable
 
-import casadi as ca
 import numpy as np
 import scipy.sparse as sp
 
