@@ -48,13 +48,15 @@ class Problem:
     """Base class: a curve ``G(X) = 0``, ``X = (Y, p_free)``, compiled by CasADi."""
 
     kind = "abstract"
+    #: ``builder(vf) -> CompiledSystem`` for kinds not built in (None: built-in kind)
+    builder = None
 
     def __init__(self, vf: VectorField, free: tuple, X0, p0, D=()):
         self.vf = vf
         self.free = tuple(free)
         self.free_idx = tuple(vf.par_index(f) for f in self.free)
         self.X0 = np.array(X0, dtype=float)
-        self.system = bound(vf, self.kind, p0, D, self.free)
+        self.system = bound(vf, self.kind, p0, D, self.free, type(self).builder)
         if self.X0.size != self.system.n_unknowns:
             raise ValueError(f"X0 has size {self.X0.size}, the {self.kind} system has "
                              f"{self.system.n_unknowns} unknowns")

@@ -26,18 +26,24 @@ from ._symbolic import BoundSystem, CompiledSystem
 from ._vectorfield import VectorField
 
 
-def system(vf: VectorField, kind: str) -> CompiledSystem:
-    """Compiled augmented system ``kind`` in {'equilibrium','fold','hopf'}."""
+def system(vf: VectorField, kind: str, builder=None) -> CompiledSystem:
+    """Compiled augmented system ``kind``, built once per VectorField.
+
+    ``builder(vf) -> CompiledSystem`` defaults to the built-in kinds
+    'equilibrium', 'fold' and 'hopf'; new problem kinds (e.g. periodic orbits)
+    pass their own.
+    """
     cache = vf.__dict__.setdefault("_systems", {})
     if kind not in cache:
-        builder = {"equilibrium": _equilibrium, "fold": _fold, "hopf": _hopf}[kind]
+        builder = builder or {"equilibrium": _equilibrium, "fold": _fold, "hopf": _hopf}[kind]
         cache[kind] = builder(vf)
     return cache[kind]
 
 
-def bound(vf: VectorField, kind: str, p0, D, free) -> BoundSystem:
+def bound(vf: VectorField, kind: str, p0, D, free, builder=None) -> BoundSystem:
     """``system(vf, kind)`` with parameters ``p0``, data ``D`` and ``free`` names."""
-    return BoundSystem(system(vf, kind), p0, D, tuple(vf.par_index(f) for f in free))
+    return BoundSystem(system(vf, kind, builder), p0, D,
+                       tuple(vf.par_index(f) for f in free))
 
 
 def _symbols(vf, *names):
