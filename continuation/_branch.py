@@ -103,7 +103,7 @@ class Branch:
                   "iterations": self.iterations, "residual": self.residual,
                   "eig_sizes": sizes, "eig_values": flat.astype(complex),
                   "sp_x": np.array([p.x for p in self.special_points]).reshape(
-                      len(self.special_points), -1)}
+                      len(self.special_points), self.x.shape[1])}
         arrays.update({f"test_{k}": v for k, v in self.tests.items()})
         arrays.update({f"col_{k}": v for k, v in self.columns.items()})
         header = {"format": FORMAT, "kind": self.kind, "par_names": list(self.par_names),

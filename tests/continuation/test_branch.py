@@ -97,3 +97,15 @@ def test_progress_bar_quiet_by_default(brusselator_branch, capsys):
     assert out.out == "" and out.err == ""
     C.continuation(prob, settings=C.ContinuationSettings(max_steps=5, progress=True))
     assert "continuation" in capsys.readouterr().err
+
+
+def test_failed_empty_branch_round_trip(tmp_path):
+    import casadi as ca
+    x, p = ca.SX.sym("x", 1), ca.SX.sym("p", 1)
+    F = ca.Function("F", [x, p], [x**2 + 1 + p**2])
+    br = C.continuation(C.EquilibriumProblem(F, [0.5], {"mu": 0.0}, "mu"))
+    br.save(tmp_path / "empty.npz")
+    back = C.Branch.load(tmp_path / "empty.npz")
+    assert back.status == "failed" and len(back) == 0 and back.x.shape == (0, 1)
+    assert back.failure["residual"] == br.failure["residual"] >= 1.0
+    assert back.message == br.message
