@@ -90,7 +90,9 @@ class HopfCurveProblem(Problem):
 
     def monitor(self, X, tau, lu, settings) -> PointInfo:
         base = super().monitor(X, tau, lu, settings)
-        tests = {"bt": self.kappa(X), "gh": self.l1(X), **base.tests}
+        # l1 costs more than a corrector step: only when special points are detected
+        l1 = self.l1(X) if settings.detect else 0.0
+        tests = {"bt": self.kappa(X), "gh": l1, **base.tests}
         counts = {}
         if settings.compute_eigenvalues:
             others = _remove_tracked(base.eigenvalues, self.kappa(X))

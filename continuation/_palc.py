@@ -23,6 +23,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from ._newton import NewtonResult, factorize, newton
+from ._sparse import append_row
 from ._settings import PALC, ContinuationSettings
 
 
@@ -40,7 +41,7 @@ class Step:
 
 def bordered(J: sp.spmatrix, row: np.ndarray) -> sp.csc_matrix:
     """``[J; row^T]`` as a square sparse matrix."""
-    return sp.csc_matrix(sp.vstack([J, sp.csr_matrix(row[None, :])]))
+    return append_row(J, np.asarray(row, dtype=float))
 
 
 def correct(problem, X_pred: np.ndarray, tau: np.ndarray, settings) -> NewtonResult:

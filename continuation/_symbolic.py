@@ -12,6 +12,8 @@ import casadi as ca
 import numpy as np
 import scipy.sparse as sp
 
+from ._sparse import append_columns
+
 
 def as_sx_function(fun: ca.Function) -> ca.Function:
     """Return ``fun`` as an SX function when it can be expanded, else unchanged."""
@@ -78,7 +80,7 @@ class CompiledSystem:
         """``[G_Y, G_p[:, par_columns]]`` as one sparse matrix."""
         jy = to_csc(to_numpy(self._jy(Y, P, D)), self.pattern)
         jp = np.asarray(self._jp(Y, P, D).full(), dtype=float)[:, list(par_columns)]
-        return sp.hstack([jy, sp.csc_matrix(jp)], format="csc")
+        return append_columns(jy, jp)
 
 
 class BoundSystem:

@@ -161,3 +161,17 @@ def test_round_off_floor_handled_by_step_criterion():
     bad = newton(residual, jacobian, np.array([1.0]), C.NewtonSettings(xtol=0.0))
     assert not bad.converged and bad.residual > 1e-10
     assert f"{bad.residual:.3e}" in bad.message
+
+
+def test_sparse_bordering_helpers_match_dense():
+    import scipy.sparse as sp
+    from continuation._sparse import append_columns, append_row
+    rng = np.random.default_rng(0)
+    for seed in range(20):
+        m, n = rng.integers(1, 30), rng.integers(1, 30)
+        A = sp.random(m, n, density=rng.uniform(0, 0.5), format="csc", random_state=seed)
+        row = rng.standard_normal(n)
+        cols = rng.standard_normal((m, 3))
+        cols[rng.random((m, 3)) < 0.3] = 0.0
+        assert np.array_equal(append_row(A, row).toarray(), np.vstack([A.toarray(), row]))
+        assert np.array_equal(append_columns(A, cols).toarray(), np.hstack([A.toarray(), cols]))
