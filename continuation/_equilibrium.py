@@ -175,7 +175,26 @@ def _refine_fold(problem, X, settings) -> Description:
     if not res.converged:
         return Description(X, "guess", res.residual, {}, "fold refinement: " + res.message)
     Xr = np.append(res.X[: vf.n], res.X[-1])
-    return Description(Xr, "converged", res.residual, {})
+    data = _fold_coefficient(vf, Xr[:-1], problem.params(Xr), res.X[vf.n: 2 * vf.n])
+    return Description(Xr, "converged", res.residual, data)
+
+
+def _fold_coefficient(vf, x, p, v) -> dict:
+    """Fold normal-form coefficient ``a = psi^T F2(v, v) / (2 psi^T M v)``.
+
+    ``J v = 0`` with ``|v| = 1``, ``psi^T J = 0``: on the centre manifold
+    ``x = x0 + y v`` of ``M xdot = F`` the reduced equation is
+    ``ydot = a y^2 + O(y^3, dp)``; ``M1`` terms vanish since ``A v = 0``. The
+    sign of ``a`` refers to ``v`` oriented with its largest entry positive.
+    """
+    J, M = vf.jac_x(x, p), vf.mass(x, p)
+    v = v / np.linalg.norm(v)
+    psi = _eigen.left_eigenvector(J, M, 0.0)
+    psi = (psi * np.exp(-1j * np.angle(psi[np.argmax(np.abs(psi))]))).real
+    denom = psi @ (M @ v)
+    if denom == 0:
+        return {}
+    return {"a": float(psi @ vf.form("F2", x, p, v, v).real / (2 * denom))}
 
 
 def hopf_start(J, M, omega):

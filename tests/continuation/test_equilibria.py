@@ -33,6 +33,26 @@ def test_bratu_type_fold_located_and_passed(models):
     assert np.all(br.stable[x < 0.99]) and not np.any(br.stable[x > 1.01])
 
 
+def test_fold_normal_form_coefficient(models):
+    """On the centre manifold x = x0 + y v (|v| = 1): ydot = a y^2, a = F_xx / (2 m(x0)).
+
+    mu e^x - x at the fold x = 1: F_xx = mu e^x = 1 -> a = 1/2; with the mass
+    m(x) = 2 + x^2 (m(1) = 3): a = 1/6; mu - x^2 with m = 1: a = -1 (v = +1: the
+    null vector is oriented with its largest entry positive).
+    """
+    x, p = ca.SX.sym("x", 1), ca.SX.sym("p", 1)
+    cases = [(models.scalar(lambda x, p: p[0] * ca.exp(x) - x), None, 0.0, 0.5),
+             (models.scalar(lambda x, p: p[0] * ca.exp(x) - x),
+              ca.Function("M", [x, p], [2 + x[0] ** 2]), 0.0, 1 / 6),
+             (models.scalar(lambda x, p: p[0] - x**2), None, 1.0, -1.0)]
+    for F, M, x0, a in cases:
+        mu0, direction = (0.0, 1) if x0 == 0.0 else (1.0, -1)
+        br = C.continuation(C.EquilibriumProblem(F, [x0], {"mu": mu0}, "mu", M=M),
+                            settings=settings(max_steps=60, direction=direction))
+        (fold,) = br.special("fold")
+        assert fold.data["a"] == pytest.approx(a, rel=1e-10)
+
+
 def test_closed_curve_without_branch_jumping(models):
     # x^2 + mu^2 = 1: one and a half turns, folds at mu = +-1 (x = 0).
     F = models.scalar(lambda x, p: x**2 + p[0]**2 - 1)
