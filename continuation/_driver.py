@@ -65,6 +65,9 @@ def _check(problem, algorithm, settings):
 def _special(problem, kind, a, b, settings, index, stats) -> SpecialPoint:
     t0 = time.perf_counter()
     loc = locate(problem, kind, a, b, settings)
+    if not loc.bracketed and kind in problem.verified_kinds:
+        stats["rejected_events"] = stats.get("rejected_events", 0) + 1
+        return None
     desc = problem.describe(kind, loc.X, loc.tau, settings)
     stats["time_location"] = stats.get("time_location", 0.0) + time.perf_counter() - t0
     if desc.status == "rejected":

@@ -78,6 +78,7 @@ class EquilibriumProblem(Problem):
     """
 
     kind = "equilibrium"
+    verified_kinds = ("hopf",)
 
     def __init__(self, F, x0, params: Mapping[str, float], active: str, *, M=None):
         vf = make_field(F, M, params)
@@ -93,14 +94,17 @@ class EquilibriumProblem(Problem):
         counts = {}
         if settings.compute_eigenvalues:
             counts["hopf"] = _eigen.count_unstable(base.eigenvalues)
+            counts["hopf_complex"] = _eigen.count_complex_unstable(
+                base.eigenvalues, settings.eigen.imag_tol)
         return PointInfo(base.eigenvalues, tests, counts)
 
     def events(self, a: PointInfo, b: PointInfo) -> list:
-        kinds = [k for k in super().events(a, b) if k != "hopf"]
+        kinds = [k for k in super().events(a, b) if k not in ("hopf", "hopf_complex")]
         if "hopf" in a.counts and "hopf" in b.counts:
             jump = a.counts["hopf"] - b.counts["hopf"]
-            if jump != 0 and jump % 2 == 0:
-                kinds.append("hopf")
+            jump_c = a.counts["hopf_complex"] - b.counts["hopf_complex"]
+            if (jump != 0 and jump % 2 == 0) or jump_c != 0:
+                kinds.append("hopf")  # candidate; rejected if Re lambda keeps its sign
         return kinds
 
     def test_function(self, kind, X_a, info_a, X_b, info_b, settings):

@@ -24,6 +24,7 @@ class Located:
     converged: bool
     bracket: float
     message: str = ""
+    bracketed: bool = True
 
 
 def locate(problem, kind, a, b, settings) -> Located:
@@ -37,7 +38,7 @@ def locate(problem, kind, a, b, settings) -> Located:
     lo, hi = evaluate(0.0), evaluate(float(sa.tau @ (sb.X - sa.X)))
     if lo is None or hi is None or lo[3] * hi[3] > 0:
         return Located(sb.X, sb.tau, False, abs(float(sa.tau @ (sb.X - sa.X))),
-                       "test function has no sign change on re-evaluation")
+                       "test function has no sign change on re-evaluation", False)
     return _illinois(evaluate, lo, hi, smooth, settings)
 
 

@@ -50,6 +50,9 @@ class Problem:
     kind = "abstract"
     #: ``builder(vf) -> CompiledSystem`` for kinds not built in (None: built-in kind)
     builder = None
+    #: event kinds detected by a coarse criterion and dropped when their smooth
+    #: test function shows no sign change on re-evaluation
+    verified_kinds: tuple = ()
 
     def __init__(self, vf: VectorField, free: tuple, X0, p0, D=()):
         self.vf = vf

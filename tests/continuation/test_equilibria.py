@@ -197,3 +197,23 @@ def test_scalar_mass_leaves_l1_invariant(models):
                             np.array([0.0, 1.0]), 1.0)
     assert l1_m == pytest.approx(l1_id, rel=1e-11)
     assert l1_id == pytest.approx(2 * models.guckenheimer_holmes_a(k, 1.0), rel=1e-11)
+
+
+def test_fold_and_hopf_within_one_step():
+    """z' = mu - z^2 (fold at z = 0) and an oscillator with growth rate 0.01 - z
+    (Hopf at z = 0.01, mu = 1e-4, omega = 1). One step spans both: the unstable
+    count jumps by 3, the complex one by 2; both points must be found."""
+    x, p = ca.SX.sym("x", 3), ca.SX.sym("p", 1)
+    z, u, v = x[0], x[1], x[2]
+    a = 0.01 - z
+    F = ca.Function("F", [x, p], [ca.vertcat(p[0] - z**2, a * u - v - u * (u**2 + v**2),
+                                             u + a * v - v * (u**2 + v**2))])
+    br = C.continuation(C.EquilibriumProblem(F, [0.3, 0, 0], {"mu": 0.09}, "mu"),
+                        settings=settings(ds=0.1, ds_max=0.1, direction=-1, max_steps=8))
+    z = br.x[:, 0]
+    assert any(z[i] > 0.01 and z[i + 1] < 0 for i in range(len(z) - 1))  # one step spans both
+    (fold,) = br.special("fold")
+    (hopf,) = br.special("hopf")
+    assert abs(fold.x[0]) < 1e-10 and abs(fold.params["mu"]) < 1e-12
+    assert abs(hopf.x[0] - 0.01) < 1e-10 and abs(hopf.params["mu"] - 1e-4) < 1e-12
+    assert abs(hopf.data["omega"] - 1) < 1e-10
