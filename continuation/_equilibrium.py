@@ -127,12 +127,12 @@ def _hopf_function(problem, info_a, info_b, settings):
     tol = settings.eigen.imag_tol
     ref = _crossing_eigenvalue(info_a.eigenvalues, info_b.eigenvalues, tol)
     if ref is None:
-        return lambda X, tau, lu: 0.0
+        return lambda X, tau, lu: 1.0  # no complex eigenvalue: nothing crosses
 
     def f(X, tau, lu):
         ev = problem.eigenvalues(X, settings)
         ev = ev[ev.imag > tol]
-        return float(_eigen.nearest(ev, ref).real) if ev.size else 0.0
+        return float(_eigen.nearest(ev, ref).real) if ev.size else 1.0
 
     return f
 
