@@ -1,0 +1,258 @@
+"""Stability boundary in the (M*, U*) plane as the lower envelope of Hopf curves.
+
+1. Seeds: at a few M* (one per decade by default) every Hopf point of the steady branch
+   up to ``ustar_max`` is found by continuation in U* (:func:`fsicas.hopf.hopf_points`).
+2. Each Hopf point not already on a traced curve starts a two-parameter continuation of
+   its Hopf curve in (log10 M*, Δp/M*), both ways, inside the window.
+3. At each requested M*, the boundary is the lowest U* over all curves (the first loss of
+   stability along U*). Each point is then refined by a one-parameter Hopf location at that
+   M*, started just below the envelope, which also gives its l1 (criticality).
+4. Where the lowest curve changes between neighbouring M*, the two curves cross: the
+   crossing (a double-Hopf point, where the unstable mode switches and the frequency
+   jumps) is found by intersecting the two curves and reported.
+"""
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+
+import continuation as C
+
+from .hopf import (LOG_M, PI, PI_SCALE, TIME_SCALE, CriticalVelocityError, HopfPoint,
+                   _eigenvector_q, dominant_mode, flutter_problem, hopf_points)
+from .model import Model, build_model, modal_basis
+from .scene import Scene
+
+__all__ = ["HopfCurve", "ModeSwitch", "StabilityBoundary", "stability_boundary", "parse_mstar"]
+
+
+@dataclass(frozen=True)
+class HopfCurve:
+    """A traced Hopf curve: arrays along the curve (ordered by arclength)."""
+
+    index: int
+    mstar: np.ndarray
+    ustar: np.ndarray
+    omega: np.ndarray
+    dominant_mode: np.ndarray
+    status: str
+    first_piece: int = 0
+
+    @property
+    def pieces(self) -> np.ndarray:
+        """Branch id of each segment: a new id after every fold of the curve in M*
+        (the lower envelope jumps between pieces, even of one curve)."""
+        step = np.sign(np.diff(np.log10(self.mstar)))
+        turns = np.concatenate([[0], np.cumsum(step[1:] * step[:-1] < 0)])
+        return self.first_piece + turns
+
+    def crossings(self, log_m: float) -> list[tuple[float, float, int]]:
+        """(U*, omega, piece) where the curve passes log10 M* = log_m (linear interpolation)."""
+        lm = np.log10(self.mstar)
+        pieces = self.pieces
+        out = []
+        for i in range(len(lm) - 1):
+            a, b = lm[i], lm[i + 1]
+            if (a - log_m) * (b - log_m) <= 0 and a != b:
+                t = (log_m - a) / (b - a)
+                out.append((self.ustar[i] + t * (self.ustar[i + 1] - self.ustar[i]),
+                            self.omega[i] + t * (self.omega[i + 1] - self.omega[i]),
+                            int(pieces[i])))
+        return out
+
+
+@dataclass(frozen=True)
+class ModeSwitch:
+    """Where the lowest Hopf branch changes with M*: at a crossing of two Hopf curves
+    (a double-Hopf point: ustar_below = ustar_above, the frequency jumps) or at a fold of
+    a curve in M* (the boundary itself jumps from ustar_below to ustar_above)."""
+
+    mstar: float
+    ustar_below: float
+    ustar_above: float
+    branch_below: int
+    branch_above: int
+    omega_below: float
+    omega_above: float
+
+
+@dataclass(frozen=True)
+class StabilityBoundary:
+    scene: Scene
+    points: list[dict]
+    curves: list[HopfCurve] = field(repr=False)
+    switches: list[ModeSwitch]
+    wall_time: float
+
+    def to_json(self) -> dict:
+        return {"points": self.points,
+                "switches": [vars(s) for s in self.switches],
+                "curves": [{"branch": c.index, "mstar": c.mstar.tolist(), "ustar": c.ustar.tolist(),
+                            "omega": c.omega.tolist()} for c in self.curves],
+                "wall_time": self.wall_time}
+
+
+def parse_mstar(text: str) -> np.ndarray:
+    """``0.1,1,10`` (a list) or ``0.01:100:200`` (200 log-spaced values)."""
+    try:
+        if ":" in text:
+            lo, hi, count = text.split(":")
+            lo, hi, count = float(lo), float(hi), int(count)
+            if lo <= 0 or hi <= 0:
+                raise ValueError("bounds must be > 0")
+            values = np.logspace(math.log10(lo), math.log10(hi), count)
+        else:
+            values = np.array([float(v) for v in text.split(",")])
+    except ValueError as err:
+        raise ValueError(f"--mstar must be a list like 0.1,1,10 or a range lo:hi:count with "
+                         f"0 < lo, hi; got {text!r} ({err})") from None
+    if values.size == 0 or np.any(~np.isfinite(values)) or np.any(values <= 0):
+        raise ValueError(f"--mstar values must be finite and > 0, got {text!r}")
+    return values
+
+
+def stability_boundary(scene: Scene, mstars, model: Model | None = None,
+                       ustar_max: float = 40.0, seeds=None, refine: bool = True,
+                       headroom: float = 1.3) -> StabilityBoundary:
+    """The flutter boundary U*_c(M*) at ``mstars`` with its curves and mode switches.
+
+    Curves are traced below ``headroom`` times the highest onset found at the seeds; a
+    Hopf curve that stays above that everywhere cannot be the lowest one."""
+    mstars = np.sort(np.asarray(mstars, dtype=float))
+    if mstars.size == 0 or np.any(~np.isfinite(mstars)) or np.any(mstars <= 0):
+        raise ValueError(f"mstars must be finite and > 0, got {mstars}")
+    start = time.perf_counter()
+    model = model or build_model(scene)
+    lo, hi = math.log10(mstars[0]), math.log10(mstars[-1])
+    seeds = _default_seeds(lo, hi) if seeds is None else np.asarray(seeds, float)
+    window = (lo - 0.05, hi + 0.05)
+    found = [hopf_points(scene.replace(mstar=float(m)), model, ustar_max) for m in seeds]
+    firsts = [points[0].ustar for points in found if points]
+    if not firsts:
+        raise CriticalVelocityError(f"no flutter below U* = {ustar_max} at any seed M* {seeds}")
+    ceiling = min(ustar_max, headroom * max(firsts))   # curves above this cannot be lowest
+    curves: list[HopfCurve] = []
+    for points in found:
+        for h in points:
+            if h.ustar <= ceiling and not any(_on_curve(c, h) for c in curves):
+                first = curves[-1].pieces[-1] + 1 if curves else 0
+                curves.append(_trace(scene, model, h, len(curves), window, ceiling, first))
+    points = [_boundary_point(scene, model, curves, m, refine) for m in mstars]
+    switches = _switches(curves, lo, hi)
+    return StabilityBoundary(scene, points, curves, switches, time.perf_counter() - start)
+
+
+def _default_seeds(lo: float, hi: float) -> np.ndarray:
+    count = max(2, int(math.ceil(hi - lo)) + 1)
+    return np.logspace(lo, hi, count)
+
+
+def _on_curve(curve: HopfCurve, h: HopfPoint, rtol: float = 2e-2) -> bool:
+    """Does Hopf point h lie on the traced curve (same U* and frequency at its M*)?"""
+    return any(abs(u - h.ustar) <= rtol * h.ustar and abs(w - h.omega) <= rtol * h.omega
+               for u, w, _ in curve.crossings(math.log10(h.mstar)))
+
+
+def _trace(scene, model, h: HopfPoint, index: int, window, ustar_max, first_piece) -> HopfCurve:
+    """Continue the Hopf curve through h both ways inside the (log10 M*, U*) window."""
+    problem = flutter_problem(scene.replace(mstar=h.mstar), model, ustar_start=0.2)
+    pi_max = _pi_max(h, ustar_max)
+    halves, status = [], "bound"
+    for direction in (-1, 1):
+        settings = C.ContinuationSettings(
+            ds=0.05, ds_min=1e-8, ds_max=0.3, max_steps=300, direction=direction,
+            bounds={LOG_M: window, PI: (0.0, pi_max)}, detect=False, compute_eigenvalues=False)
+        branch = C.continuation(C.HopfCurveProblem.from_point(problem, h.point, LOG_M),
+                                settings=settings)
+        if branch.status != "bound":
+            status = f"{branch.status}: {branch.message}"
+        halves.append(branch)
+    lower, upper = halves
+    join = lambda a, b: np.concatenate([a[::-1], b[1:]])
+    x, params = join(lower.x, upper.x), join(lower.params, upper.params)
+    kappa = join(lower.columns["kappa"], upper.columns["kappa"])
+    keep = kappa > 0           # neutral-saddle stretches are not Hopf points
+    x, params, omega = x[keep], params[keep], np.sqrt(kappa[keep])
+    names = lower.par_names
+    modes = np.array([dominant_mode(model, _eigenvector_q(model, xk, dict(zip(names, pk)), wk))
+                      for xk, pk, wk in zip(x, params, omega)], dtype=int)
+    lm = params[:, names.index(LOG_M)]
+    return HopfCurve(index, 10 ** lm, x[:, -2:].sum(axis=1) / scene.hstar, omega * TIME_SCALE,
+                     modes, status, int(first_piece))
+
+
+def _pi_max(h: HopfPoint, ustar_max: float) -> float:
+    """Π bound equivalent to U* <= ustar_max, scaled from the Hopf point (Π ∝ U*^2)."""
+    pi_h = h.pressure_drop / (h.mstar * PI_SCALE)
+    return pi_h * (ustar_max / h.ustar) ** 2
+
+
+def _lowest(curves, log_m):
+    best = None
+    for c in curves:
+        for u, w, piece in c.crossings(log_m):
+            if best is None or u < best[0]:
+                best = (u, w, piece)
+    return best
+
+
+def _boundary_point(scene, model, curves, mstar, refine) -> dict:
+    lowest = _lowest(curves, math.log10(mstar))
+    if lowest is None:
+        return {"mstar": float(mstar), "ustar_crit": None, "omega": None, "freq_ratio": None,
+                "branch": None}
+    u, w, branch = lowest
+    omega_1 = float(modal_basis(scene, [1.0]).omega[0])
+    point = {"mstar": float(mstar), "ustar_crit": float(u), "omega": float(w),
+             "freq_ratio": float(w / omega_1), "branch": int(branch), "refined": False}
+    if refine:
+        h = _refine(scene, model, mstar, u)
+        if h is not None:
+            point.update(ustar_crit=h.ustar, omega=h.omega, freq_ratio=h.freq_ratio, l1=h.l1,
+                         criticality="supercritical" if h.l1 < 0 else "subcritical",
+                         dominant_mode=h.dominant_mode, refined=True)
+    return point
+
+
+def _refine(scene, model, mstar, u_guess) -> HopfPoint | None:
+    """First Hopf point at ``mstar`` between 0.9 and 1.1 times the envelope guess."""
+    try:
+        found = hopf_points(scene.replace(mstar=float(mstar)), model,
+                            ustar_max=1.1 * u_guess, ustar_start=0.9 * u_guess)
+    except CriticalVelocityError:
+        return None
+    return found[0] if found else None
+
+
+def _switches(curves, lo: float, hi: float) -> list[ModeSwitch]:
+    """Every change of the lowest piece on [lo, hi] (log10 M*), scanned on a fine grid of
+    the traced curves (no new solves) and bisected to round-off in log10 M*."""
+    out = []
+    grid = np.linspace(lo, hi, 801)
+    lowest = [_lowest(curves, lm) for lm in grid]
+    for k in range(len(grid) - 1):
+        a, b = lowest[k], lowest[k + 1]
+        if a is None or b is None or a[2] == b[2]:
+            continue
+        lo, hi = _switch_bracket(curves, a[2], grid[k], grid[k + 1])
+        ua, wa, _ = _lowest(curves, lo)
+        ub, wb, _ = _lowest(curves, hi)
+        out.append(ModeSwitch(float(10 ** (0.5 * (lo + hi))), float(ua), float(ub),
+                              a[2], b[2], float(wa), float(wb)))
+    return out
+
+
+def _switch_bracket(curves, piece: int, lo: float, hi: float) -> tuple[float, float]:
+    """Bisect [lo, hi] (``piece`` lowest at lo, not at hi) to where the lowest piece
+    changes: a crossing of two Hopf curves, or the fold in M* that ends ``piece``."""
+    for _ in range(50):
+        mid = 0.5 * (lo + hi)
+        lowest = _lowest(curves, mid)
+        if lowest is not None and lowest[2] == piece:
+            lo = mid
+        else:
+            hi = mid
+    return lo, hi

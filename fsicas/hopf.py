@@ -1,0 +1,170 @@
+"""Flutter onset: Hopf points of the steady branch in U*, through ``continuation``.
+
+The model is handed to the generic library through a thin adapter that makes the whole
+(M*, U*) plane well scaled for pseudo-arclength steps (whose length mixes all unknowns):
+the parameters become ``kinematic_pressure_drop = Δp / (M* PI_SCALE)`` (Δp/M* ≈ 3.3 U*^2
+at the paper's values, whatever M*) and ``log10_mstar``, and time is measured in units of
+T / TIME_SCALE (M is multiplied by TIME_SCALE), so that Hopf frequencies (20–600 in units
+of 1/T) and kappa = omega^2 are O(1). l1 is invariant under that time scaling. The steady branch is continued in the first from a small U*; each
+Hopf point found is located by the library (Newton on the Hopf system), with its first
+Lyapunov coefficient l1 (< 0: supercritical, a small stable cycle is born; > 0:
+subcritical, a jump to large amplitude with hysteresis).
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import casadi as ca
+import numpy as np
+
+import continuation as C
+
+from .model import Model, build_model, modal_basis
+from .scene import Scene
+from .steady import steady_state
+
+__all__ = ["HopfPoint", "CriticalVelocityError", "flutter_problem", "hopf_points",
+           "critical_velocity", "reparametrized_field"]
+
+PI, LOG_M = "kinematic_pressure_drop", "log10_mstar"
+PI_SCALE, TIME_SCALE = 100.0, 100.0
+
+
+class CriticalVelocityError(RuntimeError):
+    """The steady branch could not be followed or was unstable where it starts."""
+
+
+@dataclass(frozen=True)
+class HopfPoint:
+    """A located Hopf point of the steady branch."""
+
+    mstar: float
+    ustar: float
+    pressure_drop: float
+    omega: float
+    freq_ratio: float
+    l1: float
+    dominant_mode: int
+    precision: float
+    x: np.ndarray = field(repr=False)
+    point: object = field(repr=False, default=None)
+
+    @property
+    def supercritical(self) -> bool:
+        return self.l1 < 0
+
+    def to_json(self) -> dict:
+        return {"mstar": self.mstar, "ustar_crit": self.ustar, "pressure_drop": self.pressure_drop,
+                "omega": self.omega, "freq_ratio": self.freq_ratio, "l1": self.l1,
+                "criticality": "supercritical" if self.supercritical else "subcritical",
+                "dominant_mode": self.dominant_mode}
+
+
+def reparametrized_field(model: Model) -> tuple[ca.Function, ca.Function, list[str]]:
+    """F and M with parameters (Δp/(M* PI_SCALE), log10 M*, the rest, in order); M is
+    multiplied by TIME_SCALE (time in units of T/TIME_SCALE)."""
+    rest = [name for name in model.parameter_names if name not in ("pressure_drop", "mstar")]
+    names = [PI, LOG_M, *rest]
+    x = ca.MX.sym("x", model.n_state)
+    q = ca.MX.sym("p", len(names))
+    value = {name: q[i] for i, name in enumerate(names)}
+    mstar = 10 ** value[LOG_M]
+    value.update(pressure_drop=value[PI] * PI_SCALE * mstar, mstar=mstar)
+    p = ca.vertcat(*[value[name] for name in model.parameter_names])
+    F = ca.Function("F", [x, q], [model.rhs(x, p)], ["x", "p"], ["F"])
+    M = ca.Function("M", [x, q], [TIME_SCALE * model.mass(x, p)], ["x", "p"], ["M"])
+    return F, M, names
+
+
+_FIELDS: dict[int, tuple] = {}
+
+
+def flutter_field(model: Model) -> C.VectorField:
+    """The reparametrized VectorField of ``model``, built once per model (the library
+    caches its compiled augmented systems on it)."""
+    entry = _FIELDS.get(id(model))
+    if entry is None or entry[0] is not model:
+        F, M, names = reparametrized_field(model)
+        entry = _FIELDS[id(model)] = (model, C.VectorField(F, M, tuple(names)))
+    return entry[1]
+
+
+def flutter_problem(scene: Scene, model: Model, ustar_start: float) -> C.EquilibriumProblem:
+    """Equilibrium problem in Π from the steady state at ``ustar_start``."""
+    st = steady_state(scene.replace(ustar=ustar_start), model)
+    vf = flutter_field(model)
+    names = vf.par_names
+    values = dict(zip(model.parameter_names, st.p))
+    params = {PI: st.pressure_drop / (scene.mstar * PI_SCALE), LOG_M: math.log10(scene.mstar)}
+    params.update({k: values[k] for k in names[2:]})
+    return C.EquilibriumProblem(vf, st.x, params, PI)
+
+
+def _settings(pi_max: float, max_steps: int = 400) -> C.ContinuationSettings:
+    return C.ContinuationSettings(ds=pi_max / 400, ds_min=1e-10 * pi_max, ds_max=pi_max / 40,
+                                  max_steps=max_steps, bounds={PI: (0.0, pi_max)},
+                                  locate_tol=1e-12)
+
+
+def dominant_mode(model: Model, q_part: np.ndarray) -> int:
+    """1-based in-vacuo mode with the largest share of |q|^2 in a (complex) eigenvector."""
+    return int(np.argmax(np.abs(q_part) ** 2)) + 1
+
+
+def _hopf_point(model: Model, scene: Scene, point) -> HopfPoint:
+    n = model.n_modes
+    x = np.asarray(point.x)
+    omega = float(point.data["omega"]) * TIME_SCALE
+    q = _eigenvector_q(model, x, point.params, omega / TIME_SCALE)
+    mstar = 10 ** point.params[LOG_M]
+    return HopfPoint(mstar=mstar, ustar=float(x[-2:].sum() / scene.hstar),
+                     pressure_drop=float(point.params[PI] * PI_SCALE * mstar), omega=omega,
+                     freq_ratio=omega / float(modal_basis(scene, [1.0]).omega[0]),
+                     l1=float(point.data.get("l1", np.nan)), dominant_mode=dominant_mode(model, q),
+                     precision=float(point.precision), x=x, point=point)
+
+
+def _eigenvector_q(model: Model, x, params, omega) -> np.ndarray:
+    """q-part of the eigenvector of J v = i omega M v at a Hopf point (inverse iteration)."""
+    vf = flutter_field(model)
+    p = np.array([params[k] for k in vf.par_names])
+    J, Mm = _dense(vf.jac_x(x, p)), _dense(vf.mass(x, p))
+    lam, vec = np.linalg.eig(np.linalg.solve(Mm, J))
+    k = int(np.argmin(np.abs(lam - 1j * omega)))
+    n = model.n_modes
+    return vec[n:2 * n, k]
+
+
+def _dense(a) -> np.ndarray:
+    return a.toarray() if hasattr(a, "toarray") else np.asarray(a)
+
+
+def hopf_points(scene: Scene, model: Model | None = None, ustar_max: float = 40.0,
+                ustar_start: float = 0.2) -> list[HopfPoint]:
+    """All Hopf points of the steady branch for U* in (ustar_start, ustar_max), in order."""
+    if not 0 < ustar_start < ustar_max:
+        raise ValueError(f"need 0 < ustar_start < ustar_max, got {ustar_start}, {ustar_max}")
+    model = model or build_model(scene)
+    problem = flutter_problem(scene, model, ustar_start)
+    pi_max = _pi_of(scene, model, ustar_max)
+    branch = C.continuation(problem, settings=_settings(pi_max))
+    if branch.status == "failed":
+        raise CriticalVelocityError(f"steady branch lost at M* = {scene.mstar:g}: {branch.message}")
+    if branch.n_unstable is not None and len(branch.n_unstable) and branch.n_unstable[0] > 0:
+        raise CriticalVelocityError(
+            f"the steady state is already unstable at U* = {ustar_start:g} (M* = {scene.mstar:g}); "
+            "lower ustar_start")
+    return [_hopf_point(model, scene, h) for h in branch.special("hopf")]
+
+
+def critical_velocity(scene: Scene, model: Model | None = None, ustar_max: float = 40.0,
+                      ustar_start: float = 0.2) -> HopfPoint | None:
+    """The first Hopf point (flutter onset) of the steady branch, or None below ustar_max."""
+    points = hopf_points(scene, model, ustar_max, ustar_start)
+    return points[0] if points else None
+
+
+def _pi_of(scene: Scene, model: Model, ustar: float) -> float:
+    """Scaled kinematic pressure drop Δp/(M* PI_SCALE) of the steady state at ``ustar``."""
+    return steady_state(scene.replace(ustar=ustar), model).pressure_drop / (scene.mstar * PI_SCALE)
