@@ -21,7 +21,11 @@ Theory, 3rd ed., eq. (3.20)/(5.39)) becomes
     h11 = J^{-1} b(q, qbar),        A h11 = M^{-1} b(q, qbar)
     h20 = (2 i omega M - J)^{-1} b(q, q),  A h20 = 2 i omega h20 - M^{-1} b(q, q)
 
-and ``A q = i omega q``. The value depends on the scaling ``|q| = 1``; for
+and ``A q = i omega q``. When ``M`` does not depend on ``x`` the ``M1, M2``
+terms vanish and ``M^{-1}`` is never needed: the formula then also holds for
+a constant *singular* ``M`` (semi-explicit index-1 DAEs), which is what the
+centre-manifold reduction onto the algebraic constraint gives. The value
+depends on the scaling ``|q| = 1``; for
 ``xdot = mu x - omega y + a x r^2, ydot = omega x + mu y + a y r^2`` it is
 ``l1 = 2 a / omega``.
 """
@@ -49,16 +53,15 @@ def first_lyapunov(vf: VectorField, x, p, omega: float) -> float:
     J = sp.csc_matrix(vf.jac_x(x, p), dtype=complex)
     M = sp.csc_matrix(vf.mass(x, p), dtype=complex)
     q, phi = hopf_eigenvectors(J, M, omega)
-    Minv = spla.splu(M).solve
-    ctx = _Context(vf, x, p, Minv)
+    ctx = _Context(vf, x, p, M)
     qb = q.conj()
     Aq, Aqb = 1j * omega * q, -1j * omega * qb
     b11 = ctx.b(q, Aq, qb, Aqb)
     b20 = ctx.b(q, Aq, q, Aq)
     h11 = spla.splu(J).solve(b11)
     h20 = spla.splu(sp.csc_matrix(2j * omega * M - J)).solve(b20)
-    Ah11 = Minv(b11)
-    Ah20 = 2j * omega * h20 - Minv(b20)
+    Ah11 = ctx.G(b11)
+    Ah20 = 2j * omega * h20 - ctx.G(b20)
     c = ctx.c((q, Aq), (q, Aq), (qb, Aqb))
     total = phi @ c - 2 * phi @ ctx.b(q, Aq, h11, Ah11) + phi @ ctx.b(qb, Aqb, h20, Ah20)
     return float(total.real / (2 * omega))
@@ -67,9 +70,19 @@ def first_lyapunov(vf: VectorField, x, p, omega: float) -> float:
 class _Context:
     """Multilinear forms ``b`` and ``c`` of M times the derivatives of ``f``."""
 
-    def __init__(self, vf, x, p, Minv):
-        self.vf, self.x, self.p, self.G = vf, x, p, Minv
-        self.identity = vf.M is None
+    def __init__(self, vf, x, p, M):
+        self.vf, self.x, self.p = vf, x, p
+        self.identity = not vf.mass_depends_on_state  # M1 = M2 = 0
+        self._M, self._lu = M, None
+
+    def G(self, y):
+        """``M^{-1} y`` (only needed, and M only required invertible, when M
+        depends on x; with a constant M the terms ``A h`` are multiplied by zero)."""
+        if self.identity:
+            return 0 * y
+        if self._lu is None:
+            self._lu = spla.splu(self._M)
+        return self._lu.solve(y)
 
     def F2(self, u, v):
         return self.vf.form("F2", self.x, self.p, u, v)

@@ -74,6 +74,11 @@ class VectorField:
         """Symbolic ``M(x, p)`` (identity when no mass matrix is given)."""
         return self.sym.eye(self.n) if self.M is None else self.M(x, p)
 
+    @cached_property
+    def mass_depends_on_state(self) -> bool:
+        """True when ``M`` depends on ``x`` (its derivatives enter normal forms)."""
+        return self.M is not None and bool(ca.depends_on(self.M(self._x, self._p), self._x))
+
     def par_index(self, name: str) -> int:
         """Position of parameter ``name`` in ``p``; ValueError if unknown."""
         if name not in self.par_names:

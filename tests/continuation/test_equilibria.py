@@ -217,3 +217,28 @@ def test_fold_and_hopf_within_one_step():
     assert abs(fold.x[0]) < 1e-10 and abs(fold.params["mu"]) < 1e-12
     assert abs(hopf.x[0] - 0.01) < 1e-10 and abs(hopf.params["mu"] - 1e-4) < 1e-12
     assert abs(hopf.data["omega"] - 1) < 1e-10
+
+
+def test_dae_constant_singular_mass_lyapunov_matches_reduced_ode():
+    """M = diag(1, 1, 0): the constraint z = x^2 + y eliminated by hand gives a planar
+    ODE. Hopf at mu = 0 with omega = 1 in both; l1 scales with |q|^2 in the full state:
+    q3 = (q2, q2_y) with q2 = (1, -i)/sqrt(2), so l1_dae = l1_ode * |q2|^2/|q3|^2 = 2/3 l1_ode."""
+    x, p = ca.SX.sym("x", 3), ca.SX.sym("p", 1)
+    X, Y, Z = x[0], x[1], x[2]
+    r2 = X**2 + Y**2
+    F = ca.Function("F", [x, p], [ca.vertcat(
+        p[0] * X - Y - X * r2 + 0.5 * Z * X + 0.3 * Z * Y,
+        X + p[0] * Y - Y * r2 + 0.2 * Z**2, Z - X**2 - Y)])
+    M = ca.Function("M", [x, p], [ca.diag(ca.vertcat(1, 1, 0))])
+    br = C.continuation(C.EquilibriumProblem(F, [0, 0, 0], {"mu": -0.3}, "mu", M=M),
+                        settings=settings(bounds={"mu": (-1, 0.3)}))
+    (h,) = br.special("hopf")
+    assert abs(h.params["mu"]) < 1e-12 and abs(h.data["omega"] - 1) < 1e-12
+    assert all(ev.size == 2 for ev in br.eigenvalues)  # the infinite eigenvalue is dropped
+    x2 = ca.SX.sym("x", 2)
+    z, r2 = x2[0] ** 2 + x2[1], x2[0] ** 2 + x2[1] ** 2
+    f = ca.Function("f", [x2, p], [ca.vertcat(
+        p[0] * x2[0] - x2[1] - x2[0] * r2 + 0.5 * z * x2[0] + 0.3 * z * x2[1],
+        x2[0] + p[0] * x2[1] - x2[1] * r2 + 0.2 * z**2)])
+    l1_ode = C.first_lyapunov(C.VectorField(f, None, ("mu",)), np.zeros(2), np.zeros(1), 1.0)
+    assert h.data["l1"] == pytest.approx(2 / 3 * l1_ode, rel=1e-10)
