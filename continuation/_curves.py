@@ -25,7 +25,8 @@ import numpy as np
 import scipy.sparse as sp
 
 from . import _eigen
-from ._equilibrium import hopf_start, param_vector, real_null_vector, state_vector
+from ._equilibrium import (hopf_start, hopf_vectors, param_vector, real_null_vector,
+                           state_vector)
 from ._lyapunov import first_lyapunov
 from ._newton import factorize
 from ._problem import Description, PointInfo, Problem
@@ -53,13 +54,15 @@ class HopfCurveProblem(Problem):
     kind = "hopf"
 
     def __init__(self, vf: VectorField, x, params: Mapping[str, float], omega: float,
-                 free: tuple):
+                 free: tuple, *, q=None):
         free = _free_pair(vf, free)
         p, x = param_vector(vf, params), state_vector(vf, x, "x")
         if not (np.isfinite(omega) and omega > 0):
             raise ValueError(f"omega must be positive, got {omega!r}")
-        J, M = vf.jac_x(x, p), vf.mass(x, p)
-        v, w, kappa, c = hopf_start(J, M, float(omega))
+        if q is None:
+            v, w, kappa, c = hopf_start(vf.jac_x(x, p), vf.mass(x, p), float(omega))
+        else:
+            v, w, kappa, c = hopf_vectors(np.asarray(q, dtype=complex), float(omega))
         pf = [p[vf.par_index(f)] for f in free]
         super().__init__(vf, free, np.concatenate([x, v, w, [kappa], pf]), p, c)
 
@@ -73,6 +76,18 @@ class HopfCurveProblem(Problem):
 
     def kappa(self, X) -> float:
         return float(X[3 * self.vf.n])
+
+    def restart(self, X):
+        """Rebuild ``c`` from the current ``v, w`` when ``c`` and ``v`` are more
+        than 60 degrees apart (``|c| |v| > 2``, since ``c.v = 1``); Hopf part only."""
+        n, k = self.vf.n, self.kappa(X)
+        v, w, c = X[n: 2 * n], X[2 * n: 3 * n], self.system.D
+        if k <= 0 or np.linalg.norm(c) * np.linalg.norm(v) <= 2.0:
+            return None
+        omega = float(np.sqrt(k))
+        new = HopfCurveProblem(self.vf, self.state(X), self.par_dict(X), omega, self.free,
+                               q=v - 1j * w / omega)
+        return new, new.X0
 
     def columns(self, X) -> dict:
         k = self.kappa(X)
@@ -128,10 +143,11 @@ class FoldCurveProblem(Problem):
 
     kind = "fold"
 
-    def __init__(self, vf: VectorField, x, params: Mapping[str, float], free: tuple):
+    def __init__(self, vf: VectorField, x, params: Mapping[str, float], free: tuple,
+                 *, v=None):
         free = _free_pair(vf, free)
         p, x = param_vector(vf, params), state_vector(vf, x, "x")
-        v = real_null_vector(vf.jac_x(x, p))
+        v = real_null_vector(vf.jac_x(x, p)) if v is None else np.asarray(v) / np.linalg.norm(v)
         pf = [p[vf.par_index(f)] for f in free]
         super().__init__(vf, free, np.concatenate([x, v, pf]), p, v)
         self._d = np.random.default_rng(7).standard_normal(vf.n)
@@ -142,6 +158,15 @@ class FoldCurveProblem(Problem):
         if point.kind != "fold":
             raise ValueError(f"point must be a fold point, got kind {point.kind!r}")
         return cls(problem.vf, point.x, point.params, (problem.free[-1], second))
+
+    def restart(self, X):
+        """Rebuild ``c = v/|v|`` when ``|c| |v| > 2`` (c and v > 60 degrees apart)."""
+        n = self.vf.n
+        v, c = X[n: 2 * n], self.system.D
+        if np.linalg.norm(c) * np.linalg.norm(v) <= 2.0:
+            return None
+        new = FoldCurveProblem(self.vf, self.state(X), self.par_dict(X), self.free, v=v)
+        return new, new.X0
 
     def bt_test(self, X) -> float:
         """``psi^T M v / (|psi| |v|)`` from ``[[J^T, v], [d^T, 0]] (psi, g) = e``."""

@@ -6,6 +6,7 @@ consecutive ones and collects everything into a :class:`Branch`.
 from __future__ import annotations
 
 import time
+from dataclasses import replace
 
 import numpy as np
 from tqdm.auto import tqdm
@@ -28,24 +29,60 @@ def continuation(problem: Problem, algorithm: PALC | None = None,
     settings = ContinuationSettings() if settings is None else settings
     _check(problem, algorithm, settings)
     t0 = time.perf_counter()
-    it = ContinuationIterator(problem, algorithm, settings)
     rec = _Recorder(problem)
-    prev = None
     with tqdm(total=settings.max_steps + 1, disable=not settings.progress,
               desc=f"{problem.kind} continuation", leave=False) as bar:
+        it = _run_segments(problem, algorithm, settings, rec, bar)
+    stats = {**rec.stats, "time_total": time.perf_counter() - t0}
+    return rec.branch(it.status, it.message, it.failure, stats)
+
+
+def _run_segments(problem, algorithm, settings, rec, bar):
+    """Iterate PALC; when the problem asks for a restart (reference vectors of
+    an augmented system drifted), continue with the rebuilt problem from the
+    same point, oriented by the previous tangent. Returns the last iterator."""
+    tau_ref, prev, seg_settings = None, None, settings
+    while True:
+        it = ContinuationIterator(problem, algorithm, seg_settings, tau_ref)
+        restart = None
         for step in it:
             info = problem.monitor(step.X, step.tau, step.lu, settings)
-            if prev is not None and settings.detect:
-                for kind in problem.events(prev[1], info):
-                    found = _special(problem, kind, prev, (step, info), settings,
-                                     len(rec.X), rec.stats)
-                    if found is not None:
-                        rec.special.append(found)
+            if tau_ref is not None and step.ds == 0.0:  # restart point, already recorded
+                prev = (step, info)
+                continue
+            _detect(problem, prev, (step, info), settings, rec)
             rec.add(step, info)
             prev = (step, info)
             bar.update()
-    stats = {**it.stats, **rec.stats, "time_total": time.perf_counter() - t0}
-    return rec.branch(it.status, it.message, it.failure, stats)
+            done = len(rec.X) - 1
+            restart = problem.restart(step.X) if done < settings.max_steps else None
+            if restart is not None:
+                break
+        _merge(rec.stats, it.stats)
+        if restart is None:
+            return it
+        problem, X_new = restart
+        tau_ref = np.zeros(X_new.size)
+        frame = problem.frame(X_new)
+        tau_ref[frame] = step.tau[frame]
+        remaining = settings.max_steps - (len(rec.X) - 1)
+        rec.stats["restarts"] = rec.stats.get("restarts", 0) + 1
+        seg_settings = replace(settings, max_steps=remaining,
+                               ds=min(max(it.ds, settings.ds_min), settings.ds_max))
+
+
+def _detect(problem, prev, cur, settings, rec):
+    if prev is None or not settings.detect:
+        return
+    for kind in problem.events(prev[1], cur[1]):
+        found = _special(problem, kind, prev, cur, settings, len(rec.X), rec.stats)
+        if found is not None:
+            rec.special.append(found)
+
+
+def _merge(stats, it_stats):
+    for key, value in it_stats.items():
+        stats[key] = stats.get(key, 0) + value
 
 
 def _check(problem, algorithm, settings):

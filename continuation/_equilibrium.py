@@ -202,14 +202,20 @@ def _fold_coefficient(vf, x, p, v) -> dict:
 
 
 def hopf_start(J, M, omega):
-    """Initial ``(v, w, kappa, c)`` of the Hopf system from ``J q = i omega M q``.
+    """Initial ``(v, w, kappa, c)`` of the Hopf system from ``J q = i omega M q``."""
+    q, _ = hopf_eigenvectors(sp.csc_matrix(J, dtype=complex),
+                             sp.csc_matrix(M, dtype=complex), omega)
+    return hopf_vectors(q, omega)
+
+
+def hopf_vectors(q, omega):
+    """``(v, w, kappa, c)`` from an eigenvector ``q`` of ``i omega``.
 
     The phase of ``q`` is chosen so that ``Re q . Im q = 0`` and
     ``|Re q| >= |Im q|``; then ``v = Re q``, ``w = -omega Im q``,
     ``kappa = omega^2``, ``c = v / |v|^2`` satisfy ``c.v = 1, c.w = 0``.
     """
-    q, _ = hopf_eigenvectors(sp.csc_matrix(J, dtype=complex),
-                             sp.csc_matrix(M, dtype=complex), omega)
+    q = q / np.linalg.norm(q)
     q = q * np.exp(-0.5j * np.angle(q @ q))
     if np.linalg.norm(q.real) < np.linalg.norm(q.imag):
         q = 1j * q

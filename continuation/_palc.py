@@ -71,10 +71,14 @@ class ContinuationIterator:
     ``status`` is ``'running'`` while iterating, then one of ``'max_steps'``,
     ``'bound'`` (a parameter left ``settings.bounds``), ``'failed'`` (corrector
     failed at ``ds_min``, or the start point did not converge).
+    ``tau_ref`` (optional) orients the first tangent (``tau . tau_ref > 0``)
+    instead of ``settings.direction``; used when a curve is restarted.
     """
 
-    def __init__(self, problem, algorithm: PALC, settings: ContinuationSettings):
+    def __init__(self, problem, algorithm: PALC, settings: ContinuationSettings,
+                 tau_ref: np.ndarray | None = None):
         self.problem, self.algorithm, self.settings = problem, algorithm, settings
+        self.tau_ref = None if tau_ref is None else np.asarray(tau_ref, dtype=float)
         self.status, self.message, self.failure = "running", "", {}
         self.stats = {"steps": 0, "newton_iterations": 0, "rejected_steps": 0,
                       "time_steps": 0.0}
@@ -103,11 +107,15 @@ class ContinuationIterator:
         res = correct(prob, X0, e, self.settings.newton)
         if not res.converged:
             return self._fail("start point did not converge: " + res.message, res, 0.0)
-        tau, lu = tangent(prob, res.X, e)
+        if self.tau_ref is not None:
+            tau, lu = tangent(prob, res.X, self.tau_ref)
+        else:
+            tau, lu = tangent(prob, res.X, e)
         if tau is None:
             return self._fail("singular Jacobian at the start point (start at a "
                               "fold or branch point?)", res, 0.0)
-        tau = self.settings.direction * tau
+        if self.tau_ref is None:
+            tau = self.settings.direction * tau
         lu = factorize(bordered(prob.jacobian(res.X), tau))
         self.stats["newton_iterations"] += res.iterations
         return Step(res.X, tau, 0.0, res.iterations, res.residual, lu)

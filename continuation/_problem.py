@@ -98,6 +98,17 @@ class Problem:
         J, M = self.matrices(X)
         return _eigen.eigenvalues(J, M, settings.eigen)
 
+    def frame(self, X) -> np.ndarray:
+        """Indices of the state ``x`` and the free parameters in ``X`` (the
+        components that keep their meaning when the problem is restarted)."""
+        N, nf = len(X), len(self.free)
+        return np.r_[0:self.vf.n, N - nf:N]
+
+    def restart(self, X):
+        """``(new_problem, X_new)`` when the augmented system should be rebuilt at
+        ``X`` (e.g. reference vectors drifted), else None (default: never)."""
+        return None
+
     def columns(self, X) -> dict:
         """Problem-specific scalar columns recorded per point (default none)."""
         return {}

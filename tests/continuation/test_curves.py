@@ -149,3 +149,39 @@ def test_sparse_and_dense_eigenvalues_agree():
     sparse = eigenvalues(J, M, C.EigenSettings(dense_max=10, nev=6, sigma=0.0))
     nearest = dense[np.argsort(np.abs(dense))[:6]]
     assert np.allclose(np.sort_complex(nearest), np.sort_complex(sparse), atol=1e-10)
+
+
+def _rotation(a):
+    c, s = ca.cos(a), ca.sin(a)
+    return ca.vertcat(ca.horzcat(c, 0, s, 0), ca.horzcat(0, c, 0, s),
+                      ca.horzcat(-s, 0, c, 0), ca.horzcat(0, -s, 0, c))
+
+
+@pytest.mark.parametrize("kind", ["hopf", "fold"])
+def test_curve_restarts_when_the_critical_space_rotates(kind):
+    """F(x) = Q(a)^T g(Q(a) x): the critical eigenvector(s) rotate from span(e1, e2) to
+    span(e3, e4) as a goes 0 -> pi/2, orthogonal to the initial reference vector c. The
+    curve (mu = 0, omega = 1 for Hopf) continues past a = pi/2 only because c is rebuilt."""
+    x, p = ca.SX.sym("x", 4), ca.SX.sym("p", 2)
+    Q = _rotation(p[1])
+    y = ca.mtimes(Q, x)
+    if kind == "hopf":
+        r2 = y[0]**2 + y[1]**2
+        g = ca.vertcat(p[0] * y[0] - y[1] - y[0] * r2, y[0] + p[0] * y[1] - y[1] * r2,
+                       -y[2] + y[0]**2, -2 * y[3])
+        x0, mu0 = [0, 0, 0, 0], -0.2
+    else:
+        g = ca.vertcat(p[0] - y[0]**2, -y[1] + y[0]**2, -y[2], -2 * y[3])
+        x0, mu0 = [0.5, 0.25, 0, 0], 0.25
+    F = ca.Function("F", [x, p], [ca.mtimes(Q.T, g)])
+    prob = C.EquilibriumProblem(F, x0, {"mu": mu0, "a": 0.0}, "mu")
+    br = run(prob, direction=1 if kind == "hopf" else -1, bounds={"mu": (-1, 0.3)})
+    (point,) = br.special(kind)
+    cls = C.HopfCurveProblem if kind == "hopf" else C.FoldCurveProblem
+    curve = run(cls.from_point(prob, point, "a"), ds=0.05, ds_max=0.1, max_steps=300,
+                bounds={"a": (-1, 3.5)})
+    assert curve.status == "bound" and curve.par("a").max() > 3.4
+    assert curve.stats["restarts"] >= 1
+    assert np.max(np.abs(curve.par("mu"))) < 1e-10
+    if kind == "hopf":
+        assert np.max(np.abs(curve.columns["omega"] - 1)) < 1e-10
