@@ -34,7 +34,9 @@ def continuation(problem: Problem, algorithm: PALC | None = None,
               desc=f"{problem.kind} continuation", leave=False) as bar:
         it = _run_segments(problem, algorithm, settings, rec, bar)
     stats = {**rec.stats, "time_total": time.perf_counter() - t0}
-    return rec.branch(it.status, it.message, it.failure, stats)
+    message = f"reached max_steps = {settings.max_steps}" if it.status == "max_steps" \
+        else it.message  # a restarted segment only knows its remaining budget
+    return rec.branch(it.status, message, it.failure, stats)
 
 
 def _run_segments(problem, algorithm, settings, rec, bar):
