@@ -3,8 +3,9 @@
 Public API (everything else is private)::
 
     continuation(problem, algorithm=PALC(), settings=ContinuationSettings()) -> Branch
-    EquilibriumProblem(F, x0, params, active, M=None)
-    HopfCurveProblem.from_point(problem, point, second) / FoldCurveProblem.from_point(...)
+    EquilibriumProblem(F, x0, params, active, *, M=None)
+    HopfCurveProblem(vf, x, params, omega, free) / .from_point(problem, point, second)
+    FoldCurveProblem(vf, x, params, free) / .from_point(problem, point, second)
     VectorField(F, M, par_names), first_lyapunov(vf, x, p, omega)
     Branch, SpecialPoint, ContinuationIterator, PALC, ContinuationSettings,
     NewtonSettings, EigenSettings
@@ -24,6 +25,6 @@ from ._vectorfield import VectorField
 
 __all__ = [
     "Branch", "ContinuationIterator", "ContinuationSettings", "EigenSettings",
-    "EquilibriumProblem", "FoldCurveProblem", "HopfCurveProblem", "NewtonSettings", "PALC", "Problem",
-    "SpecialPoint", "Step", "VectorField", "continuation", "first_lyapunov",
+    "EquilibriumProblem", "FoldCurveProblem", "HopfCurveProblem", "NewtonSettings",
+    "PALC", "Problem", "SpecialPoint", "Step", "VectorField", "continuation", "first_lyapunov",
 ]
