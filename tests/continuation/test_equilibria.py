@@ -242,3 +242,42 @@ def test_dae_constant_singular_mass_lyapunov_matches_reduced_ode():
         x2[0] + p[0] * x2[1] - x2[1] * r2 + 0.2 * z**2)])
     l1_ode = C.first_lyapunov(C.VectorField(f, None, ("mu",)), np.zeros(2), np.zeros(1), 1.0)
     assert h.data["l1"] == pytest.approx(2 / 3 * l1_ode, rel=1e-10)
+
+
+def _gh_coefficient_in_normal_coordinates(F, xs, ps, omega, q):
+    """Guckenheimer-Holmes a for F at (xs, ps) in coordinates x = xs + T y with
+    T = [Re q, -Im q], where the linear part becomes [[0, -omega], [omega, 0]]."""
+    T = np.column_stack([q.real, -q.imag])
+    y = ca.SX.sym("y", 2)
+    g = ca.mtimes(ca.DM(np.linalg.inv(T)), F(ca.DM(xs) + ca.mtimes(ca.DM(T), y), ca.DM(ps)))
+    d = {}
+    for name, idx in {"xx": (0, 0), "xy": (0, 1), "yy": (1, 1), "xxx": (0, 0, 0),
+                      "xyy": (0, 1, 1), "xxy": (0, 0, 1), "yyy": (1, 1, 1)}.items():
+        for comp in (0, 1):
+            e = g[comp]
+            for k in idx:
+                e = ca.jacobian(e, y[k])
+            d[("f" if comp == 0 else "g") + name] = float(ca.Function("d", [y], [e])([0, 0]))
+    return (d["fxxx"] + d["fxyy"] + d["gxxy"] + d["gyyy"]) / 16 + (
+        d["fxy"] * (d["fxx"] + d["fyy"]) - d["gxy"] * (d["gxx"] + d["gyy"])
+        - d["fxx"] * d["gxx"] + d["fyy"] * d["gyy"]) / (16 * omega)
+
+
+@pytest.mark.parametrize("A", [0.7, 1.5, 2.5])
+def test_brusselator_lyapunov_against_guckenheimer_holmes(models, A):
+    """Independent route: transform the Brusselator at its Hopf point to the rotation
+    normal coordinates y (x = x* + T y, T = [Re q, -Im q], |q| = 1) and apply the
+    Guckenheimer-Holmes formula. There q_y = (1, -i)/sqrt(2) maps to q/sqrt(2), so the
+    library's |q| = 1 value is l1 = 2 * (2 a / omega) = 4 a / omega."""
+    from continuation._lyapunov import hopf_eigenvectors
+    F = models.brusselator()
+    br = C.continuation(C.EquilibriumProblem(F, [A, 1 / A], {"A": A, "B": 1.0}, "B"),
+                        settings=settings(bounds={"B": (0, 1 + A**2 + 1)}))
+    (h,) = br.special("hopf")
+    ps = np.array([A, h.params["B"]])
+    vf = C.VectorField(F, None, ("A", "B"))
+    q, _ = hopf_eigenvectors(vf.jac_x(h.x, ps).astype(complex),
+                             vf.mass(h.x, ps).astype(complex), h.data["omega"])
+    a = _gh_coefficient_in_normal_coordinates(F, h.x, ps, h.data["omega"], q)
+    assert h.data["l1"] == pytest.approx(4 * a / h.data["omega"], rel=1e-9)
+    assert h.data["l1"] < 0  # the Brusselator Hopf bifurcation is supercritical
