@@ -127,6 +127,8 @@ def _parser() -> argparse.ArgumentParser:
     p.add_argument("--quick", action="store_true", help="coarser grids (for a smoke test)")
     p.add_argument("--json", action="store_true")
     p.set_defaults(run=_cmd_paper)
+    from .cli_time import add_time_commands   # simulate, map (docs/simulate.md)
+    add_time_commands(sub, _add_scene_options)
     return parser
 
 

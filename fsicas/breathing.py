@@ -1,0 +1,99 @@
+"""Prescribed pressure drop in time: constant, ramp, or a sinusoidal inspiration cycle.
+
+A schedule prescribes the *quasi-steady* mean inlet velocity ``U(t)`` and drives the
+model with the pressure drop that would hold that velocity in a steady state,
+
+    Δp(t) = c · U(t)|U(t)|,        c = Δp_ss(U_ref) / (U_ref |U_ref|),
+
+with ``Δp_ss`` the steady state's pressure drop at the reference velocity (the constant
+value, the end of a ramp, or the peak of a breath). For a straight symmetric channel the
+steady pressure drop is exactly ``M* U|U| ((K0+KL)/2 + 2f/H*)``, so Δp(t) is exactly the
+steady pressure drop of U(t) at every t; for other geometries it is exact at U_ref and
+a quasi-steady quadratic law elsewhere. The actual flow rate lags Δp(t) through the
+fluid inertia (that lag and the beam's own growth time make onset and offset differ).
+
+Kinds (``U(t)``):
+
+- ``constant``: ``U(t) = U``;
+- ``ramp``: ``U(t) = U0 + (U1 − U0) min(t / duration, 1)``;
+- ``breath``: ``U(t) = U_peak |sin(π t / period)|``: an inspiration of the given period
+  (one breath from rest to the peak and back), repeated.
+
+Time enters the integrator as an input (the schedule is a CasADi expression of t, one
+compiled integrator serves any schedule of the same kind); no piecewise-constant chunks.
+The schedule's six numbers ``(c, U_a, U_b, duration, U_s, period)`` are passed to the
+integrator as parameters: ``U(t) = U_a + U_b min(t/duration, 1) + U_s |sin(π t/period)|``.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import casadi as ca
+import numpy as np
+
+__all__ = ["PressureSchedule", "schedule_expression", "N_SCHEDULE_PARAMS"]
+
+N_SCHEDULE_PARAMS = 6
+_KINDS = ("constant", "ramp", "breath")
+
+
+@dataclass(frozen=True)
+class PressureSchedule:
+    """U*(t) prescription; see the module docstring. ``duration``/``period`` > 0."""
+
+    kind: str = "constant"
+    ustar: float = 0.0            # constant value, ramp end U1, or breath peak
+    ustar_start: float = 0.0      # ramp start U0
+    duration: float = 1.0         # ramp duration
+    period: float = 1.0           # breath period
+
+    def __post_init__(self):
+        if self.kind not in _KINDS:
+            raise ValueError(f"schedule kind must be one of {_KINDS}, got {self.kind!r}")
+        for name in ("ustar", "ustar_start", "duration", "period"):
+            value = getattr(self, name)
+            if not isinstance(value, (int, float)) or not math.isfinite(value):
+                raise ValueError(f"schedule {name} must be a finite number, got {value!r}")
+        if self.duration <= 0 or self.period <= 0:
+            raise ValueError(f"schedule duration and period must be > 0, got "
+                             f"{self.duration}, {self.period}")
+
+    @classmethod
+    def constant(cls, ustar: float) -> "PressureSchedule":
+        return cls("constant", ustar=ustar)
+
+    @classmethod
+    def ramp(cls, ustar_start: float, ustar_end: float, duration: float) -> "PressureSchedule":
+        return cls("ramp", ustar=ustar_end, ustar_start=ustar_start, duration=duration)
+
+    @classmethod
+    def breath(cls, peak: float, period: float) -> "PressureSchedule":
+        return cls("breath", ustar=peak, period=period)
+
+    @property
+    def reference_ustar(self) -> float:
+        """The U* at which Δp is taken from the steady state."""
+        return self.ustar
+
+    def vector(self, coefficient: float) -> np.ndarray:
+        """The six schedule parameters for a given ``c`` (module docstring)."""
+        if self.kind == "constant":
+            return np.array([coefficient, self.ustar, 0.0, 1.0, 0.0, 1.0])
+        if self.kind == "ramp":
+            return np.array([coefficient, self.ustar_start, self.ustar - self.ustar_start,
+                             self.duration, 0.0, 1.0])
+        return np.array([coefficient, 0.0, 0.0, 1.0, self.ustar, self.period])
+
+    def ustar_at(self, t) -> np.ndarray:
+        """Quasi-steady U*(t) (NumPy)."""
+        t = np.asarray(t, dtype=float)
+        _, a, b, d, s, per = self.vector(1.0)
+        return a + b * np.minimum(t / d, 1.0) + s * np.abs(np.sin(np.pi * t / per))
+
+
+def schedule_expression(t, sched):
+    """CasADi Δp(t) from the schedule parameters ``sched`` (6-vector)."""
+    c, a, b, d, s, per = (sched[i] for i in range(N_SCHEDULE_PARAMS))
+    u = a + b * ca.fmin(t / d, 1.0) + s * ca.fabs(ca.sin(np.pi * t / per))
+    return c * u * ca.fabs(u)

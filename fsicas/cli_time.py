@@ -1,0 +1,94 @@
+"""CLI commands of the time integration: ``fsicas simulate`` and ``fsicas map``.
+
+Registered by :func:`add_time_commands` from ``fsicas.cli._parser``; the JSON contract
+(keys) is in ``docs/simulate.md``.
+"""
+from __future__ import annotations
+
+import argparse
+
+import numpy as np
+
+__all__ = ["add_time_commands"]
+
+
+def add_time_commands(sub, add_scene_options) -> None:
+    """Add the ``simulate`` and ``map`` subcommands."""
+    p = sub.add_parser("simulate", help="nonlinear time integration and outcome classification")
+    add_scene_options(p)
+    p.add_argument("--t-end", type=float, required=True, help="final time (units of T)")
+    p.add_argument("--method", default="cvodes", choices=["cvodes", "idas", "radau", "bdf"])
+    p.add_argument("--rtol", type=float, default=1e-8)
+    p.add_argument("--atol", type=float, default=1e-10)
+    p.add_argument("--dt-out", type=float, default=1e-3, help="output sampling step")
+    p.add_argument("--perturbation", type=float, default=1e-2,
+                   help="initial modal displacement, as a fraction of H*/2 (docs/simulate.md)")
+    p.add_argument("--schedule", default="constant", choices=["constant", "ramp", "breath"])
+    p.add_argument("--ustar-start", type=float, default=0.0, help="ramp: initial U*")
+    p.add_argument("--ramp-time", type=float, default=1.0, help="ramp: duration")
+    p.add_argument("--breath-period", type=float, default=1.0, help="breath: period")
+    p.add_argument("--full", action="store_true", help="run to --t-end (no early stop)")
+    p.add_argument("--plot", metavar="FILE", help="figure of the run (and FILE_cycle if settled)")
+    p.set_defaults(run=_cmd_simulate)
+    p = sub.add_parser("map", help="impact-boundary map in (U*, M*) (paper Fig. 4)")
+    p.add_argument("--ustar", default="4:14:11", metavar="LO:HI:COUNT", help="U* grid (linear)")
+    p.add_argument("--mstar", default="0.1:10:7", metavar="LO:HI:COUNT", help="M* grid (log)")
+    p.add_argument("--modes", type=int, default=10)
+    p.add_argument("--t-end", type=float, default=30.0)
+    p.add_argument("--workers", type=int, default=None)
+    p.add_argument("--out", default="impact_map.jsonl", help="results file (resumable)")
+    p.add_argument("--plot", metavar="FILE", help="write Fig. 4 to FILE")
+    p.add_argument("--json", action="store_true")
+    p.set_defaults(run=_cmd_map)
+
+
+def _grid(text: str, name: str, log: bool) -> np.ndarray:
+    try:
+        if ":" in text:
+            lo, hi, count = text.split(":")
+            lo, hi, count = float(lo), float(hi), int(count)
+            if count < 1 or (log and (lo <= 0 or hi <= 0)):
+                raise ValueError
+            return np.geomspace(lo, hi, count) if log else np.linspace(lo, hi, count)
+        return np.array([float(v) for v in text.split(",")])
+    except ValueError:
+        raise ValueError(f"--{name} must be LO:HI:COUNT or a comma list, got {text!r}") from None
+
+
+def _schedule(args, scene):
+    from .breathing import PressureSchedule
+    if args.schedule == "ramp":
+        return PressureSchedule.ramp(args.ustar_start, scene.ustar, args.ramp_time)
+    if args.schedule == "breath":
+        return PressureSchedule.breath(scene.ustar, args.breath_period)
+    return None
+
+
+def _cmd_simulate(args) -> dict:
+    from .cli import scene_from_args
+    from .run import run_case
+    from .simulate import Settings
+    if not args.t_end > 0:
+        raise ValueError(f"--t-end must be > 0, got {args.t_end}")
+    settings = Settings(method=args.method, rtol=args.rtol, atol=args.atol, dt_out=args.dt_out)
+    scene = scene_from_args(args)
+    run = run_case(scene, args.t_end, settings=settings, schedule=_schedule(args, scene),
+                   perturbation=args.perturbation, stop_early=not args.full)
+    if args.plot:
+        from .plots_time import plot_cycle, plot_run
+        plot_run(run, args.plot)
+        if run.outcome.period is not None:
+            stem, dot, ext = args.plot.rpartition(".")
+            plot_cycle(run, f"{stem}_cycle.{ext}" if dot else args.plot + "_cycle")
+    return run.to_json()
+
+
+def _cmd_map(args) -> dict:
+    from .impact_map import MAP_SCENE, impact_map
+    ustars, mstars = _grid(args.ustar, "ustar", False), _grid(args.mstar, "mstar", True)
+    scene = MAP_SCENE.replace(modes=args.modes)
+    result = impact_map(ustars, mstars, args.out, scene=scene, t_end=args.t_end, workers=args.workers)
+    if args.plot:
+        from .plots_time import plot_map
+        plot_map(result, args.plot)
+    return {**result.to_json(), "out": args.out}

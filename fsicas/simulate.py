@@ -1,0 +1,362 @@
+"""Nonlinear time integration of ``M(x, p) xdot = F(x, p)`` with wall contact.
+
+Routes (``Settings.method``):
+
+- ``cvodes`` (default): CasADi's CVODES (BDF, Newton with the exact dense Jacobian from
+  CasADi's AD) on the explicit form ``xdot = M(x)^{-1} F(x)``; the linear solve is a
+  symbolic node, so the Jacobian includes the derivative of M.
+- ``idas``: CasADi's IDAS on the semi-explicit index-1 form ``x' = z, 0 = M(x) z − F(x)``
+  (the implicit form; ``z`` are the time derivatives, started consistently).
+- ``radau`` / ``bdf``: SciPy's ``solve_ivp`` with the same compiled right-hand side and its
+  exact Jacobian: an independent check and the benchmark's baseline.
+
+Time is an input of the integrator: the pressure drop is ``Δp(t)`` of a
+:class:`~fsicas.breathing.PressureSchedule`. The run is integrated in chunks of about
+``Settings.chunk`` time units, each returning the state on a uniform output grid of step
+``dt_out``; after each chunk the samples are checked (finite, both gaps ``h_c > 0`` at
+101 points along the beam) and handed to a ``monitor`` (outcome classification) that may
+stop the run early. Solver failures (step-size or Newton failures, too much work) are
+returned as ``status="failed"`` with the solver's message, never as NaN.
+"""
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass, field
+
+import casadi as ca
+import numpy as np
+import scipy.integrate
+
+from .breathing import N_SCHEDULE_PARAMS, PressureSchedule, schedule_expression
+from .model import Model, modal_basis
+from .steady import SteadyState
+
+__all__ = ["Settings", "Trajectory", "Integrator", "simulate", "initial_state", "gaps",
+           "CHECK_POINTS"]
+
+METHODS = ("cvodes", "idas", "radau", "bdf")
+#: Points along the beam where the gaps are checked (and contact is detected).
+CHECK_POINTS = np.linspace(0.0, 1.0, 101)
+
+
+@dataclass(frozen=True)
+class Settings:
+    """Integration policy; checked when built (ValueError names the field).
+
+    rtol in [1e-13, 1e-2], atol in (0, 1e-2]; ``dt_out`` output step; ``chunk``: time
+    between checks; ``max_steps``: solver steps allowed per chunk.
+    """
+
+    method: str = "cvodes"
+    rtol: float = 1e-8
+    atol: float = 1e-10
+    dt_out: float = 1e-3
+    chunk: float = 0.5
+    max_steps: int = 50_000
+
+    def __post_init__(self):
+        if self.method not in METHODS:
+            raise ValueError(f"method must be one of {METHODS}, got {self.method!r}")
+        _check(1e-13 <= _num("rtol", self.rtol) <= 1e-2, f"rtol must lie in [1e-13, 1e-2], got {self.rtol}")
+        _check(0 < _num("atol", self.atol) <= 1e-2, f"atol must lie in (0, 1e-2], got {self.atol}")
+        _check(_num("dt_out", self.dt_out) > 0, f"dt_out must be > 0, got {self.dt_out}")
+        _check(_num("chunk", self.chunk) >= self.dt_out, f"chunk must be >= dt_out, got {self.chunk}")
+        _check(isinstance(self.max_steps, int) and self.max_steps > 0,
+               f"max_steps must be a positive integer, got {self.max_steps!r}")
+
+
+def _check(ok: bool, message: str) -> None:
+    if not ok:
+        raise ValueError(message)
+
+
+def _num(name: str, value) -> float:
+    _check(isinstance(value, (int, float, np.floating, np.integer)) and not isinstance(value, bool)
+           and math.isfinite(value), f"{name} must be a finite number, got {value!r}")
+    return float(value)
+
+
+@dataclass(frozen=True)
+class Trajectory:
+    """Samples ``x[k]`` at times ``t[k]`` (t[0] = 0 is the initial state).
+
+    status: "success" or "failed" (message says why, t ends at the last good sample);
+    stop_reason: "t_end" or the monitor's reason; steps: solver steps taken.
+    """
+
+    model: Model = field(repr=False)
+    t: np.ndarray
+    x: np.ndarray
+    pressure_drop: np.ndarray
+    p: np.ndarray
+    status: str
+    message: str
+    stop_reason: str
+    steps: int
+    wall_time: float
+    settings: Settings
+    gap_closed: bool = False
+
+    @property
+    def failed(self) -> bool:
+        return self.status != "success"
+
+    @property
+    def tip(self) -> np.ndarray:
+        """Tip displacement y(1, t)."""
+        n = self.model.n_modes
+        return self.x[:, n:2 * n] @ self.model.tip.phi[:, 1]
+
+    @property
+    def tip_velocity(self) -> np.ndarray:
+        return self.x[:, :self.model.n_modes] @ self.model.tip.phi[:, 1]
+
+
+def gaps(model: Model, X, xs=CHECK_POINTS) -> np.ndarray:
+    """Gaps ``h_c(xs)`` of the samples X (rows are states): shape (samples, 2, len(xs))."""
+    X = np.atleast_2d(X)
+    n = model.n_modes
+    y = X[:, n:2 * n] @ modal_basis(model.scene, xs).phi
+    H = np.array([w(xs) for w in model.scene.walls])
+    return np.stack([H[0] - y, H[1] + y], axis=1)
+
+
+def initial_state(model: Model, steady: SteadyState, perturbation=1e-2) -> np.ndarray:
+    """Steady state plus a perturbation of the modal displacements.
+
+    ``perturbation``: a scalar a gives ``q_n += a (H*/2) (w_1/w_n)² / 2``: the static
+    response to one equal modal force on every mode (the paper's "small perturbation
+    force applied to all beam modes"), tip displacement ≈ a H*/2 (mode 1 dominates, the
+    lightly damped high modes are barely excited); or an array of N modal displacements.
+    Raises ValueError if the perturbed beam touches or crosses a wall.
+    """
+    n = model.n_modes
+    x0 = np.array(steady.x, dtype=float)
+    if np.isscalar(perturbation):
+        a = _num("perturbation", perturbation)
+        w = model.basis.omega
+        dq = a * model.scene.hstar / 2 * (w[0] / w) ** 2 / 2
+    else:
+        dq = np.asarray(perturbation, dtype=float)
+        _check(dq.shape == (n,) and bool(np.all(np.isfinite(dq))),
+               f"perturbation must be a scalar or {n} finite modal displacements")
+    x0[n:2 * n] += dq
+    h = gaps(model, x0)
+    _check(float(h.min()) > 0, f"perturbation puts the beam through a wall (min gap {h.min():.3g} "
+           f"<= 0 at x = {CHECK_POINTS[np.argmin(h.min(axis=1)[0])]:.3g}); use a smaller perturbation")
+    return x0
+
+
+# -- compiled right-hand sides --------------------------------------------------------
+def _ode(model: Model):
+    """Symbols and the explicit ODE of the model with time and schedule as inputs.
+
+    Extended parameters ``pe = (p, sched, t_offset)``: Δp in p is replaced by the
+    schedule's Δp(t_offset + t).
+    """
+    nx, npar = model.n_state, len(model.parameter_names)
+    x = ca.MX.sym("x", nx)
+    pe = ca.MX.sym("pe", npar + N_SCHEDULE_PARAMS + 1)
+    t = ca.MX.sym("t")
+    p, sched, t0 = pe[:npar], pe[npar:npar + N_SCHEDULE_PARAMS], pe[-1]
+    i = model.index("pressure_drop")
+    p_t = ca.vertcat(p[:i], schedule_expression(t0 + t, sched), p[i + 1:])
+    M, F = model.mass(x, p_t), model.rhs(x, p_t)
+    return x, pe, t, M, _nan_if_closed(model, x, F)
+
+
+def _nan_if_closed(model: Model, x, F):
+    """F, or NaN once a gap at the check points or the nodes is <= 0.
+
+    The flow is singular at ``h_c = 0``; NaN makes the solver's error test fail at once,
+    so a closing gap ends the chunk with a solver error (reported) in a few steps
+    instead of an endless step-size collapse.
+    """
+    n = model.n_modes
+    xs = np.union1d(CHECK_POINTS, model.basis.x)
+    y = ca.mtimes(modal_basis(model.scene, xs).phi.T, x[n:2 * n])
+    H = [np.asarray(w(xs), float) for w in model.scene.walls]
+    gap = ca.fmin(ca.mmin(H[0] - y), ca.mmin(H[1] + y))
+    return ca.if_else(gap > 0, F, np.nan * ca.DM.ones(F.shape[0]))
+
+
+@dataclass
+class Integrator:
+    """One integrator for one model, method and output grid of a chunk; reusable."""
+
+    model: Model
+    settings: Settings
+    span: float
+    n_out: int
+    _fn: object = None
+    _rhs: object = None
+    _jac: object = None
+    _zfun: object = None
+
+    def __post_init__(self):
+        x, pe, t, M, F = _ode(self.model)
+        s = self.settings
+        grid = list(np.linspace(0.0, self.span, self.n_out + 1)[1:])
+        opts = {"abstol": s.atol, "reltol": s.rtol, "max_num_steps": s.max_steps,
+                "disable_internal_warnings": True, "regularity_check": True}
+        if s.method == "cvodes":
+            xdot = ca.solve(M, F)
+            self._fn = ca.integrator("sim", "cvodes", {"x": x, "p": pe, "t": t, "ode": xdot},
+                                     0.0, grid, opts)
+        elif s.method == "idas":
+            z = ca.MX.sym("z", self.model.n_state)
+            self._fn = ca.integrator("sim", "idas", {"x": x, "z": z, "p": pe, "t": t, "ode": z,
+                                                     "alg": ca.mtimes(M, z) - F},
+                                     0.0, grid, {**opts, "calc_ic": False, "suppress_algebraic": True})
+            self._zfun = ca.Function("z0", [x, pe, t], [ca.solve(M, F)])
+        else:
+            xdot = ca.solve(M, F)
+            self._rhs = ca.Function("f", [t, x, pe], [xdot])
+            self._jac = ca.Function("J", [t, x, pe], [ca.jacobian(xdot, x)])
+
+    def run(self, x0, pe) -> tuple[np.ndarray, int]:
+        """States at the chunk's output grid (n_state, n_out) and the solver steps."""
+        if self._fn is not None:
+            args = {"x0": x0, "p": pe}
+            if self._zfun is not None:
+                args["z0"] = self._zfun(x0, pe, 0.0)
+            out = self._fn(**args)
+            return np.array(out["xf"]), int(self._fn.stats().get("nsteps", 0))
+        return self._run_scipy(x0, pe)
+
+    def _run_scipy(self, x0, pe):
+        s = self.settings
+        fun = lambda t, x: np.array(self._rhs(t, x, pe)).ravel()
+        jac = lambda t, x: np.array(self._jac(t, x, pe))
+        grid = np.linspace(0.0, self.span, self.n_out + 1)
+        sol = scipy.integrate.solve_ivp(fun, (0.0, self.span), np.asarray(x0, float),
+                                        method=s.method.capitalize() if s.method == "radau" else "BDF",
+                                        t_eval=grid[1:], rtol=s.rtol, atol=s.atol, jac=jac)
+        if sol.status != 0:
+            raise RuntimeError(f"solve_ivp ({s.method}): {sol.message}")
+        return sol.y, int(sol.t.size and sol.nfev)  # SciPy exposes no step count: report f-evals
+
+
+def pressure_coefficient(model: Model, steady: SteadyState, schedule: PressureSchedule) -> float:
+    """``c = Δp_ss / (U_ref |U_ref|)`` from the steady state at the reference U*."""
+    u = schedule.reference_ustar
+    if abs(u - steady.scene.ustar) > 1e-12 * max(1.0, abs(u)):
+        raise ValueError(f"the steady state is at U* = {steady.scene.ustar}, the schedule's "
+                         f"reference U* is {u}: compute the steady state at the reference")
+    return steady.pressure_drop / (u * abs(u)) if u != 0 else 0.0
+
+
+def simulate(model: Model, steady: SteadyState, t_end: float, *, settings: Settings = Settings(),
+             schedule: PressureSchedule | None = None, perturbation=1e-2, x0=None,
+             monitor=None, integrator: Integrator | None = None) -> Trajectory:
+    """Integrate from the perturbed steady state (or ``x0``) over ``[0, t_end]``.
+
+    ``monitor(t, x) -> str | None`` is called after each chunk with all samples so far;
+    a non-None return stops the run with that ``stop_reason``. Bad input raises
+    ValueError before any work; solver failures give ``status="failed"``.
+    """
+    _check(_num("t_end", t_end) > 0, f"t_end must be > 0, got {t_end}")
+    schedule = schedule or PressureSchedule.constant(steady.scene.ustar)
+    x0 = initial_state(model, steady, perturbation) if x0 is None else _checked_x0(model, x0)
+    n_chunks = max(1, math.ceil(t_end / settings.chunk - 1e-9))
+    span = t_end / n_chunks
+    n_out = max(1, round(span / settings.dt_out))
+    if integrator is None or (integrator.settings, integrator.span, integrator.n_out) != (settings, span, n_out):
+        integrator = Integrator(model, settings, span, n_out)
+    return _loop(model, steady, schedule, integrator, x0, n_chunks, monitor)
+
+
+def _checked_x0(model, x0):
+    x0 = np.asarray(x0, dtype=float)
+    _check(x0.shape == (model.n_state,) and bool(np.all(np.isfinite(x0))),
+           f"x0 must hold {model.n_state} finite values")
+    _check(float(gaps(model, x0).min()) > 0, "x0 puts the beam through a wall (a gap h_c <= 0)")
+    return x0
+
+
+def _loop(model, steady, schedule, integrator, x0, n_chunks, monitor) -> Trajectory:
+    start = time.perf_counter()
+    coefficient = pressure_coefficient(model, steady, schedule)
+    sched = schedule.vector(coefficient)
+    span, n_out = integrator.span, integrator.n_out
+    ts, xs = [np.zeros(1)], [x0[None, :]]
+    steps, status, message, reason = 0, "success", "", "t_end"
+    x = x0
+    for k in range(n_chunks):
+        pe = np.concatenate([steady.p, sched, [k * span]])
+        try:
+            X, nsteps = integrator.run(x, pe)
+        except RuntimeError as err:
+            status, message = "failed", _solver_message(err, k * span)
+            t_good, x_good = _recover(model, integrator, x, pe, k * span)
+            ts.append(t_good), xs.append(x_good)
+            break
+        steps += nsteps
+        bad = _first_bad(model, X.T)
+        if bad is not None:
+            status, message = "failed", bad[1]
+            ts.append(k * span + np.linspace(0.0, span, n_out + 1)[1:bad[0] + 1])
+            xs.append(X.T[:bad[0]])
+            break
+        ts.append(k * span + np.linspace(0.0, span, n_out + 1)[1:])
+        xs.append(X.T)
+        x = X[:, -1]
+        if monitor is not None:
+            reason_now = monitor(np.concatenate(ts), np.concatenate(xs))
+            if reason_now:
+                reason = reason_now
+                break
+    t, X = np.concatenate(ts), np.concatenate(xs)
+    dp = coefficient * _u_abs_u(schedule.ustar_at(t))
+    return Trajectory(model, t, X, dp, steady.p, status, message, reason, steps,
+                      time.perf_counter() - start, integrator.settings,
+                      gap_closed="gap closed" in message)
+
+
+def _recover(model, integrator, x, pe, t0):
+    """Samples of a failed chunk up to the failure, by re-running it in 20 pieces."""
+    span, n_out = integrator.span, integrator.n_out
+    pieces = math.gcd(n_out, 20)
+    sub = Integrator(model, integrator.settings, span / pieces, n_out // pieces)
+    ts, xs = [np.zeros(0)], [np.zeros((0, model.n_state))]
+    for j in range(pieces):
+        pe_j = np.concatenate([pe[:-1], [t0 + j * sub.span]])
+        try:
+            X, _ = sub.run(x, pe_j)
+        except RuntimeError:
+            break
+        if _first_bad(model, X.T) is not None:
+            break
+        ts.append(t0 + j * sub.span + np.linspace(0.0, sub.span, sub.n_out + 1)[1:])
+        xs.append(X.T)
+        x = X[:, -1]
+    return np.concatenate(ts), np.concatenate(xs)
+
+
+def _u_abs_u(u):
+    return u * np.abs(u)
+
+
+def _solver_message(err: Exception, t0: float) -> str:
+    text = str(err).strip().splitlines()
+    if any("RHSFUNC_FAIL" in line or "RES_FAIL" in line for line in text):
+        return (f"a gap closed (h_c <= 0) in the chunk starting at t = {t0:.6g}: the flow model is "
+                "singular there; with contact on the impact load did not stop the beam "
+                "(raise contact_stiffness or contact_eps)")
+    key = [line for line in text if "CV_" in line or "IDA_" in line or "solve_ivp" in line]
+    return f"integrator failed in the chunk starting at t = {t0:.6g}: " + (key[-1] if key else text[-1] if text else repr(err))
+
+
+def _first_bad(model, X) -> tuple[int, str] | None:
+    """(index of the first bad sample, message) if a sample is not finite or a gap closed."""
+    finite = np.all(np.isfinite(X), axis=1)
+    if not finite.all():
+        k = int(np.argmin(finite))
+        return k, f"non-finite state at output sample {k} of the chunk"
+    h = gaps(model, X)
+    if h.min() <= 0:
+        k = int(np.argmax(h.min(axis=(1, 2)) <= 0))
+        return k, (f"a gap closed (h_c = {h.min():.3g} <= 0) at output sample {k} of the chunk: the "
+                "flow model is singular there; with contact on, raise contact_stiffness or eps")
+    return None

@@ -1,0 +1,80 @@
+"""Outcome classification: synthetic Poincaré data, and one run of each kind."""
+import json
+
+import numpy as np
+import pytest
+
+from fsicas import Scene
+from fsicas.cli import main
+from fsicas.outcome import Criteria, poincare_returns
+from fsicas.run import run_case
+from fsicas.simulate import Settings
+from fsicas.stability import eigenvalues
+
+BASE = Scene(mstar=1.0, ustar=6.5, zeta=0.01, modes=10)
+FAST = Settings(rtol=1e-8, atol=1e-10, dt_out=1e-3)
+
+
+def test_poincare_returns_of_a_sine_with_chatter():
+    t = np.linspace(0.0, 10.0, 20001)
+    y = np.sin(2 * np.pi * t / 1.25) + 0.05 * np.sin(2 * np.pi * 40 * t) * (np.sin(2 * np.pi * t / 1.25) > 0.9)
+    times, _ = poincare_returns(t, y, y_ref=0.0)
+    assert np.allclose(np.diff(times), 1.25, atol=1e-6)   # chatter near the top adds no return
+    assert times[0] == pytest.approx(1.25, abs=1e-6)
+
+
+def test_criteria_validated():
+    with pytest.raises(ValueError, match="cycles"):
+        Criteria(cycles=1)
+    with pytest.raises(ValueError, match="tol"):
+        Criteria(tol=2.0)
+
+
+def test_decay_below_onset():
+    run = run_case(BASE.replace(ustar=4.0), 20.0, settings=FAST)
+    assert run.outcome.outcome == "decay" and run.trajectory.t[-1] < 20.0   # stopped early
+
+
+def test_limit_cycle_near_onset_has_the_hopf_frequency():
+    """Above onset (U*_c = 5.611) the cycle's frequency stays near |Im(lambda)|."""
+    run = run_case(BASE, 20.0, settings=FAST)
+    o = run.outcome
+    omega = abs(eigenvalues(run.model, run.steady)[0].imag)
+    assert o.outcome == "lco" and not o.contact and o.convergence < 1e-3
+    assert o.frequency == pytest.approx(omega, rel=5e-2)     # weakly nonlinear shift only
+    assert 0 < o.tip_amplitude < BASE.hstar / 2
+    assert 0 < o.mean_flow_reduction < 0.2                   # fluttering beam reduces the mean flow
+
+
+def test_contact_without_contact_model_stops_the_run():
+    run = run_case(BASE.replace(ustar=8.0), 20.0, settings=FAST)
+    o = run.outcome
+    assert o.outcome == "contact" and o.contact and o.first_contact_time < 3.0
+    assert 0.0 <= o.first_contact_position <= 1.0
+    assert run.trajectory.status == "success"
+
+
+def test_short_run_is_unsettled():
+    run = run_case(BASE, 0.5, settings=FAST)
+    assert run.outcome.outcome == "unsettled"
+
+
+def test_cli_simulate_json_contract(capsys):
+    code = main(["simulate", "--mstar", "1", "--ustar", "4", "--zeta", "0.01", "--t-end", "10",
+                 "--json"])
+    out = json.loads(capsys.readouterr().out)
+    assert code == 0
+    assert {"outcome", "period", "frequency", "tip_amplitude", "contact", "first_contact_time",
+            "contact_positions", "max_impact_force", "mean_flow_reduction", "steps",
+            "wall_time"} <= set(out)
+    assert out["outcome"] == "decay" and out["steps"] > 0
+
+
+@pytest.mark.parametrize("argv, field", [
+    (["--t-end", "0"], "t-end"), (["--t-end", "1", "--rtol", "0.5"], "rtol"),
+    (["--t-end", "1", "--perturbation", "40"], "perturbation"),
+])
+def test_cli_simulate_bad_input(capsys, argv, field):
+    code = main(["simulate", "--modes", "4", "--json", *argv])
+    out = json.loads(capsys.readouterr().out)
+    assert code == 2 and field in out["error"]

@@ -1,0 +1,137 @@
+"""Time integration against the linear analysis, independent routes, and bad input."""
+import numpy as np
+import pytest
+import scipy.linalg
+import scipy.optimize
+
+from fsicas import Scene, build_model, steady_state
+from fsicas.breathing import PressureSchedule
+from fsicas.simulate import Settings, initial_state, simulate
+from fsicas.stability import eigenvalues
+
+BASE = Scene(mstar=1.0, ustar=7.0, zeta=0.01, modes=10)
+
+
+@pytest.fixture(scope="module")
+def model():
+    return build_model(BASE)
+
+
+def leading_mode_start(model, steady, size):
+    """Steady state plus a small real part of the leading eigenvector (tip deviation = size)."""
+    J = np.array(model.jac_rhs(steady.x, steady.p))
+    M = np.array(model.mass(steady.x, steady.p))
+    lam, V = scipy.linalg.eig(J, M)
+    lam[~np.isfinite(lam)] = -np.inf
+    k = int(np.argmax(lam.real))
+    v = V[:, k].real
+    n = model.n_modes
+    v = v / abs(v[n:2 * n] @ model.tip.phi[:, 1])
+    return steady.x + size * v, lam[k]
+
+
+def tip_growth_rate(traj, steady, t_from):
+    """Log-slope of the positive tip-deviation peaks after ``t_from``."""
+    y = traj.tip - traj.model.deflection(steady.x, [1.0])[0]
+    k = np.flatnonzero((y[1:-1] > y[:-2]) & (y[1:-1] >= y[2:]) & (y[1:-1] > 0)) + 1
+    k = k[traj.t[k] >= t_from]
+    return np.polyfit(traj.t[k], np.log(y[k]), 1)[0], 2 * np.pi / np.mean(np.diff(traj.t[k]))
+
+
+@pytest.mark.parametrize("ustar", [4.0, 7.0])
+def test_early_growth_rate_and_frequency_match_the_leading_eigenvalue(model, ustar):
+    steady = steady_state(BASE.replace(ustar=ustar), model)
+    x0, lam = leading_mode_start(model, steady, 1e-6)
+    assert lam == pytest.approx(eigenvalues(model, steady)[0], rel=1e-10)
+    traj = simulate(model, steady, 1.0, x0=x0, settings=Settings(rtol=1e-10, atol=1e-15, dt_out=2e-4))
+    rate, omega = tip_growth_rate(traj, steady, 0.0)
+    assert rate == pytest.approx(lam.real, rel=2e-4)      # U*=4: -2.886, U*=7: +3.939 (measured 1e-5)
+    assert omega == pytest.approx(abs(lam.imag), rel=5e-4)
+
+
+def test_onset_of_oscillation_brackets_the_linear_instability(model):
+    rate = lambda u: eigenvalues(model, steady_state(BASE.replace(ustar=u), model))[0].real
+    u_c = scipy.optimize.brentq(rate, 5.0, 6.5, xtol=1e-10)
+    growth = []
+    for u in (u_c - 0.1, u_c + 0.1):
+        steady = steady_state(BASE.replace(ustar=u), model)
+        x0, lam = leading_mode_start(model, steady, 1e-6)
+        traj = simulate(model, steady, 3.0, x0=x0, settings=Settings(rtol=1e-10, atol=1e-15, dt_out=5e-4))
+        measured, _ = tip_growth_rate(traj, steady, 0.0)
+        growth.append(measured)
+        assert measured == pytest.approx(lam.real, abs=5e-4)   # rates -0.2917, +0.2978
+    assert growth[0] < -0.05 and growth[1] > 0.05          # stable below, growing above
+
+
+def test_casadi_and_scipy_routes_agree(model):
+    steady = steady_state(BASE, model)
+    runs = {m: simulate(model, steady, 0.3, settings=Settings(method=m, rtol=1e-10, atol=1e-13, chunk=0.15))
+            for m in ("cvodes", "idas", "radau")}
+    ref = runs["radau"].x
+    n = model.n_modes
+    blocks = (slice(0, n), slice(n, 2 * n), slice(2 * n, None))     # r, q, Q
+    for m in ("cvodes", "idas"):
+        assert runs[m].status == "success", runs[m].message
+        for b in blocks:
+            err = np.max(np.abs(runs[m].x[:, b] - ref[:, b])) / np.max(np.abs(ref[:, b]))
+            assert err < 1e-6, (m, b, err)
+
+
+def test_schedule_time_input_matches_piecewise_constant_drive(model):
+    """A ramp fed as a time input equals chunks of constant Δp in the limit: check Δp(t)."""
+    steady = steady_state(BASE, model)
+    sched = PressureSchedule.ramp(3.0, 7.0, 0.2)
+    traj = simulate(model, steady, 0.3, schedule=sched, settings=Settings(chunk=0.1))
+    c = steady.pressure_drop / 49.0
+    u = np.interp(traj.t, [0.0, 0.2, 0.3], [3.0, 7.0, 7.0])
+    assert np.allclose(traj.pressure_drop, c * u**2, rtol=1e-13)
+    # the flow follows: total inlet flow rate rises from the U*=3 level towards U*=7
+    q = traj.x[:, -2:].sum(axis=1) / BASE.hstar
+    assert q[0] == pytest.approx(7.0, rel=1e-12)   # starts from the steady state at U_ref
+    assert q[np.searchsorted(traj.t, 0.05)] < 6.5
+
+
+def test_straight_channel_pressure_coefficient_is_exact():
+    scene = Scene(mstar=2.0, ustar=5.0, modes=4)
+    steady = steady_state(scene)
+    c = steady.pressure_drop / 25.0
+    assert c == pytest.approx(2.0 * (0.5 + 2 * 0.14 / 0.1), rel=1e-13)
+    s = PressureSchedule.breath(5.0, 2.0)
+    assert s.ustar_at([0.0, 0.5, 1.0]) == pytest.approx([0.0, 5 * np.sqrt(0.5), 5.0], abs=1e-14)
+
+
+@pytest.mark.parametrize("kwargs, field", [
+    (dict(t_end=0.0), "t_end"), (dict(t_end=-1.0), "t_end"), (dict(t_end=np.nan), "t_end"),
+    (dict(perturbation=30.0), "perturbation"),
+])
+def test_bad_run_input_raises_before_work(model, kwargs, field):
+    steady = steady_state(BASE, model)
+    args = dict(t_end=1.0, perturbation=1e-2) | kwargs
+    with pytest.raises(ValueError, match=field):
+        simulate(model, steady, args["t_end"], perturbation=args["perturbation"])
+
+
+@pytest.mark.parametrize("kwargs, field", [
+    (dict(rtol=1.0), "rtol"), (dict(rtol=1e-16), "rtol"), (dict(atol=0.0), "atol"),
+    (dict(atol=1.0), "atol"), (dict(method="euler"), "method"), (dict(dt_out=-1.0), "dt_out"),
+    (dict(max_steps=0), "max_steps"),
+])
+def test_settings_out_of_range_raise(kwargs, field):
+    with pytest.raises(ValueError, match=field):
+        Settings(**kwargs)
+
+
+def test_perturbation_array_shape_checked(model):
+    steady = steady_state(BASE, model)
+    with pytest.raises(ValueError, match="perturbation"):
+        initial_state(model, steady, np.zeros(3))
+
+
+def test_closing_gap_is_a_reported_failure_not_nan():
+    """A contact law too soft for the impact: the gap closes; the run says so, no NaN."""
+    scene = BASE.replace(ustar=8.0, contact=True, contact_stiffness=1e4, contact_eps=1e-3)
+    model = build_model(scene)
+    steady = steady_state(scene, model)
+    traj = simulate(model, steady, 3.0, settings=Settings(rtol=1e-7, atol=1e-9))
+    assert traj.status == "failed" and traj.gap_closed and "gap closed" in traj.message
+    assert np.all(np.isfinite(traj.x)) and traj.t[-1] < 3.0
