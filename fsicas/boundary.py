@@ -7,9 +7,10 @@
 3. At each requested M*, the boundary is the lowest U* over all curves (the first loss of
    stability along U*). Each point is then refined by a one-parameter Hopf location at that
    M*, started just below the envelope, which also gives its l1 (criticality).
-4. Where the lowest curve changes between neighbouring M*, the two curves cross: the
-   crossing (a double-Hopf point, where the unstable mode switches and the frequency
-   jumps) is found by intersecting the two curves and reported.
+4. Where the lowest branch changes (scanned along the traced curves), two curves cross
+   (a double-Hopf point: U* continuous, the frequency jumps) or a curve folds back in M*
+   (U* jumps). Each switch is then bisected with exact one-parameter onsets, to 1e-4
+   relative in M* (``refine=True``).
 """
 from __future__ import annotations
 
@@ -22,7 +23,8 @@ import numpy as np
 import continuation as C
 
 from .hopf import (LOG_M, PI, PI_SCALE, TIME_SCALE, CriticalVelocityError, HopfPoint,
-                   _eigenvector_q, dominant_mode, flutter_problem, hopf_points)
+                   _eigenvector_q, critical_velocity, dominant_mode, flutter_problem,
+                   hopf_points)
 from .model import Model, build_model, modal_basis
 from .scene import Scene
 
@@ -135,14 +137,28 @@ def stability_boundary(scene: Scene, mstars, model: Model | None = None,
         raise CriticalVelocityError(f"no flutter below U* = {ustar_max} at any seed M* {seeds}")
     ceiling = min(ustar_max, headroom * max(firsts))   # curves above this cannot be lowest
     curves: list[HopfCurve] = []
+    _add_curves(scene, model, curves, found, window, ceiling)
+    points = [_boundary_point(scene, model, curves, m, refine) for m in mstars]
+    for _ in range(3):   # a refinement that starts unstable reveals a curve the seeds missed
+        missed = [p["mstar"] for p in points if p.get("missed")]
+        if not missed:
+            break
+        found = [hopf_points(scene.replace(mstar=m), model, ustar_max) for m in missed]
+        _add_curves(scene, model, curves, found, window, ceiling)
+        points = [_boundary_point(scene, model, curves, m, refine) for m in mstars]
+    switches = _switches(curves, lo, hi)
+    if refine:
+        switches = [_refine_switch(scene, model, s) or s for s in switches]
+    return StabilityBoundary(scene, points, curves, switches, time.perf_counter() - start)
+
+
+def _add_curves(scene, model, curves, found, window, ceiling) -> None:
+    """Trace the Hopf curve of every found point below ``ceiling`` not yet on a curve."""
     for points in found:
         for h in points:
             if h.ustar <= ceiling and not any(_on_curve(c, h) for c in curves):
                 first = curves[-1].pieces[-1] + 1 if curves else 0
                 curves.append(_trace(scene, model, h, len(curves), window, ceiling, first))
-    points = [_boundary_point(scene, model, curves, m, refine) for m in mstars]
-    switches = _switches(curves, lo, hi)
-    return StabilityBoundary(scene, points, curves, switches, time.perf_counter() - start)
 
 
 def _default_seeds(lo: float, hi: float) -> np.ndarray:
@@ -210,20 +226,23 @@ def _boundary_point(scene, model, curves, mstar, refine) -> dict:
              "freq_ratio": float(w / omega_1), "branch": int(branch), "refined": False}
     if refine:
         h = _refine(scene, model, mstar, u)
-        if h is not None:
+        if h == "unstable":
+            point["missed"] = True
+        elif h is not None:
             point.update(ustar_crit=h.ustar, omega=h.omega, freq_ratio=h.freq_ratio, l1=h.l1,
                          criticality="supercritical" if h.l1 < 0 else "subcritical",
                          dominant_mode=h.dominant_mode, refined=True)
     return point
 
 
-def _refine(scene, model, mstar, u_guess) -> HopfPoint | None:
-    """First Hopf point at ``mstar`` between 0.9 and 1.1 times the envelope guess."""
+def _refine(scene, model, mstar, u_guess):
+    """First Hopf point at ``mstar`` between 0.9 and 1.1 times the envelope guess; None
+    if there is none there, ``"unstable"`` if the steady state is unstable at 0.9 u."""
     try:
         found = hopf_points(scene.replace(mstar=float(mstar)), model,
                             ustar_max=1.1 * u_guess, ustar_start=0.9 * u_guess)
     except CriticalVelocityError:
-        return None
+        return "unstable"        # already unstable below the envelope: a curve is missing
     return found[0] if found else None
 
 
@@ -256,3 +275,32 @@ def _switch_bracket(curves, piece: int, lo: float, hi: float) -> tuple[float, fl
         else:
             hi = mid
     return lo, hi
+
+
+def _refine_switch(scene, model, s: ModeSwitch, spread: float = 1.05, steps: int = 9):
+    """Bisect the switch with exact onsets: the first Hopf point's frequency tells which
+    branch is lowest (nearer omega_below or omega_above). Returns None when the bracket
+    ``[M*/spread, M* spread]`` does not contain the change (the traced switch stands)."""
+    u_max = 1.3 * max(s.ustar_below, s.ustar_above)
+
+    def side(log_m):
+        h = critical_velocity(scene.replace(mstar=10 ** log_m), model, ustar_max=u_max)
+        if h is None:
+            return None, None
+        below = abs(h.omega - s.omega_below) < abs(h.omega - s.omega_above)
+        return below, h
+    lo, hi = math.log10(s.mstar / spread), math.log10(s.mstar * spread)
+    (at_lo, h_lo), (at_hi, h_hi) = side(lo), side(hi)
+    if at_lo is not True or at_hi is not False:
+        return None
+    for _ in range(steps):
+        mid = 0.5 * (lo + hi)
+        at_mid, h_mid = side(mid)
+        if at_mid is None:
+            return None
+        if at_mid:
+            lo, h_lo = mid, h_mid
+        else:
+            hi, h_hi = mid, h_mid
+    return ModeSwitch(float(10 ** (0.5 * (lo + hi))), h_lo.ustar, h_hi.ustar, s.branch_below,
+                      s.branch_above, h_lo.omega, h_hi.omega)

@@ -68,6 +68,8 @@ def steady_state(scene: Scene, model: Model | None = None, tol: float = 1e-12) -
     residual_fn, jacobian_fn = _system(model)
     p = model.parameters(scene)
     z = _initial_guess(scene)
+    if scene.ustar == 0.0:       # fluid at rest: no load, no flow (the Q rows degenerate)
+        return SteadyState(scene, np.zeros(model.n_state), p, 0.0, 0.0, time.perf_counter() - start)
     solution = _solve(residual_fn, jacobian_fn, z, p, scene.ustar, tol)
     if solution is None:
         solution = _homotopy(residual_fn, jacobian_fn, z, p, scene.ustar, tol)
