@@ -102,10 +102,12 @@ def flutter_problem(scene: Scene, model: Model, ustar_start: float) -> C.Equilib
     return C.EquilibriumProblem(vf, st.x, params, PI)
 
 
-def _settings(pi_max: float, max_steps: int = 1000) -> C.ContinuationSettings:
+def _settings(pi_start: float, pi_max: float, max_steps: int = 1000) -> C.ContinuationSettings:
     """Steps of at most pi_max/150 in Π (≈ U*^2): a pocket of stability between two Hopf
-    points closer than one step would leave the unstable count unchanged and be missed."""
-    return C.ContinuationSettings(ds=pi_max / 600, ds_min=1e-10 * pi_max, ds_max=pi_max / 150,
+    points closer than one step would leave the unstable count unchanged and be missed,
+    and two Hopf points in one step (near a crossing of Hopf curves) would be confused."""
+    ds_max = pi_max / 150
+    return C.ContinuationSettings(ds=ds_max / 4, ds_min=1e-10 * pi_max, ds_max=ds_max,
                                   max_steps=max_steps, bounds={PI: (0.0, pi_max)},
                                   locate_tol=1e-12)
 
@@ -151,7 +153,7 @@ def hopf_points(scene: Scene, model: Model | None = None, ustar_max: float = 40.
     model = model or build_model(scene)
     problem = flutter_problem(scene, model, ustar_start)
     pi_max = _pi_of(scene, model, ustar_max)
-    branch = C.continuation(problem, settings=_settings(pi_max))
+    branch = C.continuation(problem, settings=_settings(problem.X0[-1], pi_max))
     if branch.status == "failed":
         raise CriticalVelocityError(f"steady branch lost at M* = {scene.mstar:g}: {branch.message}")
     if branch.n_unstable is not None and len(branch.n_unstable) and branch.n_unstable[0] > 0:
