@@ -56,6 +56,27 @@ def test_paper_quick_writes_report(tmp_path, capsys):
     code, out = run_json(capsys, ["paper", "--quick", "--out", str(tmp_path), "--json"])
     assert code == 0
     assert out["steady"]["pressure_drop"] == pytest.approx(out["steady"]["closed_form"], rel=1e-14)
-    assert (tmp_path / "report.json").exists() and (tmp_path / "stability_scan.png").exists()
-    crit = [c for c in out["critical"] if c["ustar_crit"] is not None]
-    assert len(crit) == 3 and all(c["omega"] > 0 for c in crit)
+    for name in ("report.json", "fig2_boundary.png", "fig3_modes.png"):
+        assert (tmp_path / name).exists()
+    points = out["boundary"]["points"]
+    assert len(points) == 7 and all(p["refined"] and p["omega"] > 0 for p in points)
+    assert out["boundary"]["switches"]
+
+
+def test_eig_json_is_sorted_and_flags_instability(capsys):
+    code, out = run_json(capsys, ["eig", "--mstar", "1", "--ustar", "6", "--modes", "6", "--json"])
+    assert code == 0 and len(out["eigenvalues"]) == 14
+    re = [e[0] for e in out["eigenvalues"]]
+    assert re == sorted(re, reverse=True) and out["stable"] == (re[0] < 0)
+
+
+def test_boundary_json(capsys):
+    code, out = run_json(capsys, ["boundary", "--modes", "6", "--mstar", "0.5,1,2", "--json"])
+    assert code == 0 and [p["mstar"] for p in out["points"]] == [0.5, 1.0, 2.0]
+    for p in out["points"]:
+        assert set(p) >= {"mstar", "ustar_crit", "omega", "freq_ratio", "branch"}
+
+
+def test_boundary_rejects_bad_ranges(capsys):
+    code, out = run_json(capsys, ["boundary", "--mstar", "0:10:5", "--json"])
+    assert code == 2 and "mstar" in out["error"]
