@@ -211,5 +211,20 @@ def _contact_force(scene, basis, w, h, s, par):
     """
     k = par["contact_stiffness"] * basis.omega[0] ** 2
     eps = par["contact_eps"] * scene.hstar / 2
-    load = s * k * ca.fmax(0, eps - h)
+    load = s * k * _ramp(eps - h, scene.contact_smoothing, eps)
     return ca.mtimes(basis.phi, w * load)
+
+
+def _ramp(v, smoothing: float, eps):
+    """``max(0, v)``, or with ``smoothing`` > 0 the softplus
+    ``width log(1 + exp(v / width))`` of ``width = smoothing · eps``.
+
+    Written as ``max(0, v) + width log1p(exp(-|v| / width))``: no overflow, and the two
+    kinks cancel, so it is C-infinity. It exceeds max(0, v) by at most width·log 2 (at
+    v = 0) and by ``width·exp(-|v|/width)`` away from it: a force of relative size
+    e^-10 already ten widths outside the contact zone.
+    """
+    if smoothing == 0:
+        return ca.fmax(0, v)
+    width = smoothing * eps
+    return ca.fmax(0, v) + width * ca.log1p(ca.exp(-ca.fabs(v) / width))

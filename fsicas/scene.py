@@ -37,6 +37,9 @@ class Scene:
     Hermite-cubic FE modes of :mod:`fsicas.beam_fe`, m = e, EI = e^3 relative to the root.
     contact: regularized wall impact on/off; contact_stiffness k* (per unit length,
     relative to the first-mode stiffness); contact_eps: eps/H with H = hstar/2.
+    contact_smoothing: 0 (default) for the exact kink max(0, v) of the impact law; > 0
+    replaces it by the C-infinity softplus of width contact_smoothing * eps
+    (docs/simulate.md), for Newton/collocation on impacting cycles.
     """
 
     mstar: float = 1.0
@@ -54,6 +57,7 @@ class Scene:
     contact: bool = False
     contact_stiffness: float = 1e6
     contact_eps: float = 1e-3
+    contact_smoothing: float = 0.0
     scales: Scales | None = field(default=None, compare=False)
 
     def __post_init__(self):
@@ -194,3 +198,5 @@ def _validate(s: Scene) -> None:
              f"contact_stiffness must be > 0, got {s.contact_stiffness}")
     _require(0 < _finite("contact_eps", s.contact_eps) < 1,
              f"contact_eps (eps/H) must lie in (0, 1), got {s.contact_eps}")
+    _require(0 <= _finite("contact_smoothing", s.contact_smoothing) <= 1,
+             f"contact_smoothing (width / eps) must lie in [0, 1], got {s.contact_smoothing}")

@@ -27,12 +27,14 @@ from dataclasses import dataclass, field
 import casadi as ca
 import numpy as np
 import scipy.integrate
+import scipy.linalg
 
 from .breathing import N_SCHEDULE_PARAMS, PressureSchedule, schedule_expression
 from .model import Model, modal_basis
 from .steady import SteadyState
 
 __all__ = ["Settings", "Trajectory", "Integrator", "simulate", "initial_state", "gaps",
+           "eigenvector_state",
            "CHECK_POINTS"]
 
 METHODS = ("cvodes", "idas", "radau", "bdf")
@@ -146,6 +148,20 @@ def initial_state(model: Model, steady: SteadyState, perturbation=1e-2) -> np.nd
     _check(float(h.min()) > 0, f"perturbation puts the beam through a wall (min gap {h.min():.3g} "
            f"<= 0 at x = {CHECK_POINTS[np.argmin(h.min(axis=1)[0])]:.3g}); use a smaller perturbation")
     return x0
+
+
+def eigenvector_state(model: Model, steady: SteadyState, size: float):
+    """Steady state plus ``size`` times the real part of the leading eigenvector, scaled to
+    a unit tip deviation; and that eigenvalue (largest real part of ``F_x v = λ M v``)."""
+    J = np.array(model.jac_rhs(steady.x, steady.p))
+    M = np.array(model.mass(steady.x, steady.p))
+    lam, V = scipy.linalg.eig(J, M)
+    lam = np.where(np.isfinite(lam), lam, -np.inf)
+    k = int(np.argmax(lam.real))
+    v = V[:, k].real
+    n = model.n_modes
+    v = v / abs(v[n:2 * n] @ model.tip.phi[:, 1])
+    return _checked_x0(model, steady.x + size * v), lam[k]
 
 
 # -- compiled right-hand sides --------------------------------------------------------

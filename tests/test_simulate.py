@@ -1,12 +1,11 @@
 """Time integration against the linear analysis, independent routes, and bad input."""
 import numpy as np
 import pytest
-import scipy.linalg
 import scipy.optimize
 
 from fsicas import Scene, build_model, steady_state
 from fsicas.breathing import PressureSchedule
-from fsicas.simulate import Settings, initial_state, simulate
+from fsicas.simulate import Settings, eigenvector_state, initial_state, simulate
 from fsicas.stability import eigenvalues
 
 BASE = Scene(mstar=1.0, ustar=7.0, zeta=0.01, modes=10)
@@ -18,16 +17,7 @@ def model():
 
 
 def leading_mode_start(model, steady, size):
-    """Steady state plus a small real part of the leading eigenvector (tip deviation = size)."""
-    J = np.array(model.jac_rhs(steady.x, steady.p))
-    M = np.array(model.mass(steady.x, steady.p))
-    lam, V = scipy.linalg.eig(J, M)
-    lam[~np.isfinite(lam)] = -np.inf
-    k = int(np.argmax(lam.real))
-    v = V[:, k].real
-    n = model.n_modes
-    v = v / abs(v[n:2 * n] @ model.tip.phi[:, 1])
-    return steady.x + size * v, lam[k]
+    return eigenvector_state(model, steady, size)
 
 
 def tip_growth_rate(traj, steady, t_from):

@@ -1,0 +1,74 @@
+"""The contact law: exact kink and its smooth (softplus) variant."""
+import casadi as ca
+import numpy as np
+import pytest
+
+from fsicas import Scene, build_model, steady_state
+from fsicas.model import _ramp
+from fsicas.simulate import Settings, simulate
+
+SCENE = Scene(mstar=1.0, ustar=7.0, zeta=0.01, modes=6, contact=True, contact_stiffness=1e7,
+              contact_eps=1e-2)
+
+
+def test_softplus_ramp_bounds():
+    v = np.linspace(-1e-3, 1e-3, 2001)
+    exact = np.array(ca.evalf(_ramp(ca.DM(v), 0.0, 1e-4))).ravel()
+    smooth = np.array(ca.evalf(_ramp(ca.DM(v), 0.1, 1e-4))).ravel()
+    assert np.array_equal(exact, np.maximum(0, v))
+    width = 1e-5
+    assert np.all(smooth >= exact) and np.max(smooth - exact) == pytest.approx(width * np.log(2), rel=1e-12)
+    far = np.abs(v) > 10 * width
+    assert np.all(smooth[far] - exact[far] <= width * np.exp(-10) * 1.0001)
+
+
+def test_smoothing_validated():
+    with pytest.raises(ValueError, match="contact_smoothing"):
+        SCENE.replace(contact_smoothing=-0.1)
+
+
+def tip_states(model, steady, offsets):
+    """States bent in mode 1 so the gap at the outermost quadrature node is eps + offset."""
+    n = model.n_modes
+    eps = model.scene.contact_gap
+    phi_end = np.max(model.basis.phi[0])
+    out = []
+    for d in offsets:
+        x = steady.x.copy()
+        x[n] = (model.scene.hstar / 2 - eps - d) / phi_end
+        out.append(x)
+    return out
+
+
+def test_smooth_variant_has_a_continuous_jacobian_exact_one_jumps():
+    """Across eps at the outermost node K, dF_r1/dq1 of the kink jumps by
+    k w1² w_K phi_1(x_K)² (the node's penalty stiffness); the softplus does not jump."""
+    jumps = {}
+    for smoothing in (0.0, 0.05):
+        scene = SCENE.replace(contact_smoothing=smoothing)
+        model = build_model(scene)
+        steady = steady_state(scene, model)
+        below, above = tip_states(model, steady, [-1e-9 * scene.contact_gap, 1e-9 * scene.contact_gap])
+        J = [np.array(model.jac_rhs(x, steady.p)) for x in (below, above)]
+        n = model.n_modes
+        jumps[smoothing] = abs(J[0][0, n] - J[1][0, n])
+        K = int(np.argmax(model.basis.phi[0]))
+        expected = scene.contact_stiffness * model.basis.omega[0] ** 2 * model.weights[K] * model.basis.phi[0, K] ** 2
+    assert jumps[0.0] == pytest.approx(expected, rel=1e-6)
+    assert jumps[0.05] < 1e-6 * expected
+
+
+def test_smooth_trajectory_converges_to_the_exact_one():
+    model0 = build_model(SCENE)
+    steady = steady_state(SCENE, model0)
+    settings = Settings(rtol=1e-9, atol=1e-11, dt_out=1e-4, chunk=0.5)
+    ref = simulate(model0, steady, 2.2, settings=settings)
+    assert ref.status == "success"
+    errors = []
+    for smoothing in (0.1, 0.01):
+        scene = SCENE.replace(contact_smoothing=smoothing)
+        model = build_model(scene)
+        tr = simulate(model, steady_state(scene, model), 2.2, settings=settings)
+        errors.append(np.max(np.abs(tr.tip - ref.tip)))
+    assert errors[1] < errors[0] / 3      # the smooth law converges to the kink as width -> 0
+    assert errors[1] < 1e-2 * SCENE.hstar / 2
