@@ -18,9 +18,10 @@ def _pyplot():
 
 
 def plot_boundary(boundary: StabilityBoundary, path=None):
-    """Fig. 2: U*_c(M*) with all traced Hopf curves (left), frequency ratio (right)."""
+    """Fig. 2: U*_c(M*) with all traced Hopf curves (left), frequency ratio (middle) and
+    the first Lyapunov coefficient l1 along the boundary (right; > 0: subcritical)."""
     plt = _pyplot()
-    fig, (left, right) = plt.subplots(1, 2, figsize=(10, 4))
+    fig, (left, right, crit) = plt.subplots(1, 3, figsize=(15, 4))
     for c in boundary.curves:
         left.semilogx(c.mstar, c.ustar, color="0.8", lw=0.8)
     pts = [p for p in boundary.points if p["ustar_crit"] is not None]
@@ -40,6 +41,12 @@ def plot_boundary(boundary: StabilityBoundary, path=None):
     for s in boundary.switches:
         left.axvline(s.mstar, color="0.6", ls=":", lw=0.8)
         right.axvline(s.mstar, color="0.6", ls=":", lw=0.8)
+    with_l1 = [p for p in pts if "l1" in p]
+    if with_l1:
+        crit.semilogx([p["mstar"] for p in with_l1], [p["l1"] for p in with_l1], "k.-")
+        crit.set_yscale("symlog", linthresh=1e-3)
+        crit.axhline(0.0, color="0.5", lw=0.8)
+    crit.set(xlabel="M*", ylabel="l1", title="criticality (l1 > 0: subcritical, hysteresis)")
     top = 1.3 * max(u) if len(u) else 1.0
     left.set(xlabel="M*", ylabel="U*", ylim=(0, top), title="flutter boundary (grey: Hopf curves)")
     right.set(xlabel="M*", ylabel="omega / omega_1", title="frequency at onset")
