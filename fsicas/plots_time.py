@@ -1,0 +1,137 @@
+"""Figures of time integrations (Matplotlib, Agg): a run, the impact map, impacting cycles.
+
+- :func:`plot_run`: tip displacement, flow rates and impact force against time.
+- :func:`plot_map`: Fig. 4, outcomes on the (U*, M*) grid with the linear boundary.
+- :func:`plot_cycle`: Figs. 6–9 for one settled cycle: beam snapshots, modal velocities
+  and flow rates, tip phase portrait and displacement, tip-velocity spectrum, RMS of the
+  modal displacements, impact force / F0 against t / T0.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from .model import modal_basis
+from .outcome import contact_load, reference_force
+
+__all__ = ["plot_run", "plot_map", "plot_cycle", "cycle_window"]
+
+_COLORS = {"decay": "tab:green", "lco": "tab:orange", "contact": "tab:blue",
+           "impacting_lco": "tab:purple", "unsettled": "tab:gray", "error": "k"}
+
+
+def _pyplot():
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    return plt
+
+
+def plot_run(run, path) -> None:
+    """Tip displacement / (H*/2), flow rates and impact force / F0 against time."""
+    plt = _pyplot()
+    tr, model = run.trajectory, run.model
+    fig, ax = plt.subplots(3, 1, figsize=(7, 7), sharex=True)
+    ax[0].plot(tr.t, tr.tip / (model.scene.hstar / 2), lw=0.7)
+    ax[0].set_ylabel("y(1) / (H*/2)")
+    ax[0].set_title(f"{run.outcome.outcome}: U* = {run.scene.ustar:g}, M* = {run.scene.mstar:g}, "
+                    f"N = {run.scene.modes}")
+    ax[1].plot(tr.t, tr.x[:, -2], lw=0.7, label="Q1")
+    ax[1].plot(tr.t, tr.x[:, -1], lw=0.7, label="Q2")
+    ax[1].set_ylabel("flow rate")
+    ax[1].legend()
+    _, total = contact_load(model, tr.x)
+    ax[2].plot(tr.t, total / reference_force(model), lw=0.7)
+    ax[2].set_ylabel("impact force / F0")
+    ax[2].set_xlabel("t (units of T)")
+    fig.tight_layout()
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
+
+
+def plot_map(result, path) -> None:
+    """Fig. 4: outcome of each (U*, M*) point and the linear stability boundary."""
+    plt = _pyplot()
+    fig, ax = plt.subplots(figsize=(7, 5))
+    for kind, color in _COLORS.items():
+        pts = [(p["ustar"], p["mstar"]) for p in result.points if p["outcome"] == kind]
+        if pts:
+            u, m = np.array(pts).T
+            ax.scatter(u, m, s=25, color=color, label=kind)
+    b = result.boundary
+    ok = [(u, m) for u, m in zip(b["ustar_crit"], b["mstar"]) if u is not None]
+    if ok:
+        u, m = np.array(ok).T
+        ax.plot(u, m, "k-", lw=1.5, label="linear stability boundary")
+    ax.set_yscale("log")
+    ax.set_xlabel("U*")
+    ax.set_ylabel("M*")
+    ax.set_title("H* = 1/10, f = 0.14, zeta = 0.01, N = 10")
+    ax.legend(fontsize=8)
+    fig.tight_layout()
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
+
+
+def cycle_window(run, cycles: int = 1) -> slice:
+    """Samples of the last ``cycles`` settled periods of a run (needs a period)."""
+    T = run.outcome.period
+    if T is None:
+        raise ValueError(f"the run has no settled cycle (outcome {run.outcome.outcome})")
+    t = run.trajectory.t
+    return slice(int(np.searchsorted(t, t[-1] - cycles * T)), len(t))
+
+
+def plot_cycle(run, path, snapshots: int = 24) -> None:
+    """Figs. 6–9 of one run's last settled cycle in one figure (2 x 4 panels)."""
+    plt = _pyplot()
+    tr, model, scene = run.trajectory, run.model, run.scene
+    n, T = scene.modes, run.outcome.period
+    w = cycle_window(run)
+    t, X = tr.t[w], tr.x[w]
+    tau = (t - t[0]) / T
+    fig, ax = plt.subplots(2, 4, figsize=(17, 7))
+    xs = np.linspace(0, 1, 201)
+    phi = modal_basis(scene, xs).phi
+    for k in np.linspace(0, len(t) - 1, snapshots).astype(int):
+        ax[0, 0].plot(xs, X[k, n:2 * n] @ phi, lw=0.6, color="tab:blue")
+    ax[0, 0].axhline(scene.walls[0](1.0), color="k")
+    ax[0, 0].axhline(-scene.walls[1](1.0), color="k")
+    ax[0, 0].set(title="beam snapshots (Fig. 6)", xlabel="x", ylabel="y")
+    for m in range(min(n, 6)):
+        ax[0, 1].plot(tau, X[:, m], lw=0.7, label=f"r{m + 1}")
+    ax[0, 1].set(title="modal velocities (Fig. 7)", xlabel="t / T0")
+    ax[0, 1].legend(fontsize=7)
+    ax[0, 2].plot(tau, X[:, -2], label="Q1")
+    ax[0, 2].plot(tau, X[:, -1], label="Q2")
+    ax[0, 2].axhline(run.steady.x[-2], color="k", ls=":", lw=0.8)
+    ax[0, 2].set(title="flow rates (Fig. 7)", xlabel="t / T0")
+    ax[0, 2].legend(fontsize=7)
+    tip, vtip = tr.tip[w], tr.tip_velocity[w]
+    ax[0, 3].plot(tip, vtip, lw=0.7)
+    ax[0, 3].set(title="tip phase portrait (Fig. 8)", xlabel="y(1)", ylabel="dy/dt(1)")
+    ax[1, 0].plot(tau, tip)
+    ax[1, 0].set(title="tip displacement (Fig. 8)", xlabel="t / T0")
+    _spectrum(ax[1, 1], tr, T)
+    rms = np.sqrt(np.mean((X[:, n:2 * n] - X[:, n:2 * n].mean(axis=0)) ** 2, axis=0))
+    ax[1, 2].semilogy(np.arange(1, n + 1), rms, "o-", ms=3)
+    ax[1, 2].set(title="RMS of q_n (Fig. 8)", xlabel="mode n")
+    _, total = contact_load(model, X)
+    ax[1, 3].plot(tau, total / reference_force(model))
+    ax[1, 3].set(title="impact force / F0 (Fig. 9)", xlabel="t / T0")
+    fig.suptitle(f"U* = {scene.ustar:g}, M* = {scene.mstar:g}, N = {n}: {run.outcome.outcome}, "
+                 f"T0 = {T:.4g}")
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+
+
+def _spectrum(ax, tr, T):
+    """Spectrum of the tip velocity over the settled part (Hann window)."""
+    t0 = tr.t[-1] - min(20 * T, tr.t[-1] / 2)
+    k = int(np.searchsorted(tr.t, t0))
+    v = tr.tip_velocity[k:] - tr.tip_velocity[k:].mean()
+    dt = tr.t[1] - tr.t[0]
+    spec = np.abs(np.fft.rfft(v * np.hanning(v.size)))
+    freq = np.fft.rfftfreq(v.size, dt) * T
+    ax.semilogy(freq[1:], spec[1:] + 1e-300, lw=0.7)
+    ax.set(title="tip velocity spectrum (Fig. 8)", xlabel="f T0", xlim=(0, 30))
