@@ -223,15 +223,33 @@ def hopf_vectors(q, omega):
     return v, w, omega ** 2, v / (v @ v)
 
 
-def _refine_hopf(problem, X, settings) -> Description:
+def hopf_point(problem: "EquilibriumProblem", x, omega: float, settings=None):
+    """Locate a Hopf point from a guess: Newton on the Hopf system with the active
+    parameter free, started from state ``x`` at the problem's parameter values and the
+    eigenvector of ``J q = i omega M q`` (omega: a guess of the critical frequency, which
+    picks the eigenvalue — not the one nearest the axis). Returns a SpecialPoint with
+    ``omega`` and ``l1`` in ``data``; status 'guess' with the residual if Newton fails."""
+    from ._branch import SpecialPoint
+    from ._settings import ContinuationSettings
+    settings = settings or ContinuationSettings()
+    if not (np.isfinite(omega) and omega > 0):
+        raise ValueError(f"omega must be positive, got {omega!r}")
+    X = np.append(state_vector(problem.vf, x, "x"), problem.X0[-1])
+    desc = _refine_hopf(problem, X, settings, omega0=float(omega))
+    return SpecialPoint("hopf", 0, problem.state(desc.X), problem.par_dict(desc.X),
+                        desc.status, float(desc.precision), desc.data, desc.message)
+
+
+def _refine_hopf(problem, X, settings, omega0: float | None = None) -> Description:
     """Newton on the Hopf system (active parameter free), then ``omega, l1``."""
     vf = problem.vf
     J, M = problem.matrices(X)
-    ev = _eigen.eigenvalues(J, M, settings.eigen)
-    ev = ev[ev.imag > settings.eigen.imag_tol]
-    if not ev.size:
-        return Description(X, "rejected", 0.0, {}, "no complex eigenvalue: not a Hopf point")
-    omega0 = float(ev[np.argmin(np.abs(ev.real))].imag)
+    if omega0 is None:
+        ev = _eigen.eigenvalues(J, M, settings.eigen)
+        ev = ev[ev.imag > settings.eigen.imag_tol]
+        if not ev.size:
+            return Description(X, "rejected", 0.0, {}, "no complex eigenvalue: not a Hopf point")
+        omega0 = float(ev[np.argmin(np.abs(ev.real))].imag)
     v, w, kappa, c = hopf_start(J, M, omega0)
     sysh = bound(vf, "hopf", problem.params(X), c, problem.free)
     Y0 = np.concatenate([problem.state(X), v, w, [kappa], X[-1:]])

@@ -24,7 +24,10 @@ import numpy as np
 import continuation as C
 
 from .hopf import (LOG_M, PI, PI_SCALE, TIME_SCALE, CriticalVelocityError, HopfPoint,
-                   _eigenvector_q, dominant_mode, flutter_problem, hopf_points)
+                   _eigenvector_q, _hopf_point, dominant_mode, flutter_field, flutter_problem,
+                   hopf_points)
+from .stability import eigenvalues
+from .steady import steady_state
 from .model import Model, build_model, modal_basis
 from .scene import Scene
 
@@ -42,6 +45,19 @@ class HopfCurve:
     dominant_mode: np.ndarray
     status: str
     first_piece: int = 0
+    states: np.ndarray = field(default=None, repr=False)   # steady states along the curve
+    params: np.ndarray = field(default=None, repr=False)   # adapter parameters along it
+
+    def guess(self, log_m: float, piece: int) -> tuple[np.ndarray, np.ndarray, float]:
+        """Interpolated (state, params, omega) on ``piece`` at log10 M* = log_m."""
+        lm = np.log10(self.mstar)
+        for i in np.flatnonzero(self.pieces[:-1] == piece):
+            a, b = lm[i], lm[i + 1]
+            if (a - log_m) * (b - log_m) <= 0 and a != b:
+                t = (log_m - a) / (b - a)
+                mix = lambda arr: arr[i] + t * (arr[i + 1] - arr[i])
+                return mix(self.states), mix(self.params), float(mix(self.omega))
+        raise ValueError(f"piece {piece} does not reach log10 M* = {log_m}")
 
     @property
     def pieces(self) -> np.ndarray:
@@ -195,7 +211,7 @@ def _trace(scene, model, h: HopfPoint, index: int, window, ustar_max, first_piec
                       for xk, pk, wk in zip(x, params, omega)], dtype=int)
     lm = params[:, names.index(LOG_M)]
     return HopfCurve(index, 10 ** lm, x[:, -2:].sum(axis=1) / scene.hstar, omega * TIME_SCALE,
-                     modes, status, int(first_piece))
+                     modes, status, int(first_piece), x, params)
 
 
 def _pi_max(h: HopfPoint, ustar_max: float) -> float:
@@ -214,16 +230,18 @@ def _lowest(curves, log_m):
 
 
 def _boundary_point(scene, model, curves, mstar, refine) -> dict:
-    lowest = _lowest(curves, math.log10(mstar))
+    log_m = math.log10(mstar)
+    lowest = _lowest(curves, log_m)
     if lowest is None:
         return {"mstar": float(mstar), "ustar_crit": None, "omega": None, "freq_ratio": None,
                 "branch": None}
-    u, w, branch = lowest
+    u, w, piece = lowest
     omega_1 = float(modal_basis(scene, [1.0]).omega[0])
     point = {"mstar": float(mstar), "ustar_crit": float(u), "omega": float(w),
-             "freq_ratio": float(w / omega_1), "branch": int(branch), "refined": False}
+             "freq_ratio": float(w / omega_1), "branch": int(piece), "refined": False}
     if refine:
-        h = _refine(scene, model, mstar, u)
+        curve = next(c for c in curves if piece in set(c.pieces.tolist()))
+        h = _refine(scene, model, mstar, *curve.guess(log_m, piece))
         if h == "unstable":
             point["missed"] = True
         elif h is not None:
@@ -233,15 +251,22 @@ def _boundary_point(scene, model, curves, mstar, refine) -> dict:
     return point
 
 
-def _refine(scene, model, mstar, u_guess):
-    """First Hopf point at ``mstar`` between 0.9 and 1.1 times the envelope guess; None
-    if there is none there, ``"unstable"`` if the steady state is unstable at 0.9 u."""
-    try:
-        found = hopf_points(scene.replace(mstar=float(mstar)), model,
-                            ustar_max=1.1 * u_guess, ustar_start=0.9 * u_guess)
-    except CriticalVelocityError:
-        return "unstable"        # already unstable below the envelope: a curve is missing
-    return found[0] if found else None
+def _refine(scene, model, mstar, x, params, omega):
+    """Newton on the Hopf system at ``mstar`` from the interpolated curve point; then
+    check that the steady state just below is stable (``"unstable"``: a Hopf curve below
+    this one was missed). None if Newton fails."""
+    names = flutter_field(model).par_names
+    values = dict(zip(names, params))
+    values[LOG_M] = math.log10(mstar)
+    problem = C.EquilibriumProblem(flutter_field(model), x, values, PI)
+    located = C.hopf_point(problem, x, omega / TIME_SCALE)
+    if located.status != "converged" or located.data.get("omega", 0.0) <= 0:
+        return None
+    h = _hopf_point(model, scene, located)
+    below = scene.replace(mstar=float(mstar), ustar=0.99 * h.ustar)
+    if eigenvalues(model, steady_state(below, model))[0].real > 0:
+        return "unstable"
+    return h
 
 
 def _switches(curves, lo: float, hi: float) -> list[ModeSwitch]:

@@ -23,7 +23,7 @@ def test_public_names():
         "Branch", "ContinuationIterator", "ContinuationSettings", "EigenSettings",
         "EquilibriumProblem", "FoldCurveProblem", "HopfCurveProblem", "NewtonSettings",
         "PALC", "Problem", "SpecialPoint", "Step", "VectorField", "continuation",
-        "first_lyapunov"}
+        "first_lyapunov", "hopf_point"}
 
 
 def test_new_problem_kind_plugs_into_palc():
