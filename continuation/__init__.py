@@ -7,24 +7,30 @@ Public API (everything else is private)::
     HopfCurveProblem(vf, x, params, omega, free) / .from_point(problem, point, second)
     FoldCurveProblem(vf, x, params, free) / .from_point(problem, point, second)
     VectorField(F, M, par_names), first_lyapunov(vf, x, p, omega)
+    CycleProblem(F, orbit, period, params, active, *, M=None, settings=CollocationSettings())
+    cycle_from_hopf(problem, hopf_point, *, dp=1e-3, settings=None) -> CycleProblem
     Branch, SpecialPoint, ContinuationIterator, PALC, ContinuationSettings,
-    NewtonSettings, EigenSettings
+    NewtonSettings, EigenSettings, CollocationSettings
 
 Plotting lives in ``continuation.plotting`` (Matplotlib is imported there only).
 """
 
 from ._branch import Branch, SpecialPoint
 from ._curves import FoldCurveProblem, HopfCurveProblem
+from ._cycles import CycleProblem
 from ._driver import continuation
 from ._equilibrium import EquilibriumProblem, hopf_point
 from ._lyapunov import first_lyapunov
 from ._palc import ContinuationIterator, Step
 from ._problem import Problem
-from ._settings import ContinuationSettings, EigenSettings, NewtonSettings, PALC
+from ._settings import (CollocationSettings, ContinuationSettings, EigenSettings,
+                        NewtonSettings, PALC)
+from ._switching import cycle_from_hopf
 from ._vectorfield import VectorField
 
 __all__ = [
-    "Branch", "ContinuationIterator", "ContinuationSettings", "EigenSettings",
+    "Branch", "CollocationSettings", "ContinuationIterator", "ContinuationSettings",
+    "CycleProblem", "EigenSettings", "cycle_from_hopf",
     "EquilibriumProblem", "FoldCurveProblem", "HopfCurveProblem", "NewtonSettings",
     "PALC", "Problem", "SpecialPoint", "Step", "VectorField", "continuation", "first_lyapunov", "hopf_point",
 ]

@@ -82,7 +82,10 @@ class Branch:
 
     @property
     def n_unstable(self) -> np.ndarray:
-        """Number of eigenvalues with positive real part at each point."""
+        """Number of eigenvalues with positive real part at each point (for
+        cycles: non-trivial Floquet multipliers outside the unit circle)."""
+        if "n_unstable" in self.tests:
+            return self.tests["n_unstable"].astype(int)
         return np.array([int(np.sum(ev.real > 0)) for ev in self.eigenvalues])
 
     @property

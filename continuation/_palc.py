@@ -117,6 +117,7 @@ class ContinuationIterator:
         if self.tau_ref is None:
             tau = self.settings.direction * tau
         lu = factorize(bordered(prob.jacobian(res.X), tau))
+        prob.accept(res.X)
         self.stats["newton_iterations"] += res.iterations
         return Step(res.X, tau, 0.0, res.iterations, res.residual, lu)
 
@@ -137,6 +138,7 @@ class ContinuationIterator:
         if self._out_of_bounds(new.X):
             return None
         self.stats["steps"] += 1
+        self.problem.accept(new.X)
         if res.iterations <= s.easy_iterations:
             self.ds = min(self.ds * s.step_grow, s.ds_max)
         return new

@@ -109,6 +109,10 @@ class Problem:
         ``X`` (e.g. reference vectors drifted), else None (default: never)."""
         return None
 
+    def accept(self, X) -> None:
+        """Called by the iterator at every accepted point; problems with data that
+        follows the branch (the phase reference of a cycle) refresh it here."""
+
     def columns(self, X) -> dict:
         """Problem-specific scalar columns recorded per point (default none)."""
         return {}

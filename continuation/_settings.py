@@ -155,3 +155,33 @@ def _check_bounds(bounds) -> dict:
                              f"got ({lo}, {hi})")
         checked[str(name)] = (lo, hi)
     return checked
+
+
+@dataclass(frozen=True)
+class CollocationSettings:
+    """Orthogonal collocation of periodic orbits.
+
+    ntst : number of mesh intervals (>= 2); ncol : Gauss-Legendre collocation
+    points per interval (2 to 7). floquet : 'pencil' (QZ of the block-cyclic
+    pencil of the condensed transfer matrices), 'product' (eigenvalues of
+    their product) or 'auto' (pencil while ``n * ntst <= pencil_max``).
+    unstable_tol : a non-trivial multiplier counts as unstable when
+    ``|mu| > 1 + unstable_tol``.
+    """
+
+    ntst: int = 20
+    ncol: int = 4
+    floquet: str = "auto"
+    pencil_max: int = 1200
+    unstable_tol: float = 1e-8
+
+    def __post_init__(self):
+        _positive_int(self, "ntst", "ncol", "pencil_max")
+        _positive(self, "unstable_tol")
+        if self.ntst < 2:
+            raise ValueError(f"CollocationSettings.ntst must be >= 2, got {self.ntst}")
+        if not 2 <= self.ncol <= 7:
+            raise ValueError(f"CollocationSettings.ncol must be in 2..7, got {self.ncol}")
+        if self.floquet not in ("auto", "pencil", "product"):
+            raise ValueError("CollocationSettings.floquet must be 'auto', 'pencil' or "
+                             f"'product', got {self.floquet!r}")

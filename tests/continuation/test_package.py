@@ -23,7 +23,8 @@ def test_public_names():
         "Branch", "ContinuationIterator", "ContinuationSettings", "EigenSettings",
         "EquilibriumProblem", "FoldCurveProblem", "HopfCurveProblem", "NewtonSettings",
         "PALC", "Problem", "SpecialPoint", "Step", "VectorField", "continuation",
-        "first_lyapunov", "hopf_point"}
+        "first_lyapunov", "hopf_point", "CollocationSettings", "CycleProblem",
+        "cycle_from_hopf"}
 
 
 def test_new_problem_kind_plugs_into_palc():

@@ -1,0 +1,193 @@
+"""Periodic orbits of ``M(x, p) xdot = F(x, p)`` continued in one parameter.
+
+A cycle is "just another problem": ``X = (U, T, p)`` with ``U`` the node
+values of the collocation polynomial (see ``_collocation``), ``G`` the
+collocation equations ``M(u) u' = T F(u)`` plus the integral phase condition
+``int <u, v'> dt = 0``. The reference ``v`` is the last accepted cycle
+(refreshed through ``Problem.accept``). Along the branch:
+
+* Floquet multipliers (``_floquet``) replace eigenvalues; the trivial
+  multiplier's distance to 1 is recorded in ``tests['trivial_error']`` and the
+  number of non-trivial multipliers outside the unit circle in
+  ``tests['n_unstable']`` (``Branch.stable``);
+* fold of cycles: ``tau_p`` changes sign (located by Illinois on ``tau_p``);
+* period doubling: the number of real multipliers ``< -1`` changes (located
+  on ``mu + 1`` of the real multiplier nearest -1);
+* Neimark-Sacker: the number of complex multipliers with ``|mu| > 1``
+  changes (located on ``|mu| - 1``).
+"""
+
+from __future__ import annotations
+
+from typing import Mapping
+
+import numpy as np
+
+from . import _collocation as colloc
+from . import _floquet
+from ._equilibrium import make_field, param_vector
+from ._problem import Description, PointInfo, Problem
+from ._settings import CollocationSettings
+from ._systems import bound
+
+
+class CycleProblem(Problem):
+    """Branch of periodic orbits by orthogonal collocation.
+
+    Parameters
+    ----------
+    F : casadi.Function ``(x, p) -> F`` or a VectorField.
+    orbit : initial guess, a callable ``t -> x`` on ``t in [0, 1)`` (one
+        period, vectorized or not) or an array ``(m, n)`` of equally spaced
+        samples over one period (interpolated periodically).
+    period : initial guess of ``T``.
+    params : ``{name: value}`` of all parameters; active : continuation parameter.
+    M : casadi.Function ``(x, p) -> M`` or None (identity).
+    settings : :class:`CollocationSettings` (NTST, NCOL, Floquet method).
+    """
+
+    kind = "cycle"
+    verified_kinds = ("pd", "ns")
+
+    def __init__(self, F, orbit, period: float, params: Mapping[str, float], active: str,
+                 *, M=None, settings: CollocationSettings | None = None):
+        settings = CollocationSettings() if settings is None else settings
+        if not isinstance(settings, CollocationSettings):
+            raise ValueError("settings must be a CollocationSettings")
+        if not (np.isfinite(period) and period > 0):
+            raise ValueError(f"period must be a positive finite number, got {period!r}")
+        self.vf = vf = make_field(F, M, params)
+        self.settings, self.ntst, self.ncol = settings, settings.ntst, settings.ncol
+        self.active = active
+        self.free = (active,)
+        self.free_idx = (vf.par_index(active),)
+        p0 = param_vector(vf, params)
+        self.mesh = np.linspace(0.0, 1.0, self.ntst + 1)
+        U = _sample(orbit, colloc.node_times(self.mesh, self.ncol), vf.n)
+        self.X0 = np.concatenate([U, [float(period), p0[self.free_idx[0]]]])
+        D = np.concatenate([np.diff(self.mesh), self._phase(U)])
+        self.system = bound(vf, f"collocation_{self.ntst}_{self.ncol}", p0, D, self.free,
+                            colloc.builder(self.ntst, self.ncol))
+
+    # -- unknowns ------------------------------------------------------------------
+    @property
+    def n_nodes(self) -> int:
+        return self.ntst * self.ncol
+
+    def nodes(self, X) -> np.ndarray:
+        """Node values ``(NTST NCOL, n)`` at times :meth:`times`."""
+        return np.asarray(X[: self.n_nodes * self.vf.n]).reshape(self.n_nodes, self.vf.n)
+
+    def times(self) -> np.ndarray:
+        """Normalized times of the nodes in ``[0, 1)``."""
+        return colloc.node_times(self.mesh, self.ncol)
+
+    def period(self, X) -> float:
+        return float(X[self.n_nodes * self.vf.n])
+
+    def state(self, X) -> np.ndarray:
+        """``u(0)``, the cycle's point at ``t = 0``."""
+        return np.asarray(X[: self.vf.n], dtype=float)
+
+    def frame(self, X) -> np.ndarray:
+        return np.arange(len(X))
+
+    def _phase(self, U) -> np.ndarray:
+        return colloc.phase_coefficients(U, self.vf.n, self.ntst, self.ncol)
+
+    def accept(self, X) -> None:
+        """Phase reference <- the accepted cycle."""
+        self.system.D = np.concatenate([np.diff(self.mesh),
+                                        self._phase(X[: self.n_nodes * self.vf.n])])
+
+    def columns(self, X) -> dict:
+        u = self.nodes(X)
+        return {"period": self.period(X),
+                "amplitude": float(np.max(np.ptp(u, axis=0))),
+                "max_norm": float(np.max(np.linalg.norm(u, axis=1)))}
+
+    # -- Floquet multipliers ------------------------------------------------------------
+    def transfer_matrices(self, X) -> np.ndarray:
+        """Condensed ``A_i`` with ``v_{i+1} = A_i v_i`` at the mesh points."""
+        return _floquet.transfer_matrices(self.vf, X[: self.n_nodes * self.vf.n],
+                                          self.period(X), self.params(X),
+                                          np.diff(self.mesh), self.ntst, self.ncol)
+
+    def multipliers(self, X) -> np.ndarray:
+        """Floquet multipliers sorted by decreasing modulus."""
+        s = self.settings
+        method = s.floquet if s.floquet != "auto" else \
+            ("pencil" if self.vf.n * self.ntst <= s.pencil_max else "product")
+        return _floquet.multipliers(self.transfer_matrices(X), method)
+
+    # -- detection hooks ---------------------------------------------------------------
+    def monitor(self, X, tau, lu, settings) -> PointInfo:
+        tests = {"fold": float(tau[-1])}
+        if not settings.compute_eigenvalues:
+            return PointInfo(np.zeros(0, dtype=complex), tests)
+        mu = self.multipliers(X)
+        tol = self.settings.unstable_tol
+        rest = np.delete(mu, _floquet.trivial_index(mu))
+        tests["trivial_error"] = float(np.min(np.abs(mu - 1.0)))
+        tests["n_unstable"] = float(_floquet.count_unstable(mu, tol))
+        counts = {"pd": int(np.sum((rest.imag == 0) & (rest.real < -1.0))),
+                  "ns": int(np.sum((rest.imag != 0) & (np.abs(rest) > 1.0)))}
+        return PointInfo(mu, tests, counts)
+
+    def events(self, a: PointInfo, b: PointInfo) -> list:
+        kinds = ["fold"] if a.tests["fold"] * b.tests["fold"] < 0 else []
+        return kinds + [k for k in ("pd", "ns")
+                        if k in a.counts and k in b.counts and a.counts[k] != b.counts[k]]
+
+    def test_function(self, kind, X_a, info_a, X_b, info_b, settings):
+        if kind == "fold":
+            return lambda X, tau, lu: float(tau[-1])
+        if kind == "pd":
+            return lambda X, tau, lu: float(_nearest_real(self.multipliers(X), -1.0) + 1.0)
+        if kind == "ns":
+            return lambda X, tau, lu: float(_nearest_complex_modulus(self.multipliers(X)) - 1)
+        return None
+
+    def describe(self, kind, X, tau, settings) -> Description:
+        data = {"period": self.period(X), "X": [float(v) for v in X]}
+        if kind in ("pd", "ns"):
+            mu = self.multipliers(X)
+            m = _nearest_real(mu, -1.0) if kind == "pd" else \
+                mu[np.argmin(np.abs(np.abs(mu) - 1) + (mu.imag == 0))]
+            data.update({"multiplier_re": float(np.real(m)), "multiplier_im": float(np.imag(m))})
+        return Description(X, "converged", 0.0, data)
+
+
+def _nearest_real(mu, target) -> float:
+    real = mu[mu.imag == 0]
+    pool = real if real.size else mu.real
+    return float(np.real(pool[np.argmin(np.abs(pool - target))]))
+
+
+def _nearest_complex_modulus(mu) -> float:
+    cplx = mu[mu.imag > 0]
+    if not cplx.size:
+        return 1.0
+    return float(np.abs(cplx[np.argmin(np.abs(np.abs(cplx) - 1.0))]))
+
+
+def _sample(orbit, t, n) -> np.ndarray:
+    """Guess values at the node times, flattened node by node."""
+    if callable(orbit):
+        try:
+            u = np.asarray(orbit(t), dtype=float)
+            u = u if u.shape == (t.size, n) else u.T
+        except (TypeError, ValueError):
+            u = None
+        if u is None or u.shape != (t.size, n):
+            u = np.array([np.asarray(orbit(s), dtype=float).ravel() for s in t])
+    else:
+        samples = np.asarray(orbit, dtype=float)
+        if samples.ndim != 2 or samples.shape[1] != n or samples.shape[0] < 2:
+            raise ValueError(f"orbit must be a callable or an array (m, {n}), got shape "
+                             f"{samples.shape}")
+        ts = np.arange(samples.shape[0]) / samples.shape[0]
+        u = np.column_stack([np.interp(t, ts, samples[:, j], period=1.0) for j in range(n)])
+    if u.shape != (t.size, n) or not np.all(np.isfinite(u)):
+        raise ValueError(f"orbit must give finite states of size {n}")
+    return u.ravel()

@@ -1,0 +1,90 @@
+"""Floquet multipliers of a collocated cycle by condensation of the interior unknowns.
+
+The linearized collocation equations of interval ``i`` (``T`` and ``p``
+fixed, ``v_{i,l}`` the node perturbations) read
+``B_L v_{i,0} + B_R (v_{i,1}, ..., v_{i,NCOL}) = 0`` with ``B = d r_i / d u_i``
+the exact CasADi Jacobian (it contains the ``(D_x M[v]) u'`` terms of a
+state-dependent mass). Eliminating the interior and right nodes gives the
+transfer ``v_{i+1,0} = A_i v_{i,0}``, ``A_i = -(B_R^{-1} B_L)[last n rows]``,
+and the monodromy matrix of the discretized variational equation is
+``A_{N-1} ... A_0``. Its eigenvalues (the multipliers) are computed without
+forming the product (``method='pencil'``) as the finite eigenvalues of the
+block-cyclic pencil
+
+    A_i v_i - v_{i+1} = 0  (i < N-1),      A_{N-1} v_{N-1} = mu v_0,
+
+by the QZ algorithm (size ``n NTST``; ``n (NTST - 1)`` infinite eigenvalues
+are discarded), which keeps strongly contracting/expanding multipliers
+accurate; ``method='product'`` forms the product (``O(n^3 NTST)``, for large
+``n NTST``).
+"""
+
+from __future__ import annotations
+
+import casadi as ca
+import numpy as np
+import scipy.linalg as sla
+
+from ._collocation import interval_function, interval_nodes
+
+
+def interval_jacobian(vf, ntst: int, ncol: int) -> ca.Function:
+    """Mapped ``d r_i / d u_i`` for all intervals, cached on the VectorField."""
+    cache = vf.__dict__.setdefault("_floquet", {})
+    key = (ntst, ncol)
+    if key not in cache:
+        f = interval_function(vf, ncol)
+        u, T, p, h = f.mx_in()
+        jac = ca.jacobian(ca.vec(f(u, T, p, h)), ca.vec(u))
+        cache[key] = ca.Function("colloc_jac", [u, T, p, h], [ca.densify(jac)]).map(ntst)
+    return cache[key]
+
+
+def transfer_matrices(vf, U, T, p, h, ntst: int, ncol: int) -> np.ndarray:
+    """``A_i`` (shape ``(ntst, n, n)``) with ``v_{i+1,0} = A_i v_{i,0}``."""
+    n = vf.n
+    nodes = interval_nodes(U, n, ntst, ncol)                    # (ntst, ncol+1, n)
+    blocks = np.concatenate([b.T for b in nodes], axis=1)      # n x ntst (ncol+1)
+    B = np.asarray(interval_jacobian(vf, ntst, ncol)(blocks, T, p, h[None, :]).full())
+    B = B.reshape(n * ncol, ntst, n * (ncol + 1)).transpose(1, 0, 2)
+    X = np.linalg.solve(B[:, :, n:], -B[:, :, :n])              # (ntst, n ncol, n)
+    return X[:, -n:, :]
+
+
+def multipliers(A: np.ndarray, method: str = "pencil") -> np.ndarray:
+    """Eigenvalues of ``A_{N-1} ... A_0``, sorted by decreasing modulus."""
+    if method == "product":
+        mono = np.eye(A.shape[1])
+        for Ai in A:
+            mono = Ai @ mono
+        mu = np.linalg.eigvals(mono)
+    else:
+        mu = _pencil_multipliers(A)
+    return mu[np.argsort(-np.abs(mu), kind="stable")]
+
+
+def _pencil_multipliers(A: np.ndarray) -> np.ndarray:
+    N, n, _ = A.shape
+    L = np.zeros((N * n, N * n))
+    R = np.zeros_like(L)
+    for i in range(N):
+        L[i * n:(i + 1) * n, i * n:(i + 1) * n] = A[i]
+        if i < N - 1:
+            L[i * n:(i + 1) * n, (i + 1) * n:(i + 2) * n] = -np.eye(n)
+    R[(N - 1) * n:, :n] = np.eye(n)
+    ab = sla.eig(L, R, right=False, homogeneous_eigvals=True)
+    alpha, beta = ab[0], ab[1]
+    scale = np.abs(beta) / np.hypot(np.abs(alpha), np.abs(beta))
+    keep = np.argsort(-scale)[:n]
+    return alpha[keep] / beta[keep]
+
+
+def trivial_index(mu: np.ndarray) -> int:
+    """Index of the multiplier closest to 1 (the trivial one of an autonomous cycle)."""
+    return int(np.argmin(np.abs(mu - 1.0)))
+
+
+def count_unstable(mu: np.ndarray, tol: float) -> int:
+    """Non-trivial multipliers with ``|mu| > 1 + tol``."""
+    rest = np.delete(mu, trivial_index(mu))
+    return int(np.sum(np.abs(rest) > 1.0 + tol))

@@ -1,0 +1,90 @@
+"""Branch switching onto cycles: from a Hopf point of an equilibrium branch.
+
+At a Hopf point ``(x_H, p_H)`` with ``J q = i omega M q`` (``|q| = 1``) and
+first Lyapunov coefficient ``l1`` (normalization of ``_lyapunov``), the
+normal form ``zdot = (i omega + alpha' dp) z + l1 omega z |z|^2`` gives the
+small cycle
+
+    x(t) ~ x_eq(p_H + dp) + 2 Re(z e^(2 pi i t) q),   |z|^2 = -alpha' dp / (l1 omega),
+    T ~ 2 pi / omega,
+
+with ``alpha' = d Re lambda / dp`` at the Hopf point (central difference on
+corrected equilibria). The side of ``dp`` is the one where ``|z|^2 > 0``:
+``dp > 0`` for a supercritical Hopf point whose pair crosses to the right with
+increasing ``p``. (For ``xdot = mu x - y + a x r^2``, ``l1 = 2a``, ``alpha' = 1``:
+``r^2 = 2 |z|^2 = -mu / a``, the exact radius.)
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import scipy.sparse as sp
+
+from . import _eigen
+from ._branch import SpecialPoint
+from ._cycles import CycleProblem
+from ._lyapunov import hopf_eigenvectors
+from ._newton import newton
+from ._settings import CollocationSettings, EigenSettings, NewtonSettings
+
+
+def cycle_from_hopf(problem, point: SpecialPoint, *, dp: float = 1e-3,
+                    settings: CollocationSettings | None = None) -> CycleProblem:
+    """A :class:`CycleProblem` started on the small cycle born at ``point``.
+
+    ``problem`` is the EquilibriumProblem whose branch holds the Hopf ``point``
+    (with ``data['omega']`` and ``data['l1']``); ``dp > 0`` is the size of the
+    parameter offset, its sign is chosen by the normal form. The returned
+    problem's ``X0`` is the normal-form guess; ``hopf_direction`` (+1/-1) is the
+    side of the Hopf point the cycles live on (use it as ``direction``).
+    """
+    if not isinstance(point, SpecialPoint) or point.kind != "hopf":
+        raise ValueError("point must be a 'hopf' SpecialPoint")
+    if "l1" not in point.data or "omega" not in point.data:
+        raise ValueError(f"point.data must hold 'omega' and 'l1', got {sorted(point.data)}")
+    l1, omega = float(point.data["l1"]), float(point.data["omega"])
+    if l1 == 0 or not np.isfinite(l1):
+        raise ValueError(f"point.data['l1'] must be finite and nonzero, got {l1!r}")
+    if not (np.isfinite(dp) and dp > 0):
+        raise ValueError(f"dp must be a positive finite number, got {dp!r}")
+    vf, active = problem.vf, problem.active
+    p_H = np.array([point.params[k] for k in vf.par_names], dtype=float)
+    ia = vf.par_index(active)
+    alpha = _crossing_speed(vf, point.x, p_H, ia, omega, dp)
+    sign = 1.0 if -alpha / (l1 * omega) > 0 else -1.0
+    p = p_H.copy()
+    p[ia] += sign * dp
+    x_eq = _equilibrium(vf, point.x, p)
+    J, M = vf.jac_x(x_eq, p), vf.mass(x_eq, p)
+    q, _ = hopf_eigenvectors(sp.csc_matrix(J, dtype=complex), sp.csc_matrix(M, dtype=complex),
+                             omega)
+    z = np.sqrt(abs(alpha * dp / (l1 * omega)))
+
+    def orbit(t):
+        t = np.atleast_1d(t)
+        return x_eq[None, :] + 2 * z * np.real(np.exp(2j * np.pi * t)[:, None] * q[None, :])
+
+    params = dict(zip(vf.par_names, map(float, p)))
+    cycle = CycleProblem(vf, orbit, 2 * np.pi / omega, params, active, settings=settings)
+    cycle.hopf_direction = int(sign)
+    return cycle
+
+
+def _equilibrium(vf, x0, p) -> np.ndarray:
+    """Equilibrium near ``x0`` at parameters ``p`` (Newton on ``F = 0``)."""
+    res = newton(lambda x: vf.rhs(x, p), lambda x: vf.jac_x(x, p), np.asarray(x0, float),
+                 NewtonSettings(tol=1e-12, max_iter=20))
+    return res.X
+
+
+def _crossing_speed(vf, x, p, ia, omega, dp) -> float:
+    """``d Re lambda / dp`` of the eigenvalue near ``i omega`` (central difference)."""
+    h = min(dp, 1e-4) * max(1.0, abs(p[ia]))
+    re = []
+    for s in (1.0, -1.0):
+        pp = p.copy()
+        pp[ia] += s * h
+        xe = _equilibrium(vf, x, pp)
+        ev = _eigen.eigenvalues(vf.jac_x(xe, pp), vf.mass(xe, pp), EigenSettings())
+        re.append(_eigen.nearest(ev, 1j * omega).real)
+    return (re[0] - re[1]) / (2 * h)
