@@ -9,8 +9,9 @@ Public API (everything else is private)::
     VectorField(F, M, par_names), first_lyapunov(vf, x, p, omega)
     CycleProblem(F, orbit, period, params, active, *, M=None, settings=CollocationSettings())
     cycle_from_hopf(problem, hopf_point, *, dp=1e-3, settings=None) -> CycleProblem
+    ShootingProblem(F, orbit, period, params, active, *, M=None, settings=ShootingSettings())
     Branch, SpecialPoint, ContinuationIterator, PALC, ContinuationSettings,
-    NewtonSettings, EigenSettings, CollocationSettings
+    NewtonSettings, EigenSettings, CollocationSettings, ShootingSettings
 
 Plotting lives in ``continuation.plotting`` (Matplotlib is imported there only).
 """
@@ -24,13 +25,14 @@ from ._lyapunov import first_lyapunov
 from ._palc import ContinuationIterator, Step
 from ._problem import Problem
 from ._settings import (CollocationSettings, ContinuationSettings, EigenSettings,
-                        NewtonSettings, PALC)
+                        NewtonSettings, PALC, ShootingSettings)
+from ._shooting import ShootingProblem
 from ._switching import cycle_from_hopf
 from ._vectorfield import VectorField
 
 __all__ = [
     "Branch", "CollocationSettings", "ContinuationIterator", "ContinuationSettings",
-    "CycleProblem", "EigenSettings", "cycle_from_hopf",
+    "CycleProblem", "EigenSettings", "ShootingProblem", "ShootingSettings", "cycle_from_hopf",
     "EquilibriumProblem", "FoldCurveProblem", "HopfCurveProblem", "NewtonSettings",
     "PALC", "Problem", "SpecialPoint", "Step", "VectorField", "continuation", "first_lyapunov", "hopf_point",
 ]

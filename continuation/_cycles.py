@@ -31,7 +31,57 @@ from ._settings import CollocationSettings
 from ._systems import bound
 
 
-class CycleProblem(Problem):
+class PeriodicProblem(Problem):
+    """Shared detection hooks of periodic-orbit problems (collocation, shooting).
+
+    Subclasses provide ``period(X)``, ``multipliers(X)`` and ``settings.unstable_tol``.
+    """
+
+    kind = "cycle"
+    verified_kinds = ("pd", "ns")
+
+    def frame(self, X) -> np.ndarray:
+        return np.arange(len(X))
+
+    # -- detection hooks ---------------------------------------------------------------
+    def monitor(self, X, tau, lu, settings) -> PointInfo:
+        tests = {"fold": float(tau[-1])}
+        if not settings.compute_eigenvalues:
+            return PointInfo(np.zeros(0, dtype=complex), tests)
+        mu = self.multipliers(X)
+        tol = self.settings.unstable_tol
+        rest = np.delete(mu, _floquet.trivial_index(mu))
+        tests["trivial_error"] = float(np.min(np.abs(mu - 1.0)))
+        tests["n_unstable"] = float(_floquet.count_unstable(mu, tol))
+        counts = {"pd": int(np.sum((rest.imag == 0) & (rest.real < -1.0))),
+                  "ns": int(np.sum((rest.imag != 0) & (np.abs(rest) > 1.0)))}
+        return PointInfo(mu, tests, counts)
+
+    def events(self, a: PointInfo, b: PointInfo) -> list:
+        kinds = ["fold"] if a.tests["fold"] * b.tests["fold"] < 0 else []
+        return kinds + [k for k in ("pd", "ns")
+                        if k in a.counts and k in b.counts and a.counts[k] != b.counts[k]]
+
+    def test_function(self, kind, X_a, info_a, X_b, info_b, settings):
+        if kind == "fold":
+            return lambda X, tau, lu: float(tau[-1])
+        if kind == "pd":
+            return lambda X, tau, lu: float(_nearest_real(self.multipliers(X), -1.0) + 1.0)
+        if kind == "ns":
+            return lambda X, tau, lu: float(_nearest_complex_modulus(self.multipliers(X)) - 1)
+        return None
+
+    def describe(self, kind, X, tau, settings) -> Description:
+        data = {"period": self.period(X), "X": [float(v) for v in X]}
+        if kind in ("pd", "ns"):
+            mu = self.multipliers(X)
+            m = _nearest_real(mu, -1.0) if kind == "pd" else \
+                mu[np.argmin(np.abs(np.abs(mu) - 1) + (mu.imag == 0))]
+            data.update({"multiplier_re": float(np.real(m)), "multiplier_im": float(np.imag(m))})
+        return Description(X, "converged", 0.0, data)
+
+
+class CycleProblem(PeriodicProblem):
     """Branch of periodic orbits by orthogonal collocation.
 
     Parameters
@@ -45,9 +95,6 @@ class CycleProblem(Problem):
     M : casadi.Function ``(x, p) -> M`` or None (identity).
     settings : :class:`CollocationSettings` (NTST, NCOL, Floquet method).
     """
-
-    kind = "cycle"
-    verified_kinds = ("pd", "ns")
 
     def __init__(self, F, orbit, period: float, params: Mapping[str, float], active: str,
                  *, M=None, settings: CollocationSettings | None = None):
@@ -89,9 +136,6 @@ class CycleProblem(Problem):
         """``u(0)``, the cycle's point at ``t = 0``."""
         return np.asarray(X[: self.vf.n], dtype=float)
 
-    def frame(self, X) -> np.ndarray:
-        return np.arange(len(X))
-
     def _phase(self, U) -> np.ndarray:
         return colloc.phase_coefficients(U, self.vf.n, self.ntst, self.ncol)
 
@@ -119,44 +163,6 @@ class CycleProblem(Problem):
         method = s.floquet if s.floquet != "auto" else \
             ("pencil" if self.vf.n * self.ntst <= s.pencil_max else "product")
         return _floquet.multipliers(self.transfer_matrices(X), method)
-
-    # -- detection hooks ---------------------------------------------------------------
-    def monitor(self, X, tau, lu, settings) -> PointInfo:
-        tests = {"fold": float(tau[-1])}
-        if not settings.compute_eigenvalues:
-            return PointInfo(np.zeros(0, dtype=complex), tests)
-        mu = self.multipliers(X)
-        tol = self.settings.unstable_tol
-        rest = np.delete(mu, _floquet.trivial_index(mu))
-        tests["trivial_error"] = float(np.min(np.abs(mu - 1.0)))
-        tests["n_unstable"] = float(_floquet.count_unstable(mu, tol))
-        counts = {"pd": int(np.sum((rest.imag == 0) & (rest.real < -1.0))),
-                  "ns": int(np.sum((rest.imag != 0) & (np.abs(rest) > 1.0)))}
-        return PointInfo(mu, tests, counts)
-
-    def events(self, a: PointInfo, b: PointInfo) -> list:
-        kinds = ["fold"] if a.tests["fold"] * b.tests["fold"] < 0 else []
-        return kinds + [k for k in ("pd", "ns")
-                        if k in a.counts and k in b.counts and a.counts[k] != b.counts[k]]
-
-    def test_function(self, kind, X_a, info_a, X_b, info_b, settings):
-        if kind == "fold":
-            return lambda X, tau, lu: float(tau[-1])
-        if kind == "pd":
-            return lambda X, tau, lu: float(_nearest_real(self.multipliers(X), -1.0) + 1.0)
-        if kind == "ns":
-            return lambda X, tau, lu: float(_nearest_complex_modulus(self.multipliers(X)) - 1)
-        return None
-
-    def describe(self, kind, X, tau, settings) -> Description:
-        data = {"period": self.period(X), "X": [float(v) for v in X]}
-        if kind in ("pd", "ns"):
-            mu = self.multipliers(X)
-            m = _nearest_real(mu, -1.0) if kind == "pd" else \
-                mu[np.argmin(np.abs(np.abs(mu) - 1) + (mu.imag == 0))]
-            data.update({"multiplier_re": float(np.real(m)), "multiplier_im": float(np.imag(m))})
-        return Description(X, "converged", 0.0, data)
-
 
 def _nearest_real(mu, target) -> float:
     real = mu[mu.imag == 0]

@@ -185,3 +185,31 @@ class CollocationSettings:
         if self.floquet not in ("auto", "pencil", "product"):
             raise ValueError("CollocationSettings.floquet must be 'auto', 'pencil' or "
                              f"'product', got {self.floquet!r}")
+
+
+@dataclass(frozen=True)
+class ShootingSettings:
+    """Multiple shooting of periodic orbits with a CasADi integrator.
+
+    segments : number of shooting segments (>= 1); integrator : CasADi plugin
+    ('cvodes', 'idas', 'rk'); abstol, reltol : integrator tolerances (their
+    sensitivities give the exact Jacobian of the discrete map); floquet :
+    'pencil' or 'product' (see CollocationSettings); unstable_tol as there.
+    """
+
+    segments: int = 4
+    integrator: str = "cvodes"
+    abstol: float = 1e-12
+    reltol: float = 1e-12
+    floquet: str = "pencil"
+    unstable_tol: float = 1e-8
+
+    def __post_init__(self):
+        _positive_int(self, "segments")
+        _positive(self, "abstol", "reltol", "unstable_tol")
+        if self.integrator not in ("cvodes", "idas", "rk"):
+            raise ValueError("ShootingSettings.integrator must be 'cvodes', 'idas' or 'rk', "
+                             f"got {self.integrator!r}")
+        if self.floquet not in ("pencil", "product"):
+            raise ValueError("ShootingSettings.floquet must be 'pencil' or 'product', got "
+                             f"{self.floquet!r}")
