@@ -9,6 +9,7 @@ Public API (everything else is private)::
     VectorField(F, M, par_names), first_lyapunov(vf, x, p, omega)
     CycleProblem(F, orbit, period, params, active, *, M=None, settings=CollocationSettings())
     cycle_from_hopf(problem, hopf_point, *, dp=1e-3, settings=None) -> CycleProblem
+    cycle_from_pd(cycle_problem, pd_point, *, amplitude=1e-2, settings=None) -> CycleProblem
     ShootingProblem(F, orbit, period, params, active, *, M=None, settings=ShootingSettings())
     Branch, SpecialPoint, ContinuationIterator, PALC, ContinuationSettings,
     NewtonSettings, EigenSettings, CollocationSettings, ShootingSettings
@@ -27,12 +28,13 @@ from ._problem import Problem
 from ._settings import (CollocationSettings, ContinuationSettings, EigenSettings,
                         NewtonSettings, PALC, ShootingSettings)
 from ._shooting import ShootingProblem
-from ._switching import cycle_from_hopf
+from ._switching import cycle_from_hopf, cycle_from_pd
 from ._vectorfield import VectorField
 
 __all__ = [
     "Branch", "CollocationSettings", "ContinuationIterator", "ContinuationSettings",
     "CycleProblem", "EigenSettings", "ShootingProblem", "ShootingSettings", "cycle_from_hopf",
+    "cycle_from_pd",
     "EquilibriumProblem", "FoldCurveProblem", "HopfCurveProblem", "NewtonSettings",
     "PALC", "Problem", "SpecialPoint", "Step", "VectorField", "continuation", "first_lyapunov", "hopf_point",
 ]

@@ -84,6 +84,17 @@ def interval_nodes(U: np.ndarray, n: int, ntst: int, ncol: int) -> np.ndarray:
     return u[idx]
 
 
+def evaluate(U, mesh: np.ndarray, ncol: int, n: int, t) -> np.ndarray:
+    """Values ``(len(t), n)`` of the piecewise polynomial with node values ``U``."""
+    t = np.mod(np.atleast_1d(np.asarray(t, dtype=float)), 1.0)
+    ntst = len(mesh) - 1
+    nodes = interval_nodes(U, n, ntst, ncol)
+    i = np.clip(np.searchsorted(mesh, t, side="right") - 1, 0, ntst - 1)
+    s = (t - mesh[i]) / (mesh[i + 1] - mesh[i])
+    L, _ = lagrange(np.linspace(0.0, 1.0, ncol + 1), s)
+    return np.einsum("jl,jlk->jk", L, nodes[i])
+
+
 def phase_coefficients(U_ref: np.ndarray, n: int, ntst: int, ncol: int) -> np.ndarray:
     """``c`` with ``c . U = int_0^1 <u, v'> dt`` for the reference ``v = U_ref``.
 

@@ -40,8 +40,17 @@ class PeriodicProblem(Problem):
     kind = "cycle"
     verified_kinds = ("pd", "ns")
 
+    #: unit row fixing the start amplitude along a critical direction (branch
+    #: switching); None keeps the parameter fixed at the start
+    start_direction = None
+
     def frame(self, X) -> np.ndarray:
         return np.arange(len(X))
+
+    def start_row(self) -> np.ndarray:
+        if self.start_direction is None:
+            return super().start_row()
+        return np.asarray(self.start_direction, dtype=float)
 
     # -- detection hooks ---------------------------------------------------------------
     def monitor(self, X, tau, lu, settings) -> PointInfo:
@@ -151,11 +160,17 @@ class CycleProblem(PeriodicProblem):
                 "max_norm": float(np.max(np.linalg.norm(u, axis=1)))}
 
     # -- Floquet multipliers ------------------------------------------------------------
-    def transfer_matrices(self, X) -> np.ndarray:
-        """Condensed ``A_i`` with ``v_{i+1} = A_i v_i`` at the mesh points."""
+    def transfer_matrices(self, X, full: bool = False) -> np.ndarray:
+        """Condensed ``A_i`` with ``v_{i+1} = A_i v_i`` at the mesh points (``full``:
+        the maps from ``v_i`` to all nodes of interval ``i``)."""
         return _floquet.transfer_matrices(self.vf, X[: self.n_nodes * self.vf.n],
                                           self.period(X), self.params(X),
-                                          np.diff(self.mesh), self.ntst, self.ncol)
+                                          np.diff(self.mesh), self.ntst, self.ncol, full)
+
+    def evaluate(self, X, t) -> np.ndarray:
+        """Collocation polynomial at times ``t`` in ``[0, 1)``, shape ``(len(t), n)``."""
+        return colloc.evaluate(X[: self.n_nodes * self.vf.n], self.mesh, self.ncol,
+                               self.vf.n, t)
 
     def multipliers(self, X) -> np.ndarray:
         """Floquet multipliers sorted by decreasing modulus."""

@@ -40,15 +40,16 @@ def interval_jacobian(vf, ntst: int, ncol: int) -> ca.Function:
     return cache[key]
 
 
-def transfer_matrices(vf, U, T, p, h, ntst: int, ncol: int) -> np.ndarray:
-    """``A_i`` (shape ``(ntst, n, n)``) with ``v_{i+1,0} = A_i v_{i,0}``."""
+def transfer_matrices(vf, U, T, p, h, ntst: int, ncol: int, full: bool = False) -> np.ndarray:
+    """``A_i`` (shape ``(ntst, n, n)``) with ``v_{i+1,0} = A_i v_{i,0}``; with
+    ``full`` the ``(ntst, n ncol, n)`` maps to all nodes ``v_{i,1..NCOL}``."""
     n = vf.n
     nodes = interval_nodes(U, n, ntst, ncol)                    # (ntst, ncol+1, n)
     blocks = np.concatenate([b.T for b in nodes], axis=1)      # n x ntst (ncol+1)
     B = np.asarray(interval_jacobian(vf, ntst, ncol)(blocks, T, p, h[None, :]).full())
     B = B.reshape(n * ncol, ntst, n * (ncol + 1)).transpose(1, 0, 2)
     X = np.linalg.solve(B[:, :, n:], -B[:, :, :n])              # (ntst, n ncol, n)
-    return X[:, -n:, :]
+    return X if full else X[:, -n:, :]
 
 
 def multipliers(A: np.ndarray, method: str = "pencil") -> np.ndarray:

@@ -102,8 +102,7 @@ class ContinuationIterator:
     def start(self) -> Step | None:
         """Correct ``X0`` at fixed parameter and orient the first tangent."""
         prob, X0 = self.problem, self.problem.X0
-        e = np.zeros(X0.size)
-        e[-1] = 1.0
+        e = prob.start_row()
         res = correct(prob, X0, e, self.settings.newton)
         if not res.converged:
             return self._fail("start point did not converge: " + res.message, res, 0.0)

@@ -109,6 +109,14 @@ class Problem:
         ``X`` (e.g. reference vectors drifted), else None (default: never)."""
         return None
 
+    def start_row(self) -> np.ndarray:
+        """Row ``e`` of the start corrector ``e . (X - X0) = 0`` (default: the
+        continuation parameter is fixed). Branch switching onto a bifurcating branch
+        fixes the amplitude along the critical direction instead."""
+        e = np.zeros(self.X0.size)
+        e[-1] = 1.0
+        return e
+
     def accept(self, X) -> None:
         """Called by the iterator at every accepted point; problems with data that
         follows the branch (the phase reference of a cycle) refresh it here."""

@@ -17,6 +17,8 @@ increasing ``p``. (For ``xdot = mu x - y + a x r^2``, ``l1 = 2a``, ``alpha' = 1`
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
 import scipy.sparse as sp
 
@@ -88,3 +90,63 @@ def _crossing_speed(vf, x, p, ia, omega, dp) -> float:
         ev = _eigen.eigenvalues(vf.jac_x(xe, pp), vf.mass(xe, pp), EigenSettings())
         re.append(_eigen.nearest(ev, 1j * omega).real)
     return (re[0] - re[1]) / (2 * h)
+
+
+def floquet_eigenfunction(problem: CycleProblem, X, multiplier: complex) -> np.ndarray:
+    """Node values ``(NTST NCOL, n)`` of the real Floquet solution ``v`` with
+    ``v(1) = mu v(0)`` for the (real) multiplier nearest ``multiplier``.
+
+    ``v_0`` is the eigenvector of the condensed monodromy ``A_{N-1}...A_0``; the
+    other nodes follow from the condensation maps of each interval. Scaled to
+    ``max |v| = 1``.
+    """
+    n = problem.vf.n
+    full = problem.transfer_matrices(X, full=True)            # (ntst, n ncol, n)
+    mono = np.eye(n)
+    for Xi in full:
+        mono = Xi[-n:] @ mono
+    w, vecs = np.linalg.eig(mono)
+    v = np.real(vecs[:, np.argmin(np.abs(w - multiplier))])
+    rows = []
+    for Xi in full:
+        rows.append(np.vstack([v[None, :], (Xi[:-n] @ v).reshape(-1, n)]))
+        v = Xi[-n:] @ v
+    V = np.vstack(rows)
+    return V / np.max(np.abs(V))
+
+
+def cycle_from_pd(problem: CycleProblem, point: SpecialPoint, *, amplitude: float = 1e-2,
+                  settings: CollocationSettings | None = None) -> CycleProblem:
+    """The period-doubled branch born at the period-doubling ``point`` of a cycle branch.
+
+    With ``u`` the cycle at the PD point (period ``T``) and ``v`` its Floquet
+    solution for ``mu = -1`` (``v(t + T) = -v(t)``), the guess is
+
+        u2(s) = u(2s) + a w(s),   w(s) = +v(2s) (s < 1/2),  -v(2s - 1) (s >= 1/2),
+
+    with period ``2T`` on ``2 NTST`` intervals (default). The start corrector fixes
+    the amplitude ``w . (X - X0) = 0`` instead of the parameter (the doubled branch
+    is tangent to ``w`` at the PD point), so ``direction=+1`` continues towards
+    larger amplitudes.
+    """
+    if not isinstance(problem, CycleProblem):
+        raise ValueError("problem must be the CycleProblem whose branch holds the point")
+    if not isinstance(point, SpecialPoint) or point.kind != "pd" or "X" not in point.data:
+        raise ValueError("point must be a 'pd' SpecialPoint of a cycle branch")
+    if not (np.isfinite(amplitude) and amplitude > 0):
+        raise ValueError(f"amplitude must be a positive finite number, got {amplitude!r}")
+    X = np.asarray(point.data["X"], dtype=float)
+    V = floquet_eigenfunction(problem, X, -1.0).ravel()
+
+    def doubled(s, which):
+        s = np.atleast_1d(s)
+        sgn = np.where(s < 0.5, 1.0, -1.0)[:, None]
+        w = sgn * problem.evaluate(np.r_[V, 0.0, 0.0], 2 * s)
+        return w if which == "w" else problem.evaluate(X, 2 * s) + amplitude * w
+
+    settings = settings or replace(problem.settings, ntst=2 * problem.ntst)
+    new = CycleProblem(problem.vf, lambda s: doubled(s, "u"), 2 * problem.period(X),
+                       problem.par_dict(X), problem.active, settings=settings)
+    w = doubled(new.times(), "w").ravel()
+    new.start_direction = np.concatenate([w / np.linalg.norm(w), [0.0, 0.0]])
+    return new

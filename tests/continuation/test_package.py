@@ -24,7 +24,8 @@ def test_public_names():
         "EquilibriumProblem", "FoldCurveProblem", "HopfCurveProblem", "NewtonSettings",
         "PALC", "Problem", "SpecialPoint", "Step", "VectorField", "continuation",
         "first_lyapunov", "hopf_point", "CollocationSettings", "CycleProblem",
-        "cycle_from_hopf", "ShootingProblem", "ShootingSettings"}
+        "cycle_from_hopf", "ShootingProblem", "ShootingSettings",
+        "cycle_from_pd"}
 
 
 def test_new_problem_kind_plugs_into_palc():
