@@ -19,12 +19,14 @@ collocation equations ``M(u) u' = T F(u)`` plus the integral phase condition
 
 from __future__ import annotations
 
+from dataclasses import replace
 from typing import Mapping
 
 import numpy as np
 
 from . import _collocation as colloc
 from . import _floquet
+from . import _mesh
 from ._equilibrium import make_field, param_vector
 from ._problem import Description, PointInfo, Problem
 from ._settings import CollocationSettings
@@ -102,11 +104,12 @@ class CycleProblem(PeriodicProblem):
     period : initial guess of ``T``.
     params : ``{name: value}`` of all parameters; active : continuation parameter.
     M : casadi.Function ``(x, p) -> M`` or None (identity).
-    settings : :class:`CollocationSettings` (NTST, NCOL, Floquet method).
+    settings : :class:`CollocationSettings` (NTST, NCOL, Floquet method, adaptation).
+    mesh : ``NTST + 1`` increasing times from 0 to 1 (default uniform).
     """
 
     def __init__(self, F, orbit, period: float, params: Mapping[str, float], active: str,
-                 *, M=None, settings: CollocationSettings | None = None):
+                 *, M=None, settings: CollocationSettings | None = None, mesh=None):
         settings = CollocationSettings() if settings is None else settings
         if not isinstance(settings, CollocationSettings):
             raise ValueError("settings must be a CollocationSettings")
@@ -118,7 +121,8 @@ class CycleProblem(PeriodicProblem):
         self.free = (active,)
         self.free_idx = (vf.par_index(active),)
         p0 = param_vector(vf, params)
-        self.mesh = np.linspace(0.0, 1.0, self.ntst + 1)
+        self.mesh = _check_mesh(mesh, self.ntst)
+        self._accepted = 0
         U = _sample(orbit, colloc.node_times(self.mesh, self.ncol), vf.n)
         self.X0 = np.concatenate([U, [float(period), p0[self.free_idx[0]]]])
         D = np.concatenate([np.diff(self.mesh), self._phase(U)])
@@ -150,6 +154,7 @@ class CycleProblem(PeriodicProblem):
 
     def accept(self, X) -> None:
         """Phase reference <- the accepted cycle."""
+        self._accepted += 1
         self.system.D = np.concatenate([np.diff(self.mesh),
                                         self._phase(X[: self.n_nodes * self.vf.n])])
 
@@ -157,7 +162,36 @@ class CycleProblem(PeriodicProblem):
         u = self.nodes(X)
         return {"period": self.period(X),
                 "amplitude": float(np.max(np.ptp(u, axis=0))),
-                "max_norm": float(np.max(np.linalg.norm(u, axis=1)))}
+                "max_norm": float(np.max(np.linalg.norm(u, axis=1))),
+                "error_estimate": self.error_estimate(X)}
+
+    # -- mesh ------------------------------------------------------------------------
+    def error_estimate(self, X) -> float:
+        """A-posteriori indicator ``max_i h_i^(NCOL+1) |u^(NCOL+1)|_i`` (``_mesh``)."""
+        return _mesh.error_indicator(X[: self.n_nodes * self.vf.n], self.mesh, self.ncol,
+                                     self.vf.n)
+
+    def remesh(self, X, ntst: int | None = None):
+        """``(problem, X_new)`` on a mesh equidistributing the error of ``X`` (same
+        ``NTST`` unless given); node values are the old polynomial at the new nodes."""
+        ntst = self.ntst if ntst is None else int(ntst)
+        mesh = _mesh.equidistribute(X[: self.n_nodes * self.vf.n], self.mesh, self.ncol,
+                                    self.vf.n, ntst)
+        settings = replace(self.settings, ntst=ntst)
+        new = CycleProblem(self.vf, lambda t: self.evaluate(X, t), self.period(X),
+                           self.par_dict(X), self.active, settings=settings, mesh=mesh)
+        return new, new.X0.copy()
+
+    def restart(self, X):
+        """Re-mesh every ``settings.adapt_every`` accepted points (0: never)."""
+        every = self.settings.adapt_every
+        if every and self._accepted >= every:
+            return self.remesh(X)
+        return None
+
+    def frame(self, X) -> np.ndarray:
+        """Only ``T`` and ``p`` keep their meaning across a re-mesh."""
+        return np.array([len(X) - 2, len(X) - 1])
 
     # -- Floquet multipliers ------------------------------------------------------------
     def transfer_matrices(self, X, full: bool = False) -> np.ndarray:
@@ -178,6 +212,15 @@ class CycleProblem(PeriodicProblem):
         method = s.floquet if s.floquet != "auto" else \
             ("pencil" if self.vf.n * self.ntst <= s.pencil_max else "product")
         return _floquet.multipliers(self.transfer_matrices(X), method)
+
+def _check_mesh(mesh, ntst) -> np.ndarray:
+    if mesh is None:
+        return np.linspace(0.0, 1.0, ntst + 1)
+    m = np.array(mesh, dtype=float).ravel()
+    if m.size != ntst + 1 or m[0] != 0.0 or m[-1] != 1.0 or not np.all(np.diff(m) > 0):
+        raise ValueError(f"mesh must be {ntst + 1} increasing times from 0 to 1, got {mesh!r}")
+    return m
+
 
 def _nearest_real(mu, target) -> float:
     real = mu[mu.imag == 0]

@@ -53,7 +53,7 @@ def _run_segments(problem, algorithm, settings, rec, bar):
                 prev = (step, info)
                 continue
             _detect(problem, prev, (step, info), settings, rec)
-            rec.add(step, info)
+            rec.add(step, info, problem.columns(step.X))
             prev = (step, info)
             bar.update()
             done = len(rec.X) - 1
@@ -126,10 +126,13 @@ class _Recorder:
 
     def __init__(self, problem):
         self.problem = problem
-        self.X, self.steps, self.infos, self.special = [], [], [], []
+        self.X, self.steps, self.infos, self.special, self.cols = [], [], [], [], []
         self.stats = {}
 
-    def add(self, step, info):
+    def add(self, step, info, columns):
+        """Record a point; ``columns`` are taken now, from the problem that
+        produced it (a restarted cycle problem has a different mesh)."""
+        self.cols.append(columns)
         self.X.append(step.X)
         self.steps.append(step)
         self.infos.append(info)
@@ -143,7 +146,7 @@ class _Recorder:
                  for k in (self.infos[0].tests if self.infos else {})}
         tests.update({k: np.array([i.counts.get(k, 0) for i in self.infos], dtype=float)
                       for k in (self.infos[0].counts if self.infos else {})})
-        cols = [prob.columns(x) for x in self.X]
+        cols = self.cols
         columns = {k: np.array([c[k] for c in cols]) for k in (cols[0] if cols else {})}
         return Branch(prob.kind, prob.vf.par_names, prob.free,
                       np.array([prob.state(x) for x in self.X]).reshape(len(X), prob.vf.n),

@@ -166,7 +166,8 @@ class CollocationSettings:
     pencil of the condensed transfer matrices), 'product' (eigenvalues of
     their product) or 'auto' (pencil while ``n * ntst <= pencil_max``).
     unstable_tol : a non-trivial multiplier counts as unstable when
-    ``|mu| > 1 + unstable_tol``.
+    ``|mu| > 1 + unstable_tol``. adapt_every : re-mesh (equidistribution of
+    the error indicator) after every ``adapt_every`` accepted points; 0 = never.
     """
 
     ntst: int = 20
@@ -174,9 +175,13 @@ class CollocationSettings:
     floquet: str = "auto"
     pencil_max: int = 1200
     unstable_tol: float = 1e-8
+    adapt_every: int = 0
 
     def __post_init__(self):
         _positive_int(self, "ntst", "ncol", "pencil_max")
+        if not (isinstance(self.adapt_every, int) and self.adapt_every >= 0):
+            raise ValueError("CollocationSettings.adapt_every must be an integer >= 0, got "
+                             f"{self.adapt_every!r}")
         _positive(self, "unstable_tol")
         if self.ntst < 2:
             raise ValueError(f"CollocationSettings.ntst must be >= 2, got {self.ntst}")
