@@ -51,7 +51,7 @@ class HopfCurve:
     def guess(self, log_m: float, piece: int) -> tuple[np.ndarray, np.ndarray, float]:
         """Interpolated (state, params, omega) on ``piece`` at log10 M* = log_m."""
         lm = np.log10(self.mstar)
-        for i in np.flatnonzero(self.pieces[:-1] == piece):
+        for i in np.flatnonzero(self.pieces == piece):   # pieces are per segment
             a, b = lm[i], lm[i + 1]
             if (a - log_m) * (b - log_m) <= 0 and a != b:
                 t = (log_m - a) / (b - a)
@@ -61,7 +61,7 @@ class HopfCurve:
 
     @property
     def pieces(self) -> np.ndarray:
-        """Branch id of each segment: a new id after every fold of the curve in M*
+        """Branch id of each segment (length = points - 1): a new id after every fold in M*
         (the lower envelope jumps between pieces, even of one curve)."""
         step = np.sign(np.diff(np.log10(self.mstar)))
         turns = np.concatenate([[0], np.cumsum(step[1:] * step[:-1] < 0)])
@@ -282,6 +282,8 @@ def _switches(curves, lo: float, hi: float) -> list[ModeSwitch]:
         lo, hi = _switch_bracket(curves, a[2], grid[k], grid[k + 1])
         ua, wa, _ = _lowest(curves, lo)
         ub, wb, _ = _lowest(curves, hi)
+        if abs(ua - ub) < 1e-2 * ub and abs(wa - wb) < 1e-2 * wb:
+            continue     # the same branch traced twice (two pieces overlapping): no switch
         out.append(ModeSwitch(float(10 ** (0.5 * (lo + hi))), float(ua), float(ub),
                               a[2], b[2], float(wa), float(wb)))
     return out
