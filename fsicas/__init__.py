@@ -2,6 +2,8 @@
 
 Data flow: Scene (what) -> build_model (CasADi functions) -> analyses -> results.
 """
+__version__ = "0.1.0"
+
 from .beam import ModalBasis, clamped_free_betas, clamped_free_modes
 from .channel import Profile
 from .fields import FlowFields, flow_fields
@@ -9,12 +11,14 @@ from .model import Model, build_model, parameter_names
 from .scene import Scene, load_scene
 from .steady import SteadyState, SteadyStateError, steady_state, straight_pressure_drop
 from .units import Scales, friction_from_reynolds
-
-__version__ = "0.1.0"
+from .stability import LinearStability, linear_stability
+from .hopf import CriticalVelocityError, HopfPoint, critical_velocity, hopf_points
+from .boundary import StabilityBoundary, stability_boundary
 
 __all__ = [
     "ModalBasis", "clamped_free_betas", "clamped_free_modes", "Profile", "FlowFields",
     "flow_fields", "Model", "build_model", "parameter_names", "Scene", "load_scene",
     "SteadyState", "SteadyStateError", "steady_state", "straight_pressure_drop", "Scales",
-    "friction_from_reynolds",
+    "friction_from_reynolds", "LinearStability", "linear_stability", "CriticalVelocityError",
+    "HopfPoint", "critical_velocity", "hopf_points", "StabilityBoundary", "stability_boundary",
 ]
