@@ -197,9 +197,8 @@ class CycleProblem(PeriodicProblem):
     def transfer_matrices(self, X, full: bool = False) -> np.ndarray:
         """Condensed ``A_i`` with ``v_{i+1} = A_i v_i`` at the mesh points (``full``:
         the maps from ``v_i`` to all nodes of interval ``i``)."""
-        return _floquet.transfer_matrices(self.vf, X[: self.n_nodes * self.vf.n],
-                                          self.period(X), self.params(X),
-                                          np.diff(self.mesh), self.ntst, self.ncol, full)
+        return _floquet.transfer_matrices(self.jacobian(X), self.vf.n, self.ntst,
+                                          self.ncol, full)
 
     def evaluate(self, X, t) -> np.ndarray:
         """Collocation polynomial at times ``t`` in ``[0, 1)``, shape ``(len(t), n)``."""

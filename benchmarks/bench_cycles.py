@@ -1,0 +1,229 @@
+"""Cycle continuation benchmark: `continuation` collocation vs AUTO-07p.
+
+Model: a chain of N Brusselator cells (n = 2N unknowns), diffusive coupling
+d1 = d2 = 1, Dirichlet ends held at the homogeneous state (A, B/A), A = 2.
+The homogeneous state loses stability at a Hopf point at
+B_H = 1 + A^2 + (d1 + d2) 2 (1 - cos(pi / (N + 1))); the cycle branch born there
+is continued in B for a fixed number of points with NTST = 50, NCOL = 4, uniform
+mesh (AUTO: IAD = 0), Floquet multipliers at every point (AUTO: ISP = 2).
+
+Printed per n and per tool: time per branch point, the last point's B, and the
+errors of its period and of its four largest non-trivial multipliers against a
+reference solved by `continuation` with NTST = 200 at the same B.
+
+    python benchmarks/bench_cycles.py --sizes 20 40 80 --points 20 [--no-auto]
+
+AUTO-07p is optional (`apt-get install gfortran auto-07p`); without it only the
+`continuation` rows are printed.
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import re
+import shutil
+import subprocess
+import tempfile
+import time
+
+import casadi as ca
+import numpy as np
+
+import continuation as C
+
+A, D1, D2 = 2.0, 1.0, 1.0
+
+
+def brusselator_chain(n: int) -> ca.Function:
+    """F(x, p), x = (u_1, v_1, ..., u_N, v_N), p = (A, B, d1, d2)."""
+    x, p = ca.SX.sym("x", n), ca.SX.sym("p", 4)
+    a, b, d1, d2 = p[0], p[1], p[2], p[3]
+    u, v = x[0::2], x[1::2]
+    N = n // 2
+    ul = ca.vertcat(a, u[:-1]) if N > 1 else a
+    ur = ca.vertcat(u[1:], a) if N > 1 else a
+    vl = ca.vertcat(b / a, v[:-1]) if N > 1 else b / a
+    vr = ca.vertcat(v[1:], b / a) if N > 1 else b / a
+    fu = a - (b + 1) * u + u ** 2 * v + d1 * (ul - 2 * u + ur)
+    fv = b * u - u ** 2 * v + d2 * (vl - 2 * v + vr)
+    return ca.Function("F", [x, p], [ca.vec(ca.horzcat(fu, fv).T)])
+
+
+def params(B):
+    return {"A": A, "B": float(B), "d1": D1, "d2": D2}
+
+
+def hopf_b(n: int) -> float:
+    return 1 + A ** 2 + (D1 + D2) * 2 * (1 - np.cos(np.pi / (n // 2 + 1)))
+
+
+def ours(n: int, points: int, floquet: str):
+    """Continue the cycles from the first Hopf point; returns timings and the last X."""
+    F = brusselator_chain(n)
+    x0 = np.tile([A, 4.5 / A], n // 2)
+    eq = C.EquilibriumProblem(F, x0, params(4.5), "B")
+    br = C.continuation(eq, settings=C.ContinuationSettings(ds=0.05, ds_max=0.1,
+                                                            bounds={"B": (4.0, 5.3)}))
+    hopf = br.special("hopf")[0]
+    t0 = time.perf_counter()
+    cyc = C.cycle_from_hopf(eq, hopf, dp=1e-3, settings=C.CollocationSettings(
+        ntst=50, ncol=4, floquet=floquet))
+    it = C.ContinuationIterator(cyc, C.PALC(), C.ContinuationSettings(
+        ds=0.01, ds_max=0.05, max_steps=points - 1, direction=cyc.hopf_direction))
+    first = next(iter([it.start()]))
+    cyc.multipliers(first.X)                     # compile the Floquet blocks once
+    build = time.perf_counter() - t0
+    t0 = time.perf_counter()
+    steps = [first]
+    mus = [cyc.multipliers(first.X)]
+    step = first
+    for _ in range(points - 1):
+        step = it.advance(step)
+        if step is None:
+            break
+        steps.append(step)
+        mus.append(cyc.multipliers(step.X))
+    per_point = (time.perf_counter() - t0) / max(len(steps) - 1, 1)
+    return {"F": F, "cyc": cyc, "steps": steps, "mu": mus, "per_point": per_point,
+            "build": build, "hopf_B": hopf.params["B"]}
+
+
+def reference(run, B):
+    """Period and multipliers at B with NTST = 200 from the nearest cycle of ``run``."""
+    cyc = run["cyc"]
+    Bs = np.array([cyc.params(s.X)[1] for s in run["steps"]])
+    X = run["steps"][int(np.argmin(np.abs(Bs - B)))].X
+    ref = C.CycleProblem(run["F"], lambda t: cyc.evaluate(X, t), cyc.period(X), params(B),
+                         "B", settings=C.CollocationSettings(ntst=200, ncol=4,
+                                                             floquet="product"))
+    step = C.ContinuationIterator(ref, C.PALC(), C.ContinuationSettings()).start()
+    return ref.period(step.X), ref.multipliers(step.X)
+
+
+def errors(T, mu, T_ref, mu_ref):
+    def top(m):
+        m = np.delete(m, np.argmin(np.abs(m - 1)))
+        return m[np.argsort(-np.abs(m))][:4]
+    return abs(T - T_ref), float(np.max(np.abs(top(mu) - top(mu_ref))))
+
+
+# ---- AUTO-07p -------------------------------------------------------------------------
+FORTRAN = """SUBROUTINE FUNC(NDIM,U,ICP,PAR,IJAC,F,DFDU,DFDP)
+  IMPLICIT NONE
+  INTEGER, INTENT(IN) :: NDIM, ICP(*), IJAC
+  DOUBLE PRECISION, INTENT(IN) :: U(NDIM), PAR(*)
+  DOUBLE PRECISION, INTENT(OUT) :: F(NDIM)
+  DOUBLE PRECISION, INTENT(INOUT) :: DFDU(NDIM,NDIM), DFDP(NDIM,*)
+  INTEGER :: N, I
+  DOUBLE PRECISION :: A, B, D1, D2, UL, UR, VL, VR, X, Y
+  A=PAR(1); B=PAR(2); D1=PAR(3); D2=PAR(4)
+  N=NDIM/2
+  DO I=1,N
+    X=U(2*I-1); Y=U(2*I)
+    IF (I==1) THEN
+      UL=A; VL=B/A
+    ELSE
+      UL=U(2*I-3); VL=U(2*I-2)
+    ENDIF
+    IF (I==N) THEN
+      UR=A; VR=B/A
+    ELSE
+      UR=U(2*I+1); VR=U(2*I+2)
+    ENDIF
+    F(2*I-1)=A-(B+1)*X+X*X*Y+D1*(UL-2*X+UR)
+    F(2*I)=B*X-X*X*Y+D2*(VL-2*Y+VR)
+  ENDDO
+END SUBROUTINE FUNC
+
+SUBROUTINE STPNT(NDIM,U,PAR,T)
+  IMPLICIT NONE
+  INTEGER, INTENT(IN) :: NDIM
+  DOUBLE PRECISION, INTENT(INOUT) :: U(NDIM),PAR(*)
+  DOUBLE PRECISION, INTENT(IN) :: T
+  INTEGER :: I
+  PAR(1)=2.0d0; PAR(2)=4.5d0; PAR(3)=1.0d0; PAR(4)=1.0d0
+  DO I=1,NDIM/2
+    U(2*I-1)=PAR(1); U(2*I)=PAR(2)/PAR(1)
+  ENDDO
+END SUBROUTINE STPNT
+
+SUBROUTINE BCND
+END SUBROUTINE BCND
+SUBROUTINE ICND
+END SUBROUTINE ICND
+SUBROUTINE FOPT
+END SUBROUTINE FOPT
+SUBROUTINE PVLS
+END SUBROUTINE PVLS
+"""
+
+CONSTANTS = """NDIM={n}, IPS=1, ILP=1, ICP=[2], NTST=50, NCOL=4, IAD=3, ISP=2, ISW=1, IPLT=0
+NBC=0, NINT=0, NMX=50, NPR=1000, MXBF=0, IID=0, ITMX=8, ITNW=7, NWTN=3, JAC=0
+EPSL=1e-10, EPSU=1e-10, EPSS=1e-7, DS=0.01, DSMIN=1e-6, DSMAX=0.1, IADS=1
+THL={{}}, THU={{}}, UZSTOP={{2: 5.3}}
+"""
+
+SCRIPT = """import time
+eq = run(e='brus', c='brus')
+hb = eq('HB1')
+t0 = time.perf_counter()
+po = run(hb, IPS=2, ICP=[2, 11], NMX={points}, NPR={points}, ISP=2, IAD=0, IID=2,
+         DS=0.01, DSMAX=0.05, UZSTOP={{}})
+open('timing.txt', 'w').write(str(time.perf_counter() - t0))
+"""
+
+
+def auto(n: int, points: int):
+    """Run AUTO-07p; None when it is not installed."""
+    exe = shutil.which("auto-07p")
+    if exe is None:
+        return None
+    with tempfile.TemporaryDirectory() as tmp:
+        for name, text in (("brus.f90", FORTRAN), ("c.brus", CONSTANTS.format(n=n)),
+                           ("run.auto", SCRIPT.format(points=points))):
+            with open(os.path.join(tmp, name), "w") as fh:
+                fh.write(text)
+        env = {**os.environ, "OMP_NUM_THREADS": "1"}
+        out = subprocess.run([exe, "run.auto"], cwd=tmp, env=env, capture_output=True,
+                             text=True, timeout=3600).stdout
+        wall = float(open(os.path.join(tmp, "timing.txt")).read())
+        fortran = [float(t) for t in re.findall(r"Total Time\s+([0-9.E+-]+)", out)][-1]
+        last = open(os.path.join(tmp, "fort.7")).read().strip().splitlines()[-1].split()
+        B, T = float(last[4]), float(last[-1])
+        pt = int(last[1])
+        mult = re.findall(rf"^\s+2\s+{abs(pt)}\s+Multiplier\s+\d+\s+(\S+)\s+(\S+)",
+                          open(os.path.join(tmp, "fort.9")).read(), re.M)
+        mu = np.array([float(a) + 1j * float(b) for a, b in mult])
+    return {"per_point": wall / points, "fortran_per_point": fortran / points, "B": B,
+            "T": T, "mu": mu}
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--sizes", type=int, nargs="+", default=[20, 40, 80])
+    ap.add_argument("--points", type=int, default=20)
+    ap.add_argument("--floquet", default="product", choices=["product", "pencil"])
+    ap.add_argument("--no-auto", action="store_true")
+    args = ap.parse_args(argv)
+    print("| n | tool | ms/point | last B | period error | multiplier error | note |")
+    print("|---|---|---|---|---|---|---|")
+    for n in args.sizes:
+        run = ours(n, args.points, args.floquet)
+        X = run["steps"][-1].X
+        B, T = run["cyc"].params(X)[1], run["cyc"].period(X)
+        eT, emu = errors(T, run["mu"][-1], *reference(run, B))
+        print(f"| {n} | continuation ({args.floquet}) | {1e3 * run['per_point']:.1f} | "
+              f"{B:.5f} | {eT:.1e} | {emu:.1e} | build {run['build']:.2f} s, "
+              f"B_H err {abs(run['hopf_B'] - hopf_b(n)):.0e} |", flush=True)
+        res = None if args.no_auto else auto(n, args.points)
+        if res is not None:
+            eT, emu = errors(res["T"], res["mu"], *reference(run, res["B"]))
+            print(f"| {n} | AUTO-07p | {1e3 * res['per_point']:.1f} | {res['B']:.5f} | "
+                  f"{eT:.1e} | {emu:.1e} | Fortran time {1e3 * res['fortran_per_point']:.1f}"
+                  f" ms/point; ratio ours/AUTO "
+                  f"{run['per_point'] / res['per_point']:.2f} |", flush=True)
+
+
+if __name__ == "__main__":
+    main()
