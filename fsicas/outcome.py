@@ -241,11 +241,15 @@ def _impacts(t, X, model, m):
 
 
 class Monitor:
-    """Stop rule for :func:`fsicas.simulate.simulate`: classifies after each chunk."""
+    """Stop rule for :func:`fsicas.simulate.simulate`: classifies after each chunk
+    (``contact_only``: stops only at contact, for contact-free runs kept to t_end)."""
 
-    def __init__(self, model: Model, steady, criteria: Criteria = Criteria()):
+    def __init__(self, model: Model, steady, criteria: Criteria = Criteria(), contact_only: bool = False):
         self.model, self.steady, self.criteria = model, steady, criteria
+        self.contact_only = contact_only
 
     def __call__(self, t, X):
+        if self.contact_only:   # run to t_end, but a contact-free run still ends at contact
+            return "contact" if _first_contact(t, X, self.model) is not None else None
         out = _classify(t, X, self.model, self.steady, self.criteria, final=False)
         return None if out is None else out.outcome

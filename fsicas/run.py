@@ -70,7 +70,10 @@ def run_case(scene: Scene, t_end: float, *, settings: Settings = Settings(),
     if criteria.stop_on_contact is None:
         criteria = _with_stop(criteria, stop_on_contact)
     steady = steady_state(_steady_scene(scene, schedule), model)
-    monitor = Monitor(model, steady, criteria) if stop_early else None
+    if stop_early:
+        monitor = Monitor(model, steady, criteria)
+    else:
+        monitor = Monitor(model, steady, criteria, contact_only=True) if criteria.stop_on_contact else None
     traj = simulate(model, steady, t_end, settings=settings, schedule=schedule,
                     perturbation=perturbation, monitor=monitor)
     if criteria.stop_on_contact and traj.gap_closed:

@@ -243,7 +243,12 @@ class Integrator:
 
     def _run_scipy(self, x0, pe):
         s = self.settings
-        fun = lambda t, x: np.array(self._rhs(t, x, pe)).ravel()
+        def fun(t, x):
+            f = np.array(self._rhs(t, x, pe)).ravel()
+            if not np.all(np.isfinite(f)):   # NaN marks a closed gap (_nan_if_closed)
+                raise RuntimeError(f"solve_ivp ({s.method}): RHSFUNC_FAIL, NaN right-hand side at t = {t}")
+            return f
+
         jac = lambda t, x: np.array(self._jac(t, x, pe))
         grid = np.linspace(0.0, self.span, self.n_out + 1)
         sol = scipy.integrate.solve_ivp(fun, (0.0, self.span), np.asarray(x0, float),

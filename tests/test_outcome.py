@@ -78,3 +78,11 @@ def test_cli_simulate_bad_input(capsys, argv, field):
     code = main(["simulate", "--modes", "4", "--json", *argv])
     out = json.loads(capsys.readouterr().out)
     assert code == 2 and field in out["error"]
+
+
+def test_full_contact_free_run_still_ends_at_contact():
+    """stop_early=False keeps a run to t_end, but a contact-free beam cannot pass a wall."""
+    run = run_case(BASE.replace(ustar=8.0), 20.0, settings=FAST, stop_early=False)
+    assert run.outcome.outcome == "contact" and run.trajectory.t[-1] < 3.0
+    lco = run_case(BASE, 3.0, settings=FAST, stop_early=False)
+    assert lco.trajectory.t[-1] == pytest.approx(3.0)          # no early stop otherwise
