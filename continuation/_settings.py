@@ -173,7 +173,7 @@ class CollocationSettings:
     ntst: int = 20
     ncol: int = 4
     floquet: str = "auto"
-    pencil_max: int = 1200
+    pencil_max: int = 500
     unstable_tol: float = 1e-8
     adapt_every: int = 0
 
