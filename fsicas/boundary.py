@@ -194,7 +194,8 @@ def _trace(scene, model, h: HopfPoint, index: int, window, ustar_max, first_piec
     for direction in (-1, 1):
         settings = C.ContinuationSettings(
             ds=0.05, ds_min=1e-8, ds_max=0.3, max_steps=300, direction=direction,
-            bounds={LOG_M: window, PI: (0.0, pi_max)}, detect=False, compute_eigenvalues=False)
+            bounds={LOG_M: window, PI: (0.0, pi_max)}, detect=False, compute_eigenvalues=False,
+            newton=C.NewtonSettings(tol=1e-8))   # curve points only guide; points are refined
         branch = C.continuation(C.HopfCurveProblem.from_point(problem, h.point, LOG_M),
                                 settings=settings)
         if branch.status != "bound":
