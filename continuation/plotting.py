@@ -1,4 +1,4 @@
-"""Matplotlib helper: bifurcation diagrams of a :class:`Branch`.
+"""Matplotlib helpers: bifurcation diagrams of a :class:`Branch`, cycles in phase space.
 
 Kept apart from the algorithms: importing ``continuation`` never imports
 Matplotlib.
@@ -9,15 +9,19 @@ from __future__ import annotations
 import numpy as np
 
 MARKERS = {"fold": ("s", "LP"), "hopf": ("o", "H"), "bp": ("D", "BP"),
-           "bt": ("*", "BT"), "gh": ("P", "GH"), "hh": ("X", "HH"), "zh": ("v", "ZH")}
+           "bt": ("*", "BT"), "gh": ("P", "GH"), "hh": ("X", "HH"), "zh": ("v", "ZH"),
+           "pd": ("^", "PD"), "ns": ("h", "NS")}
 
 
 def _column(branch, spec):
-    """Values of ``spec``: parameter name, state index, 'norm' or a callable."""
+    """Values of ``spec``: parameter name, column name (e.g. 'period', 'amplitude'),
+    state index, 'norm' or a callable."""
     if callable(spec):
         return np.asarray(spec(branch), dtype=float)
     if isinstance(spec, str) and spec == "norm":
         return np.linalg.norm(branch.x, axis=1)
+    if isinstance(spec, str) and spec in branch.columns:
+        return np.asarray(branch.columns[spec], dtype=float)
     if isinstance(spec, str):
         return branch.par(spec)
     if isinstance(spec, (int, np.integer)):
@@ -33,6 +37,8 @@ def _point_value(branch, spec, point):
         return point.x[int(spec)]
     if isinstance(spec, str) and spec == "norm":
         return float(np.linalg.norm(point.x))
+    if isinstance(spec, str) and spec in point.data and np.isscalar(point.data[spec]):
+        return float(point.data[spec])
     return None
 
 
@@ -52,7 +58,7 @@ def plot_branch(branch, x=None, y=None, ax=None, *, color=None, label=None,
     x = branch.free[-1] if x is None else x
     y = (branch.free[0] if len(branch.free) > 1 else "norm") if y is None else y
     xs, ys = _column(branch, x), _column(branch, y)
-    show_stab = (branch.kind == "equilibrium") if stability is None else stability
+    show_stab = (branch.kind in ("equilibrium", "cycle")) if stability is None else stability
     stable = branch.stable if show_stab and len(branch.eigenvalues) else np.ones(len(xs), bool)
     color = color or ax._get_lines.get_next_color()
     for i, (start, stop, st) in enumerate(_segments(stable)):
@@ -83,3 +89,20 @@ def _special_markers(ax, branch, x, y, color):
         marker, text = MARKERS.get(point.kind, ("o", point.kind))
         ax.plot([px], [py], marker, color=color, markeredgecolor="k")
         ax.annotate(text, (px, py), textcoords="offset points", xytext=(4, 4))
+
+
+def plot_cycle(problem, X, i=0, j=1, ax=None, *, samples=400, **style):
+    """Draw the cycle ``X`` of a CycleProblem: component ``j`` against ``i`` (phase
+    space), or component ``i`` against time ``t T`` when ``j`` is None. ``X`` is a
+    point of the problem (e.g. ``SpecialPoint.data['X']`` or an iterator step)."""
+    import matplotlib.pyplot as plt
+
+    ax = plt.gca() if ax is None else ax
+    X = np.asarray(X, dtype=float)
+    t = np.linspace(0.0, 1.0, samples + 1)
+    u = problem.evaluate(X, t)
+    if j is None:
+        ax.plot(t * problem.period(X), u[:, i], **style)
+    else:
+        ax.plot(u[:, i], u[:, j], **style)
+    return ax
