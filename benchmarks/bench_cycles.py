@@ -29,10 +29,16 @@ import subprocess
 import tempfile
 import time
 
-import casadi as ca
-import numpy as np
+# Single-threaded BLAS, like AUTO (OMP_NUM_THREADS=1): on a shared, loaded 2-core
+# machine the multithreaded OpenBLAS made the many small solves of the Floquet
+# condensation (and SuperLU's solves) 10-100x slower. Must be set before NumPy loads.
+for _var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS"):
+    os.environ.setdefault(_var, "1")
 
-import continuation as C
+import casadi as ca  # noqa: E402
+import numpy as np  # noqa: E402
+
+import continuation as C  # noqa: E402
 
 A, D1, D2 = 2.0, 1.0, 1.0
 
@@ -71,8 +77,12 @@ def ours(n: int, points: int, floquet: str):
     t0 = time.perf_counter()
     cyc = C.cycle_from_hopf(eq, hopf, dp=1e-3, settings=C.CollocationSettings(
         ntst=50, ncol=4, floquet=floquet))
+    # AUTO's arclength uses the L2 norm of the profile over [0, 1]; ours is the
+    # Euclidean norm of all NTST NCOL node values, sqrt(NTST NCOL) = sqrt(200) larger
+    scale = np.sqrt(50 * 4)
     it = C.ContinuationIterator(cyc, C.PALC(), C.ContinuationSettings(
-        ds=0.01, ds_max=0.05, max_steps=points - 1, direction=cyc.hopf_direction))
+        ds=0.01 * scale, ds_max=0.05 * scale, max_steps=points - 1,
+        direction=cyc.hopf_direction))
     first = next(iter([it.start()]))
     cyc.multipliers(first.X)                     # compile the Floquet blocks once
     build = time.perf_counter() - t0
@@ -88,7 +98,8 @@ def ours(n: int, points: int, floquet: str):
         mus.append(cyc.multipliers(step.X))
     per_point = (time.perf_counter() - t0) / max(len(steps) - 1, 1)
     return {"F": F, "cyc": cyc, "steps": steps, "mu": mus, "per_point": per_point,
-            "build": build, "hopf_B": hopf.params["B"]}
+            "build": build, "hopf_B": hopf.params["B"], "stats": it.stats,
+            "newton": np.mean([s.iterations for s in steps[1:]])}
 
 
 def reference(run, B):
@@ -104,6 +115,9 @@ def reference(run, B):
 
 
 def errors(T, mu, T_ref, mu_ref):
+    if len(mu) < 2:
+        return abs(T - T_ref), float("nan")          # multipliers not found in the output
+
     def top(m):
         m = np.delete(m, np.argmin(np.abs(m - 1)))
         return m[np.argsort(-np.abs(m))][:4]
@@ -161,9 +175,9 @@ END SUBROUTINE PVLS
 """
 
 CONSTANTS = """NDIM={n}, IPS=1, ILP=1, ICP=[2], NTST=50, NCOL=4, IAD=3, ISP=2, ISW=1, IPLT=0
-NBC=0, NINT=0, NMX=50, NPR=1000, MXBF=0, IID=0, ITMX=8, ITNW=7, NWTN=3, JAC=0
-EPSL=1e-10, EPSU=1e-10, EPSS=1e-7, DS=0.01, DSMIN=1e-6, DSMAX=0.1, IADS=1
-THL={{}}, THU={{}}, UZSTOP={{2: 5.3}}
+NBC=0, NINT=0, NMX=2000, NPR=10000, MXBF=0, IID=0, ITMX=8, ITNW=7, NWTN=3, JAC=0
+EPSL=1e-10, EPSU=1e-10, EPSS=1e-7, DS=0.002, DSMIN=1e-6, DSMAX=0.002, IADS=1
+THL={{}}, THU={{}}, UZSTOP={{2: {b_stop}}}
 """
 
 SCRIPT = """import time
@@ -182,7 +196,7 @@ def auto(n: int, points: int):
     if exe is None:
         return None
     with tempfile.TemporaryDirectory() as tmp:
-        for name, text in (("brus.f90", FORTRAN), ("c.brus", CONSTANTS.format(n=n)),
+        for name, text in (("brus.f90", FORTRAN), ("c.brus", CONSTANTS.format(n=n, b_stop=hopf_b(n) + 0.003)),
                            ("run.auto", SCRIPT.format(points=points))):
             with open(os.path.join(tmp, name), "w") as fh:
                 fh.write(text)
@@ -200,8 +214,9 @@ def auto(n: int, points: int):
 
 
 def auto_point(res, B_max):
-    """The AUTO point with the largest B <= B_max: (B, T, multipliers)."""
-    pt, B, T = max((p for p in res["points"] if p[1] <= B_max), key=lambda p: p[1])
+    """The AUTO point with the largest B <= B_max (else the first): (B, T, multipliers)."""
+    inside = [p for p in res["points"] if p[1] <= B_max] or res["points"][:1]
+    pt, B, T = max(inside, key=lambda p: p[1])
     mult = re.findall(rf"^\s+2\s+{pt}\s+Multiplier\s+\d+\s+(\S+)\s+(\S+)", res["diag"],
                       re.M)
     return B, T, np.array([float(a) + 1j * float(b) for a, b in mult])
@@ -223,6 +238,7 @@ def main(argv=None):
         eT, emu = errors(T, run["mu"][-1], *reference(run, B))
         print(f"| {n} | continuation ({args.floquet}) | {1e3 * run['per_point']:.1f} | "
               f"{B:.5f} | {eT:.1e} | {emu:.1e} | build {run['build']:.2f} s, "
+              f"Newton it/point {run['newton']:.1f}, rejected {run['stats']['rejected_steps']}, "
               f"B_H err {abs(run['hopf_B'] - hopf_b(n)):.0e} |", flush=True)
         res = None if args.no_auto else auto(n, args.points)
         if res is not None:

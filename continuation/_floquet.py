@@ -27,22 +27,33 @@ import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
 
+#: interval systems up to this size are solved densely (batched LAPACK), larger ones
+#: by SuperLU (sparse blocks; LAPACK on many mid-size systems was pathologically slow
+#: with a multithreaded OpenBLAS on a loaded machine)
+DENSE_MAX = 96
+
+
 def transfer_matrices(J, n: int, ntst: int, ncol: int, full: bool = False) -> np.ndarray:
     """``A_i`` (shape ``(ntst, n, n)``) with ``v_{i+1,0} = A_i v_{i,0}``, from the
     sparse collocation Jacobian ``J`` (rows of interval ``i`` are
     ``i n NCOL .. (i+1) n NCOL``); with ``full`` the ``(ntst, n NCOL, n)`` maps to all
-    nodes ``v_{i,1..NCOL}``. One small sparse LU (SuperLU) per interval: many small
-    dense LAPACK solves are very slow on a loaded machine once SuperLU has woken the
-    BLAS thread pool (measured 4 s instead of 9 ms for 50 systems of size 160)."""
+    nodes ``v_{i,1..NCOL}``. Blocks of size ``n NCOL <= DENSE_MAX`` are solved by
+    one batched dense solve, larger ones by one SuperLU per interval (with a
+    multithreaded OpenBLAS on a loaded machine, 50 dense systems of size 160 took 4 s
+    instead of 9 ms single-threaded)."""
     J = sp.csr_matrix(J)
     m, N = n * ncol, n * ncol * ntst
-    out = np.empty((ntst, m, n))
+    right, left = [], []
     for i in range(ntst):
         rows = J[i * m:(i + 1) * m]
         c0 = i * m
-        right = rows[:, c0 + n:c0 + n + m] if i < ntst - 1 else \
-            sp.hstack([rows[:, c0 + n:N], rows[:, :n]])
-        out[i] = -spla.splu(sp.csc_matrix(right)).solve(rows[:, c0:c0 + n].toarray())
+        right.append(rows[:, c0 + n:c0 + n + m] if i < ntst - 1 else
+                     sp.hstack([rows[:, c0 + n:N], rows[:, :n]]))
+        left.append(rows[:, c0:c0 + n].toarray())
+    if m <= DENSE_MAX:   # small blocks: one batched dense solve
+        out = np.linalg.solve(np.array([r.toarray() for r in right]), -np.array(left))
+    else:
+        out = np.array([-spla.splu(sp.csc_matrix(r)).solve(l) for r, l in zip(right, left)])
     return out if full else out[:, -n:, :]
 
 

@@ -26,7 +26,7 @@ class NewtonResult:
 def factorize(A: sp.spmatrix):
     """Sparse LU of ``A`` or ``None`` when it is exactly singular."""
     try:
-        return spla.splu(sp.csc_matrix(A))
+        return spla.splu(sp.csc_matrix(A), permc_spec="MMD_AT_PLUS_A")
     except RuntimeError:
         return None
 
