@@ -41,20 +41,40 @@ def transfer_matrices(J, n: int, ntst: int, ncol: int, full: bool = False) -> np
     one batched dense solve, larger ones by one SuperLU per interval (with a
     multithreaded OpenBLAS on a loaded machine, 50 dense systems of size 160 took 4 s
     instead of 9 ms single-threaded)."""
+    m = n * ncol
+    if m <= DENSE_MAX:   # small blocks: scatter into dense arrays, one batched solve
+        B = _dense_blocks(J, n, ntst, ncol)
+        out = np.linalg.solve(B[:, :, n:], -B[:, :, :n])
+    else:
+        out = np.array([-spla.splu(sp.csc_matrix(r)).solve(l.toarray())
+                        for r, l in _sparse_blocks(J, n, ntst, ncol)])
+    return out if full else out[:, -n:, :]
+
+
+def _dense_blocks(J, n, ntst, ncol) -> np.ndarray:
+    """``(ntst, n NCOL, n (NCOL+1))`` interval blocks ``[B_L, B_R]`` of ``J``."""
+    m, N = n * ncol, n * ncol * ntst
+    J = sp.coo_matrix(J)
+    keep = (J.row < N) & (J.col < N)
+    r, c, v = J.row[keep], J.col[keep], J.data[keep]
+    i = r // m
+    local = (c - i * m) % N
+    inside = local < m + n
+    B = np.zeros((ntst, m, m + n))
+    np.add.at(B, (i[inside], r[inside] - i[inside] * m, local[inside]), v[inside])
+    return B
+
+
+def _sparse_blocks(J, n, ntst, ncol):
+    """``(B_R, B_L)`` sparse blocks of each interval."""
     J = sp.csr_matrix(J)
     m, N = n * ncol, n * ncol * ntst
-    right, left = [], []
     for i in range(ntst):
         rows = J[i * m:(i + 1) * m]
         c0 = i * m
-        right.append(rows[:, c0 + n:c0 + n + m] if i < ntst - 1 else
-                     sp.hstack([rows[:, c0 + n:N], rows[:, :n]]))
-        left.append(rows[:, c0:c0 + n].toarray())
-    if m <= DENSE_MAX:   # small blocks: one batched dense solve
-        out = np.linalg.solve(np.array([r.toarray() for r in right]), -np.array(left))
-    else:
-        out = np.array([-spla.splu(sp.csc_matrix(r)).solve(l) for r, l in zip(right, left)])
-    return out if full else out[:, -n:, :]
+        right = rows[:, c0 + n:c0 + n + m] if i < ntst - 1 else \
+            sp.hstack([rows[:, c0 + n:N], rows[:, :n]])
+        yield right, rows[:, c0:c0 + n]
 
 
 def multipliers(A: np.ndarray, method: str = "pencil") -> np.ndarray:

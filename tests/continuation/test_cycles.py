@@ -228,3 +228,15 @@ def test_sampled_orbit_guess_and_compile_cache():
                            settings=C.CollocationSettings(ntst=12, ncol=3))
     assert again.system.compiled is prob.system.compiled
     assert callable(builder(12, 3))
+
+
+def test_dense_and_sparse_condensation_agree(monkeypatch):
+    """Both condensation paths (batched dense for small blocks, SuperLU per interval
+    for large ones) give the same transfer matrices."""
+    from continuation import _floquet
+    F, e = _ring(), 0.5
+    prob, X = _solve(F, e, 12, 3, 2 * np.pi / np.sqrt(1 - e ** 2))
+    dense = prob.transfer_matrices(X, full=True)
+    monkeypatch.setattr(_floquet, "DENSE_MAX", 0)
+    sparse = prob.transfer_matrices(X, full=True)
+    assert np.max(np.abs(dense - sparse)) < 1e-12 * np.max(np.abs(dense))
