@@ -81,3 +81,18 @@ def test_pd_switching_bad_input(pd_branch):
                                              "converged", 0.0, {}))
     with pytest.raises(ValueError, match="amplitude"):
         C.cycle_from_pd(prob, br.special("pd")[0], amplitude=-1.0)
+
+
+def test_cycle_branch_save_load_round_trip(pd_branch, tmp_path):
+    """Multipliers, cycle columns, stability counts and the PD point (with its full
+    unknown vector in data['X']) survive save/load."""
+    prob, br = pd_branch
+    path = tmp_path / "cycles.npz"
+    br.save(path)
+    back = C.Branch.load(path)
+    assert back.kind == "cycle" and len(back) == len(br)
+    assert all(np.array_equal(a, b) for a, b in zip(back.eigenvalues, br.eigenvalues))
+    assert np.array_equal(back.columns["period"], br.columns["period"])
+    assert np.array_equal(back.n_unstable, br.n_unstable)
+    (pd,) = back.special("pd")
+    assert np.allclose(pd.data["X"], br.special("pd")[0].data["X"])
