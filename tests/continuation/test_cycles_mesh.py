@@ -97,3 +97,23 @@ def test_mesh_validation():
                        settings=C.CollocationSettings(ntst=3), mesh=[0, 0.5, 0.4, 1])
     with pytest.raises(ValueError, match="adapt_every"):
         C.CollocationSettings(adapt_every=-1)
+
+
+def test_van_der_pol_large_mu_matches_dorodnitsyn_asymptotics():
+    """Adaptive-mesh continuation from mu = 1 to 40 (NTST = 60). The period follows
+    T3 = (3 - 2 ln 2) mu + 3 a mu^(-1/3) - (2/3) ln(mu)/mu (a = 2.338107, first Airy
+    zero; Dorodnitsyn) up to the next term c/mu: mu (T - T3) stays within
+    [-1.75, -1.40] for mu >= 5 and moves monotonically (measured -1.71 at mu = 5,
+    -1.46 at mu = 39); at mu = 1 the published T = 6.663286859323130."""
+    F = _vdp()
+    co = C.CycleProblem(F, _guess, 6.6, {"mu": 1.0}, "mu",
+                        settings=C.CollocationSettings(ntst=60, ncol=4, adapt_every=2))
+    br = C.continuation(co, settings=C.ContinuationSettings(
+        ds=0.5, ds_max=10.0, max_steps=200, bounds={"mu": (0.5, 41.0)}))
+    mu, T = br.par("mu"), br.columns["period"]
+    assert br.status == "bound" and mu[-1] > 38
+    assert abs(T[0] - 6.663286859323130) < 1e-8
+    a = 2.338107410459767
+    T3 = (3 - 2 * np.log(2)) * mu + 3 * a * mu ** (-1 / 3) - 2 / 3 * np.log(mu) / mu
+    c = (mu * (T - T3))[mu >= 5]
+    assert np.all((c > -1.75) & (c < -1.40)) and np.all(np.diff(c) > 0)
