@@ -6,7 +6,7 @@ default). Points run in parallel in a :class:`concurrent.futures.ProcessPoolExec
 each worker builds the (guarded) model once, since U* and M* are parameters and the
 structure is shared. Each finished point is appended at once as one JSON line to the
 results file, so an interrupted map resumes where it stopped: points already in the file
-are skipped. The linear stability boundary ``U*_c(M*)`` comes from the eigenvalues.
+are skipped. The linear stability boundary ``U*_c(M*)`` is the first Hopf point of the steady branch.
 """
 from __future__ import annotations
 
@@ -18,18 +18,15 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
-import scipy.optimize
 
+from .hopf import critical_velocity
 from .model import build_model
 from .outcome import Criteria
 from .run import guarded_model, run_case
 from .scene import Scene
 from .simulate import Settings
-from .stability import eigenvalues
-from .steady import steady_state
 
-__all__ = ["MAP_SCENE", "MapResult", "impact_map", "stability_boundary", "critical_velocity",
-           "load_points"]
+__all__ = ["MAP_SCENE", "MapResult", "impact_map", "stability_boundary", "load_points"]
 
 MAP_SCENE = Scene(mstar=1.0, ustar=5.0, hstar=0.1, friction=0.14, k0=0.0, kl=1.0, zeta=0.01,
                   modes=10)
@@ -131,29 +128,16 @@ def impact_map(ustars, mstars, path, *, scene: Scene = MAP_SCENE, t_end: float =
 
 
 def stability_boundary(scene: Scene, mstars, ustars) -> dict:
-    """Critical U* per M*: the first sign change of the leading growth rate on a grid of
-    40 U* values spanning the map, refined by Brent's method (eigenvalues of the
-    contact-free model)."""
+    """Critical U* per M* of the contact-free model: the first Hopf point of the steady
+    branch (:func:`fsicas.hopf.critical_velocity`), searched up to 1.5 x the largest U*
+    of the map."""
     base = scene.replace(contact=False)
     model = build_model(base)
-    u_grid = np.linspace(max(0.25, float(np.min(ustars)) / 2), float(np.max(ustars)) * 1.2, 40)
+    u_max = 1.5 * float(np.max(ustars))
     out = {"mstar": [], "ustar_crit": [], "omega": []}
     for m in mstars:
-        u_c, omega = critical_velocity(base.replace(mstar=float(m)), model, u_grid)
+        h = critical_velocity(base.replace(mstar=float(m)), model, ustar_max=u_max)
         out["mstar"].append(float(m))
-        out["ustar_crit"].append(u_c)
-        out["omega"].append(omega)
+        out["ustar_crit"].append(None if h is None else h.ustar)
+        out["omega"].append(None if h is None else h.omega)
     return out
-
-
-def critical_velocity(scene: Scene, model, u_grid) -> tuple[float | None, float | None]:
-    """(U*_c, |Im lambda| there) at the first growth-rate sign change on ``u_grid``."""
-    def leading(u):
-        return eigenvalues(model, steady_state(scene.replace(ustar=float(u)), model))[0]
-
-    rates = [leading(u).real for u in u_grid]
-    for k in range(1, len(u_grid)):
-        if rates[k - 1] < 0 <= rates[k]:
-            u_c = scipy.optimize.brentq(lambda u: leading(u).real, u_grid[k - 1], u_grid[k], xtol=1e-10)
-            return float(u_c), float(abs(leading(u_c).imag))
-    return None, None

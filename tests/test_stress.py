@@ -4,7 +4,7 @@ import pytest
 
 from fsicas import Profile, Scene, build_model, steady_state
 from fsicas.outcome import poincare_returns
-from fsicas.impact_map import critical_velocity
+from fsicas.hopf import critical_velocity
 from fsicas.run import run_case
 from fsicas.simulate import Settings, eigenvector_state, simulate
 
@@ -64,9 +64,9 @@ def test_reversed_mean_flow():
 def test_mass_ratio_range(mstar):
     """At 1.2 U*_c(M*) every run grows (no decay) and ends clearly."""
     scene = BASE.replace(mstar=mstar)
-    model = build_model(scene)
-    u_c, _ = critical_velocity(scene, model, np.linspace(0.5, 40.0, 40))
-    assert u_c is not None
+    onset = critical_velocity(scene, build_model(scene), ustar_max=40.0)
+    assert onset is not None
+    u_c = onset.ustar
     run = run_case(scene.replace(ustar=1.2 * u_c), 10.0,
                    settings=Settings(rtol=1e-8, atol=1e-10), model=None)
     check_clear(run)
