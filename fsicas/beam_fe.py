@@ -33,6 +33,7 @@ and ``Psi = ∫_x^1 phi`` are exact for the FE shape (closed-form shape-function
 """
 from __future__ import annotations
 
+import functools
 import numbers
 from typing import Callable
 
@@ -255,18 +256,31 @@ def nonuniform_beam_modes(n_modes: int, x, thickness: Profile | None = None,
     n_modes = _check_n_modes(n_modes)
     n_elements = _check_n_elements(n_elements, n_modes)
     x = _check_x(x)
+    _sample_profile("thickness", thickness, x)
+    b_x = _sample_profile("width", width, x)
+    try:
+        omega, V, C = _mesh_modes(n_modes, n_elements, thickness, width)
+    except TypeError:          # an unhashable profile object: solve without the cache
+        omega, V, C = _mesh_modes.__wrapped__(n_modes, n_elements, thickness, width)
+    return ModalBasis(x=x, omega=omega.copy(), width=b_x, **_evaluate(V, C, x))
+
+
+@functools.lru_cache(maxsize=16)
+def _mesh_modes(n_modes: int, n_elements: int, thickness, width):
+    """Frequencies and nodal/curvature mode vectors, solved once per beam and mesh
+    (profiles must be hashable: Profile objects and plain functions are)."""
     xi_g, w_g, x_q = _gauss_points(n_elements)
-    samples = np.concatenate([np.linspace(0.0, 1.0, N_PROFILE_SAMPLES), x_q.ravel(), x])
+    samples = np.concatenate([np.linspace(0.0, 1.0, N_PROFILE_SAMPLES), x_q.ravel()])
     t_s = _sample_profile("thickness", thickness, samples)
     b_s = _sample_profile("width", width, samples)
-
-    n_q, h = x_q.size, 1.0 / n_elements
-    quad = slice(N_PROFILE_SAMPLES, N_PROFILE_SAMPLES + n_q)
-    t_q, b_q = t_s[quad].reshape(x_q.shape), b_s[quad].reshape(x_q.shape)
+    h = 1.0 / n_elements
+    t_q = t_s[N_PROFILE_SAMPLES:].reshape(x_q.shape)
+    b_q = b_s[N_PROFILE_SAMPLES:].reshape(x_q.shape)
     T = _curvature_to_nodal(n_elements)
     M_c = T.T @ _assemble(_hermite_mass(xi_g, w_g, b_q * t_q, h)) @ T
     K_c = _curvature_stiffness(xi_g, w_g, b_q * t_q**3, h)
     omega, C = _solve(K_c, M_c, n_modes)
     V, C = _orient(np.vstack([np.zeros((2, n_modes)), T @ C]), C)
-    fields = _evaluate(V, C, x)
-    return ModalBasis(x=x, omega=omega, width=b_s[N_PROFILE_SAMPLES + n_q:], **fields)
+    for array in (omega, V, C):
+        array.setflags(write=False)
+    return omega, V, C
