@@ -5,7 +5,6 @@ Registered by :func:`add_time_commands` from ``fsicas.cli._parser``; the JSON co
 """
 from __future__ import annotations
 
-import argparse
 
 import numpy as np
 

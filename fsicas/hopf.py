@@ -118,7 +118,6 @@ def dominant_mode(model: Model, q_part: np.ndarray) -> int:
 
 
 def _hopf_point(model: Model, scene: Scene, point) -> HopfPoint:
-    n = model.n_modes
     x = np.asarray(point.x)
     omega = float(point.data["omega"]) * TIME_SCALE
     q = _eigenvector_q(model, x, point.params, omega / TIME_SCALE)

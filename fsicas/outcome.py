@@ -30,7 +30,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .simulate import CHECK_POINTS, Trajectory, gaps
-from .model import Model, modal_basis
+from .model import Model
 
 __all__ = ["Criteria", "Outcome", "classify", "Monitor", "contact_load", "poincare_returns"]
 

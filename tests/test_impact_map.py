@@ -1,7 +1,6 @@
 """Impact map: parallel points, results file, resume, linear boundary, CLI."""
 import json
 
-import numpy as np
 import pytest
 
 from fsicas.cli import main
