@@ -25,3 +25,26 @@ def test_buffered_function_raises_like_a_call():
     fun = ca.Function("g", [x], [integ(x0=x)["xf"]])
     with pytest.raises(RuntimeError):
         BufferedFunction(fun)(np.array([1.0]))
+
+
+def test_factorization_with_reused_ordering_matches_a_fresh_splu():
+    import scipy.sparse as sp
+    import scipy.sparse.linalg as spla
+
+    from continuation._newton import factorize
+    from continuation._problem import _det_sign
+
+    rng = np.random.default_rng(0)
+    A = (sp.random(300, 300, density=0.02, random_state=1) + 0.5 * sp.identity(300)).tocsc()
+    first = factorize(A)
+    B = A.copy()
+    B.data = rng.standard_normal(B.nnz)             # same pattern: ordering reused
+    reused = factorize(B)
+    assert not np.array_equal(reused.q, np.arange(300))
+    b = rng.standard_normal(300)
+    for lu, M in ((first, A), (reused, B)):
+        fresh = spla.splu(M, permc_spec="MMD_AT_PLUS_A")
+        for trans in ("N", "T"):
+            x, x0 = lu.solve(b, trans=trans), fresh.solve(b, trans=trans)
+            assert np.max(np.abs(x - x0)) < 1e-12 * np.max(np.abs(x0))
+        assert _det_sign(lu) == np.sign(np.linalg.det(M.toarray()))
