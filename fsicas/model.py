@@ -71,7 +71,9 @@ def quadrature_rule(scene: Scene) -> tuple[np.ndarray, np.ndarray]:
 class Model:
     """CasADi functions of one scene structure; parameters are symbolic inputs.
 
-    ``mass(x, p)`` and ``rhs(x, p)`` give M and F; ``jac_rhs(x, p)`` gives dF/dx.
+    ``mass(x, p)`` and ``rhs(x, p)`` give M and F; ``jac_rhs(x, p)`` gives dF/dx;
+    ``mass_action(x, p, v)`` gives ``M(x, p) v`` in O(N K) operations without forming M
+    (the implicit residual ``M z − F`` of time integration).
     ``tip`` maps x to (y(1), dy/dt(1)). Use :meth:`parameters` for the numeric p.
     """
 
@@ -84,6 +86,7 @@ class Model:
     basis: ModalBasis = field(repr=False)
     weights: np.ndarray = field(repr=False)
     tip: ModalBasis = field(repr=False)
+    mass_action: ca.Function = field(default=None, repr=False)
 
     @property
     def n_modes(self) -> int:
@@ -144,18 +147,20 @@ def build_model(scene: Scene, symbolic: str = "MX") -> Model:
     n = scene.modes
     x = sym.sym("x", 2 * n + 2)
     p = sym.sym("p", len(names))
+    v = sym.sym("v", 2 * n + 2)
     par = {name: p[i] for i, name in enumerate(names)}
-    mass, force = _equations(scene, basis, tip, weights, x, par)
+    mass, force, mass_v = _equations(scene, basis, tip, weights, x, par, v)
     rhs = ca.Function("F", [x, p], [force], ["x", "p"], ["F"])
     mass_f = ca.Function("M", [x, p], [mass], ["x", "p"], ["M"])
     jac = ca.Function("dFdx", [x, p], [ca.jacobian(force, x)], ["x", "p"], ["dFdx"])
     jac_p = ca.Function("dFdp", [x, p], [ca.jacobian(force, p)], ["x", "p"], ["dFdp"])
+    action = ca.Function("Mv", [x, p, v], [mass_v], ["x", "p", "v"], ["Mv"])
     return Model(scene=scene, parameter_names=names, mass=mass_f, rhs=rhs, jac_rhs=jac,
-                 jac_rhs_p=jac_p, basis=basis, weights=weights, tip=tip)
+                 jac_rhs_p=jac_p, basis=basis, weights=weights, tip=tip, mass_action=action)
 
 
-def _equations(scene, basis, tip, w, x, par):
-    """Symbolic (M, F) of the module docstring."""
+def _equations(scene, basis, tip, w, x, par, v):
+    """Symbolic (M, F, M v) of the module docstring."""
     n = scene.modes
     r, q, Q = x[:n], x[n:2 * n], x[2 * n:]
     phi, Phi, Psi = basis.phi, basis.Phi, basis.Psi          # (N, K) constants
@@ -172,6 +177,7 @@ def _equations(scene, basis, tip, w, x, par):
     mass_rQ, mass_Qr, mass_QQ = [], [], []
     force_beam = -2 * zeta * omega * r - omega**2 * q
     force_Q = []
+    inv_hw = []
     for c, s in ((0, -1.0), (1, 1.0)):
         H = walls[c](basis.x)
         h = H + s * y
@@ -181,6 +187,7 @@ def _equations(scene, basis, tip, w, x, par):
         u_in = Q[c] / float(walls[c](0.0))
         u_out = (Q[c] - s * run_tip) / (float(walls[c](1.0)) + s * y_tip)
         wh = w * inv_h                                         # quadrature weight / h
+        inv_hw.append(wh)
         mass_rQ.append(mstar * s * ca.mtimes(Psi, wh))
         mass_rr = mass_rr - mstar * ca.mtimes(Psi, ca.mtimes(ca.diag(wh), Phi.T))
         mass_Qr.append(-s * ca.mtimes(Phi, wh).T)
@@ -199,7 +206,25 @@ def _equations(scene, basis, tip, w, x, par):
         [ca.vertcat(mass_Qr[0], mass_Qr[1]), ca.DM.zeros(2, n), ca.diag(ca.vertcat(*mass_QQ))],
     ])
     force = ca.vertcat(force_beam, r, *force_Q)
-    return mass, force
+    return mass, force, _mass_action(basis, mstar, inv_hw, v)
+
+
+def _mass_action(basis, mstar, inv_hw, v):
+    """``M v`` from the rows of M above, with ``a = Σ Phi_m v_r,m`` at the nodes:
+
+        beam:   v_r + M* Σ_c Psi (w/h_c) (s_c v_Q,c − a)
+        kinematics: v_q
+        Q row:  Σ_k (w/h_c)_k (v_Q,c − s_c a_k)
+    """
+    n = basis.phi.shape[0]
+    vr, vq, vQ = v[:n], v[n:2 * n], v[2 * n:]
+    a = ca.mtimes(basis.Phi.T, vr)
+    beam = 0
+    rows_Q = []
+    for c, s in ((0, -1.0), (1, 1.0)):
+        beam += inv_hw[c] * (s * vQ[c] - a)
+        rows_Q.append(ca.dot(inv_hw[c], vQ[c] - s * a))
+    return ca.vertcat(vr + mstar * ca.mtimes(basis.Psi, beam), vq, *rows_Q)
 
 
 def _contact_force(scene, basis, w, h, s, par):

@@ -178,8 +178,7 @@ def _ode(model: Model):
     p, sched, t0 = pe[:npar], pe[npar:npar + N_SCHEDULE_PARAMS], pe[-1]
     i = model.index("pressure_drop")
     p_t = ca.vertcat(p[:i], schedule_expression(t0 + t, sched), p[i + 1:])
-    M, F = model.mass(x, p_t), model.rhs(x, p_t)
-    return x, pe, t, M, _nan_if_closed(model, x, F)
+    return x, pe, t, p_t, _nan_if_closed(model, x, model.rhs(x, p_t))
 
 
 def _nan_if_closed(model: Model, x, F):
@@ -211,7 +210,8 @@ class Integrator:
     _zfun: object = None
 
     def __post_init__(self):
-        x, pe, t, M, F = _ode(self.model)
+        x, pe, t, p_t, F = _ode(self.model)
+        M = self.model.mass(x, p_t)
         s = self.settings
         grid = list(np.linspace(0.0, self.span, self.n_out + 1)[1:])
         opts = {"abstol": s.atol, "reltol": s.rtol, "max_num_steps": s.max_steps,
@@ -222,8 +222,9 @@ class Integrator:
                                      0.0, grid, opts)
         elif s.method == "idas":
             z = ca.MX.sym("z", self.model.n_state)
+            residual = self.model.mass_action(x, p_t, z) - F     # M z − F without forming M
             self._fn = ca.integrator("sim", "idas", {"x": x, "z": z, "p": pe, "t": t, "ode": z,
-                                                     "alg": ca.mtimes(M, z) - F},
+                                                     "alg": residual},
                                      0.0, grid, {**opts, "calc_ic": False, "suppress_algebraic": True})
             self._zfun = ca.Function("z0", [x, pe, t], [ca.solve(M, F)])
         else:

@@ -137,6 +137,19 @@ def test_exact_jacobians_match_central_differences(model, seed):
         assert np.max(np.abs(fd - exact)) < 1e-6 * np.max(np.abs(exact))
 
 
+@pytest.mark.parametrize("scene", [SCENE, SCENE.replace(contact=True, modes=6),
+                                   Scene(mstar=0.3, ustar=6.0, modes=5, thickness=Profile.linear(1.0, 0.6))])
+def test_matrix_free_mass_action_equals_the_assembled_mass_matrix(scene):
+    """``mass_action(x, p, v)`` (the implicit residual's ``M v``) equals ``M(x, p) @ v``."""
+    model = build_model(scene)
+    p = model.parameters(pressure_drop=10.0)
+    rng = np.random.default_rng(3)
+    for seed in range(3):
+        x, v = random_state(scene, seed), rng.normal(size=model.n_state)
+        dense = np.array(model.mass(x, p)) @ v
+        assert np.max(np.abs(np.array(model.mass_action(x, p, v)).ravel() - dense)) < 1e-12 * np.max(np.abs(dense))
+
+
 # -- symmetry and the sign of the static deflection ---------------------------------------
 def mirror(x, n):
     """Flip y (r, q -> -r, -q) and swap the channels (Q1 <-> Q2)."""
