@@ -41,6 +41,7 @@ class PeriodicProblem(Problem):
 
     kind = "cycle"
     verified_kinds = ("pd", "ns")
+    monitor_uses_lu = False
 
     #: unit row fixing the start amplitude along a critical direction (branch
     #: switching); None keeps the parameter fixed at the start
@@ -123,6 +124,7 @@ class CycleProblem(PeriodicProblem):
         p0 = param_vector(vf, params)
         self.mesh = _check_mesh(mesh, self.ntst)
         self._accepted = 0
+        self._last_jacobian = None
         U = _sample(orbit, colloc.node_times(self.mesh, self.ncol), vf.n)
         self.X0 = np.concatenate([U, [float(period), p0[self.free_idx[0]]]])
         D = np.concatenate([np.diff(self.mesh), self._phase(U)])
@@ -194,11 +196,20 @@ class CycleProblem(PeriodicProblem):
         return np.array([len(X) - 2, len(X) - 1])
 
     # -- Floquet multipliers ------------------------------------------------------------
+    def jacobian(self, X):
+        """``G_X``; the last one is kept for the multipliers at the same ``X``."""
+        J = super().jacobian(X)
+        self._last_jacobian = (np.array(X), J)
+        return J
+
     def transfer_matrices(self, X, full: bool = False) -> np.ndarray:
         """Condensed ``A_i`` with ``v_{i+1} = A_i v_i`` at the mesh points (``full``:
-        the maps from ``v_i`` to all nodes of interval ``i``)."""
-        return _floquet.transfer_matrices(self.jacobian(X), self.vf.n, self.ntst,
-                                          self.ncol, full)
+        the maps from ``v_i`` to all nodes of interval ``i``). Reuses the Jacobian
+        of the tangent at the same ``X`` (its phase row may predate ``accept``; only
+        the interval blocks are used)."""
+        last = self._last_jacobian
+        J = last[1] if last is not None and np.array_equal(last[0], X) else self.jacobian(X)
+        return _floquet.transfer_matrices(J, self.vf.n, self.ntst, self.ncol, full)
 
     def evaluate(self, X, t) -> np.ndarray:
         """Collocation polynomial at times ``t`` in ``[0, 1)``, shape ``(len(t), n)``."""

@@ -61,7 +61,7 @@ def _dense_blocks(J, n, ntst, ncol) -> np.ndarray:
     local = (c - i * m) % N
     inside = local < m + n
     B = np.zeros((ntst, m, m + n))
-    np.add.at(B, (i[inside], r[inside] - i[inside] * m, local[inside]), v[inside])
+    B[i[inside], r[inside] - i[inside] * m, local[inside]] = v[inside]   # no duplicates
     return B
 
 

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Callable
 
 import numpy as np
@@ -21,6 +21,8 @@ class NewtonResult:
     iterations: int
     residual: float
     message: str
+    #: factors of the last Jacobian used (at the iterate before the last update)
+    lu: object = field(default=None, repr=False, compare=False)
 
 
 class LU:
@@ -70,6 +72,31 @@ def factorize(A: sp.spmatrix):
         return None
 
 
+def solve(A: sp.spmatrix, b: np.ndarray, lu=None):
+    """``(x, lu)`` with ``A x = b``: by iterative refinement on the factors ``lu``
+    of a nearby matrix when that converges fast (the Jacobian one Newton update
+    away), else by a fresh factorization (returned as ``lu``); ``(None, None)``
+    when ``A`` is singular."""
+    if lu is not None:
+        x = refine(lu, A, b)
+        if x is not None:
+            return x, lu
+    lu = factorize(A)
+    return (None, None) if lu is None else (lu.solve(b), lu)
+
+
+def refine(lu, A, b, max_iter: int = 4, rtol: float = 1e-13):
+    """``x = lu^{-1} b`` corrected by ``x += lu^{-1} (b - A x)`` until the correction
+    is below ``rtol ||x||``; None when ``max_iter`` corrections do not get there."""
+    x = lu.solve(b)
+    for _ in range(max_iter):
+        dx = lu.solve(b - A @ x)
+        x = x + dx
+        if _norm(dx) <= rtol * _norm(x):
+            return x
+    return None
+
+
 def _ordering(A: sp.csc_matrix):
     for indptr, indices, q in _orderings:
         if np.array_equal(indptr, A.indptr) and np.array_equal(indices, A.indices):
@@ -84,28 +111,30 @@ def newton(residual: Callable, jacobian: Callable, X0: np.ndarray,
     Converged when ``||H(X)||_inf <= tol`` or when an update was at round-off
     level (``||dX||_inf <= xtol (1 + ||X||_inf)``). Stops on a singular Jacobian, a
     non-finite or diverging residual, or after ``max_iter`` iterations; the
-    last residual is always reported. ``polish`` extra iterations after
+    last residual is always reported. From the second iteration on, the step is
+    solved by refinement on the previous factors when that converges to round-off
+    (``solve``), saving a factorization. ``polish`` extra iterations after
     convergence are kept while they decrease the residual (used to refine
     special points to round-off).
     """
     X = np.array(X0, dtype=float)
     r = residual(X)
     res = res0 = _norm(r)
+    lu = None
     tiny_step = False
     for it in range(settings.max_iter + 1):
         if res <= settings.tol or (tiny_step and np.isfinite(res)):
             X, res = _polish(residual, jacobian, X, res, polish)
             how = "" if not tiny_step or res <= settings.tol else \
                 f" (update below xtol; residual {res:.3e} at round-off level)"
-            return NewtonResult(X, True, it, res, f"converged in {it} iterations{how}")
+            return NewtonResult(X, True, it, res, f"converged in {it} iterations{how}", lu)
         if not np.isfinite(res) or res > settings.divergence * (1 + res0) \
                 or it == settings.max_iter:
             break
-        lu = factorize(jacobian(X))
-        if lu is None:
+        dX, lu = solve(jacobian(X), r, lu)
+        if dX is None:
             return NewtonResult(X, False, it, res,
                                 f"singular Jacobian at iteration {it}, residual {res:.3e}")
-        dX = lu.solve(r)
         X = X - dX
         tiny_step = _norm(dX) <= settings.xtol * (1.0 + _norm(X))
         r = residual(X)

@@ -7,7 +7,9 @@ From a point ``X_k`` with unit tangent ``tau_k`` (``G_X(X_k) tau_k = 0``):
   ``G(X) = 0``, ``tau_k . (X - X^0) = 0`` with the sparse matrix
   ``[G_X(X); tau_k^T]`` factorized by SuperLU;
 * tangent: ``[G_X(X_{k+1}); tau_k^T] t = e_{m+1}``, ``tau_{k+1} = t / |t|``
-  (so ``tau_{k+1} . tau_k > 0``: orientation is kept), or the secant;
+  (so ``tau_{k+1} . tau_k > 0``: orientation is kept), or the secant; for
+  problems whose ``monitor`` does not use the factors (``monitor_uses_lu``
+  False) it is solved by refinement on the corrector's last factors;
 * step control: ``ds <- min(grow ds, ds_max)`` after at most
   ``easy_iterations`` Newton iterations; on failure ``ds <- shrink ds`` and
   retry; below ``ds_min`` the run stops with status ``'failed'`` and the last
@@ -22,7 +24,7 @@ from dataclasses import dataclass, field
 import numpy as np
 import scipy.sparse as sp
 
-from ._newton import NewtonResult, factorize, newton
+from ._newton import NewtonResult, factorize, newton, solve
 from ._sparse import append_row
 from ._settings import PALC, ContinuationSettings
 
@@ -54,14 +56,17 @@ def correct(problem, X_pred: np.ndarray, tau: np.ndarray, settings) -> NewtonRes
     return newton(H, lambda X: bordered(problem.jacobian(X), tau), X_pred, settings)
 
 
-def tangent(problem, X: np.ndarray, tau_ref: np.ndarray):
-    """Unit tangent with ``tau . tau_ref > 0`` and the LU of ``[G_X; tau_ref^T]``."""
-    lu = factorize(bordered(problem.jacobian(X), tau_ref))
-    if lu is None:
-        return None, None
+def tangent(problem, X: np.ndarray, tau_ref: np.ndarray, lu=None):
+    """Unit tangent with ``tau . tau_ref > 0`` and the LU of ``[G_X; tau_ref^T]``.
+
+    With ``lu`` (factors of a nearby matrix, e.g. the corrector's last one, as
+    AUTO reuses it) the tangent is solved by refinement on them when that
+    converges to round-off, and the returned factors are those ``lu``."""
     rhs = np.zeros(X.size)
     rhs[-1] = 1.0
-    t = lu.solve(rhs)
+    t, lu = solve(bordered(problem.jacobian(X), tau_ref), rhs, lu)
+    if t is None:
+        return None, None
     return t / np.linalg.norm(t), lu
 
 
@@ -148,7 +153,8 @@ class ContinuationIterator:
             tau = tau / np.linalg.norm(tau)
             lu = factorize(bordered(self.problem.jacobian(res.X), tau))
         else:
-            tau, lu = tangent(self.problem, res.X, step.tau)
+            reuse = None if self.problem.monitor_uses_lu else res.lu
+            tau, lu = tangent(self.problem, res.X, step.tau, reuse)
         if tau is None or lu is None:
             return None
         return Step(res.X, tau, self.ds, res.iterations, res.residual, lu)

@@ -53,6 +53,10 @@ class Problem:
     #: event kinds detected by a coarse criterion and dropped when their smooth
     #: test function shows no sign change on re-evaluation
     verified_kinds: tuple = ()
+    #: ``monitor`` and the test functions use the factors ``lu`` of
+    #: ``[G_X(X); tau^T]`` (branch-point test); when False, ``Step.lu`` may be the
+    #: factors of a nearby matrix (the corrector's last one)
+    monitor_uses_lu = True
 
     def __init__(self, vf: VectorField, free: tuple, X0, p0, D=()):
         self.vf = vf

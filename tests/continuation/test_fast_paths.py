@@ -48,3 +48,72 @@ def test_factorization_with_reused_ordering_matches_a_fresh_splu():
             x, x0 = lu.solve(b, trans=trans), fresh.solve(b, trans=trans)
             assert np.max(np.abs(x - x0)) < 1e-12 * np.max(np.abs(x0))
         assert _det_sign(lu) == np.sign(np.linalg.det(M.toarray()))
+
+
+def _random_system(seed, n=200):
+    import scipy.sparse as sp
+    rng = np.random.default_rng(seed)
+    A = (sp.random(n, n, density=0.03, random_state=seed) + 2.0 * sp.identity(n)).tocsc()
+    return A, rng.standard_normal(n)
+
+
+def test_refinement_on_nearby_factors_matches_a_fresh_solve():
+    from continuation._newton import factorize, solve
+
+    A, b = _random_system(2)
+    lu = factorize(A)
+    near = A.copy()
+    near.data = near.data * (1 + 1e-5 * np.random.default_rng(3).standard_normal(near.nnz))
+    x, used = solve(near, b, lu)
+    assert used is lu                                  # refined, not refactorized
+    fresh = factorize(near).solve(b)
+    assert np.max(np.abs(x - fresh)) < 1e-12 * np.max(np.abs(fresh))
+    far = A.copy()
+    far.data = np.random.default_rng(4).standard_normal(far.nnz)
+    x, used = solve(far, b, lu)                        # no convergence: fresh factors
+    assert used is not lu and np.max(np.abs(far @ x - b)) < 1e-10
+
+
+def _brusselator_cycles():
+    import continuation as C
+    x, p = ca.SX.sym("x", 2), ca.SX.sym("p", 2)
+    F = ca.Function("F", [x, p], [ca.vertcat(p[0] - (p[1] + 1) * x[0] + x[0] ** 2 * x[1],
+                                             p[1] * x[0] - x[0] ** 2 * x[1])])
+    eq = C.EquilibriumProblem(F, [1, 2.5], {"A": 1.0, "B": 2.5}, "B")
+    (hopf,) = C.continuation(eq, settings=C.ContinuationSettings(
+        ds=0.05, bounds={"B": (1.5, 2.5)}, direction=-1)).special("hopf")
+    cyc = C.cycle_from_hopf(eq, hopf, dp=1e-2, settings=C.CollocationSettings(ntst=20, ncol=4))
+    it = C.ContinuationIterator(cyc, C.PALC(), C.ContinuationSettings(
+        ds=0.1, max_steps=4, direction=cyc.hopf_direction))
+    return cyc, it
+
+
+def test_cycle_tangent_from_corrector_factors_equals_a_fresh_tangent(monkeypatch):
+    import continuation._newton as newton_module
+    from continuation._palc import tangent
+
+    cyc, it = _brusselator_cycles()
+    step = it.start()
+    calls = []
+    fresh_factors = newton_module.factorize
+    monkeypatch.setattr(newton_module, "factorize", lambda A: calls.append(1) or fresh_factors(A))
+    for _ in range(4):
+        D = cyc.system.D.copy()                        # phase reference of the step
+        calls.clear()
+        new = it.advance(step)
+        assert len(calls) == 1 <= new.iterations       # one LU for corrector and tangent
+        D_new, cyc.system.D = cyc.system.D, D
+        fresh, _ = tangent(cyc, new.X, step.tau)
+        assert np.max(np.abs(new.tau - fresh)) < 1e-12
+        assert np.max(np.abs(cyc.jacobian(new.X) @ new.tau)) < 1e-12
+        cyc.system.D, step = D_new, new
+
+
+def test_multipliers_from_the_kept_jacobian_equal_fresh_ones():
+    cyc, it = _brusselator_cycles()
+    X = it.advance(it.start()).X
+    kept = cyc.multipliers(X)                          # Jacobian kept from the tangent
+    cyc._last_jacobian = None
+    fresh = cyc.multipliers(X)
+    assert np.array_equal(kept, fresh)
+    assert abs(kept[np.argmin(np.abs(kept - 1))] - 1) < 1e-8
