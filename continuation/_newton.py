@@ -85,15 +85,21 @@ def solve(A: sp.spmatrix, b: np.ndarray, lu=None):
     return (None, None) if lu is None else (lu.solve(b), lu)
 
 
-def refine(lu, A, b, max_iter: int = 4, rtol: float = 1e-13):
+def refine(lu, A, b, max_iter: int = 8, rtol: float = 1e-13, rate: float = 0.05):
     """``x = lu^{-1} b`` corrected by ``x += lu^{-1} (b - A x)`` until the correction
-    is below ``rtol ||x||``; None when ``max_iter`` corrections do not get there."""
+    is below ``rtol ||x||``; None as soon as a correction shrinks by less than
+    ``rate`` (a fresh factorization is then cheaper) or after ``max_iter``."""
     x = lu.solve(b)
+    last = _norm(x)
     for _ in range(max_iter):
         dx = lu.solve(b - A @ x)
         x = x + dx
-        if _norm(dx) <= rtol * _norm(x):
+        size = _norm(dx)
+        if size <= rtol * _norm(x):
             return x
+        if size > rate * last:
+            return None
+        last = size
     return None
 
 
