@@ -16,7 +16,7 @@ def add_time_commands(sub, add_scene_options) -> None:
     p = sub.add_parser("simulate", help="nonlinear time integration and outcome classification")
     add_scene_options(p)
     p.add_argument("--t-end", type=float, required=True, help="final time (units of T)")
-    p.add_argument("--method", default="cvodes", choices=["cvodes", "idas", "radau", "bdf"])
+    p.add_argument("--method", default="idas", choices=["cvodes", "idas", "radau", "bdf"])
     p.add_argument("--rtol", type=float, default=1e-8)
     p.add_argument("--atol", type=float, default=1e-10)
     p.add_argument("--dt-out", type=float, default=1e-3, help="output sampling step")

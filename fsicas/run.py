@@ -78,9 +78,9 @@ def run_case(scene: Scene, t_end: float, *, settings: Settings = Settings(),
                     perturbation=perturbation, monitor=monitor)
     if criteria.stop_on_contact and traj.gap_closed:
         traj = replace(traj, status="success", stop_reason="contact", message=(
-            "contact reached: a gap went below eps and closed before the next output sample "
-            "(the contact-free flow is singular at h_c = 0); time and position are those of "
-            "the last sample before"))
+            "contact reached: a gap went below eps and then closed (the contact-free flow is "
+            "singular at h_c = 0); the samples before are refined to dt_out/50, on which the "
+            "contact time is located"))
     outcome = classify(traj, steady, criteria)
     return Run(scene, model, steady, traj, outcome, time.perf_counter() - start)
 

@@ -2,11 +2,13 @@
 
 Routes (``Settings.method``):
 
-- ``cvodes`` (default): CasADi's CVODES (BDF, Newton with the exact dense Jacobian from
-  CasADi's AD) on the explicit form ``xdot = M(x)^{-1} F(x)``; the linear solve is a
-  symbolic node, so the Jacobian includes the derivative of M.
-- ``idas``: CasADi's IDAS on the semi-explicit index-1 form ``x' = z, 0 = M(x) z − F(x)``
-  (the implicit form; ``z`` are the time derivatives, started consistently).
+- ``idas`` (default): CasADi's IDAS on the semi-explicit index-1 form
+  ``x' = z, 0 = M(x) z − F(x)`` (the implicit form; ``z`` are the time derivatives, started
+  consistently). ``M z`` is the matrix-free :attr:`Model.mass_action`, O(N K): the
+  residual and its Jacobian never form M, and no linear solve appears inside them.
+- ``cvodes``: CasADi's CVODES (BDF, Newton with the exact dense Jacobian from CasADi's
+  AD) on the explicit form ``xdot = M(x)^{-1} F(x)``; the linear solve is a symbolic node,
+  so the Jacobian includes the derivative of M (about 10x dearer per step at N = 40).
 - ``radau`` / ``bdf``: SciPy's ``solve_ivp`` with the same compiled right-hand side and its
   exact Jacobian: an independent check and the benchmark's baseline.
 
@@ -47,10 +49,12 @@ class Settings:
     """Integration policy; checked when built (ValueError names the field).
 
     rtol in [1e-13, 1e-2], atol in (0, 1e-2]; ``dt_out`` output step; ``chunk``: time
-    between checks; ``max_steps``: solver steps allowed per chunk.
+    between checks; ``max_steps``: solver steps allowed per chunk. IDAS's Newton test
+    also weighs the algebraic derivatives z with atol: far below their round-off
+    (atol ≲ 1e-16 for |z| ~ 100) it fails with IDA_CONV_FAIL (reported); use cvodes there.
     """
 
-    method: str = "cvodes"
+    method: str = "idas"
     rtol: float = 1e-8
     atol: float = 1e-10
     dt_out: float = 1e-3
@@ -208,6 +212,7 @@ class Integrator:
     _rhs: object = None
     _jac: object = None
     _zfun: object = None
+    _idas: tuple = None
 
     def __post_init__(self):
         x, pe, t, p_t, F = _ode(self.model)
@@ -223,9 +228,8 @@ class Integrator:
         elif s.method == "idas":
             z = ca.MX.sym("z", self.model.n_state)
             residual = self.model.mass_action(x, p_t, z) - F     # M z − F without forming M
-            self._fn = ca.integrator("sim", "idas", {"x": x, "z": z, "p": pe, "t": t, "ode": z,
-                                                     "alg": residual},
-                                     0.0, grid, {**opts, "calc_ic": False, "suppress_algebraic": True})
+            dae = {"x": x, "z": z, "p": pe, "t": t, "ode": z, "alg": residual}
+            self._idas = (dae, grid, {**opts, "calc_ic": False, "suppress_algebraic": True})
             self._zfun = ca.Function("z0", [x, pe, t], [ca.solve(M, F)])
         else:
             xdot = ca.solve(M, F)
@@ -234,13 +238,27 @@ class Integrator:
 
     def run(self, x0, pe) -> tuple[np.ndarray, int]:
         """States at the chunk's output grid (n_state, n_out) and the solver steps."""
+        if self._idas is not None:
+            return self._run_idas(x0, pe)
         if self._fn is not None:
-            args = {"x0": x0, "p": pe}
-            if self._zfun is not None:
-                args["z0"] = self._zfun(x0, pe, 0.0)
-            out = self._fn(**args)
+            out = self._fn(x0=x0, p=pe)
             return np.array(out["xf"]), int(self._fn.stats().get("nsteps", 0))
         return self._run_scipy(x0, pe)
+
+    def _run_idas(self, x0, pe):
+        """IDAS from the consistent start ``z0 = x'(0) = M⁻¹F``.
+
+        CasADi takes the initial derivative of x from the construction option
+        ``init_xdot`` (default 0), so the integrator is built per run with it (about
+        4 / 18 / 58 ms at N = 10 / 40 / 80). Starting from x' = 0 instead fails IDAS's first
+        error test at tight tolerances; IDACalcIC, the alternative, fails its line search
+        when the guess is already consistent.
+        """
+        dae, grid, opts = self._idas
+        z0 = np.array(self._zfun(x0, pe, 0.0)).ravel()
+        fn = ca.integrator("sim", "idas", dae, 0.0, grid, {**opts, "init_xdot": list(z0)})
+        out = fn(x0=x0, p=pe, z0=z0)
+        return np.array(out["xf"]), int(fn.stats().get("nsteps", 0))
 
     def _run_scipy(self, x0, pe):
         s = self.settings
@@ -336,23 +354,42 @@ def _loop(model, steady, schedule, integrator, x0, n_chunks, monitor) -> Traject
                       gap_closed="gap closed" in message)
 
 
-def _recover(model, integrator, x, pe, t0):
-    """Samples of a failed chunk up to the failure, by re-running it in 20 pieces."""
+def _recover(model, integrator, x, pe, t0, refine=50):
+    """Samples of a failed chunk up to the failure.
+
+    The chunk is re-run in (up to) 20 pieces, the failing piece one output step at a
+    time, and the failing step in ``refine`` sub-steps: the last samples before a failure
+    (e.g. a closing gap) are ``dt_out / refine`` apart, close enough to locate the
+    contact (:mod:`fsicas.outcome`).
+    """
     span, n_out = integrator.span, integrator.n_out
     pieces = math.gcd(n_out, 20)
-    sub = Integrator(model, integrator.settings, span / pieces, n_out // pieces)
+    dt = span / n_out
+    levels = [(span / pieces, n_out // pieces, pieces), (dt, 1, n_out // pieces), (dt / refine, 1, refine)]
     ts, xs = [np.zeros(0)], [np.zeros((0, model.n_state))]
-    for j in range(pieces):
-        pe_j = np.concatenate([pe[:-1], [t0 + j * sub.span]])
+    for length, samples, count in levels:
+        t, X = _runs(model, Integrator(model, integrator.settings, length, samples), x, pe, t0, count)
+        ts.append(t), xs.append(X)
+        if len(t):
+            t0, x = t[-1], X[-1]
+    return np.concatenate(ts), np.concatenate(xs)
+
+
+def _runs(model, integrator, x, pe, t0, count):
+    """Samples of up to ``count`` successive runs of ``integrator`` from (t0, x), up to the
+    first run that fails."""
+    ts, xs = [np.zeros(0)], [np.zeros((0, model.n_state))]
+    grid = np.linspace(0.0, integrator.span, integrator.n_out + 1)[1:]
+    for j in range(count):
+        start = t0 + j * integrator.span
         try:
-            X, _ = sub.run(x, pe_j)
+            X, _ = integrator.run(x, np.concatenate([pe[:-1], [start]]))
         except RuntimeError:
             break
         if _first_bad(model, X.T) is not None:
             break
-        ts.append(t0 + j * sub.span + np.linspace(0.0, sub.span, sub.n_out + 1)[1:])
-        xs.append(X.T)
         x = X[:, -1]
+        ts.append(start + grid), xs.append(X.T)
     return np.concatenate(ts), np.concatenate(xs)
 
 

@@ -54,6 +54,21 @@ def test_contact_without_contact_model_stops_the_run():
     assert run.trajectory.status == "success"
 
 
+def test_first_contact_is_located_between_output_samples():
+    """Event location: the contact time from samples 2e-3 apart equals the one from
+    samples 2e-5 apart (both located on the interpolating cubic) to far below either
+    step, and lies inside the last sample interval, not on a sample."""
+    times = []
+    for dt_out in (2e-3, 2e-5):
+        run = run_case(BASE.replace(ustar=8.0), 20.0,
+                       settings=Settings(rtol=1e-10, atol=1e-12, dt_out=dt_out))
+        o = run.outcome
+        assert o.outcome == "contact" and run.trajectory.status == "success"
+        assert np.min(np.abs(run.trajectory.t - o.first_contact_time)) > 0
+        times.append(o.first_contact_time)
+    assert times[0] == pytest.approx(times[1], abs=1e-7)
+
+
 def test_short_run_is_unsettled():
     run = run_case(BASE, 0.5, settings=FAST)
     assert run.outcome.outcome == "unsettled"
