@@ -54,14 +54,14 @@ def transfer_matrices(J, n: int, ntst: int, ncol: int, full: bool = False) -> np
 def _dense_blocks(J, n, ntst, ncol) -> np.ndarray:
     """``(ntst, n NCOL, n (NCOL+1))`` interval blocks ``[B_L, B_R]`` of ``J``."""
     m, N = n * ncol, n * ncol * ntst
-    J = sp.coo_matrix(J)
-    keep = (J.row < N) & (J.col < N)
-    r, c, v = J.row[keep], J.col[keep], J.data[keep]
-    i = r // m
-    local = (c - i * m) % N
+    J = sp.csc_matrix(J)
+    c = np.repeat(np.arange(J.shape[1]), np.diff(J.indptr))
+    keep = (J.indices < N) & (c < N)
+    r, c, v = J.indices[keep], c[keep], J.data[keep]
+    local = (c - (r // m) * m) % N                     # column within interval r // m
     inside = local < m + n
     B = np.zeros((ntst, m, m + n))
-    B[i[inside], r[inside] - i[inside] * m, local[inside]] = v[inside]   # no duplicates
+    B.reshape(-1)[r[inside] * (m + n) + local[inside]] = v[inside]   # no duplicates
     return B
 
 
