@@ -185,6 +185,23 @@ def _ode(model: Model):
     return x, pe, t, p_t, _nan_if_closed(model, x, model.rhs(x, p_t))
 
 
+def _explicit_ode(model: Model, x, pe, t, p_t, F):
+    """``xdot = M⁻¹F`` and a Function ``J(t, x, pe)`` of its exact Jacobian in x,
+
+        d(M⁻¹F)/dx = M⁻¹ (F_x − ∂(M v)/∂x |_{v = xdot}),
+
+    where the derivative of M enters only through the matrix-free ``M v``: O(N K) per
+    direction instead of AD through M, O(N² K) (3.5 instead of 18 ms at N = 40). SciPy's
+    routes use it; CVODES derives its own by AD (handing this one over as CasADi's
+    ``custom_jacobian`` did not change its cost).
+    """
+    M = model.mass(x, p_t)
+    xdot = ca.solve(M, F)
+    v = ca.MX.sym("v", model.n_state)
+    dMv = ca.Function("dMv", [x, pe, t, v], [ca.jacobian(model.mass_action(x, p_t, v), x)])
+    return xdot, ca.Function("J", [t, x, pe], [ca.solve(M, ca.jacobian(F, x) - dMv(x, pe, t, xdot))])
+
+
 def _nan_if_closed(model: Model, x, F):
     """F, or NaN once a gap at the check points or the nodes is <= 0.
 
@@ -216,13 +233,12 @@ class Integrator:
 
     def __post_init__(self):
         x, pe, t, p_t, F = _ode(self.model)
-        M = self.model.mass(x, p_t)
         s = self.settings
         grid = list(np.linspace(0.0, self.span, self.n_out + 1)[1:])
         opts = {"abstol": s.atol, "reltol": s.rtol, "max_num_steps": s.max_steps,
                 "disable_internal_warnings": True, "regularity_check": True}
+        xdot, jac = _explicit_ode(self.model, x, pe, t, p_t, F)
         if s.method == "cvodes":
-            xdot = ca.solve(M, F)
             self._fn = ca.integrator("sim", "cvodes", {"x": x, "p": pe, "t": t, "ode": xdot},
                                      0.0, grid, opts)
         elif s.method == "idas":
@@ -230,11 +246,10 @@ class Integrator:
             residual = self.model.mass_action(x, p_t, z) - F     # M z − F without forming M
             dae = {"x": x, "z": z, "p": pe, "t": t, "ode": z, "alg": residual}
             self._idas = (dae, grid, {**opts, "calc_ic": False, "suppress_algebraic": True})
-            self._zfun = ca.Function("z0", [x, pe, t], [ca.solve(M, F)])
+            self._zfun = ca.Function("z0", [x, pe, t], [xdot])
         else:
-            xdot = ca.solve(M, F)
             self._rhs = ca.Function("f", [t, x, pe], [xdot])
-            self._jac = ca.Function("J", [t, x, pe], [ca.jacobian(xdot, x)])
+            self._jac = jac
 
     def run(self, x0, pe) -> tuple[np.ndarray, int]:
         """States at the chunk's output grid (n_state, n_out) and the solver steps."""
