@@ -29,6 +29,10 @@ def test_period_and_amplitude_follow_hopf_theory(supercritical):
     model, branch = supercritical
     assert branch.hopf["l1"] < 0
     uc = branch.hopf["ustar_crit"]
+    # U* of a cycle = U* of the steady state at its Δp: closed form for straight walls
+    coef = SUPER.mstar * ((SUPER.k0 + SUPER.kl) / 2 + SUPER.friction / (SUPER.hstar / 2))
+    for p in branch.points[::10]:
+        assert abs(np.sqrt(p.pressure_drop / coef) / p.ustar - 1) < 1e-10
     # omega_H independently: the flutter eigenvalue of the linearization at U*_c
     lam = linear_stability(SUPER.replace(ustar=uc), model).eigenvalues[0]
     assert abs(lam.real) < 1e-6 * abs(lam.imag)
@@ -114,3 +118,25 @@ def test_save_load_roundtrip(supercritical, tmp_path):
 def test_no_hopf_point_below_ustar_max_raises():
     with pytest.raises(fsicas.hopf.CriticalVelocityError):
         cycle_branch(SUPER, ustar_max=3.0, settings=CycleSettings(max_points=5))
+
+
+def test_cli_cycles_json_and_files(tmp_path, capsys):
+    """``fsicas cycles`` as registered by fsicas.cli_cycles (parser built here)."""
+    import argparse
+    import json
+    from fsicas.cli import _add_scene_options
+    from fsicas.cli_cycles import add_cycle_commands
+    parser = argparse.ArgumentParser()
+    add_cycle_commands(parser.add_subparsers(dest="command"), _add_scene_options)
+    args = parser.parse_args(["cycles", "--mstar", "1", "--zeta", "0.01", "--modes", "4",
+                              "--max-points", "12", "--out", str(tmp_path / "b.json"),
+                              "--plot", str(tmp_path / "b.png"), "--json"])
+    out = json.loads(json.dumps(args.run(args)))
+    assert out["status"] == "max_points" and len(out["points"]) == 12
+    assert out["hopf"]["l1"] < 0 and out["contact"] is None
+    assert all(p["ustar"] > out["hopf"]["ustar_crit"] for p in out["points"])
+    assert all(p["stable"] for p in out["points"])
+    assert CycleBranch.load(tmp_path / "b.json").points[0].ustar == out["points"][0]["ustar"]
+    assert (tmp_path / "b.png").stat().st_size > 0
+    with pytest.raises(ValueError, match="contact-free"):
+        args.run(parser.parse_args(["cycles", "--contact"]))
