@@ -133,6 +133,9 @@ def main(argv=None):
     ap.add_argument("--modes", type=int, default=None, help="N of the cycles (default 40, quick 10)")
     ap.add_argument("--map-only", action="store_true", help="only the Fig. 4 map timing")
     ap.add_argument("--no-map", action="store_true", help="only the work-precision tables")
+    ap.add_argument("--cases", nargs="+", default=["free", "impacting"], choices=["free", "impacting"],
+                    help="work-precision cases: the no-contact and/or the impacting cycle")
+    ap.add_argument("--methods", nargs="+", default=list(METHODS), choices=list(METHODS))
     args = ap.parse_args(argv)
     n = args.modes or (10 if args.quick else 40)
     print(f"machine: {machine()}")
@@ -140,9 +143,11 @@ def main(argv=None):
     if n > 20:   # CVODES and SciPy (Jacobian of M⁻¹F, 16 ms at N = 40) too slow at tight tolerances
         methods = {**methods, "cvodes": [1e-4, 1e-6, 1e-8], "radau": [1e-4, 1e-6], "bdf": [1e-4]}
     base = Scene(mstar=1.0, zeta=0.01, modes=n)
+    methods = {m: t for m, t in methods.items() if m in args.methods}
     periods = 10 if n <= 20 else 5
-    if not args.map_only:
+    if not args.map_only and "free" in args.cases:
         work_precision("no-contact limit cycle", base.replace(ustar=6.5), 6.0, 1e-4, methods, periods)
+    if not args.map_only and "impacting" in args.cases:
         work_precision("impacting cycle", base.replace(ustar=8.5, **CONTACT), 4.0, 2e-5, methods, periods)
     if args.no_map:
         return 0
