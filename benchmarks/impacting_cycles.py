@@ -16,27 +16,13 @@ import sys
 from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 
-from fsicas import Scene
-from fsicas.outcome import Criteria
-from fsicas.run import run_case
-from fsicas.simulate import Settings
-
-PAPER = dict(contact_stiffness=1e6, contact_eps=1e-3)
-USED = dict(contact_stiffness=1e8, contact_eps=1e-2)
+from fsicas.paper import HOLDING_CONTACT, PAPER_CONTACT, impacting_cycle
 
 
 def one(args):
     ustar, modes, contact, t_end, out = args
-    scene = Scene(mstar=1.0, ustar=ustar, zeta=0.01, modes=modes, contact=True, **contact)
-    settings = Settings(method="idas", rtol=1e-7, atol=1e-9, dt_out=2e-5, chunk=0.25)
-    run = run_case(scene, t_end, settings=settings, perturbation=0.3, stop_early=False,
-                   criteria=Criteria(cycles=4, tol_impacting=2e-2))
-    row = run.to_json()
-    row.update(ustar=ustar, modes=modes, **contact)
-    if out and run.outcome.period is not None:
-        from fsicas.plots_time import plot_cycle
-        plot_cycle(run, Path(out) / f"cycle_U{ustar:g}_N{modes}.png")
-    return row
+    plot = Path(out) / f"cycle_U{ustar:g}_N{modes}.png" if out else None
+    return impacting_cycle(ustar, modes, contact, t_end, plot)
 
 
 def main(argv=None):
@@ -48,8 +34,8 @@ def main(argv=None):
     ap.add_argument("--ustar", type=float, nargs="+", default=[7.0, 8.5, 10.0])
     args = ap.parse_args(argv)
     Path(args.out).mkdir(parents=True, exist_ok=True)
-    jobs = [] if args.skip_paper else [(8.5, args.modes, PAPER, 2.5, None)]
-    jobs += [(u, args.modes, USED, args.t_end, args.out) for u in args.ustar]
+    jobs = [] if args.skip_paper else [(8.5, args.modes, PAPER_CONTACT, 1.0, None)]
+    jobs += [(u, args.modes, HOLDING_CONTACT, args.t_end, args.out) for u in args.ustar]
     with ProcessPoolExecutor(max_workers=2) as pool:
         rows = list(pool.map(one, jobs))
     print("| U* | N | k* | eps/H | outcome | status | period T0 | w/w1 | tip ampl./(H/2) | contact x | "

@@ -95,8 +95,9 @@ def _cmd_boundary(args) -> dict:
 
 def _cmd_paper(args) -> dict:
     """The main job: the paper's core numbers on its embedded default configuration."""
-    from .paper import run_paper
-    return run_paper(out=args.out, quick=args.quick)
+    from .paper import run_paper, summary
+    report = run_paper(out=args.out, quick=args.quick)
+    return report if args.json else {**summary(report), "written to": args.out}
 
 
 def _parser() -> argparse.ArgumentParser:
