@@ -37,7 +37,7 @@ import scipy.optimize
 import continuation as C
 from continuation._palc import correct   # the PALC corrector the library's locate() uses
 
-from .hopf import PI, PI_SCALE, TIME_SCALE, CriticalVelocityError, HopfPoint, _dense, \
+from .hopf import LOG_M, PI, PI_SCALE, TIME_SCALE, CriticalVelocityError, HopfPoint, _dense, \
     _pi_of, critical_velocity, flutter_problem
 from .model import Model, build_model, modal_basis
 from .scene import Scene
@@ -71,7 +71,8 @@ class CycleSettings:
 class CyclePoint:
     """One cycle. ``kind``: "regular", "fold" (cycle fold) or "contact" (first contact);
     ``state``: the model state x = (r, q, Q1, Q2) on the cycle at its phase 0 (a start
-    point for time integration at ``pressure_drop``)."""
+    point for time integration at ``pressure_drop``); ``located``: False for a special
+    point whose location failed (the branch point just past it is reported)."""
 
     ustar: float
     pressure_drop: float
@@ -83,6 +84,7 @@ class CyclePoint:
     stable: bool = True
     kind: str = "regular"
     state: np.ndarray = field(repr=False, default=None)
+    located: bool = True
 
     @property
     def frequency(self) -> float:
@@ -187,11 +189,11 @@ def cycle_branch(scene: Scene, model: Model | None = None, *, ustar_max: float =
             point = gauge.measure(step.X)
             if contact is None and prev is not None and \
                     (prev[1].gap_ratio - 1) * (point.gap_ratio - 1) < 0:
-                contact = gauge.contact(prev[0], step, steps.newton)
+                contact = gauge.locate("contact", prev[0], step, steps.newton)
                 if settings.stop_at_contact:
                     break
             if prev is not None and prev[0].tau[-1] * step.tau[-1] < 0:
-                folds.append(gauge.fold(prev[0], step, steps.newton))
+                folds.append(gauge.locate("fold", prev[0], step, steps.newton))
             points.append(point)
             prev = (step, point)
             restart = problem.restart(step.X) if len(points) < settings.max_points else None
@@ -241,7 +243,8 @@ class _Gauge:
         y_max = -self._extremum(X, lambda Q: -(Q @ self.tip))
         y_min = self._extremum(X, lambda Q: Q @ self.tip)
         gap = self._extremum(X, self._gap)
-        return CyclePoint(ustar=self._ustar(p), pressure_drop=float(X[-1] * PI_SCALE * 10 ** p[1]),
+        mstar = 10 ** p[self.vf.par_index(LOG_M)]
+        return CyclePoint(ustar=self._ustar(p), pressure_drop=float(X[-1] * PI_SCALE * mstar),
                           period=self.problem.period(X) / TIME_SCALE,
                           tip_amplitude=(y_max - y_min) / 2, min_gap=gap, gap_ratio=gap / self.eps,
                           multipliers=mu, stable=bool(np.all(np.abs(rest) < 1.0)), kind=kind,
@@ -278,6 +281,14 @@ class _Gauge:
         return float(x[-2:].sum() / self.model.scene.hstar)
 
     # -- special points --------------------------------------------------------------
+    def locate(self, kind: str, a, b, newton) -> CyclePoint:
+        """The ``kind`` ("fold" or "contact") point between steps a and b; if a corrector
+        fails or the sign change is lost, b itself with ``located=False``."""
+        try:
+            return (self.fold if kind == "fold" else self.contact)(a, b, newton)
+        except (RuntimeError, ValueError):
+            return replace(self.measure(b.X, kind), located=False)
+
     def _on_arc(self, a, s: float, newton):
         """The branch point at arclength s from step a (PALC corrector)."""
         res = correct(self.problem, a.X + s * a.tau, a.tau, newton)

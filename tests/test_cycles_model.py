@@ -72,7 +72,7 @@ def test_first_contact_geometry(supercritical):
     half-amplitude is H*/2 - eps."""
     model, branch = supercritical
     c = branch.contact
-    assert branch.status == "contact" and c is not None and c.kind == "contact"
+    assert branch.status == "contact" and c is not None and c.kind == "contact" and c.located
     assert abs(c.gap_ratio - 1) < 1e-9
     assert abs(c.tip_amplitude - (SUPER.hstar / 2 - branch.eps)) < 1e-9
     assert all(p.min_gap > branch.eps for p in branch.points)
@@ -93,6 +93,7 @@ def test_subcritical_branch_folds_and_turns_stable():
     assert hopf.l1 > 0
     branch = cycle_branch(SUB, model, hopf=hopf)
     pts, (fold,) = branch.points, branch.folds
+    assert fold.kind == "fold" and fold.located
     first = pts[1]
     assert first.ustar < hopf.ustar and not first.stable           # unstable, below U*_c
     lead = first.nontrivial_multipliers[0]
