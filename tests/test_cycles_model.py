@@ -87,11 +87,16 @@ def test_first_contact_geometry(supercritical):
     assert abs(gaps(model, X).min() / branch.eps - 1) < 1e-4
 
 
-def test_subcritical_branch_folds_and_turns_stable():
+@pytest.fixture(scope="module")
+def subcritical():
     model = build_model(SUB)
     hopf = critical_velocity(SUB, model)
+    return model, hopf, cycle_branch(SUB, model, hopf=hopf)
+
+
+def test_subcritical_branch_folds_and_turns_stable(subcritical):
+    model, hopf, branch = subcritical
     assert hopf.l1 > 0
-    branch = cycle_branch(SUB, model, hopf=hopf)
     pts, (fold,) = branch.points, branch.folds
     assert fold.kind == "fold" and fold.located
     first = pts[1]
@@ -106,6 +111,22 @@ def test_subcritical_branch_folds_and_turns_stable():
     assert after and all(p.stable for p in after)
     assert all(not p.stable for p in pts if p.tip_amplitude < fold.tip_amplitude * 0.95)
     assert branch.contact is not None and branch.contact.stable
+
+
+def test_subcritical_hysteresis_by_integration(subcritical):
+    """Between the fold and U*_c the steady state is linearly stable and yet a perturbed
+    start on the stable large cycle stays there (direct integration, 60 periods)."""
+    model, hopf, branch = subcritical
+    window = [p for p in branch.points if p.stable and branch.folds[0].ustar < p.ustar < hopf.ustar]
+    p = window[-1]
+    assert linear_stability(SUB.replace(ustar=p.ustar), model).stable
+    par = model.parameters(SUB, pressure_drop=p.pressure_drop)
+    sol = scipy.integrate.solve_ivp(lambda t, x: model.xdot(x, par), (0, 60 * p.period),
+                                    p.state * (1 + 1e-3), method="DOP853", rtol=1e-10,
+                                    atol=1e-12, dense_output=True)
+    t = np.linspace(59 * p.period, 60 * p.period, 4001)
+    y = sol.sol(t)[SUB.modes:2 * SUB.modes].T @ model.tip.phi[:, 1]
+    assert abs((y.max() - y.min()) / 2 / p.tip_amplitude - 1) < 1e-3
 
 
 def test_save_load_roundtrip(supercritical, tmp_path):
