@@ -19,8 +19,9 @@ Extrema over the cycle are taken on the collocation polynomial (16 samples per m
 interval, 201 points along the beam) and refined in t by Brent's method. A cycle fold
 (the parameter's tangent component changes sign) is located as the extremum of Π along
 the arclength; the first contact (min gap = eps) by Brent's root finder on the arclength
-between the two points that bracket it. Each evaluation there is one PALC corrector
-from the earlier point, as the library's own event location does. The run stops at the
+between the two points that bracket it; each evaluation there is one PALC corrector
+from the earlier point, as the library's own event location does. The mesh is
+re-equidistributed every few points (the cycle sharpens as the gap closes). The run stops at the
 first contact (the contact-free model ends there), at ``ustar_max`` or after
 ``max_points``.
 """
@@ -54,7 +55,8 @@ class CycleSettings:
     offset of Π from the Hopf point; ``ds``/``ds_max``: arclength steps (Euclidean norm of
     all node values); ``tol``: Newton tolerance; ``max_points``: branch points;
     ``adapt_every``: re-mesh (equidistribute the collocation error) every so many points,
-    0 = never (the cycle sharpens as the gap closes); ``stop_at_contact``: stop at the first contact (else only report it)."""
+    0 = never (the cycle sharpens as the gap closes); ``stop_at_contact``: stop at the
+    first contact (else report it and go on, e.g. on a scene with smoothed contact)."""
 
     ntst: int = 20
     ncol: int = 4
