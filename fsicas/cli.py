@@ -130,6 +130,8 @@ def _parser() -> argparse.ArgumentParser:
     p.set_defaults(run=_cmd_paper)
     from .cli_time import add_time_commands   # simulate, map (docs/simulate.md)
     add_time_commands(sub, _add_scene_options)
+    from .cli_cycles import add_cycle_commands   # cycles (docs/cycles.md)
+    add_cycle_commands(sub, _add_scene_options)
     return parser
 
 
