@@ -23,7 +23,7 @@ from ._cycles import CycleProblem
 from ._driver import continuation
 from ._equilibrium import EquilibriumProblem, hopf_point
 from ._lyapunov import first_lyapunov
-from ._palc import ContinuationIterator, Step
+from ._palc import ContinuationIterator, Step, correct
 from ._problem import Problem
 from ._settings import (CollocationSettings, ContinuationSettings, EigenSettings,
                         NewtonSettings, PALC, ShootingSettings)
@@ -36,5 +36,6 @@ __all__ = [
     "CycleProblem", "EigenSettings", "ShootingProblem", "ShootingSettings", "cycle_from_hopf",
     "cycle_from_pd",
     "EquilibriumProblem", "FoldCurveProblem", "HopfCurveProblem", "NewtonSettings",
-    "PALC", "Problem", "SpecialPoint", "Step", "VectorField", "continuation", "first_lyapunov", "hopf_point",
+    "PALC", "Problem", "SpecialPoint", "Step", "VectorField", "continuation", "correct",
+    "first_lyapunov", "hopf_point",
 ]

@@ -36,10 +36,9 @@ import numpy as np
 import scipy.optimize
 
 import continuation as C
-from continuation._palc import correct   # the PALC corrector the library's locate() uses
 
-from .hopf import LOG_M, PI, PI_SCALE, TIME_SCALE, CriticalVelocityError, HopfPoint, _dense, \
-    _pi_of, critical_velocity, flutter_problem
+from .hopf import LOG_M, PI, PI_SCALE, TIME_SCALE, CriticalVelocityError, HopfPoint, dense, \
+    pi_of, critical_velocity, flutter_problem
 from .model import Model, build_model, modal_basis
 from .scene import Scene
 
@@ -178,7 +177,7 @@ def cycle_branch(scene: Scene, model: Model | None = None, *, ustar_max: float =
     gauge = _Gauge(problem, model, hopf.x)
     steps = C.ContinuationSettings(
         ds=settings.ds, ds_min=1e-9, ds_max=settings.ds_max, direction=problem.hopf_direction,
-        max_steps=settings.max_points - 1, bounds={PI: (0.0, _pi_of(scene, model, ustar_max))},
+        max_steps=settings.max_points - 1, bounds={PI: (0.0, pi_of(scene, model, ustar_max))},
         newton=C.NewtonSettings(tol=settings.tol), detect=False)
     points, folds, contact, prev, tau_ref = [], [], None, None, None
     while True:
@@ -278,7 +277,7 @@ class _Gauge:
             F = np.asarray(self.vf.rhs(x, p), dtype=float).ravel()
             if np.max(np.abs(F)) < 1e-12:
                 break
-            x = x - np.linalg.solve(_dense(self.vf.jac_x(x, p)), F)
+            x = x - np.linalg.solve(dense(self.vf.jac_x(x, p)), F)
         self.x_eq = x
         return float(x[-2:].sum() / self.model.scene.hstar)
 
@@ -293,7 +292,7 @@ class _Gauge:
 
     def _on_arc(self, a, s: float, newton):
         """The branch point at arclength s from step a (PALC corrector)."""
-        res = correct(self.problem, a.X + s * a.tau, a.tau, newton)
+        res = C.correct(self.problem, a.X + s * a.tau, a.tau, newton)
         if not res.converged:
             raise RuntimeError(f"corrector failed while locating a point: {res.message}")
         return res.X

@@ -25,7 +25,7 @@ from .scene import Scene
 from .steady import steady_state
 
 __all__ = ["HopfPoint", "CriticalVelocityError", "flutter_problem", "hopf_points",
-           "critical_velocity", "reparametrized_field"]
+           "critical_velocity", "reparametrized_field", "pi_of", "dense"]
 
 PI, LOG_M = "kinematic_pressure_drop", "log10_mstar"
 PI_SCALE, TIME_SCALE = 100.0, 100.0
@@ -133,14 +133,15 @@ def _eigenvector_q(model: Model, x, params, omega) -> np.ndarray:
     """q-part of the eigenvector of J v = i omega M v at a Hopf point (inverse iteration)."""
     vf = flutter_field(model)
     p = np.array([params[k] for k in vf.par_names])
-    J, Mm = _dense(vf.jac_x(x, p)), _dense(vf.mass(x, p))
+    J, Mm = dense(vf.jac_x(x, p)), dense(vf.mass(x, p))
     lam, vec = np.linalg.eig(np.linalg.solve(Mm, J))
     k = int(np.argmin(np.abs(lam - 1j * omega)))
     n = model.n_modes
     return vec[n:2 * n, k]
 
 
-def _dense(a) -> np.ndarray:
+def dense(a) -> np.ndarray:
+    """A NumPy array of a sparse or dense matrix."""
     return a.toarray() if hasattr(a, "toarray") else np.asarray(a)
 
 
@@ -151,7 +152,7 @@ def hopf_points(scene: Scene, model: Model | None = None, ustar_max: float = 40.
         raise ValueError(f"need 0 < ustar_start < ustar_max, got {ustar_start}, {ustar_max}")
     model = model or build_model(scene)
     problem = flutter_problem(scene, model, ustar_start)
-    pi_max = _pi_of(scene, model, ustar_max)
+    pi_max = pi_of(scene, model, ustar_max)
     branch = C.continuation(problem, settings=_settings(problem.X0[-1], pi_max))
     if branch.status == "failed":
         raise CriticalVelocityError(f"steady branch lost at M* = {scene.mstar:g}: {branch.message}")
@@ -169,6 +170,6 @@ def critical_velocity(scene: Scene, model: Model | None = None, ustar_max: float
     return points[0] if points else None
 
 
-def _pi_of(scene: Scene, model: Model, ustar: float) -> float:
+def pi_of(scene: Scene, model: Model, ustar: float) -> float:
     """Scaled kinematic pressure drop Δp/(M* PI_SCALE) of the steady state at ``ustar``."""
     return steady_state(scene.replace(ustar=ustar), model).pressure_drop / (scene.mstar * PI_SCALE)
