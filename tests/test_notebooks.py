@@ -22,3 +22,6 @@ def test_quickstart(capsys):
     lam = ns["lam"]
     assert len(lam) == 2 * 10 + 2  # M is non-singular: every eigenvalue is finite
     assert sorted(lam.imag) == pytest.approx(sorted(-lam.imag), abs=1e-9 * abs(lam).max())
+    # two independent routes to the same limit cycle: integration and continuation
+    assert ns["run"].outcome.outcome == "lco" and ns["branch"].status == "contact"
+    assert ns["period_on_branch"] == pytest.approx(ns["run"].outcome.period, rel=1e-4)
