@@ -2,6 +2,7 @@
 
     python benchmarks/bench_simulate.py            # N = 40 cycles, the 15 x 7 Fig. 4 map at N = 10
     python benchmarks/bench_simulate.py --quick    # N = 10 cycles, 3 x 2 map
+    python benchmarks/bench_simulate.py --scaling  # cost of the integrators' functions vs N
 
 For each case (a no-contact limit cycle, M* = 1, U* = 6.5; the impacting cycle,
 M* = 1, U* = 8.5 with contact) every integrator (CVODES, IDAS: CasADi; Radau, BDF:
@@ -104,6 +105,50 @@ def speedups(rows):
                   f"{wall / best[2]:.1f}x |")
 
 
+def scaling(modes):
+    """One call of each function an integrator evaluates, per N (median of repeats, µs):
+    the IDAS residual M z − F with the matrix-free and with the assembled M z, the IDAS
+    Newton matrix (Jacobian in x and z), the explicit M⁻¹F (CVODES, SciPy), its Jacobian
+    by AD through solve(M, F) (CVODES) and through the matrix-free M v (SciPy)."""
+    import statistics
+    import timeit
+
+    import casadi as ca
+
+    from fsicas.breathing import PressureSchedule
+    from fsicas.simulate import _explicit_ode, _ode
+
+    def per_call(f, *args):
+        f(*args)
+        t = timeit.repeat(lambda: f(*args), number=20, repeat=7)
+        return 1e6 * statistics.median(t) / 20
+
+    print("\n### Cost of one call (µs) per N, contact on, quad_nodes = 2N + 20\n")
+    print("| N | M z − F (matrix-free) | M z − F (assembled M) | IDAS Newton matrix (matrix-free) | "
+          "(assembled) | M⁻¹F | d(M⁻¹F)/dx by AD | d(M⁻¹F)/dx via M v |")
+    print("|---|---|---|---|---|---|---|---|")
+    for n in modes:
+        scene = Scene(mstar=1.0, ustar=8.5, zeta=0.01, modes=n, **CONTACT)
+        model, _ = guarded_model(scene)
+        steady = steady_state(scene, model)
+        x, pe, t, p_t, F = _ode(model)
+        z = ca.MX.sym("z", model.n_state)
+        xdot, jac = _explicit_ode(model, x, pe, t, p_t, F)
+        free = model.mass_action(x, p_t, z) - F
+        assembled = ca.mtimes(model.mass(x, p_t), z) - F
+        xz = ca.vertcat(x, z)
+        fns = [ca.Function("r", [x, z, pe, t], [free]), ca.Function("ra", [x, z, pe, t], [assembled]),
+               ca.Function("J", [x, z, pe, t], [ca.jacobian(free, xz)]),
+               ca.Function("Ja", [x, z, pe, t], [ca.jacobian(assembled, xz)]),
+               ca.Function("f", [x, z, pe, t], [xdot]),
+               ca.Function("Jad", [x, z, pe, t], [ca.jacobian(xdot, x)])]
+        pv = np.concatenate([steady.p, PressureSchedule.constant(8.5).vector(1.0), [0.0]])
+        x0 = steady.x + 1e-3 * np.r_[np.ones(2 * n), 0, 0] / np.r_[np.arange(1, n + 1), np.arange(1, n + 1), 1, 1]
+        z0 = np.array(fns[4](x0, x0, pv, 0.0)).ravel()
+        cost = [per_call(f, x0, z0, pv, 0.0) for f in fns] + [per_call(jac, 0.0, x0, pv)]
+        print(f"| {n} | " + " | ".join(f"{c:.0f}" for c in cost) + " |", flush=True)
+
+
 def map_benchmark(ustars, mstars, modes, t_end, methods):
     print(f"\n### Fig. 4 map: {len(ustars)} x {len(mstars)} points, N = {modes}, t_end = {t_end}, "
           "2 worker processes\n")
@@ -136,9 +181,13 @@ def main(argv=None):
     ap.add_argument("--cases", nargs="+", default=["free", "impacting"], choices=["free", "impacting"],
                     help="work-precision cases: the no-contact and/or the impacting cycle")
     ap.add_argument("--methods", nargs="+", default=list(METHODS), choices=list(METHODS))
+    ap.add_argument("--scaling", action="store_true", help="only the cost of the functions vs N")
     args = ap.parse_args(argv)
     n = args.modes or (10 if args.quick else 40)
     print(f"machine: {machine()}")
+    if args.scaling:
+        scaling([10, 20, 40, 80])
+        return 0
     methods = METHODS if not args.quick else {m: t[:3] for m, t in METHODS.items()}
     if n > 20:   # CVODES and SciPy (Jacobian of M⁻¹F, 16 ms at N = 40) too slow at tight tolerances
         methods = {**methods, "cvodes": [1e-4, 1e-6, 1e-8], "radau": [1e-4, 1e-6], "bdf": [1e-4]}
