@@ -6,9 +6,9 @@ Routes (``Settings.method``):
   ``x' = z, 0 = M(x) z − F(x)`` (the implicit form; ``z`` are the time derivatives, started
   consistently). ``M z`` is the matrix-free :attr:`Model.mass_action`, O(N K): the
   residual and its Jacobian never form M, and no linear solve appears inside them.
-- ``cvodes``: CasADi's CVODES (BDF, Newton with the exact dense Jacobian from CasADi's
-  AD) on the explicit form ``xdot = M(x)^{-1} F(x)``; the linear solve is a symbolic node,
-  so the Jacobian includes the derivative of M (about 10x dearer per step at N = 40).
+- ``cvodes``: CasADi's CVODES (BDF, Newton with an exact dense Jacobian) on the explicit
+  form ``xdot = M(x)^{-1} F(x)``; the Jacobian includes the derivative of M, through the
+  matrix-free ``M v`` (:func:`_explicit_ode`); about 4x dearer per step than IDAS at N = 40.
 - ``radau`` / ``bdf``: SciPy's ``solve_ivp`` with the same compiled right-hand side and its
   exact Jacobian: an independent check and the benchmark's baseline.
 
@@ -186,20 +186,29 @@ def _ode(model: Model):
 
 
 def _explicit_ode(model: Model, x, pe, t, p_t, F):
-    """``xdot = M⁻¹F`` and a Function ``J(t, x, pe)`` of its exact Jacobian in x,
+    """``xdot = M⁻¹F`` as a call to a Function of (x, pe, t) whose Jacobian CasADi does not
+    derive by AD through M, and a Function ``J(t, x, pe)`` of that Jacobian's x-block:
 
-        d(M⁻¹F)/dx = M⁻¹ (F_x − ∂(M v)/∂x |_{v = xdot}),
+        d(M⁻¹F)/dy = M⁻¹ (F_y − ∂(M v)/∂y |_{v = xdot}),   y in (x, pe, t),
 
     where the derivative of M enters only through the matrix-free ``M v``: O(N K) per
-    direction instead of AD through M, O(N² K) (3.5 instead of 18 ms at N = 40). SciPy's
-    routes use it; CVODES derives its own by AD (handing this one over as CasADi's
-    ``custom_jacobian`` did not change its cost).
+    direction instead of O(N² K) (x-block 3.5 instead of 18 ms at N = 40). It is the
+    Function's ``custom_jacobian``, so CVODES's Newton matrix uses it too (7.8 instead of
+    17.6 ms per evaluation at N = 40: CVODES gets all three blocks).
     """
     M = model.mass(x, p_t)
     xdot = ca.solve(M, F)
-    v = ca.MX.sym("v", model.n_state)
-    dMv = ca.Function("dMv", [x, pe, t, v], [ca.jacobian(model.mass_action(x, p_t, v), x)])
-    return xdot, ca.Function("J", [t, x, pe], [ca.solve(M, ca.jacobian(F, x) - dMv(x, pe, t, xdot))])
+    v, out = ca.MX.sym("v", model.n_state), ca.MX.sym("out", model.n_state)
+    args = [x, pe, t]
+    dMv = ca.Function("dMv", [*args, v], [ca.jacobian(model.mass_action(x, p_t, v), ca.vertcat(*args))])
+    jac = ca.solve(M, ca.jacobian(F, ca.vertcat(*args)) - dMv(*args, xdot))
+    blocks = ca.horzsplit(jac, np.cumsum([0, *(a.numel() for a in args)]).tolist())
+    custom = ca.Function("jac_xdot", [*args, out], blocks, ["x", "pe", "t", "out_xdot"],
+                         ["jac_xdot_x", "jac_xdot_pe", "jac_xdot_t"])
+    f = ca.Function("xdot", args, [xdot], ["x", "pe", "t"], ["xdot"],
+                    {"custom_jacobian": custom, "jac_penalty": 0, "never_inline": True})
+    x_block = ca.solve(M, ca.jacobian(F, x) - ca.horzsplit(dMv(*args, xdot), [0, x.numel(), jac.size2()])[0])
+    return f(x, pe, t), ca.Function("J", [t, x, pe], [x_block])
 
 
 def _nan_if_closed(model: Model, x, F):

@@ -128,8 +128,9 @@ def test_closing_gap_is_a_reported_failure_not_nan():
 
 
 def test_explicit_jacobian_through_the_mass_action_equals_ad_through_m():
-    """``M⁻¹(F_x − ∂(M v)/∂x|_{v=xdot})`` (SciPy routes) equals CasADi's AD of solve(M, F),
-    at a moving state with the contact load on."""
+    """``M⁻¹(F_y − ∂(M v)/∂y|_{v=xdot})`` for y = x, pe, t (the SciPy routes' Jacobian and
+    CVODES's custom Jacobian) equals CasADi's AD of solve(M, F), at a moving state with
+    the contact load on and a time-dependent pressure drop."""
     import casadi as ca
     from fsicas.simulate import _explicit_ode, _ode
     scene = BASE.replace(modes=6, contact=True, contact_stiffness=1e6, contact_eps=1e-2)
@@ -137,14 +138,19 @@ def test_explicit_jacobian_through_the_mass_action_equals_ad_through_m():
     steady = steady_state(scene, model)
     x, pe, t, p_t, F = _ode(model)
     xdot, jac = _explicit_ode(model, x, pe, t, p_t, F)
-    ad = ca.Function("ad", [t, x, pe], [ca.jacobian(xdot, x)])
+    plain = ca.solve(model.mass(x, p_t), F)
     rng = np.random.default_rng(1)
     x0 = steady.x.copy()
     x0[:12] += 1e-3 * rng.normal(size=12)
     phi_tip = model.tip.phi[:, 1]                      # tip 2e-4 from wall 1: inside eps = 5e-4
     x0[6] = (0.05 - 2e-4 - x0[7:12] @ phi_tip[1:]) / phi_tip[0]
     assert 0 < gaps(model, x0).min() < scene.contact_gap
-    pv = np.concatenate([steady.p, PressureSchedule.constant(7.0).vector(1.0), [0.3]])
-    a, b = np.array(ad(0.1, x0, pv)), np.array(jac(0.1, x0, pv))
-    assert np.all(np.isfinite(a))
-    assert np.max(np.abs(a - b)) < 1e-12 * np.max(np.abs(a))
+    pv = np.concatenate([steady.p, PressureSchedule.breath(7.0, 2.0).vector(1.0), [0.3]])
+    for y in (x, pe, t):
+        ad = np.array(ca.Function("ad", [t, x, pe], [ca.jacobian(plain, y)])(0.1, x0, pv))
+        custom = [np.array(ca.Function("c", [t, x, pe], [ca.jacobian(xdot, y)])(0.1, x0, pv))]
+        if y is x:
+            custom.append(np.array(jac(0.1, x0, pv)))
+        assert np.all(np.isfinite(ad)) and np.max(np.abs(ad)) > 0
+        for c in custom:
+            assert np.max(np.abs(c - ad)) < 1e-12 * np.max(np.abs(ad))
