@@ -198,17 +198,19 @@ def _explicit_ode(model: Model, x, pe, t, p_t, F):
     """
     M = model.mass(x, p_t)
     xdot = ca.solve(M, F)
-    v, out = ca.MX.sym("v", model.n_state), ca.MX.sym("out", model.n_state)
     args = [x, pe, t]
-    dMv = ca.Function("dMv", [*args, v], [ca.jacobian(model.mass_action(x, p_t, v), ca.vertcat(*args))])
-    jac = ca.solve(M, ca.jacobian(F, ca.vertcat(*args)) - dMv(*args, xdot))
-    blocks = ca.horzsplit(jac, np.cumsum([0, *(a.numel() for a in args)]).tolist())
-    custom = ca.Function("jac_xdot", [*args, out], blocks, ["x", "pe", "t", "out_xdot"],
-                         ["jac_xdot_x", "jac_xdot_pe", "jac_xdot_t"])
+
+    def jacobian(y):
+        v = ca.MX.sym("v", model.n_state)
+        dMv = ca.Function("dMv", [*args, v], [ca.jacobian(model.mass_action(x, p_t, v), y)])
+        return ca.solve(M, ca.jacobian(F, y) - dMv(*args, xdot))
+
+    blocks = ca.horzsplit(jacobian(ca.vertcat(*args)), np.cumsum([0, *(a.numel() for a in args)]).tolist())
+    custom = ca.Function("jac_xdot", [*args, ca.MX.sym("out", model.n_state)], blocks,
+                         ["x", "pe", "t", "out_xdot"], ["jac_xdot_x", "jac_xdot_pe", "jac_xdot_t"])
     f = ca.Function("xdot", args, [xdot], ["x", "pe", "t"], ["xdot"],
                     {"custom_jacobian": custom, "jac_penalty": 0, "never_inline": True})
-    x_block = ca.solve(M, ca.jacobian(F, x) - ca.horzsplit(dMv(*args, xdot), [0, x.numel(), jac.size2()])[0])
-    return f(x, pe, t), ca.Function("J", [t, x, pe], [x_block])
+    return f(x, pe, t), ca.Function("J", [t, x, pe], [jacobian(x)])
 
 
 def _nan_if_closed(model: Model, x, F):
