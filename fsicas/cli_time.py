@@ -34,7 +34,9 @@ def add_time_commands(sub, add_scene_options) -> None:
     p.add_argument("--mstar", default="0.1:10:7", metavar="LO:HI:COUNT", help="M* grid (log)")
     p.add_argument("--modes", type=int, default=10)
     p.add_argument("--t-end", type=float, default=30.0)
-    p.add_argument("--workers", type=int, default=None)
+    p.add_argument("--workers", type=int, default=None, help="local processes (default: the cores)")
+    p.add_argument("--dask", metavar="ADDRESS", help="run the points on a Dask scheduler "
+                   "(e.g. tcp://host:8786) instead of local processes; needs the parallel extra")
     p.add_argument("--out", default="impact_map.jsonl", help="results file (resumable)")
     p.add_argument("--plot", metavar="FILE", help="write Fig. 4 to FILE")
     p.add_argument("--json", action="store_true")
@@ -86,7 +88,17 @@ def _cmd_map(args) -> dict:
     from .impact_map import MAP_SCENE, impact_map
     ustars, mstars = _grid(args.ustar, "ustar", False), _grid(args.mstar, "mstar", True)
     scene = MAP_SCENE.replace(modes=args.modes)
-    result = impact_map(ustars, mstars, args.out, scene=scene, t_end=args.t_end, workers=args.workers)
+    if args.dask:
+        try:
+            from distributed import Client
+        except ImportError:
+            raise ValueError("--dask needs Dask: pip install -e '.[parallel]'") from None
+        with Client(args.dask) as client:
+            result = impact_map(ustars, mstars, args.out, scene=scene, t_end=args.t_end,
+                                executor=client.get_executor())
+    else:
+        result = impact_map(ustars, mstars, args.out, scene=scene, t_end=args.t_end,
+                            workers=args.workers)
     if args.plot:
         from .plots_time import plot_map
         plot_map(result, args.plot)

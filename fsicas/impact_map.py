@@ -2,22 +2,26 @@
 
 Every grid point is one classified run (:func:`fsicas.run.run_case`) of the contact-free
 scene, stopped at the first contact (H* = 1/10, f = 0.14, zeta = 0.01, N = 10 by
-default). Points run in parallel in a :class:`concurrent.futures.ProcessPoolExecutor`;
-each worker builds the (guarded) model once, since U* and M* are parameters and the
-structure is shared. Each finished point is appended at once as one JSON line to the
+default). Points run in parallel in a :class:`concurrent.futures.ProcessPoolExecutor` on
+the local cores, or in any ``concurrent.futures`` executor passed in, e.g. a Dask
+cluster's ``Client.get_executor()`` (the ``parallel`` extra) for a distributed sweep;
+each worker process builds the (guarded) model once per scene structure, since U* and
+M* are parameters. A progress bar (tqdm, on a terminal only) counts the points. Each finished point is appended at once as one JSON line to the
 results file, so an interrupted map resumes where it stopped: points already in the file
 are skipped. The linear stability boundary ``U*_c(M*)`` is the first Hopf point of the steady branch.
 """
 from __future__ import annotations
 
+import contextlib
 import json
 import os
 import time
-from concurrent.futures import ProcessPoolExecutor, as_completed
+from concurrent.futures import Executor, ProcessPoolExecutor, as_completed
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
+from tqdm import tqdm
 
 from .hopf import critical_velocity
 from .model import build_model
@@ -30,7 +34,7 @@ __all__ = ["MAP_SCENE", "MapResult", "impact_map", "stability_boundary", "load_p
 
 MAP_SCENE = Scene(mstar=1.0, ustar=5.0, hstar=0.1, friction=0.14, k0=0.0, kl=1.0, zeta=0.01,
                   modes=10)
-_WORKER = {}
+_MODELS: dict = {}
 
 
 @dataclass(frozen=True)
@@ -72,17 +76,19 @@ def load_points(path) -> dict:
     return done
 
 
-def _init(scene, t_end, settings, criteria):
-    _WORKER.update(scene=scene, t_end=t_end, settings=settings, criteria=criteria,
-                   model=guarded_model(scene)[0])
+def _model(scene: Scene):
+    """The guarded model of ``scene``'s structure, built once per worker process."""
+    key = json.dumps(scene.replace(ustar=1.0, mstar=1.0).to_dict(), sort_keys=True)
+    if key not in _MODELS:
+        _MODELS[key] = guarded_model(scene)[0]
+    return _MODELS[key]
 
 
-def _point(ustar: float, mstar: float) -> dict:
-    w = _WORKER
-    scene = w["scene"].replace(ustar=float(ustar), mstar=float(mstar))
+def _point(scene: Scene, ustar: float, mstar: float, t_end: float, settings: Settings,
+           criteria: Criteria) -> dict:
+    scene = scene.replace(ustar=float(ustar), mstar=float(mstar))
     try:
-        run = run_case(scene, w["t_end"], settings=w["settings"], criteria=w["criteria"],
-                       model=w["model"])
+        run = run_case(scene, t_end, settings=settings, criteria=criteria, model=_model(scene))
     except Exception as err:  # a point that cannot run is data, not a crash of the map
         return {"ustar": ustar, "mstar": mstar, "outcome": "error", "message": str(err)}
     row = run.to_json()
@@ -92,10 +98,13 @@ def _point(ustar: float, mstar: float) -> dict:
 
 def impact_map(ustars, mstars, path, *, scene: Scene = MAP_SCENE, t_end: float = 30.0,
                settings: Settings = Settings(rtol=1e-7, atol=1e-9, dt_out=2e-3, chunk=1.0),
-               workers: int | None = None, progress=None) -> MapResult:
+               workers: int | None = None, executor: Executor | None = None,
+               progress=None) -> MapResult:
     """Classify every (U*, M*) of the grid; results appended to ``path`` (JSON lines).
 
-    ``workers``: processes (default: the local cores). ``progress(done, total)`` is
+    ``workers``: local processes (default: the local cores), unless ``executor`` (any
+    ``concurrent.futures.Executor``, e.g. ``dask.distributed.Client(...).get_executor()``)
+    is given, which is used as it is and not shut down. ``progress(done, total)`` is
     called after each point.
     """
     ustars, mstars = np.atleast_1d(ustars).astype(float), np.atleast_1d(mstars).astype(float)
@@ -109,17 +118,19 @@ def impact_map(ustars, mstars, path, *, scene: Scene = MAP_SCENE, t_end: float =
     criteria = Criteria(stop_on_contact=True)
     done = load_points(path)
     todo = [(u, m) for m in mstars for u in ustars if _key(u, m) not in done]
-    workers = workers or os.cpu_count() or 1
     Path(path).parent.mkdir(parents=True, exist_ok=True)
-    with open(path, "a") as out, ProcessPoolExecutor(
-            max_workers=workers, initializer=_init,
-            initargs=(scene.replace(contact=False), t_end, settings, criteria)) as pool:
-        futures = [pool.submit(_point, u, m) for u, m in todo]
+    base = scene.replace(contact=False)
+    with open(path, "a") as out, contextlib.ExitStack() as stack:
+        if executor is None:
+            executor = stack.enter_context(ProcessPoolExecutor(max_workers=workers or os.cpu_count() or 1))
+        futures = [executor.submit(_point, base, u, m, t_end, settings, criteria) for u, m in todo]
+        bar = stack.enter_context(tqdm(total=len(todo), desc="impact map", unit="point", disable=None))
         for k, fut in enumerate(as_completed(futures), start=1):
             row = fut.result()
             out.write(json.dumps(row) + "\n")
             out.flush()
             done[_key(row["ustar"], row["mstar"])] = row
+            bar.update()
             if progress:
                 progress(k, len(todo))
     points = [done[_key(u, m)] for m in mstars for u in ustars]
