@@ -1,0 +1,328 @@
+"""Impacting limit cycles versus U*: multiple shooting through the first wall contact.
+
+Collocation (:mod:`fsicas.cycles`) follows the flutter cycles up to the first contact;
+past it the stiff penalty law (k* = 1e8, eps/H = 1e-2, smoothed by ``contact_smoothing``)
+acts for a small fraction of the period and a fixed collocation mesh does not resolve it
+(docs/cycles.md, limitations). Here the cycles are continued by multiple shooting
+(``continuation.ShootingProblem``: ``m`` segments of the flow of ``M^{-1} F`` integrated
+by CVODES, whose adaptive steps resolve each impact, and its forward sensitivities for
+the exact Jacobian), on the same reparametrised field as the Hopf and collocation
+analyses (``fsicas.hopf.flutter_field``: parameter Π = Δp/(100 M*), time in units of
+T/100), with the contact law on.
+
+The library's shooting Jacobian differentiates the mapped integrator as one CasADi
+graph (all parameters, no use of the block structure): 8 s per Jacobian at N = 4,
+12 segments. :class:`_BlockShooting` evaluates it segment by segment instead (one
+sensitivity integration per segment in the n + 2 directions x_i, T, Π: 0.7 s) and keeps
+the last one, so the Floquet multipliers reuse the tangent's Jacobian.
+
+Start points: a contact-free cycle at first contact (``CycleBranch.contact`` of
+:func:`fsicas.cycles.cycle_branch`) or any cycle state and period (e.g. from a settled
+time integration), see :func:`impacting_branch`. Per point: U* (inlet velocity of the
+steady state at the same Δp, as in :mod:`fsicas.cycles`), period, tip half-amplitude,
+minimal gap over the cycle and its ratio to eps, impacts per period (separate intervals
+with a gap below eps), Floquet multipliers and stability, wall time.
+"""
+from __future__ import annotations
+
+import json
+import math
+import time
+from dataclasses import asdict, dataclass, field
+
+import casadi as ca
+import numpy as np
+import scipy.sparse as sp
+
+import continuation as C
+
+from .hopf import LOG_M, PI, PI_SCALE, TIME_SCALE, dense, flutter_field, pi_of
+from .model import Model, build_model, modal_basis
+from .scene import Scene
+from .steady import steady_state
+
+__all__ = ["ImpactSettings", "ImpactPoint", "ImpactBranch", "impacting_branch",
+           "cycle_from_trajectory", "pre_contact_start"]
+
+#: points along the beam where the gap is evaluated (endpoints included)
+GAP_POINTS = np.linspace(0.0, 1.0, 201)
+
+
+@dataclass(frozen=True)
+class ImpactSettings:
+    """``segments``: shooting segments; ``tol``: CVODES abstol = reltol (the residual and
+    its sensitivities); ``newton_tol``: corrector tolerance (inf-norm of the matching
+    conditions); ``ds``/``ds_max``: arclength steps (Euclidean norm of the shooting
+    points, 100 T and Π); ``max_points``: branch points; ``samples``: output points per
+    segment for the measurements (min gap, amplitude, impacts)."""
+
+    segments: int = 12
+    tol: float = 1e-10
+    newton_tol: float = 1e-8
+    ds: float = 0.02
+    ds_max: float = 0.2
+    max_points: int = 20
+    samples: int = 2000
+
+
+@dataclass(frozen=True)
+class ImpactPoint:
+    """One cycle of the impacting branch (``state``: the model state at phase 0)."""
+
+    ustar: float
+    pressure_drop: float
+    period: float
+    tip_amplitude: float
+    min_gap: float
+    gap_ratio: float
+    impacts: int
+    multipliers: np.ndarray = field(repr=False)
+    stable: bool = True
+    state: np.ndarray = field(repr=False, default=None)
+    wall_time: float = 0.0
+
+    @property
+    def nontrivial_multipliers(self) -> np.ndarray:
+        mu = np.asarray(self.multipliers)
+        return np.delete(mu, np.argmin(np.abs(mu - 1.0)))
+
+    def to_json(self) -> dict:
+        d = {k: v for k, v in asdict(self).items() if k not in ("multipliers", "state")}
+        d["state"] = [float(v) for v in self.state]
+        d["multipliers"] = [[float(m.real), float(m.imag)] for m in np.asarray(self.multipliers)]
+        return d
+
+    @classmethod
+    def from_json(cls, d: dict) -> "ImpactPoint":
+        d = dict(d)
+        d["multipliers"] = np.array([complex(a, b) for a, b in d["multipliers"]])
+        d["state"] = np.array(d["state"], dtype=float)
+        return cls(**d)
+
+
+@dataclass(frozen=True)
+class ImpactBranch:
+    """Shooting branch in U* from a start cycle. ``status``: "bound" (U* left
+    [ustar_min, ustar_max]), "max_points" or "failed" (``message`` says why)."""
+
+    scene: Scene
+    eps: float
+    points: list
+    status: str
+    message: str
+    wall_time: float
+
+    def column(self, name: str) -> np.ndarray:
+        return np.array([getattr(p, name) for p in self.points])
+
+    def to_json(self) -> dict:
+        return {"scene": self.scene.to_dict(), "eps": self.eps,
+                "points": [p.to_json() for p in self.points], "status": self.status,
+                "message": self.message, "wall_time": self.wall_time}
+
+    def save(self, path) -> None:
+        with open(path, "w") as f:
+            json.dump(self.to_json(), f, indent=1)
+
+    @classmethod
+    def load(cls, path) -> "ImpactBranch":
+        with open(path) as f:
+            d = json.load(f)
+        return cls(Scene.from_dict(d["scene"]), d["eps"],
+                   [ImpactPoint.from_json(p) for p in d["points"]], d["status"], d["message"],
+                   d["wall_time"])
+
+
+class _BlockShooting(C.ShootingProblem):
+    """``ShootingProblem`` with the Jacobian assembled from per-segment sensitivities in
+    the directions (x_i, T, Π) only, cached for the last X (the multipliers reuse it)."""
+
+    def __init__(self, vf, orbit, period, params, active, settings: C.ShootingSettings):
+        super().__init__(vf, orbit, period, params, active, settings=settings)
+        n, m = vf.n, self.segments
+        x, q = ca.MX.sym("x", n), ca.MX.sym("q", 2)                 # q = (T, Π)
+        k = self.free_idx[0]
+        p0 = [float(v) for v in self.system.p0]
+        p = ca.vertcat(*[q[1] if i == k else p0[i] for i in range(len(p0))])
+        f = ca.solve(vf.M(x, p), vf.F(x, p))
+        opts = {"abstol": settings.abstol, "reltol": settings.reltol,
+                "disable_internal_warnings": True}
+        ode = {"x": x, "p": q, "ode": q[0] / m * f}
+        integ = ca.integrator("segment", settings.integrator, ode, 0.0, 1.0, opts)
+        self._segment = integ.factory("segment_jac", ["x0", "p"], ["xf", "jac:xf:x0", "jac:xf:p"])
+        self._sampler = {}
+        self._ode, self._opts = ode, opts
+        self._cache = (None, None)
+
+    def jacobian(self, X):
+        if self._cache[0] is not None and np.array_equal(self._cache[0], X):
+            return self._cache[1]
+        n, m = self.vf.n, self.segments
+        xs, q = self.points(X), np.array([self.period(X), X[-1]])
+        rows, cols, vals = [], [], []
+        try:
+            for i in range(m):
+                _, A, B = self._segment(xs[i], q)
+                A, B = np.asarray(A), np.asarray(B)
+                r = np.repeat(np.arange(i * n, (i + 1) * n), n)
+                c = np.tile(np.arange(i * n, (i + 1) * n), n)
+                j = (i + 1) % m
+                rows += [r, np.arange(i * n, (i + 1) * n), np.repeat(np.arange(i * n, (i + 1) * n), 2)]
+                cols += [c, np.arange(j * n, (j + 1) * n), np.tile([n * m, n * m + 1], n)]
+                vals += [A.ravel(), -np.ones(n), B.ravel()]
+        except RuntimeError:
+            J = sp.csc_matrix((n * m + 1, n * m + 2))
+            self._cache = (np.array(X), J)
+            return J
+        rows.append(np.full(n, n * m))
+        cols.append(np.arange(n))
+        vals.append(self.system.D[n:])
+        J = sp.csc_matrix((np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))),
+                          shape=(n * m + 1, n * m + 2))
+        self._cache = (np.array(X), J)
+        return J
+
+    def sample(self, X, k: int) -> tuple[np.ndarray, np.ndarray]:
+        """(t/T in [0, 1), states (m k, n)): ``k`` outputs per segment, integrated without
+        sensitivities from each shooting point."""
+        if k not in self._sampler:
+            self._sampler[k] = ca.integrator("sampler", self.settings.integrator, self._ode, 0.0,
+                                             np.arange(1, k + 1) / k, self._opts)
+        n, m = self.vf.n, self.segments
+        q = np.array([self.period(X), X[-1]])
+        out = [np.c_[self.points(X)[i], np.asarray(self._sampler[k](x0=self.points(X)[i], p=q)["xf"])[:, :-1]]
+               for i in range(m)]
+        t = (np.arange(m)[:, None] + np.arange(k)[None, :] / k).ravel() / m
+        return t, np.concatenate([o.T for o in out])
+
+
+def impacting_branch(scene: Scene, state, period: float, pressure_drop: float, *,
+                     model: Model | None = None, ustar_min: float = 0.0, ustar_max: float = 12.0,
+                     direction: int = 1, settings: ImpactSettings = ImpactSettings()
+                     ) -> ImpactBranch:
+    """Continue the cycle through ``state`` (phase 0) with ``period`` (units of T) at
+    ``pressure_drop`` by multiple shooting in U*, on ``scene`` (contact on: the
+    penalty law acts). ``direction`` = +1 continues towards larger Δp (U*).
+
+    A start from :func:`fsicas.cycles.cycle_branch`'s ``contact`` point passes the first
+    contact; a start from a settled time integration needs the state at one crossing
+    and the full period (a cycle with several sub-cycles, see docs/cycles.md)."""
+    start = time.perf_counter()
+    if not scene.contact:
+        raise ValueError("impacting_branch needs scene.contact = True (the impact law)")
+    model = model or build_model(scene)
+    vf = flutter_field(model)
+    st = steady_state(scene, model)
+    values = dict(zip(model.parameter_names, st.p))
+    params = {PI: pressure_drop / (scene.mstar * PI_SCALE), LOG_M: math.log10(scene.mstar)}
+    params.update({k: values[k] for k in vf.par_names[2:]})
+    shoot = C.ShootingSettings(segments=settings.segments, abstol=settings.tol,
+                               reltol=settings.tol, floquet="product")
+    m = settings.segments
+    orbit = _shooting_points(vf, np.asarray(state, float), period * TIME_SCALE, params, m, shoot)
+    problem = _BlockShooting(vf, orbit, period * TIME_SCALE, params, PI, shoot)
+    gauge = _ImpactGauge(problem, model, st.x, settings.samples)
+    pi_lo = pi_of(scene, model, ustar_min) if ustar_min > 0 else 0.0
+    steps = C.ContinuationSettings(
+        ds=settings.ds, ds_min=1e-6, ds_max=settings.ds_max, direction=direction,
+        max_steps=settings.max_points - 1, bounds={PI: (pi_lo, pi_of(scene, model, ustar_max))},
+        newton=C.NewtonSettings(tol=settings.newton_tol, max_iter=8), detect=False)
+    iterator = C.ContinuationIterator(problem, C.PALC(), steps)
+    points, t_last = [], time.perf_counter()
+    for step in iterator:
+        points.append(gauge.measure(step.X, time.perf_counter() - t_last))
+        t_last = time.perf_counter()
+    status = {"bound": "bound", "max_steps": "max_points"}.get(iterator.status, "failed")
+    return ImpactBranch(scene, model.scene.contact_gap, points, status, iterator.message,
+                        time.perf_counter() - start)
+
+
+def pre_contact_start(branch, min_gap_ratio: float = 3.0):
+    """The last point of a collocation ``CycleBranch`` (contact-free model) whose min gap
+    is at least ``min_gap_ratio`` eps: there the smoothed law's force (width w = σ eps)
+    is below exp(-(min_gap_ratio - 1)/σ) of its value at contact, so the cycle is also
+    a cycle of the model with contact to that accuracy, and a start for
+    :func:`impacting_branch` (closer to contact works too, e.g. at M* = 1, N = 4,
+    k* = 1e8, σ = 0.1 from gap = 1.05 eps, but the start then differs from the
+    collocation cycle by 1e-4 in period: the softplus already pushes)."""
+    points = [p for p in branch.points if p.gap_ratio >= min_gap_ratio]
+    if not points:
+        raise ValueError(f"no cycle of the branch has min gap >= {min_gap_ratio} eps")
+    return points[-1]
+
+
+def cycle_from_trajectory(model: Model, t, x, max_subcycles: int = 6, tol: float = 1e-3
+                          ) -> tuple[np.ndarray, float, int]:
+    """(state, period, sub-cycles) of the settled cycle at the end of a trajectory.
+
+    Upward crossings of the tip through its mean over the last quarter; the period is
+    the time over the fewest crossings k (<= ``max_subcycles``) after which the state
+    returns within ``tol`` (relative, max-norm), else the k of the closest return."""
+    t, x = np.asarray(t, float), np.asarray(x, float)
+    y = x[:, model.n_modes:2 * model.n_modes] @ model.tip.phi[:, 1]
+    y = y - np.mean(y[3 * len(y) // 4:])
+    i = np.where((y[:-1] < 0) & (y[1:] >= 0))[0]
+    s = -y[i] / (y[i + 1] - y[i])
+    tc = t[i] + s * (t[i + 1] - t[i])
+    xc = x[i] + s[:, None] * (x[i + 1] - x[i])
+    if len(tc) < max_subcycles + 2:
+        raise ValueError(f"only {len(tc)} tip crossings: integrate longer")
+    miss = [np.max(np.abs(xc[-1] - xc[-1 - k])) / np.max(np.abs(xc[-1])) for k in
+            range(1, max_subcycles + 1)]
+    ok = [k for k, e in enumerate(miss, 1) if e < tol]
+    k = ok[0] if ok else int(np.argmin(miss)) + 1
+    return xc[-1], float(tc[-1] - tc[-1 - k]), k
+
+
+def _shooting_points(vf, x0, period, params, m, shoot) -> np.ndarray:
+    """The m shooting points along the flow from x0 (one period, m equal segments)."""
+    x, q = ca.MX.sym("x", vf.n), ca.MX.sym("q", len(vf.par_names))
+    f = ca.solve(vf.M(x, q), vf.F(x, q))
+    integ = ca.integrator("guess", "cvodes", {"x": x, "p": q, "ode": period * f}, 0.0,
+                          np.arange(1, m) / m, {"abstol": shoot.abstol, "reltol": shoot.reltol,
+                                                "disable_internal_warnings": True})
+    p = np.array([params[k] for k in vf.par_names])
+    xs = np.asarray(integ(x0=x0, p=p)["xf"]).T
+    return np.vstack([x0, xs])                   # the orbit at t = 0, 1/m, ..., (m - 1)/m
+
+
+class _ImpactGauge:
+    """Physical quantities of shooting unknowns X = (x_0..x_{m-1}, 100 T, Π)."""
+
+    def __init__(self, problem: _BlockShooting, model: Model, x_eq, samples: int):
+        self.problem, self.model, self.vf = problem, model, problem.vf
+        self.n, self.samples = model.n_modes, samples
+        self.eps = model.scene.contact_gap
+        self.tip = model.tip.phi[:, 1]
+        self.phi = modal_basis(model.scene, GAP_POINTS).phi
+        self.walls = np.array([w(GAP_POINTS) for w in model.scene.walls])
+        self.x_eq = np.asarray(x_eq, dtype=float)
+
+    def measure(self, X, wall_time: float) -> ImpactPoint:
+        p = self.problem.params(X)
+        mu = self.problem.multipliers(X)
+        rest = np.delete(mu, np.argmin(np.abs(mu - 1.0)))
+        _, u = self.problem.sample(X, self.samples)
+        Q = u[:, self.n:2 * self.n]
+        y = Q @ self.tip
+        yq = Q @ self.phi
+        gap = np.minimum(self.walls[0] - yq, self.walls[1] + yq).min(axis=1)
+        inside = gap < self.eps
+        impacts = int(np.sum(inside & ~np.roll(inside, 1))) if not inside.all() else 1
+        mstar = 10 ** p[self.vf.par_index(LOG_M)]
+        return ImpactPoint(ustar=self._ustar(p), pressure_drop=float(X[-1] * PI_SCALE * mstar),
+                           period=self.problem.period(X) / TIME_SCALE,
+                           tip_amplitude=float(y.max() - y.min()) / 2, min_gap=float(gap.min()),
+                           gap_ratio=float(gap.min() / self.eps), impacts=impacts,
+                           multipliers=mu, stable=bool(np.all(np.abs(rest) < 1.0)),
+                           state=self.problem.state(X).copy(), wall_time=wall_time)
+
+    def _ustar(self, p) -> float:
+        x = self.x_eq
+        for _ in range(30):
+            F = np.asarray(self.vf.rhs(x, p), dtype=float).ravel()
+            if np.max(np.abs(F)) < 1e-12:
+                break
+            x = x - np.linalg.solve(dense(self.vf.jac_x(x, p)), F)
+        self.x_eq = x
+        return float(x[-2:].sum() / self.model.scene.hstar)

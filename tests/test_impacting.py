@@ -1,0 +1,128 @@
+"""Impacting limit cycles by multiple shooting (fsicas.impacting), against the library's
+shooting Jacobian, collocation before contact and time integration after it."""
+
+import numpy as np
+import pytest
+
+import continuation as C
+from fsicas import Scene
+from fsicas.hopf import PI, PI_SCALE, TIME_SCALE, flutter_field
+from fsicas.impacting import ImpactSettings, _BlockShooting, cycle_from_trajectory, \
+    impacting_branch, _shooting_points
+from fsicas.model import build_model
+from fsicas.simulate import Settings, simulate
+from fsicas.steady import steady_state
+
+IMPACT = dict(contact=True, contact_stiffness=1e8, contact_eps=1e-2, contact_smoothing=0.1)
+
+
+def test_block_jacobian_equals_library_jacobian():
+    """The per-segment sensitivity Jacobian equals the library's (CasADi AD through the
+    mapped integrator) at an arbitrary point, N = 2, 3 segments; the closing residual of
+    shooting points from ``_shooting_points`` vanishes."""
+    scene = Scene(mstar=1.0, ustar=6.0, zeta=0.01, modes=2, **IMPACT)
+    model = build_model(scene)
+    vf = flutter_field(model)
+    st = steady_state(scene, model)
+    params = dict(zip(vf.par_names, [st.pressure_drop / PI_SCALE, 0.0] +
+                      [dict(zip(model.parameter_names, st.p))[k] for k in vf.par_names[2:]]))
+    shoot = C.ShootingSettings(segments=3, abstol=1e-10, reltol=1e-10, floquet="product")
+    x0 = st.x.copy()
+    x0[model.n_modes] += 0.02                          # q1: the beam displaced, at rest
+    orbit = _shooting_points(vf, x0, 0.13 * TIME_SCALE, params, 3, shoot)
+    problem = _BlockShooting(vf, orbit, 0.13 * TIME_SCALE, params, PI, shoot)
+    X = problem.X0
+    r = problem.residual(X)
+    assert np.max(np.abs(r[:2 * vf.n])) < 1e-8        # segments 0, 1 continue each other
+    J, J0 = problem.jacobian(X), C.ShootingProblem.jacobian(problem, X)
+    assert J.shape == J0.shape
+    assert abs(J - J0).max() < 1e-6 * abs(J0).max()
+    assert problem.jacobian(X) is J                    # cached for the multipliers
+
+
+def test_cycle_from_trajectory_finds_subharmonic_period():
+    """A synthetic period-3 signal: three tip swings of different heights."""
+    scene = Scene(modes=2)
+    model = build_model(scene)
+    t = np.linspace(0.0, 6.0, 60001)
+    base = np.sin(2 * np.pi * t / 0.1)
+    x = np.zeros((t.size, model.n_state))
+    tip = model.tip.phi[:, 1]
+    x[:, 2] = base * (1 + 0.2 * np.sin(2 * np.pi * t / 0.3)) / tip[0]
+    x[:, 0] = np.cos(2 * np.pi * t / 0.3)
+    x[:, 1] = np.sin(2 * np.pi * t / 0.3)
+    state, period, k = cycle_from_trajectory(model, t, x)
+    assert k == 3 and abs(period - 0.3) < 1e-4
+
+
+def _returns(model, traj):
+    """Upward tip crossings of zero: times and states (linear interpolation)."""
+    y = traj.x[:, model.n_modes:2 * model.n_modes] @ model.tip.phi[:, 1]
+    i = np.where((y[:-1] < 0) & (y[1:] >= 0))[0]
+    s = -y[i] / (y[i + 1] - y[i])
+    return traj.t[i] + s * (traj.t[i + 1] - traj.t[i]), traj.x[i] + s[:, None] * (traj.x[i + 1] - traj.x[i])
+
+
+@pytest.mark.slow
+def test_shooting_passes_first_contact_onto_unstable_impacting_cycles():
+    """M* = 1, N = 4: shooting from a collocation cycle before contact (gap/eps = 3.8)
+    reproduces it (independent route: collocation of the contact-free model), passes the
+    first contact, and the period-1 impacting cycles beyond are unstable (complex
+    multipliers |mu| > 1): time integration from such a cycle's state stays on it for the
+    first period and then leaves it."""
+    from fsicas.cycles import cycle_branch
+    base = Scene(mstar=1.0, zeta=0.01, modes=4, contact_eps=1e-2)
+    start = [p for p in cycle_branch(base, ustar_max=10.0).points if p.gap_ratio > 3][-1]
+    scene = base.replace(ustar=start.ustar, **IMPACT)
+    model = build_model(scene)
+    br = impacting_branch(scene, start.state, start.period, start.pressure_drop, model=model,
+                          settings=ImpactSettings(max_points=6, ds=0.02, ds_max=0.2))
+    assert br.status == "max_points" and len(br.points) == 6
+    first = br.points[0]
+    assert abs(first.period / start.period - 1) < 1e-6
+    assert abs(first.tip_amplitude / start.tip_amplitude - 1) < 1e-5
+    assert abs(first.ustar - start.ustar) < 1e-8
+    free = [p for p in br.points if p.gap_ratio > 1]
+    hit = [p for p in br.points if p.gap_ratio < 1]
+    assert free and hit and all(p.stable for p in free) and all(p.impacts == 0 for p in free)
+    assert all(not p.stable and p.impacts >= 1 for p in hit)
+    assert max(np.abs(hit[-1].nontrivial_multipliers)) > 1.5
+    assert np.all(np.diff(br.column("ustar")) > 0)
+    # time integration from the last impacting cycle
+    p = hit[-1]
+    steady = steady_state(scene.replace(ustar=p.ustar), model)
+    assert abs(steady.pressure_drop / p.pressure_drop - 1) < 1e-9
+    traj = simulate(model, steady, 15 * p.period, x0=p.state,
+                    settings=Settings(method="idas", rtol=1e-10, atol=1e-12, dt_out=1e-5))
+    assert traj.status == "success"
+    t, xs = _returns(model, traj)
+    step = np.max(np.abs(np.diff(xs, axis=0)), axis=1) / np.max(np.abs(p.state))
+    assert abs((t[1] - t[0]) / p.period - 1) < 1e-4
+    assert step[0] < 1e-5 and step[-1] > 100 * step[0]
+
+
+@pytest.mark.slow
+def test_period3_impacting_cycle_matches_time_integration():
+    """M* = 1, U* = 7, N = 4, k* = 1e8: time integration settles on an impacting cycle of
+    three tip swings; shooting from its last three swings converges to that cycle (period
+    and tip amplitude as integrated), stable, and the continuation keeps it stable."""
+    from fsicas.run import run_case
+    scene = Scene(mstar=1.0, ustar=7.0, zeta=0.01, modes=4, **IMPACT)
+    model = build_model(scene)
+    run = run_case(scene, t_end=6.0, model=model, perturbation=0.3,
+                   settings=Settings(method="idas", rtol=1e-8, atol=1e-10, dt_out=2e-5))
+    t, x = run.trajectory.t, run.trajectory.x
+    state, period, k = cycle_from_trajectory(model, t, x)
+    assert k == 3
+    tail = t > t[-1] - period
+    y = x[tail, model.n_modes:2 * model.n_modes] @ model.tip.phi[:, 1]
+    br = impacting_branch(scene, state, period, run.steady.pressure_drop, model=model,
+                          settings=ImpactSettings(max_points=2, ds=0.05, ds_max=0.5))
+    assert len(br.points) == 2
+    p = br.points[0]
+    assert abs(p.ustar - 7.0) < 1e-8
+    assert abs(p.period / period - 1) < 1e-5
+    assert abs(p.tip_amplitude / ((y.max() - y.min()) / 2) - 1) < 1e-4
+    assert p.gap_ratio < 1 and p.impacts >= 1
+    assert all(q.stable for q in br.points)
+    assert max(np.abs(p.nontrivial_multipliers)) < 0.9
