@@ -1,6 +1,9 @@
 """Small models with known answers, shared by the continuation tests."""
 
 import casadi as ca
+import numpy as np
+
+import continuation as C
 
 
 def scalar(expr_fun, n_par=1):
@@ -64,6 +67,25 @@ def mass_model(with_q=False):
     return F, M
 
 
+def van_der_pol():
+    """x'' - mu (1 - x^2) x' + x = 0 as a first-order system; p = (mu,)."""
+    x, p = ca.SX.sym("x", 2), ca.SX.sym("p", 1)
+    return ca.Function("F", [x, p], [ca.vertcat(x[1], p[0] * (1 - x[0] ** 2) * x[1] - x[0])])
+
+
+def van_der_pol_guess(t):
+    """The harmonic guess of radius 2 at phase t in [0, 1]."""
+    t = np.atleast_1d(t)
+    return np.c_[2 * np.cos(2 * np.pi * t), -2 * np.sin(2 * np.pi * t)]
+
+
+def corrected(problem):
+    """The unknowns of ``problem``'s start guess after the first corrector."""
+    step = C.ContinuationIterator(problem, C.PALC(), C.ContinuationSettings()).start()
+    assert step is not None
+    return step.X
+
+
 import types
 
 import pytest
@@ -74,4 +96,5 @@ def models():
     """The model builders above, as a namespace (tests import nothing local)."""
     return types.SimpleNamespace(
         scalar=scalar, brusselator=brusselator, hopf_normal_form=hopf_normal_form,
-        guckenheimer_holmes_a=guckenheimer_holmes_a, mass_model=mass_model)
+        guckenheimer_holmes_a=guckenheimer_holmes_a, mass_model=mass_model,
+        van_der_pol=van_der_pol, van_der_pol_guess=van_der_pol_guess, corrected=corrected)

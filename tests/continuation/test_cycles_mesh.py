@@ -7,51 +7,35 @@ import pytest
 import continuation as C
 
 
-def _vdp():
-    x, p = ca.SX.sym("x", 2), ca.SX.sym("p", 1)
-    return ca.Function("F", [x, p], [ca.vertcat(x[1], p[0] * (1 - x[0] ** 2) * x[1] - x[0])])
-
-
-def _guess(t):
-    t = np.atleast_1d(t)
-    return np.c_[2 * np.cos(2 * np.pi * t), -2 * np.sin(2 * np.pi * t)]
-
-
-def _start(problem):
-    step = C.ContinuationIterator(problem, C.PALC(), C.ContinuationSettings()).start()
-    assert step is not None
-    return step.X
-
-
 def _settings(**kw):
     return C.ContinuationSettings(ds=0.5, ds_max=5.0, max_steps=60, bounds={"mu": (0.5, 10.0)},
                                   **kw)
 
 
 @pytest.fixture(scope="module")
-def relaxation():
+def relaxation(models):
     """Van der Pol near mu = 8 (a relaxation oscillation) and its period by shooting."""
-    F = _vdp()
-    co = C.CycleProblem(F, _guess, 6.6, {"mu": 1.0}, "mu",
+    F = models.van_der_pol()
+    co = C.CycleProblem(F, models.van_der_pol_guess, 6.6, {"mu": 1.0}, "mu",
                         settings=C.CollocationSettings(ntst=40, ncol=4, adapt_every=3))
     X = list(C.ContinuationIterator(co, C.PALC(), _settings()))[-1].X
     mu, T = co.params(X)[0], co.period(X)
     sh = C.ShootingProblem(F, lambda t: co.evaluate(X, t), T, {"mu": mu}, "mu",
                            settings=C.ShootingSettings(segments=20))
-    return F, co, X, mu, sh.period(_start(sh))
+    return F, co, X, mu, sh.period(models.corrected(sh))
 
 
-def test_adapted_mesh_beats_uniform_mesh_per_unknown(relaxation):
+def test_adapted_mesh_beats_uniform_mesh_per_unknown(relaxation, models):
     """Same NTST = 40 (same number of unknowns): two equidistribution passes reduce
     the period error from ~0.3 to ~3e-7 (reference: shooting, independent route)."""
     F, co, X, mu, T_ref = relaxation
     uni = C.CycleProblem(F, lambda t: co.evaluate(X, t), co.period(X), {"mu": mu}, "mu",
                          settings=C.CollocationSettings(ntst=40, ncol=4))
-    Xu = _start(uni)
+    Xu = models.corrected(uni)
     ad, Xa = uni.remesh(Xu)
-    Xa = _start(ad)
+    Xa = models.corrected(ad)
     ad2, Xa2 = ad.remesh(Xa)
-    Xa2 = _start(ad2)
+    Xa2 = models.corrected(ad2)
     err_u, err_a = abs(uni.period(Xu) - T_ref), abs(ad2.period(Xa2) - T_ref)
     assert err_u > 1e-2 and err_a < 1e-5 and err_a < 1e-3 * err_u
     assert Xa2.size == Xu.size
@@ -59,7 +43,7 @@ def test_adapted_mesh_beats_uniform_mesh_per_unknown(relaxation):
     assert h.max() / h.min() > 10          # the mesh concentrates at the fast jumps
 
 
-def test_error_indicator_follows_order_and_drops_after_remesh():
+def test_error_indicator_follows_order_and_drops_after_remesh(models):
     """Smooth cycle (ring with e = 1/2): the indicator decreases like NTST^-(NCOL+1)."""
     x, p = ca.SX.sym("x", 2), ca.SX.sym("p", 1)
     r2 = x[0] ** 2 + x[1] ** 2
@@ -71,19 +55,19 @@ def test_error_indicator_follows_order_and_drops_after_remesh():
     for ntst in ns:
         pr = C.CycleProblem(F, lambda t: np.c_[np.cos(2 * np.pi * t), np.sin(2 * np.pi * t)],
                             7.0, {"e": 0.5}, "e", settings=C.CollocationSettings(ntst=ntst, ncol=3))
-        est.append(pr.error_estimate(_start(pr)))
+        est.append(pr.error_estimate(models.corrected(pr)))
     order = -np.polyfit(np.log(ns), np.log(est), 1)[0]
     assert abs(order - 4) < 0.5, est
 
 
-def test_adaptive_continuation_restarts_and_lowers_the_error():
+def test_adaptive_continuation_restarts_and_lowers_the_error(models):
     """adapt_every = 3 re-meshes during the run (driver restarts, columns recorded with
     each point's own mesh); at the end of the run (mu near 10) the error indicator is
     more than 10x below that of the uniform run with the same NTST."""
-    F = _vdp()
+    F = models.van_der_pol()
     runs = {}
     for adapt in (0, 3):
-        co = C.CycleProblem(F, _guess, 6.6, {"mu": 1.0}, "mu",
+        co = C.CycleProblem(F, models.van_der_pol_guess, 6.6, {"mu": 1.0}, "mu",
                             settings=C.CollocationSettings(ntst=40, ncol=4, adapt_every=adapt))
         runs[adapt] = C.continuation(co, settings=_settings())
         assert runs[adapt].status == "bound" and runs[adapt].par("mu")[-1] > 8
@@ -91,22 +75,22 @@ def test_adaptive_continuation_restarts_and_lowers_the_error():
     assert runs[3].columns["error_estimate"][-1] < 0.1 * runs[0].columns["error_estimate"][-1]
 
 
-def test_mesh_validation():
+def test_mesh_validation(models):
     with pytest.raises(ValueError, match="mesh"):
-        C.CycleProblem(_vdp(), _guess, 6.6, {"mu": 1.0}, "mu",
+        C.CycleProblem(models.van_der_pol(), models.van_der_pol_guess, 6.6, {"mu": 1.0}, "mu",
                        settings=C.CollocationSettings(ntst=3), mesh=[0, 0.5, 0.4, 1])
     with pytest.raises(ValueError, match="adapt_every"):
         C.CollocationSettings(adapt_every=-1)
 
 
-def test_van_der_pol_large_mu_matches_dorodnitsyn_asymptotics():
+def test_van_der_pol_large_mu_matches_dorodnitsyn_asymptotics(models):
     """Adaptive-mesh continuation from mu = 1 to 40 (NTST = 60). The period follows
     T3 = (3 - 2 ln 2) mu + 3 a mu^(-1/3) - (2/3) ln(mu)/mu (a = 2.338107, first Airy
     zero; Dorodnitsyn) up to the next term c/mu: mu (T - T3) stays within
     [-1.75, -1.40] for mu >= 5 and moves monotonically (measured -1.71 at mu = 5,
     -1.46 at mu = 39); at mu = 1 the published T = 6.663286859323130."""
-    F = _vdp()
-    co = C.CycleProblem(F, _guess, 6.6, {"mu": 1.0}, "mu",
+    F = models.van_der_pol()
+    co = C.CycleProblem(F, models.van_der_pol_guess, 6.6, {"mu": 1.0}, "mu",
                         settings=C.CollocationSettings(ntst=60, ncol=4, adapt_every=2))
     br = C.continuation(co, settings=C.ContinuationSettings(
         ds=0.5, ds_max=10.0, max_steps=200, bounds={"mu": (0.5, 41.0)}))

@@ -10,30 +10,14 @@ from continuation._collocation import collocation, interval_nodes
 VDP_T1 = 6.663286859323130   # Van der Pol period at mu = 1 (published benchmark value)
 
 
-def _vdp():
-    x, p = ca.SX.sym("x", 2), ca.SX.sym("p", 1)
-    return ca.Function("F", [x, p], [ca.vertcat(x[1], p[0] * (1 - x[0] ** 2) * x[1] - x[0])])
-
-
-def _guess(t):
-    t = np.atleast_1d(t)
-    return np.c_[2 * np.cos(2 * np.pi * t), -2 * np.sin(2 * np.pi * t)]
-
-
-def _start(problem):
-    step = C.ContinuationIterator(problem, C.PALC(), C.ContinuationSettings()).start()
-    assert step is not None
-    return step.X
-
-
 @pytest.fixture(scope="module")
-def vdp_routes():
-    F = _vdp()
-    co = C.CycleProblem(F, _guess, 6.6, {"mu": 1.0}, "mu",
+def vdp_routes(models):
+    F = models.van_der_pol()
+    co = C.CycleProblem(F, models.van_der_pol_guess, 6.6, {"mu": 1.0}, "mu",
                         settings=C.CollocationSettings(ntst=40, ncol=4))
-    sh = C.ShootingProblem(F, _guess, 6.6, {"mu": 1.0}, "mu",
+    sh = C.ShootingProblem(F, models.van_der_pol_guess, 6.6, {"mu": 1.0}, "mu",
                            settings=C.ShootingSettings(segments=8))
-    return co, _start(co), sh, _start(sh)
+    return co, models.corrected(co), sh, models.corrected(sh)
 
 
 def test_van_der_pol_period_by_both_routes(vdp_routes):
@@ -58,7 +42,7 @@ def test_van_der_pol_multipliers_agree_and_obey_liouville(vdp_routes):
     assert abs(np.log(ms[1].real) - trace) < 1e-7
 
 
-def test_shooting_with_state_dependent_mass():
+def test_shooting_with_state_dependent_mass(models):
     """M = (2 + x1) I on the unit circle cycle: period 4 pi, multiplier exp(-4 pi)."""
     x, p = ca.SX.sym("x", 2), ca.SX.sym("p", 1)
     r2 = x[0] ** 2 + x[1] ** 2
@@ -67,42 +51,42 @@ def test_shooting_with_state_dependent_mass():
     sh = C.ShootingProblem(F, lambda t: np.c_[np.cos(2 * np.pi * t), np.sin(2 * np.pi * t)],
                            12.0, {"e": 0.0}, "e", M=M,
                            settings=C.ShootingSettings(segments=3))
-    X = _start(sh)
+    X = models.corrected(sh)
     assert abs(sh.period(X) - 4 * np.pi) < 1e-9
     mu = sh.multipliers(X)
     assert abs(mu[0] - 1) < 1e-9 and abs(mu[1] / np.exp(-4 * np.pi) - 1) < 1e-7
 
 
-def test_shooting_branch_matches_collocation_branch():
+def test_shooting_branch_matches_collocation_branch(models):
     """Continue Van der Pol in mu by shooting; re-solve each point by collocation."""
-    F = _vdp()
-    sh = C.ShootingProblem(F, _guess, 6.6, {"mu": 1.0}, "mu",
+    F = models.van_der_pol()
+    sh = C.ShootingProblem(F, models.van_der_pol_guess, 6.6, {"mu": 1.0}, "mu",
                            settings=C.ShootingSettings(segments=8))
     br = C.continuation(sh, settings=C.ContinuationSettings(ds=0.1, ds_max=0.3, max_steps=4))
     assert br.status == "max_steps" and br.par("mu")[-1] > 1.2
     assert np.all(np.diff(br.columns["period"]) > 0) and br.stable.all()
     for mu, T, x0 in zip(br.par("mu")[1:], br.columns["period"][1:], br.x[1:]):
-        co = C.CycleProblem(F, _guess, T, {"mu": float(mu)}, "mu",
+        co = C.CycleProblem(F, models.van_der_pol_guess, T, {"mu": float(mu)}, "mu",
                             settings=C.CollocationSettings(ntst=40, ncol=4))
-        Xc = _start(co)
+        Xc = models.corrected(co)
         assert abs(co.period(Xc) - T) < 1e-8
 
 
-def test_integrator_failure_is_data():
+def test_integrator_failure_is_data(models):
     """A hopeless guess makes CVODES fail; the run ends as status 'failed'."""
-    F = _vdp()
-    sh = C.ShootingProblem(F, _guess, 6.6, {"mu": 1.0}, "mu",
+    F = models.van_der_pol()
+    sh = C.ShootingProblem(F, models.van_der_pol_guess, 6.6, {"mu": 1.0}, "mu",
                            settings=C.ShootingSettings(segments=2, abstol=1e-12))
     sh.X0[-2] = 400.0
     br = C.continuation(sh, settings=C.ContinuationSettings(max_steps=2))
     assert br.status == "failed" and len(br) == 0 and "start point" in br.message
 
 
-def test_shooting_settings_validation():
+def test_shooting_settings_validation(models):
     with pytest.raises(ValueError, match="segments"):
         C.ShootingSettings(segments=0)
     with pytest.raises(ValueError, match="integrator"):
         C.ShootingSettings(integrator="euler")
     with pytest.raises(ValueError, match="settings"):
-        C.ShootingProblem(_vdp(), _guess, 6.6, {"mu": 1.0}, "mu",
+        C.ShootingProblem(models.van_der_pol(), models.van_der_pol_guess, 6.6, {"mu": 1.0}, "mu",
                           settings=C.CollocationSettings())
