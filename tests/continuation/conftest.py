@@ -86,6 +86,17 @@ def corrected(problem):
     return step.X
 
 
+def benchmark(name):
+    """The script ``benchmarks/<name>.py`` as a module (scripts are not a package)."""
+    import importlib.util
+    import pathlib
+    path = pathlib.Path(__file__).parents[2] / "benchmarks" / f"{name}.py"
+    spec = importlib.util.spec_from_file_location(name, path)
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    return mod
+
+
 import types
 
 import pytest
@@ -97,4 +108,5 @@ def models():
     return types.SimpleNamespace(
         scalar=scalar, brusselator=brusselator, hopf_normal_form=hopf_normal_form,
         guckenheimer_holmes_a=guckenheimer_holmes_a, mass_model=mass_model,
-        van_der_pol=van_der_pol, van_der_pol_guess=van_der_pol_guess, corrected=corrected)
+        van_der_pol=van_der_pol, van_der_pol_guess=van_der_pol_guess, corrected=corrected,
+        benchmark=benchmark)

@@ -1,22 +1,11 @@
 """benchmarks/bench_cycles.py is importable; its small case hits the closed-form Hopf
 point and agrees with the NTST = 200 reference (AUTO is not needed)."""
 
-import importlib.util
-import pathlib
-
 import numpy as np
 
 
-def load_bench():
-    path = pathlib.Path(__file__).parents[2] / "benchmarks" / "bench_cycles.py"
-    spec = importlib.util.spec_from_file_location("bench_cycles", path)
-    mod = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(mod)
-    return mod
-
-
-def test_bench_cycles_small_case():
-    bench = load_bench()
+def test_bench_cycles_small_case(models):
+    bench = models.benchmark("bench_cycles")
     run = bench.ours(4, 4, "product")            # two cells
     assert abs(run["hopf_B"] - bench.hopf_b(4)) < 1e-10
     X = run["steps"][-1].X
