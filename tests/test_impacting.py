@@ -126,3 +126,12 @@ def test_period3_impacting_cycle_matches_time_integration():
     assert p.gap_ratio < 1 and p.impacts >= 1
     assert all(q.stable for q in br.points)
     assert max(np.abs(p.nontrivial_multipliers)) < 0.9
+
+
+def test_impact_settings_validation():
+    with pytest.raises(ValueError, match="segments"):
+        ImpactSettings(segments=0)
+    with pytest.raises(ValueError, match="tol"):
+        ImpactSettings(tol=-1.0)
+    with pytest.raises(ValueError, match="contact"):
+        impacting_branch(Scene(modes=2), np.zeros(6), 0.1, 1.0)
