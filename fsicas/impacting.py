@@ -233,7 +233,13 @@ def impacting_branch(scene: Scene, state, period: float, pressure_drop: float, *
     shoot = C.ShootingSettings(segments=settings.segments, abstol=settings.tol,
                                reltol=settings.tol, floquet="product")
     m = settings.segments
-    orbit = _shooting_points(vf, np.asarray(state, float), period * TIME_SCALE, params, m, shoot)
+    try:
+        orbit = _shooting_points(vf, np.asarray(state, float), period * TIME_SCALE, params, m,
+                                 shoot)
+    except RuntimeError as err:                  # CVODES failure, e.g. a gap closing
+        return ImpactBranch(scene, model.scene.contact_gap, [], "failed",
+                            f"the start cycle could not be integrated over one period: {err}",
+                            time.perf_counter() - start)
     problem = _BlockShooting(vf, orbit, period * TIME_SCALE, params, PI, shoot)
     gauge = _ImpactGauge(problem, model, st.x, settings.samples)
     pi_lo = pi_of(scene, model, ustar_min) if ustar_min > 0 else 0.0
