@@ -8,7 +8,7 @@ import continuation as C
 from fsicas import Scene
 from fsicas.hopf import PI, PI_SCALE, TIME_SCALE, flutter_field
 from fsicas.impacting import ImpactSettings, _BlockShooting, cycle_from_trajectory, \
-    impacting_branch, _shooting_points
+    impacting_branch, pre_contact_start, _shooting_points
 from fsicas.model import build_model
 from fsicas.simulate import Settings, simulate
 from fsicas.steady import steady_state
@@ -72,7 +72,8 @@ def test_shooting_passes_first_contact_onto_unstable_impacting_cycles():
     first period and then leaves it."""
     from fsicas.cycles import cycle_branch
     base = Scene(mstar=1.0, zeta=0.01, modes=4, contact_eps=1e-2)
-    start = [p for p in cycle_branch(base, ustar_max=10.0).points if p.gap_ratio > 3][-1]
+    start = pre_contact_start(cycle_branch(base, ustar_max=10.0))
+    assert 3 < start.gap_ratio < 4
     scene = base.replace(ustar=start.ustar, **IMPACT)
     model = build_model(scene)
     br = impacting_branch(scene, start.state, start.period, start.pressure_drop, model=model,
