@@ -37,8 +37,8 @@ import scipy.optimize
 
 import continuation as C
 
-from .hopf import LOG_M, PI, PI_SCALE, TIME_SCALE, CriticalVelocityError, HopfPoint, dense, \
-    pi_of, critical_velocity, flutter_problem
+from .hopf import LOG_M, PI, PI_SCALE, TIME_SCALE, CriticalVelocityError, HopfPoint, \
+    critical_velocity, flutter_problem, pi_of, steady_ustar
 from .model import Model, build_model, modal_basis
 from .scene import Scene
 
@@ -271,15 +271,9 @@ class _Gauge:
         return float(min(res.fun, values[k]))
 
     def _ustar(self, p) -> float:
-        """(Q1 + Q2)/H* of the steady state at the parameters p (Newton, warm start)."""
-        x = self.x_eq
-        for _ in range(30):
-            F = np.asarray(self.vf.rhs(x, p), dtype=float).ravel()
-            if np.max(np.abs(F)) < 1e-12:
-                break
-            x = x - np.linalg.solve(dense(self.vf.jac_x(x, p)), F)
-        self.x_eq = x
-        return float(x[-2:].sum() / self.model.scene.hstar)
+        """U* of the steady state at the parameters p (warm-started from the last one)."""
+        ustar, self.x_eq = steady_ustar(self.vf, p, self.x_eq, self.model.scene.hstar)
+        return ustar
 
     # -- special points --------------------------------------------------------------
     def locate(self, kind: str, a, b, newton) -> CyclePoint:

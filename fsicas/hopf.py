@@ -25,7 +25,7 @@ from .scene import Scene
 from .steady import steady_state
 
 __all__ = ["HopfPoint", "CriticalVelocityError", "flutter_problem", "hopf_points",
-           "critical_velocity", "reparametrized_field", "pi_of", "dense"]
+           "critical_velocity", "reparametrized_field", "pi_of", "steady_ustar", "dense"]
 
 PI, LOG_M = "kinematic_pressure_drop", "log10_mstar"
 PI_SCALE, TIME_SCALE = 100.0, 100.0
@@ -168,6 +168,18 @@ def critical_velocity(scene: Scene, model: Model | None = None, ustar_max: float
     """The first Hopf point (flutter onset) of the steady branch, or None below ustar_max."""
     points = hopf_points(scene, model, ustar_max, ustar_start)
     return points[0] if points else None
+
+
+def steady_ustar(vf, p, x_guess, hstar: float) -> tuple[float, np.ndarray]:
+    """U* = (Q1 + Q2)/H* of the steady state of the adapted field ``vf`` at parameters p,
+    and that state (Newton from ``x_guess``, to |F| < 1e-12): the inverse of :func:`pi_of`."""
+    x = np.asarray(x_guess, dtype=float)
+    for _ in range(30):
+        F = np.asarray(vf.rhs(x, p), dtype=float).ravel()
+        if np.max(np.abs(F)) < 1e-12:
+            break
+        x = x - np.linalg.solve(dense(vf.jac_x(x, p)), F)
+    return float(x[-2:].sum() / hstar), x
 
 
 def pi_of(scene: Scene, model: Model, ustar: float) -> float:

@@ -40,7 +40,7 @@ import scipy.sparse as sp
 
 import continuation as C
 
-from .hopf import LOG_M, PI, PI_SCALE, TIME_SCALE, dense, flutter_field, pi_of
+from .hopf import LOG_M, PI, PI_SCALE, TIME_SCALE, flutter_field, pi_of, steady_ustar
 from .model import Model, build_model, modal_basis
 from .scene import Scene
 from .steady import steady_state
@@ -202,7 +202,7 @@ class _BlockShooting(C.ShootingProblem):
         if k not in self._sampler:
             self._sampler[k] = ca.integrator("sampler", self.settings.integrator, self._ode, 0.0,
                                              np.arange(1, k + 1) / k, self._opts)
-        n, m = self.vf.n, self.segments
+        m = self.segments
         q = np.array([self.period(X), X[-1]])
         out = [np.c_[self.points(X)[i], np.asarray(self._sampler[k](x0=self.points(X)[i], p=q)["xf"])[:, :-1]]
                for i in range(m)]
@@ -342,11 +342,6 @@ class _ImpactGauge:
                            state=self.problem.state(X).copy(), wall_time=wall_time)
 
     def _ustar(self, p) -> float:
-        x = self.x_eq
-        for _ in range(30):
-            F = np.asarray(self.vf.rhs(x, p), dtype=float).ravel()
-            if np.max(np.abs(F)) < 1e-12:
-                break
-            x = x - np.linalg.solve(dense(self.vf.jac_x(x, p)), F)
-        self.x_eq = x
-        return float(x[-2:].sum() / self.model.scene.hstar)
+        """U* of the steady state at the parameters p (warm-started from the last one)."""
+        ustar, self.x_eq = steady_ustar(self.vf, p, self.x_eq, self.model.scene.hstar)
+        return ustar
