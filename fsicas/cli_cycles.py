@@ -1,4 +1,5 @@
-"""CLI command ``fsicas cycles``: the flutter limit-cycle branch versus U* (docs/cycles.md).
+"""CLI command ``fsicas lco`` (alias ``cycles``): the flutter limit-cycle branch versus U*
+(docs/cycles.md); ``lco`` is the name the command-line contract (shared DESIGN.md) fixes.
 
 Registered by :func:`add_cycle_commands` from ``fsicas.cli._parser``, like the time
 integration commands of ``fsicas.cli_time``.
@@ -11,8 +12,8 @@ _POINT_KEYS = ("kind", "ustar", "period", "frequency", "tip_amplitude", "gap_rat
 
 
 def add_cycle_commands(sub, add_scene_options) -> None:
-    """Add the ``cycles`` subcommand."""
-    p = sub.add_parser("cycles", help="limit cycles vs U* by collocation continuation from the "
+    """Add the ``lco`` subcommand (alias ``cycles``)."""
+    p = sub.add_parser("lco", aliases=["cycles"], help="limit cycles vs U* by collocation continuation from the "
                                       "first Hopf point, up to the first contact")
     add_scene_options(p)
     p.add_argument("--ustar-max", type=float, default=20.0, help="stop beyond this U*")

@@ -143,14 +143,11 @@ def test_no_hopf_point_below_ustar_max_raises():
 
 
 def test_cli_cycles_json_and_files(tmp_path, capsys):
-    """``fsicas cycles`` as registered by fsicas.cli_cycles (parser built here)."""
-    import argparse
+    """``fsicas lco`` (the contract's name; alias ``cycles``) on the package's parser."""
     import json
-    from fsicas.cli import _add_scene_options
-    from fsicas.cli_cycles import add_cycle_commands
-    parser = argparse.ArgumentParser()
-    add_cycle_commands(parser.add_subparsers(dest="command"), _add_scene_options)
-    args = parser.parse_args(["cycles", "--mstar", "1", "--zeta", "0.01", "--modes", "4",
+    from fsicas.cli import _parser
+    parser = _parser()
+    args = parser.parse_args(["lco", "--mstar", "1", "--zeta", "0.01", "--modes", "4",
                               "--max-points", "12", "--out", str(tmp_path / "b.json"),
                               "--plot", str(tmp_path / "b.png"), "--json"])
     out = json.loads(json.dumps(args.run(args)))
