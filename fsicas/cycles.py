@@ -42,7 +42,7 @@ from .hopf import LOG_M, PI, PI_SCALE, TIME_SCALE, CriticalVelocityError, HopfPo
 from .model import Model, build_model, modal_basis
 from .scene import Scene
 
-__all__ = ["CycleSettings", "CyclePoint", "CycleBranch", "cycle_branch"]
+__all__ = ["CycleSettings", "CyclePoint", "CycleBranch", "CycleRecord", "SavedBranch", "cycle_branch"]
 
 #: points along the beam where the gap is evaluated (endpoints included)
 GAP_POINTS = np.linspace(0.0, 1.0, 201)
@@ -68,8 +68,48 @@ class CycleSettings:
     stop_at_contact: bool = True
 
 
+class CycleRecord:
+    """JSON of a frozen cycle dataclass with array fields ``multipliers`` (complex) and
+    ``state``; ``_derived`` names properties written for readers and skipped on reading."""
+
+    _derived: tuple = ()
+
+    @property
+    def nontrivial_multipliers(self) -> np.ndarray:
+        """All multipliers but the one nearest 1 (the trivial one)."""
+        mu = np.asarray(self.multipliers)
+        return np.delete(mu, np.argmin(np.abs(mu - 1.0)))
+
+    def to_json(self) -> dict:
+        d = {k: v for k, v in asdict(self).items() if k not in ("multipliers", "state")}
+        d.update({k: getattr(self, k) for k in self._derived})
+        d["state"] = [float(v) for v in self.state]
+        d["multipliers"] = [[float(m.real), float(m.imag)] for m in np.asarray(self.multipliers)]
+        return d
+
+    @classmethod
+    def from_json(cls, d: dict):
+        d = {k: v for k, v in d.items() if k not in cls._derived}
+        d["multipliers"] = np.array([complex(a, b) for a, b in d["multipliers"]])
+        d["state"] = np.array(d["state"], dtype=float)
+        return cls(**d)
+
+
+class SavedBranch:
+    """``save(path)`` / ``load(path)`` of a branch through its ``to_json`` / ``from_json``."""
+
+    def save(self, path) -> None:
+        with open(path, "w") as f:
+            json.dump(self.to_json(), f, indent=1)
+
+    @classmethod
+    def load(cls, path):
+        with open(path) as f:
+            return cls.from_json(json.load(f))
+
+
 @dataclass(frozen=True)
-class CyclePoint:
+class CyclePoint(CycleRecord):
     """One cycle. ``kind``: "regular", "fold" (cycle fold) or "contact" (first contact);
     ``state``: the model state x = (r, q, Q1, Q2) on the cycle at its phase 0 (a start
     point for time integration at ``pressure_drop``); ``located``: False for a special
@@ -87,33 +127,15 @@ class CyclePoint:
     state: np.ndarray = field(repr=False, default=None)
     located: bool = True
 
+    _derived = ("frequency",)
+
     @property
     def frequency(self) -> float:
         return 2 * math.pi / self.period
 
-    @property
-    def nontrivial_multipliers(self) -> np.ndarray:
-        """All multipliers but the one nearest 1 (the trivial one), by decreasing modulus."""
-        mu = np.asarray(self.multipliers)
-        return np.delete(mu, np.argmin(np.abs(mu - 1.0)))
-
-    def to_json(self) -> dict:
-        d = {k: v for k, v in asdict(self).items() if k not in ("multipliers", "state")}
-        d["frequency"] = self.frequency
-        d["state"] = [float(v) for v in self.state]
-        d["multipliers"] = [[float(m.real), float(m.imag)] for m in np.asarray(self.multipliers)]
-        return d
-
-    @classmethod
-    def from_json(cls, d: dict) -> "CyclePoint":
-        d = {k: v for k, v in d.items() if k != "frequency"}
-        d["multipliers"] = np.array([complex(a, b) for a, b in d["multipliers"]])
-        d["state"] = np.array(d["state"], dtype=float)
-        return cls(**d)
-
 
 @dataclass(frozen=True)
-class CycleBranch:
+class CycleBranch(SavedBranch):
     """Cycles from the first Hopf point on, in order along the branch.
 
     ``hopf``: the Hopf point (``HopfPoint.to_json()``); ``folds``: located cycle folds;
@@ -141,16 +163,10 @@ class CycleBranch:
                 "contact": None if self.contact is None else self.contact.to_json(),
                 "status": self.status, "message": self.message, "wall_time": self.wall_time}
 
-    def save(self, path) -> None:
-        with open(path, "w") as f:
-            json.dump(self.to_json(), f, indent=1)
-
     @classmethod
-    def load(cls, path) -> "CycleBranch":
-        with open(path) as f:
-            d = json.load(f)
-        pts = [CyclePoint.from_json(p) for p in d["points"]]
-        return cls(Scene.from_dict(d["scene"]), d["eps"], d["hopf"], pts,
+    def from_json(cls, d: dict) -> "CycleBranch":
+        return cls(Scene.from_dict(d["scene"]), d["eps"], d["hopf"],
+                   [CyclePoint.from_json(p) for p in d["points"]],
                    [CyclePoint.from_json(p) for p in d["folds"]],
                    None if d["contact"] is None else CyclePoint.from_json(d["contact"]),
                    d["status"], d["message"], d["wall_time"])

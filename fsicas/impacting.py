@@ -29,10 +29,9 @@ taken on ``samples`` outputs per segment (not refined).
 """
 from __future__ import annotations
 
-import json
 import math
 import time
-from dataclasses import asdict, dataclass, field
+from dataclasses import dataclass, field
 
 import casadi as ca
 import numpy as np
@@ -40,6 +39,7 @@ import scipy.sparse as sp
 
 import continuation as C
 
+from .cycles import GAP_POINTS, CycleRecord, SavedBranch
 from .hopf import LOG_M, PI, PI_SCALE, TIME_SCALE, flutter_field, pi_of, steady_ustar
 from .model import Model, build_model, modal_basis
 from .scene import Scene
@@ -47,9 +47,6 @@ from .steady import steady_state
 
 __all__ = ["ImpactSettings", "ImpactPoint", "ImpactBranch", "impacting_branch",
            "cycle_from_trajectory", "pre_contact_start"]
-
-#: points along the beam where the gap is evaluated (endpoints included)
-GAP_POINTS = np.linspace(0.0, 1.0, 201)
 
 
 @dataclass(frozen=True)
@@ -80,7 +77,7 @@ class ImpactSettings:
 
 
 @dataclass(frozen=True)
-class ImpactPoint:
+class ImpactPoint(CycleRecord):
     """One cycle of the impacting branch (``state``: the model state at phase 0)."""
 
     ustar: float
@@ -95,27 +92,9 @@ class ImpactPoint:
     state: np.ndarray = field(repr=False, default=None)
     wall_time: float = 0.0
 
-    @property
-    def nontrivial_multipliers(self) -> np.ndarray:
-        mu = np.asarray(self.multipliers)
-        return np.delete(mu, np.argmin(np.abs(mu - 1.0)))
-
-    def to_json(self) -> dict:
-        d = {k: v for k, v in asdict(self).items() if k not in ("multipliers", "state")}
-        d["state"] = [float(v) for v in self.state]
-        d["multipliers"] = [[float(m.real), float(m.imag)] for m in np.asarray(self.multipliers)]
-        return d
-
-    @classmethod
-    def from_json(cls, d: dict) -> "ImpactPoint":
-        d = dict(d)
-        d["multipliers"] = np.array([complex(a, b) for a, b in d["multipliers"]])
-        d["state"] = np.array(d["state"], dtype=float)
-        return cls(**d)
-
 
 @dataclass(frozen=True)
-class ImpactBranch:
+class ImpactBranch(SavedBranch):
     """Shooting branch in U* from a start cycle. ``status``: "bound" (U* left
     [ustar_min, ustar_max]), "max_points" or "failed" (``message`` says why)."""
 
@@ -134,14 +113,8 @@ class ImpactBranch:
                 "points": [p.to_json() for p in self.points], "status": self.status,
                 "message": self.message, "wall_time": self.wall_time}
 
-    def save(self, path) -> None:
-        with open(path, "w") as f:
-            json.dump(self.to_json(), f, indent=1)
-
     @classmethod
-    def load(cls, path) -> "ImpactBranch":
-        with open(path) as f:
-            d = json.load(f)
+    def from_json(cls, d: dict) -> "ImpactBranch":
         return cls(Scene.from_dict(d["scene"]), d["eps"],
                    [ImpactPoint.from_json(p) for p in d["points"]], d["status"], d["message"],
                    d["wall_time"])
