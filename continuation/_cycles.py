@@ -47,6 +47,19 @@ class PeriodicProblem(Problem):
     #: switching); None keeps the parameter fixed at the start
     start_direction = None
 
+    def _setup(self, F, M, params, active, period, settings, settings_type) -> np.ndarray:
+        """Check ``settings`` and ``period``; set the field, the settings and the active
+        parameter; return the parameter vector."""
+        if not isinstance(settings, settings_type):
+            raise ValueError(f"settings must be a {settings_type.__name__}")
+        if not (np.isfinite(period) and period > 0):
+            raise ValueError(f"period must be a positive finite number, got {period!r}")
+        self.vf = make_field(F, M, params)
+        self.settings = settings
+        self.active, self.free = active, (active,)
+        self.free_idx = (self.vf.par_index(active),)
+        return param_vector(self.vf, params)
+
     def frame(self, X) -> np.ndarray:
         return np.arange(len(X))
 
@@ -112,16 +125,8 @@ class CycleProblem(PeriodicProblem):
     def __init__(self, F, orbit, period: float, params: Mapping[str, float], active: str,
                  *, M=None, settings: CollocationSettings | None = None, mesh=None):
         settings = CollocationSettings() if settings is None else settings
-        if not isinstance(settings, CollocationSettings):
-            raise ValueError("settings must be a CollocationSettings")
-        if not (np.isfinite(period) and period > 0):
-            raise ValueError(f"period must be a positive finite number, got {period!r}")
-        self.vf = vf = make_field(F, M, params)
-        self.settings, self.ntst, self.ncol = settings, settings.ntst, settings.ncol
-        self.active = active
-        self.free = (active,)
-        self.free_idx = (vf.par_index(active),)
-        p0 = param_vector(vf, params)
+        p0 = self._setup(F, M, params, active, period, settings, CollocationSettings)
+        vf, self.ntst, self.ncol = self.vf, settings.ntst, settings.ncol
         self.mesh = _check_mesh(mesh, self.ntst)
         self._accepted = 0
         self._last_jacobian = None

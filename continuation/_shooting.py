@@ -25,7 +25,6 @@ import scipy.sparse as sp
 
 from . import _floquet
 from ._cycles import PeriodicProblem, _sample
-from ._equilibrium import make_field, param_vector
 from ._settings import ShootingSettings
 from ._symbolic import CompiledSystem
 from ._systems import bound
@@ -68,15 +67,8 @@ class ShootingProblem(PeriodicProblem):
     def __init__(self, F, orbit, period: float, params: Mapping[str, float], active: str,
                  *, M=None, settings: ShootingSettings | None = None):
         settings = ShootingSettings() if settings is None else settings
-        if not isinstance(settings, ShootingSettings):
-            raise ValueError("settings must be a ShootingSettings")
-        if not (np.isfinite(period) and period > 0):
-            raise ValueError(f"period must be a positive finite number, got {period!r}")
-        self.vf = vf = make_field(F, M, params)
-        self.settings, self.segments = settings, settings.segments
-        self.active, self.free = active, (active,)
-        self.free_idx = (vf.par_index(active),)
-        p0 = param_vector(vf, params)
+        p0 = self._setup(F, M, params, active, period, settings, ShootingSettings)
+        vf, self.segments = self.vf, settings.segments
         xs = _sample(orbit, np.arange(self.segments) / self.segments, vf.n)
         self.X0 = np.concatenate([xs, [float(period), p0[self.free_idx[0]]]])
         key = (f"shooting_{self.segments}_{settings.integrator}_{settings.abstol:g}_"
