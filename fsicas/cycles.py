@@ -42,7 +42,7 @@ from .hopf import LOG_M, PI, PI_SCALE, TIME_SCALE, CriticalVelocityError, HopfPo
 from .model import Model, build_model, modal_basis
 from .scene import Scene
 
-__all__ = ["CycleSettings", "CyclePoint", "CycleBranch", "CycleRecord", "SavedBranch", "cycle_branch"]
+__all__ = ["CycleSettings", "CyclePoint", "CycleBranch", "CycleRecord", "BranchRecord", "cycle_branch"]
 
 #: points along the beam where the gap is evaluated (endpoints included)
 GAP_POINTS = np.linspace(0.0, 1.0, 201)
@@ -95,8 +95,13 @@ class CycleRecord:
         return cls(**d)
 
 
-class SavedBranch:
-    """``save(path)`` / ``load(path)`` of a branch through its ``to_json`` / ``from_json``."""
+class BranchRecord:
+    """A branch of cycle points: ``column(name)`` along it, ``save(path)`` / ``load(path)``
+    through its ``to_json`` / ``from_json``."""
+
+    def column(self, name: str) -> np.ndarray:
+        """One quantity along the branch, e.g. ``column("ustar")``."""
+        return np.array([getattr(p, name) for p in self.points])
 
     def save(self, path) -> None:
         with open(path, "w") as f:
@@ -135,7 +140,7 @@ class CyclePoint(CycleRecord):
 
 
 @dataclass(frozen=True)
-class CycleBranch(SavedBranch):
+class CycleBranch(BranchRecord):
     """Cycles from the first Hopf point on, in order along the branch.
 
     ``hopf``: the Hopf point (``HopfPoint.to_json()``); ``folds``: located cycle folds;
@@ -151,10 +156,6 @@ class CycleBranch(SavedBranch):
     status: str
     message: str
     wall_time: float
-
-    def column(self, name: str) -> np.ndarray:
-        """One quantity along the branch, e.g. ``column("ustar")``."""
-        return np.array([getattr(p, name) for p in self.points])
 
     def to_json(self) -> dict:
         return {"scene": self.scene.to_dict(), "eps": self.eps, "hopf": self.hopf,

@@ -39,7 +39,7 @@ import scipy.sparse as sp
 
 import continuation as C
 
-from .cycles import GAP_POINTS, CycleRecord, SavedBranch
+from .cycles import GAP_POINTS, BranchRecord, CycleRecord
 from .hopf import LOG_M, PI, PI_SCALE, TIME_SCALE, flutter_field, pi_of, steady_ustar
 from .model import Model, build_model, modal_basis
 from .scene import Scene
@@ -94,7 +94,7 @@ class ImpactPoint(CycleRecord):
 
 
 @dataclass(frozen=True)
-class ImpactBranch(SavedBranch):
+class ImpactBranch(BranchRecord):
     """Shooting branch in U* from a start cycle. ``status``: "bound" (U* left
     [ustar_min, ustar_max]), "max_points" or "failed" (``message`` says why)."""
 
@@ -104,9 +104,6 @@ class ImpactBranch(SavedBranch):
     status: str
     message: str
     wall_time: float
-
-    def column(self, name: str) -> np.ndarray:
-        return np.array([getattr(p, name) for p in self.points])
 
     def to_json(self) -> dict:
         return {"scene": self.scene.to_dict(), "eps": self.eps,
