@@ -248,16 +248,17 @@ class Integrator:
         grid = list(np.linspace(0.0, self.span, self.n_out + 1)[1:])
         opts = {"abstol": s.atol, "reltol": s.rtol, "max_num_steps": s.max_steps,
                 "disable_internal_warnings": True, "regularity_check": True}
-        xdot, jac = _explicit_ode(self.model, x, pe, t, p_t, F)
-        if s.method == "cvodes":
-            self._fn = ca.integrator("sim", "cvodes", {"x": x, "p": pe, "t": t, "ode": xdot},
-                                     0.0, grid, opts)
-        elif s.method == "idas":
+        if s.method == "idas":   # needs no Jacobian of M⁻¹F (0.12 s to build at N = 40)
             z = ca.MX.sym("z", self.model.n_state)
             residual = self.model.mass_action(x, p_t, z) - F     # M z − F without forming M
             dae = {"x": x, "z": z, "p": pe, "t": t, "ode": z, "alg": residual}
             self._idas = (dae, grid, {**opts, "calc_ic": False, "suppress_algebraic": True})
-            self._zfun = ca.Function("z0", [x, pe, t], [xdot])
+            self._zfun = ca.Function("z0", [x, pe, t], [ca.solve(self.model.mass(x, p_t), F)])
+            return
+        xdot, jac = _explicit_ode(self.model, x, pe, t, p_t, F)
+        if s.method == "cvodes":
+            self._fn = ca.integrator("sim", "cvodes", {"x": x, "p": pe, "t": t, "ode": xdot},
+                                     0.0, grid, opts)
         else:
             self._rhs = ca.Function("f", [t, x, pe], [xdot])
             self._jac = jac
