@@ -61,6 +61,17 @@ def test_paper_quick_writes_report(tmp_path, capsys):
     points = out["boundary"]["points"]
     assert len(points) == 7 and all(p["refined"] and p["omega"] > 0 for p in points)
     assert out["boundary"]["switches"]
+    # time domain (Fig. 4, Figs. 6-9): below onset decays, above it reaches the wall
+    rows = [json.loads(line) for line in (tmp_path / "fig4_map.jsonl").read_text().splitlines()]
+    outcomes = {p["ustar"]: p["outcome"] for p in rows}
+    assert outcomes == {4.0: "decay", 9.0: "contact"}
+    assert (tmp_path / "fig4_impact_map.png").exists()
+    assert [c["contact"] for c in out["impacting_cycles"]] == [True]
+    # the terminal summary repeats the report's numbers
+    from fsicas.paper import summary
+    short = summary(out)
+    assert short["boundary points"] == 7 and short["impact map (Fig. 4)"] == {"decay": 1, "contact": 1}
+    assert short["U*_c at M* = 1"] == next(p["ustar_crit"] for p in points if p["mstar"] == 1.0)
 
 
 def test_eig_json_is_sorted_and_flags_instability(capsys):
