@@ -24,6 +24,7 @@ from typing import Mapping
 
 import numpy as np
 
+from . import _blocks
 from . import _collocation as colloc
 from . import _floquet
 from . import _mesh
@@ -133,8 +134,8 @@ class CycleProblem(PeriodicProblem):
         U = _sample(orbit, colloc.node_times(self.mesh, self.ncol), vf.n)
         self.X0 = np.concatenate([U, [float(period), p0[self.free_idx[0]]]])
         D = np.concatenate([np.diff(self.mesh), self._phase(U)])
-        self.system = bound(vf, f"collocation_{self.ntst}_{self.ncol}", p0, D, self.free,
-                            colloc.builder(self.ntst, self.ncol))
+        kind, build = _collocation_system(settings)
+        self.system = bound(vf, kind, p0, D, self.free, build)
 
     # -- unknowns ------------------------------------------------------------------
     @property
@@ -227,6 +228,16 @@ class CycleProblem(PeriodicProblem):
         method = s.floquet if s.floquet != "auto" else \
             ("pencil" if self.vf.n * self.ntst <= s.pencil_max else "product")
         return _floquet.multipliers(self.transfer_matrices(X), method)
+
+
+def _collocation_system(settings: CollocationSettings) -> tuple:
+    """``(kind, builder)`` of the collocation system for ``settings.jacobian``:
+    'blocks' (pointwise kernel, NumPy assembly) or 'graph' (whole-graph CasADi AD)."""
+    ntst, ncol = settings.ntst, settings.ncol
+    if settings.jacobian == "graph":
+        return f"collocation_{ntst}_{ncol}", colloc.builder(ntst, ncol)
+    return f"collocation_blocks_{ntst}_{ncol}", _blocks.builder(ntst, ncol)
+
 
 def _check_mesh(mesh, ntst) -> np.ndarray:
     if mesh is None:

@@ -168,6 +168,10 @@ class CollocationSettings:
     unstable_tol : a non-trivial multiplier counts as unstable when
     ``|mu| > 1 + unstable_tol``. adapt_every : re-mesh (equidistribution of
     the error indicator) after every ``adapt_every`` accepted points; 0 = never.
+    jacobian : how the collocation residual and its sparse Jacobian are evaluated:
+    'blocks' (default; one mapped CasADi call for ``F``, ``F_x``, ``M``, ... at all
+    collocation points, the matrix assembled by NumPy) or 'graph' (CasADi AD of the
+    whole discretised residual; the reference path).
     """
 
     ntst: int = 20
@@ -176,9 +180,13 @@ class CollocationSettings:
     pencil_max: int = 500
     unstable_tol: float = 1e-8
     adapt_every: int = 0
+    jacobian: str = "blocks"
 
     def __post_init__(self):
         _positive_int(self, "ntst", "ncol", "pencil_max")
+        if self.jacobian not in ("blocks", "graph"):
+            raise ValueError("CollocationSettings.jacobian must be 'blocks' or 'graph', "
+                             f"got {self.jacobian!r}")
         if not (isinstance(self.adapt_every, int) and self.adapt_every >= 0):
             raise ValueError("CollocationSettings.adapt_every must be an integer >= 0, got "
                              f"{self.adapt_every!r}")

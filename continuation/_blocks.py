@@ -1,0 +1,229 @@
+"""Collocation residual and sparse Jacobian assembled from pointwise blocks.
+
+The collocation equations of ``_collocation`` at the Gauss point ``k`` of
+interval ``i`` read (``u_l = u_{i,l}`` the ``NCOL + 1`` node values)
+
+    r_ik = M(u_k, p) u'_k - h_i T F(u_k, p),
+    u_k = sum_l P[k, l] u_l,      u'_k = sum_l Dm[k, l] u_l,
+
+so their exact derivatives only need the vector field and its Jacobians at the
+``K = NTST NCOL`` collocation points (as AUTO-07p and BifurcationKit assemble them):
+
+    d r_ik / d u_l = (d(M v)/dx |_(u_k, v = u'_k) - h_i T F_x(u_k)) P[k, l] + M(u_k) Dm[k, l],
+    d r_ik / d T   = -h_i F(u_k),
+    d r_ik / d p   = d(M v)/dp |_(u_k, v = u'_k) - h_i T F_p(u_k),
+
+and the phase row ``c . U`` has the derivative ``c``. One mapped CasADi call
+evaluates ``F, M v, F_x, d(M v)/dx, M, F_p, d(M v)/dp`` at all points (the matrix
+blocks on the union ``S`` of their structural patterns); the matrix is assembled by
+NumPy on a sparsity pattern fixed per ``(NTST, NCOL)``: the CSC index arrays and the
+permutation from the assembly order to CSC order are computed once, each Jacobian
+is one kernel call, two broadcasts, one ``np.take`` and one CSC construction.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import casadi as ca
+import numpy as np
+import scipy.sparse as sp
+
+from ._collocation import collocation, interval_nodes
+from ._symbolic import BufferedFunction, as_sx_function
+from ._systems import system
+
+#: outputs of the Jacobian kernel, in order
+KERNEL_OUTPUTS = ("F", "Mv", "Fx", "Mvx", "M", "Fp", "Mvp")
+
+
+@dataclass(frozen=True)
+class PointKernel:
+    """``(x[n x K], v[n x K], p) ->`` pointwise values at ``K`` points.
+
+    ``values`` gives ``(F, M v)`` (each ``n x K``); ``jacobians`` gives
+    ``KERNEL_OUTPUTS``: ``F, M v``, the nonzeros on the pattern ``rows, cols`` (``s``
+    entries, CasADi CCS order) of ``F_x``, ``d(M v)/dx`` and ``M`` (each ``s x K``),
+    and ``F_p``, ``d(M v)/dp`` (``vec`` of ``n x n_par`` each, ``n n_par x K``).
+    """
+
+    n: int
+    n_par: int
+    K: int
+    rows: np.ndarray
+    cols: np.ndarray
+    values: BufferedFunction
+    jacobians: BufferedFunction
+
+    def evaluate(self, fun, x, v, p) -> list:
+        """Outputs of ``fun`` at points ``x, v`` (``(K, n)`` each) as ``(K, size)`` arrays."""
+        out = fun(x, v, p)
+        return [o.reshape(self.K, -1) for o in out]
+
+
+def pointwise_functions(vf):
+    """``(values, jacobians, pattern)``: single-point CasADi functions of ``(x, v, p)``.
+
+    ``pattern`` is the union of the structural patterns of ``F_x``, ``d(M v)/dx``
+    and ``M``; the matrix outputs are projected on it."""
+    S, n = vf.sym, vf.n
+    x, v, p = S.sym("x", n), S.sym("v", n), S.sym("p", len(vf.par_names))
+    f, m = vf.F_expr(x, p), vf.M_expr(x, p)
+    mv = ca.mtimes(m, v)
+    fx, mvx = ca.jacobian(f, x), ca.jacobian(mv, x)
+    pattern = fx.sparsity().unite(mvx.sparsity()).unite(ca.sparsify(m).sparsity())
+    nz = lambda a: ca.project(a, pattern).nz[:]
+    dense = lambda a: ca.vec(ca.densify(a))
+    values = ca.Function("colloc_point_values", [x, v, p], [f, mv])
+    jacobians = ca.Function("colloc_point_jacobians", [x, v, p],
+                            [f, mv, nz(fx), nz(mvx), nz(m),
+                             dense(ca.jacobian(f, p)), dense(ca.jacobian(mv, p))])
+    return values, jacobians, pattern
+
+
+def _mapped(fun: ca.Function, K: int, expand: bool) -> BufferedFunction:
+    """``fun`` mapped over ``K`` columns of ``x, v`` (``p`` shared), as one SX
+    function when ``expand``."""
+    mapped = fun.map(fun.name() + f"_{K}", "serial", K, [2], [])
+    return BufferedFunction(as_sx_function(mapped) if expand else mapped)
+
+
+def point_kernel(vf, K: int) -> PointKernel:
+    """The pointwise kernel of ``vf`` at ``K`` points. Expanded to SX when the
+    vector field is SX (a VectorField built with ``expand=False`` keeps MX)."""
+    values, jacobians, pattern = pointwise_functions(vf)
+    rows, cols = pattern.get_triplet()
+    expand = vf.sym is ca.SX
+    return PointKernel(vf.n, len(vf.par_names), K, np.asarray(rows), np.asarray(cols),
+                       _mapped(values, K, expand), _mapped(jacobians, K, expand))
+
+
+@dataclass(frozen=True)
+class Layout:
+    """A fixed CSC pattern and the permutation ``order`` from assembly order to CSC
+    data order: ``csc_matrix((vals[order], indices, indptr), shape)``."""
+
+    shape: tuple
+    order: np.ndarray
+    indices: np.ndarray
+    indptr: np.ndarray
+
+    def matrix(self, vals: np.ndarray) -> sp.csc_matrix:
+        """The sparse matrix with assembly-ordered values ``vals``."""
+        return sp.csc_matrix((np.take(vals, self.order), self.indices, self.indptr),
+                             shape=self.shape, copy=False)
+
+
+def layout(rows: np.ndarray, cols: np.ndarray, shape: tuple) -> Layout:
+    """CSC layout of the (duplicate-free) entries ``(rows, cols)`` in assembly order."""
+    order = np.lexsort((rows, cols))
+    counts = np.bincount(cols, minlength=shape[1])
+    indptr = np.concatenate([[0], np.cumsum(counts)])
+    idx = np.int32 if max(shape) < 2 ** 31 - 1 else np.int64
+    return Layout(shape, order, rows[order].astype(idx), indptr.astype(idx))
+
+
+def entries(n: int, ntst: int, ncol: int, prow: np.ndarray, pcol: np.ndarray,
+            n_par: int):
+    """Rows and columns of ``[G_U, G_T, G_p]`` in assembly order: interval blocks
+    ``(i, k, l, s)``, the ``T`` column, the phase row ``c``, then ``n_par`` dense
+    parameter columns (collocation rows only). Row of ``(i, k, a)`` is
+    ``(i NCOL + k) n + a``; column of node ``(i, l)``, component ``b`` is
+    ``((i NCOL + l) mod K) n + b``."""
+    K = ntst * ncol
+    N = n * K
+    i, k, l = np.meshgrid(np.arange(ntst), np.arange(ncol), np.arange(ncol + 1),
+                          indexing="ij")
+    point = (i * ncol + k)[..., None]
+    node = ((i * ncol + l) % K)[..., None]
+    rows = [np.broadcast_to(point * n + prow, point.shape[:3] + prow.shape).ravel()]
+    cols = [np.broadcast_to(node * n + pcol, node.shape[:3] + pcol.shape).ravel()]
+    rows += [np.arange(N), np.full(N, N)]
+    cols += [np.full(N, N), np.arange(N)]
+    for q in range(n_par):
+        rows.append(np.arange(N))
+        cols.append(np.full(N, N + 1 + q))
+    return np.concatenate(rows), np.concatenate(cols)
+
+
+class BlockCollocationSystem:
+    """The collocation system ``G(Y, p; D)``, ``Y = (U, T)``, ``D = (h, c)``, with the
+    interface of ``CompiledSystem`` (``residual``, ``jacobian``, ``n_state``,
+    ``n_equations``, ``pattern``), evaluated by pointwise blocks.
+
+    Parameters
+    ----------
+    kernel : the :class:`PointKernel` of the vector field at ``NTST NCOL`` points.
+    ntst, ncol : mesh intervals and collocation points per interval.
+    """
+
+    def __init__(self, kernel: PointKernel, ntst: int, ncol: int):
+        if kernel.K != ntst * ncol:
+            raise ValueError(f"kernel has {kernel.K} points, need ntst * ncol = "
+                             f"{ntst * ncol}")
+        self.kernel, self.ntst, self.ncol = kernel, ntst, ncol
+        self.col = collocation(ncol)
+        self.n_state = self.n_equations = kernel.n * ntst * ncol + 1
+        self._layouts: dict = {}
+        base = self._layout(0)
+        self.pattern = ((self.n_equations, self.n_state), base.indptr, base.indices)
+
+    def _layout(self, n_par: int) -> Layout:
+        """The layout of ``[G_Y, G_p[:, cols]]`` with ``n_par`` columns, built once."""
+        if n_par not in self._layouts:
+            kr = self.kernel
+            rows, cols = entries(kr.n, self.ntst, self.ncol, kr.rows, kr.cols, n_par)
+            shape = (self.n_equations, self.n_state + n_par)
+            self._layouts[n_par] = layout(rows, cols, shape)
+        return self._layouts[n_par]
+
+    def _split(self, Y, D):
+        """``U, T, h, c`` and the per-point ``h_i`` (length ``K``)."""
+        N = self.n_state - 1
+        U, T = np.asarray(Y[:N], dtype=float), float(Y[N])
+        h, c = np.asarray(D[:self.ntst], dtype=float), np.asarray(D[self.ntst:], dtype=float)
+        return U, T, h, c, np.repeat(h, self.ncol)
+
+    def points(self, U) -> tuple:
+        """``(u_k, u'_k)`` at the ``K`` collocation points, each ``(K, n)``:
+        ``u_k = sum_l P[k, l] u_l``, ``u'_k = sum_l Dm[k, l] u_l``."""
+        nodes = interval_nodes(U, self.kernel.n, self.ntst, self.ncol)
+        x = np.einsum("kl,ilj->ikj", self.col.P, nodes).reshape(-1, self.kernel.n)
+        v = np.einsum("kl,ilj->ikj", self.col.Dm, nodes).reshape(-1, self.kernel.n)
+        return x, v
+
+    def residual(self, Y, P, D) -> np.ndarray:
+        """``G = (vec(M(u_k) u'_k - h_i T F(u_k)), c . U)``."""
+        U, T, h, c, hk = self._split(Y, D)
+        x, v = self.points(U)
+        F, Mv = self.kernel.evaluate(self.kernel.values, x, v, P)
+        r = Mv - (hk * T)[:, None] * F
+        return np.append(r.ravel(), c @ U)
+
+    def jacobian(self, Y, P, D, par_columns) -> sp.csc_matrix:
+        """``[G_Y, G_p[:, par_columns]]`` as one sparse matrix (see the module doc)."""
+        U, T, h, c, hk = self._split(Y, D)
+        x, v = self.points(U)
+        kr = self.kernel
+        F, Mv, Fx, Mvx, M, Fp, Mvp = kr.evaluate(kr.jacobians, x, v, P)
+        W = (Mvx - (hk * T)[:, None] * Fx).reshape(self.ntst, self.ncol, -1)
+        Mb = M.reshape(self.ntst, self.ncol, -1)
+        blocks = np.einsum("iks,kl->ikls", W, self.col.P) + \
+            np.einsum("iks,kl->ikls", Mb, self.col.Dm)
+        cols = list(par_columns)
+        Gp = Mvp.reshape(kr.K, kr.n_par, kr.n)[:, cols, :] - \
+            (hk * T)[:, None, None] * Fp.reshape(kr.K, kr.n_par, kr.n)[:, cols, :]
+        vals = np.concatenate([blocks.ravel(), (-hk[:, None] * F).ravel(), c,
+                               Gp.transpose(1, 0, 2).ravel()])
+        return self._layout(len(cols)).matrix(vals)
+
+
+def builder(ntst: int, ncol: int):
+    """``builder(vf) -> BlockCollocationSystem``; the pointwise kernel is built once
+    per VectorField and number of points ``NTST NCOL`` (cached with its systems)."""
+    def build(vf) -> BlockCollocationSystem:
+        K = ntst * ncol
+        kernel = system(vf, f"collocation_points_{K}", lambda vf: point_kernel(vf, K))
+        return BlockCollocationSystem(kernel, ntst, ncol)
+
+    return build
