@@ -2,7 +2,10 @@
 
 Public API (everything else is private)::
 
-    continuation(problem, algorithm=PALC(), settings=ContinuationSettings()) -> Branch
+    continuation(problem, algorithm=PALC(), settings=ContinuationSettings(), *,
+                 events=(), record=None, stop=None) -> Branch
+    Event(name, function, terminal=False)     # function(problem, X) -> float
+    Status                                    # Literal type of Branch.status
     EquilibriumProblem(F, x0, params, active, *, M=None)
     HopfCurveProblem(vf, x, params, omega, free) / .from_point(problem, point, second)
     FoldCurveProblem(vf, x, params, free) / .from_point(problem, point, second)
@@ -17,10 +20,10 @@ Public API (everything else is private)::
 Plotting lives in ``continuation.plotting`` (Matplotlib is imported there only).
 """
 
-from ._branch import Branch, SpecialPoint
+from ._branch import Branch, SpecialPoint, Status
 from ._curves import FoldCurveProblem, HopfCurveProblem
 from ._cycles import CycleProblem
-from ._driver import continuation
+from ._driver import Event, continuation
 from ._equilibrium import EquilibriumProblem, hopf_point
 from ._lyapunov import first_lyapunov
 from ._palc import ContinuationIterator, Step, correct

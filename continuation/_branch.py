@@ -8,21 +8,36 @@ from __future__ import annotations
 
 import json
 from dataclasses import dataclass, field
+from typing import Literal
 
 import numpy as np
 
 FORMAT = "continuation.Branch/1"
+
+#: why a continuation run ended (``Branch.status``):
+#: 'max_steps' (``settings.max_steps`` points computed), 'bound' (a free parameter
+#: left ``settings.bounds``), 'failed' (the corrector failed at ``ds_min``, the start
+#: point did not converge), 'event' (a terminal :class:`Event` was located; the
+#: branch ends at it), 'stopped' (the ``stop`` predicate returned True or a message)
+Status = Literal["max_steps", "bound", "failed", "event", "stopped"]
+
+#: special-point kinds of the built-in problems (user events may not reuse them)
+BUILTIN_KINDS = ("fold", "hopf", "bp", "bt", "gh", "hh", "zh", "pd", "ns")
 
 
 @dataclass(frozen=True)
 class SpecialPoint:
     """A special point between points ``index - 1`` and ``index`` of a branch.
 
-    kind : 'fold', 'hopf', 'bp' (equilibria); 'bt', 'gh', 'hh', 'zh' (curves).
+    kind : 'fold', 'hopf', 'bp' (equilibria); 'bt', 'gh', 'hh', 'zh' (curves);
+        'fold', 'pd', 'ns' (cycles); or the name of a user :class:`Event`.
     status : 'converged' (located and refined to tolerance) or 'guess'.
     precision : residual of the refining Newton solve, or the arclength
         bracket of the location when not refined.
-    data : scalar characteristics, e.g. ``omega`` and ``l1`` at a Hopf point.
+    data : scalar characteristics, e.g. ``omega`` and ``l1`` at a Hopf point, the
+        ``bracket``; the real scalar values of the ``record`` callback at the point;
+        for user events also ``s`` (arclength from point ``index - 1``) and
+        ``value`` (the event function there).
     """
 
     kind: str
@@ -48,9 +63,12 @@ class Branch:
     s : arclength; ds : step that reached each point; iterations, residual :
     Newton work and final residual per point; eigenvalues : list of N arrays of
     generalized eigenvalues (sorted by decreasing real part); tests : test
-    function columns; columns : problem-specific columns (e.g. ``omega``);
-    status, message : why the run stopped; failure : residual, iterations and
-    ds of a failed corrector; stats : solver statistics.
+    function columns (and the values of the user events, under their names);
+    columns : problem-specific columns (e.g. ``period``) and those of the
+    ``record`` callback; status : why the run stopped, a :data:`Status`
+    ('max_steps', 'bound', 'failed', 'event', 'stopped'); message : says why in
+    words; failure : residual, iterations and ds of a failed corrector; stats :
+    solver statistics.
     """
 
     kind: str
@@ -66,7 +84,7 @@ class Branch:
     tests: dict
     columns: dict
     special_points: list
-    status: str
+    status: Status
     message: str
     failure: dict = field(default_factory=dict)
     stats: dict = field(default_factory=dict)

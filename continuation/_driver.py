@@ -1,85 +1,305 @@
-"""``continuation(problem, algorithm, settings) -> Branch``: a thin loop over
-the PALC step iterator that monitors points, locates special points between
-consecutive ones and collects everything into a :class:`Branch`.
+"""``continuation(problem, algorithm, settings, *, events, record, stop) -> Branch``:
+a thin loop over the PALC step iterator that monitors points, locates special
+points (built-in and user events) between consecutive ones, records
+user columns, stops on terminal events or a ``stop`` predicate, restarts
+problems that ask for it and collects everything into a :class:`Branch`.
 """
 
 from __future__ import annotations
 
+import math
 import time
-from dataclasses import replace
+from dataclasses import dataclass, replace
+from typing import Callable, Mapping, NamedTuple
 
 import numpy as np
 from tqdm.auto import tqdm
 
-from ._branch import Branch, SpecialPoint
-from ._locate import locate
-from ._palc import ContinuationIterator
+from ._branch import BUILTIN_KINDS, Branch, SpecialPoint
+from ._locate import Located, locate
+from ._palc import ContinuationIterator, Step, tangent
 from ._problem import Problem
 from ._settings import PALC, ContinuationSettings
 
 
+@dataclass(frozen=True)
+class Event:
+    """A user event: a zero of ``function(problem, X) -> float`` on the branch.
+
+    ``function`` is evaluated at every accepted point (``X``: the problem's
+    unknowns); a sign change between consecutive points is located like the
+    built-in events (Illinois regula falsi in arclength, each trial point
+    corrected by PALC, to ``settings.locate_tol``) and recorded as a
+    :class:`SpecialPoint` of kind ``name``. A ``terminal`` event ends the branch
+    at the located point (``Branch.status == 'event'``).
+    """
+
+    name: str
+    function: Callable
+    terminal: bool = False
+
+    def __post_init__(self):
+        if not (isinstance(self.name, str) and self.name.isidentifier()):
+            raise ValueError(f"Event.name must be an identifier string, got {self.name!r}")
+        if self.name in BUILTIN_KINDS:
+            raise ValueError(f"Event.name {self.name!r} is a built-in special-point kind; "
+                             f"use another name (built-in: {BUILTIN_KINDS})")
+        if not callable(self.function):
+            raise ValueError("Event.function must be callable (problem, X) -> float, got "
+                             f"{type(self.function).__name__}")
+        if not isinstance(self.terminal, bool):
+            raise ValueError(f"Event.terminal must be a bool, got {self.terminal!r}")
+
+
 def continuation(problem: Problem, algorithm: PALC | None = None,
-                 settings: ContinuationSettings | None = None) -> Branch:
+                 settings: ContinuationSettings | None = None, *, events=(),
+                 record: Callable | None = None, stop: Callable | None = None) -> Branch:
     """Continue ``problem`` with ``algorithm`` (default PALC) and ``settings``.
 
+    events : user :class:`Event` objects, evaluated at every accepted point and located
+        between points (also with ``settings.detect = False``, which only turns
+        off the problem's own test functions).
+    record : ``record(problem, X) -> {name: float | array}``, called once per
+        branch point (also after a restart, with the restarted problem); its
+        values become ``Branch.columns`` next to the problem's own columns.
+    stop : ``stop(problem, X) -> bool | str`` checked after each branch point;
+        a true value (or a non-empty message) ends the run with status 'stopped'.
+
     Never raises for numerical non-convergence: the returned branch carries
-    ``status`` ('max_steps', 'bound' or 'failed') and a ``message``.
+    ``status`` (a :data:`Status`: 'max_steps', 'bound', 'failed', 'event' or
+    'stopped') and a ``message``.
     """
     algorithm = PALC() if algorithm is None else algorithm
     settings = ContinuationSettings() if settings is None else settings
     _check(problem, algorithm, settings)
+    hooks = _hooks(events, record, stop)
     t0 = time.perf_counter()
-    rec = _Recorder(problem)
     with tqdm(total=settings.max_steps + 1, disable=not settings.progress,
               desc=f"{problem.kind} continuation", leave=False) as bar:
-        it = _run_segments(problem, algorithm, settings, rec, bar)
-    stats = {**rec.stats, "time_total": time.perf_counter() - t0}
+        run = _Run(_Recorder(problem), hooks, settings, bar)
+        it = _run_segments(problem, algorithm, settings, run)
+    stats = {**run.rec.stats, "time_total": time.perf_counter() - t0}
+    if run.halt is not None:
+        return run.rec.branch(*run.halt, {}, stats)
     message = f"reached max_steps = {settings.max_steps}" if it.status == "max_steps" \
         else it.message  # a restarted segment only knows its remaining budget
-    return rec.branch(it.status, message, it.failure, stats)
+    return run.rec.branch(it.status, message, it.failure, stats)
 
 
-def _run_segments(problem, algorithm, settings, rec, bar):
+@dataclass(frozen=True)
+class _Hooks:
+    events: tuple
+    record: Callable | None
+    stop: Callable | None
+
+
+def _hooks(events, record, stop) -> _Hooks:
+    """Validated ``events``, ``record``, ``stop`` (ValueError naming the argument)."""
+    events = (events,) if isinstance(events, Event) else tuple(events)
+    bad = [e for e in events if not isinstance(e, Event)]
+    if bad:
+        raise ValueError(f"events must be continuation.Event instances, got "
+                         f"{type(bad[0]).__name__}")
+    names = [e.name for e in events]
+    if len(set(names)) != len(names):
+        raise ValueError(f"events must have distinct names, got {names}")
+    for label, fun in (("record", record), ("stop", stop)):
+        if fun is not None and not callable(fun):
+            raise ValueError(f"{label} must be None or a callable (problem, X), got "
+                             f"{type(fun).__name__}")
+    return _Hooks(events, record, stop)
+
+
+def _run_segments(problem, algorithm, settings, run):
     """Iterate PALC; when the problem asks for a restart (reference vectors of
-    an augmented system drifted), continue with the rebuilt problem from the
-    same point, oriented by the previous tangent. Returns the last iterator."""
-    tau_ref, prev, seg_settings = None, None, settings
+    an augmented system drifted, a re-mesh), continue with the rebuilt problem
+    from the same point, oriented by the previous tangent. Returns the last
+    iterator."""
+    tau_ref, seg_settings = None, settings
     while True:
         it = ContinuationIterator(problem, algorithm, seg_settings, tau_ref)
-        restart = None
-        for step in it:
-            info = problem.monitor(step.X, step.tau, step.lu, settings)
-            if tau_ref is not None and step.ds == 0.0:  # restart point, already recorded
-                prev = (step, info)
-                continue
-            _detect(problem, prev, (step, info), settings, rec)
-            rec.add(step, info, problem.columns(step.X))
-            prev = (step, info)
-            bar.update()
-            done = len(rec.X) - 1
-            restart = problem.restart(step.X) if done < settings.max_steps else None
-            if restart is not None:
-                break
-        _merge(rec.stats, it.stats)
+        step, restart = _iterate(problem, it, tau_ref is not None, settings, run)
+        _merge(run.rec.stats, it.stats)
         if restart is None:
             return it
         problem, X_new = restart
         tau_ref = np.zeros(X_new.size)
         frame = problem.frame(X_new)
         tau_ref[frame] = step.tau[frame]
-        remaining = settings.max_steps - (len(rec.X) - 1)
-        rec.stats["restarts"] = rec.stats.get("restarts", 0) + 1
+        remaining = settings.max_steps - (len(run.rec.X) - 1)
+        run.rec.stats["restarts"] = run.rec.stats.get("restarts", 0) + 1
         seg_settings = replace(settings, max_steps=remaining,
                                ds=min(max(it.ds, settings.ds_min), settings.ds_max))
 
 
-def _detect(problem, prev, cur, settings, rec):
-    if prev is None or not settings.detect:
-        return
-    for kind in problem.events(prev[1], cur[1]):
-        found = _special(problem, kind, prev, cur, settings, len(rec.X), rec.stats)
-        if found is not None:
-            rec.special.append(found)
+def _iterate(problem, it, restarted, settings, run):
+    """One segment: ``(last step, restart or None)``; stops early on ``run.halt``."""
+    step = None
+    for step in it:
+        info = problem.monitor(step.X, step.tau, step.lu, settings)
+        if restarted and step.ds == 0.0:  # restart point, already recorded
+            run.prev = (step, info, run.prev[2])
+            continue
+        run.point(problem, step, info)
+        if run.halt is not None:
+            return step, None
+        done = len(run.rec.X) - 1
+        restart = problem.restart(step.X) if done < settings.max_steps else None
+        if restart is not None:
+            return step, restart
+    return step, None
+
+
+class _Found(NamedTuple):
+    """A special point found between two branch points, at arclength ``s``."""
+
+    s: float
+    point: SpecialPoint
+    X: np.ndarray
+    event: Event | None = None
+    located: Located | None = None
+
+
+class _Run:
+    """One run: the recorder, the user hooks, the previous point
+    ``(step, info, event values)`` and ``halt = (status, message)`` once ended."""
+
+    def __init__(self, rec, hooks: _Hooks, settings, bar):
+        self.rec, self.hooks, self.settings, self.bar = rec, hooks, settings, bar
+        self.prev, self.halt = None, None
+        self._cache = (None, {})
+
+    def point(self, problem, step, info) -> None:
+        """Record an accepted point and the special points since the previous one;
+        set ``halt`` when a terminal event or the ``stop`` predicate ends the run."""
+        cur = (step, info, self.event_values(problem, step.X))
+        found = self.specials(problem, cur)
+        hit = min((f for f in found if f.event is not None and f.event.terminal),
+                  key=lambda f: f.s, default=None)
+        if hit is not None and hit.located.bracketed:
+            self.rec.special += [f.point for f in found if f.s <= hit.s]
+            self.add(problem, self.located_step(problem, hit), hit.event)
+        else:
+            self.rec.special += [f.point for f in found]
+            self.add(problem, cur, hit.event if hit is not None else None)
+        self.prev = cur
+
+    def add(self, problem, cur, terminal: Event | None) -> None:
+        """Append ``cur`` to the branch; then apply ``terminal`` or ``stop``."""
+        step, info, values = cur
+        own, user = problem.columns(step.X), self.record(problem, step.X)
+        if not self.rec.X and set(own) & set(user):
+            raise ValueError(f"record returned columns {sorted(set(own) & set(user))} that "
+                             "the problem already records; rename them")
+        self.rec.add(step, info, {**own, **user}, values)
+        self.bar.update()
+        index = len(self.rec.X) - 1
+        if terminal is not None:
+            where = ", ".join(f"{k} = {v:.10g}" for k, v in zip(
+                problem.free, step.X[len(step.X) - len(problem.free):]))
+            self.halt = ("event", f"terminal event {terminal.name!r} at point {index} "
+                                  f"({where})")
+        elif self.hooks.stop is not None:
+            self.halt = _stopped(self.hooks.stop(problem, step.X), index)
+
+    def event_values(self, problem, X) -> dict:
+        """``{name: function(problem, X)}`` of the user events."""
+        t0 = time.perf_counter()
+        values = {e.name: float(e.function(problem, X)) for e in self.hooks.events}
+        _add_time(self.rec.stats, "time_events", t0)
+        return values
+
+    def record(self, problem, X) -> dict:
+        """The ``record`` callback's columns at ``X`` (kept for the last X)."""
+        if self.hooks.record is None:
+            return {}
+        if self._cache[0] is not None and np.array_equal(self._cache[0], X):
+            return self._cache[1]
+        t0 = time.perf_counter()
+        out = self.hooks.record(problem, X)
+        if not isinstance(out, Mapping):
+            raise ValueError(f"record must return a mapping {{name: value}}, got "
+                             f"{type(out).__name__}")
+        _add_time(self.rec.stats, "time_record", t0)
+        self._cache = (np.array(X), dict(out))
+        return self._cache[1]
+
+    def specials(self, problem, cur) -> list:
+        """Built-in (when ``settings.detect``) and user special points between
+        ``prev`` and ``cur``, sorted by arclength."""
+        if self.prev is None:
+            return []
+        found = _detect(problem, self.prev[:2], cur[:2], self.settings, self.rec)
+        found += [self.user_special(problem, e, cur) for e in self.hooks.events
+                  if _crossed(self.prev[2][e.name], cur[2][e.name])]
+        found = [f for f in found if f is not None]
+        for f in found:
+            f.point.data.update({k: v for k, v in _scalars(self.record(problem, f.X))
+                                 .items() if k not in f.point.data})
+        return sorted(found, key=lambda f: f.s)
+
+    def user_special(self, problem, event: Event, cur) -> _Found:
+        """Locate the zero of ``event`` between ``prev`` and ``cur``."""
+        t0 = time.perf_counter()
+        f = lambda X, tau, lu: float(event.function(problem, X))
+        loc = locate(problem, event.name, self.prev[:2], cur[:2], self.settings, f)
+        _add_time(self.rec.stats, "time_location", t0)
+        self.rec.stats["located"] = self.rec.stats.get("located", 0) + 1
+        status = "converged" if loc.converged else "guess"
+        data = {"bracket": float(loc.bracket), "s": loc.s, "value": loc.value}
+        point = SpecialPoint(event.name, len(self.rec.X), problem.state(loc.X),
+                             problem.par_dict(loc.X), status, float(loc.bracket), data,
+                             loc.message)
+        return _Found(loc.s, point, np.array(loc.X), event, loc)
+
+    def located_step(self, problem, hit: _Found):
+        """``(step, info, event values)`` of a located terminal event as a branch
+        point (accepted by the problem, monitored like the others)."""
+        loc, prev = hit.located, self.prev[0]
+        tau, lu = tangent(problem, loc.X, prev.tau)
+        tau = loc.tau if tau is None else tau
+        problem.accept(loc.X)
+        step = Step(loc.X, tau, loc.s, loc.iterations, loc.residual, lu)
+        info = problem.monitor(loc.X, tau, lu, self.settings)
+        return step, info, self.event_values(problem, loc.X)
+
+
+def _stopped(result, index):
+    """``('stopped', message)`` when the ``stop`` predicate's ``result`` is true."""
+    if not result:
+        return None
+    if isinstance(result, str):
+        return ("stopped", result)
+    return ("stopped", f"stop predicate returned True at point {index}")
+
+
+def _crossed(a: float, b: float) -> bool:
+    """A sign change from ``a`` to ``b`` (``b`` exactly zero counts once)."""
+    if not (math.isfinite(a) and math.isfinite(b)):
+        return False
+    return a * b < 0 or (b == 0.0 and a != 0.0)
+
+
+def _scalars(values: Mapping) -> dict:
+    """The real scalar entries of ``values`` as floats."""
+    out = {}
+    for k, v in values.items():
+        a = np.asarray(v)
+        if a.ndim == 0 and np.isrealobj(a) and a.dtype.kind in "biuf":
+            out[str(k)] = float(a)
+    return out
+
+
+def _add_time(stats, key, t0) -> None:
+    stats[key] = stats.get(key, 0.0) + time.perf_counter() - t0
+
+
+def _detect(problem, prev, cur, settings, rec) -> list:
+    """Built-in special points between ``prev`` and ``cur`` (``_Found`` or None)."""
+    if not settings.detect:
+        return []
+    return [_special(problem, kind, prev, cur, settings, len(rec.X), rec.stats)
+            for kind in problem.events(prev[1], cur[1])]
 
 
 def _merge(stats, it_stats):
@@ -101,7 +321,9 @@ def _check(problem, algorithm, settings):
         raise ValueError(f"settings.bounds names unknown parameters {sorted(unknown)}")
 
 
-def _special(problem, kind, a, b, settings, index, stats) -> SpecialPoint:
+def _special(problem, kind, a, b, settings, index, stats) -> _Found | None:
+    """Locate and describe the built-in ``kind`` between ``a`` and ``b``
+    (None when rejected)."""
     t0 = time.perf_counter()
     loc = locate(problem, kind, a, b, settings)
     if not loc.bracketed and kind in problem.verified_kinds:
@@ -117,8 +339,17 @@ def _special(problem, kind, a, b, settings, index, stats) -> SpecialPoint:
     data = {"bracket": loc.bracket, **desc.data}
     message = "; ".join(m for m in (loc.message, desc.message) if m)
     precision = desc.precision if desc.precision > 0 else loc.bracket
-    return SpecialPoint(kind, index, problem.state(desc.X), problem.par_dict(desc.X),
-                        status, float(precision), data, message)
+    point = SpecialPoint(kind, index, problem.state(desc.X), problem.par_dict(desc.X),
+                         status, float(precision), data, message)
+    return _Found(loc.s, point, np.array(desc.X))
+
+
+def _check_names(info, values) -> None:
+    """User event names must not shadow the problem's test-function columns."""
+    clash = sorted(set(values) & (set(info.tests) | set(info.counts)))
+    if clash:
+        raise ValueError(f"events {clash} have the names of test functions of the problem; "
+                         "rename them")
 
 
 class _Recorder:
@@ -127,12 +358,16 @@ class _Recorder:
     def __init__(self, problem):
         self.problem = problem
         self.X, self.steps, self.infos, self.special, self.cols = [], [], [], [], []
-        self.stats = {}
+        self.values, self.stats = [], {}
 
-    def add(self, step, info, columns):
+    def add(self, step, info, columns, values):
         """Record a point; ``columns`` are taken now, from the problem that
-        produced it (a restarted cycle problem has a different mesh)."""
+        produced it (a restarted cycle problem has a different mesh); ``values``
+        are the user events' values."""
+        if not self.X:
+            _check_names(info, values)
         self.cols.append(columns)
+        self.values.append(values)
         self.X.append(step.X)
         self.steps.append(step)
         self.infos.append(info)
@@ -146,6 +381,8 @@ class _Recorder:
                  for k in (self.infos[0].tests if self.infos else {})}
         tests.update({k: np.array([i.counts.get(k, 0) for i in self.infos], dtype=float)
                       for k in (self.infos[0].counts if self.infos else {})})
+        tests.update({k: np.array([v[k] for v in self.values])
+                      for k in (self.values[0] if self.values else {})})
         cols = self.cols
         columns = {k: np.array([c[k] for c in cols]) for k in (cols[0] if cols else {})}
         return Branch(prob.kind, prob.vf.par_names, prob.free,
