@@ -71,7 +71,8 @@ def pointwise_functions(vf):
     f, m = vf.F_expr(x, p), vf.M_expr(x, p)
     mv = ca.mtimes(m, v)
     fx, mvx = ca.jacobian(f, x), ca.jacobian(mv, x)
-    pattern = fx.sparsity().unite(mvx.sparsity()).unite(ca.sparsify(m).sparsity())
+    m = ca.sparsify(m) if S is ca.SX else m
+    pattern = fx.sparsity().unite(mvx.sparsity()).unite(m.sparsity())
     nz = lambda a: ca.project(a, pattern).nz[:]
     dense = lambda a: ca.vec(ca.densify(a))
     values = ca.Function("colloc_point_values", [x, v, p], [f, mv])
