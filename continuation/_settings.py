@@ -208,6 +208,12 @@ class ShootingSettings:
     ('cvodes', 'idas', 'rk'); abstol, reltol : integrator tolerances (their
     sensitivities give the exact Jacobian of the discrete map); floquet :
     'pencil' or 'product' (see CollocationSettings); unstable_tol as there.
+    jacobian : 'blocks' (default: one integration with forward sensitivities per
+    segment in the directions ``(x_i, T, p_free)`` only, assembled sparse and kept
+    for the last ``X``) or 'graph' (CasADi differentiates the whole mapped
+    integrator in all parameter directions; the reference). Both are CasADi
+    forward derivatives of the integrator (the sensitivity equations appended to
+    the ODE and integrated by the plugin at ``abstol``/``reltol``).
     """
 
     segments: int = 4
@@ -216,10 +222,14 @@ class ShootingSettings:
     reltol: float = 1e-12
     floquet: str = "pencil"
     unstable_tol: float = 1e-8
+    jacobian: str = "blocks"
 
     def __post_init__(self):
         _positive_int(self, "segments")
         _positive(self, "abstol", "reltol", "unstable_tol")
+        if self.jacobian not in ("blocks", "graph"):
+            raise ValueError("ShootingSettings.jacobian must be 'blocks' or 'graph', got "
+                             f"{self.jacobian!r}")
         if self.integrator not in ("cvodes", "idas", "rk"):
             raise ValueError("ShootingSettings.integrator must be 'cvodes', 'idas' or 'rk', "
                              f"got {self.integrator!r}")

@@ -8,10 +8,16 @@ the unknowns ``X = (x_0, ..., x_{m-1}, T, p)`` satisfy
     <f_ref, x_0 - x_ref> = 0           (Poincare phase condition),
 
 ``x_ref`` the last accepted ``x_0`` and ``f_ref`` the vector field there. The
-exact Jacobian comes from the integrator's forward sensitivities (CasADi
-differentiates the integrator call), and the diagonal blocks ``d phi / d x_i``
-are the transfer matrices whose product is the monodromy matrix, so the
-Floquet multipliers use the same block-cyclic pencil as collocation.
+exact Jacobian comes from the integrator's forward sensitivities. By default
+(``ShootingSettings.jacobian = 'blocks'``) each segment is integrated once with
+sensitivities in the ``n + 1 + n_free`` directions ``(x_i, T, p_free)`` only (the
+other parameters enter as a non-differentiated input) and the blocks are
+assembled sparse; ``'graph'`` lets CasADi differentiate the whole mapped
+integrator in the directions of all parameters (the reference; 2x slower at
+n = 20, see docs/continuation.md). The diagonal blocks ``d phi / d x_i`` are the
+transfer matrices whose product is the monodromy matrix, so the Floquet
+multipliers use the same block-cyclic pencil as collocation; they reuse the
+last Jacobian (the tangent's) at the same ``X``.
 ``M`` must be invertible (it is solved for symbolically: ``ca.solve``).
 """
 
@@ -30,17 +36,57 @@ from ._symbolic import CompiledSystem
 from ._systems import bound
 
 
+def options(settings: ShootingSettings) -> dict:
+    """CasADi integrator options of ``settings`` (tolerances for SUNDIALS, a fixed
+    grid for 'rk'). CasADi forms forward sensitivities by appending the variational
+    equations to the ODE, so SUNDIALS' own ``sensitivity_method``/``fsens_err_con``
+    have no effect (measured: identical Jacobians to the last bit)."""
+    if settings.integrator == "rk":
+        return {"number_of_finite_elements": 200}
+    return {"abstol": settings.abstol, "reltol": settings.reltol,
+            "disable_internal_warnings": True}
+
+
+def _rate(vf, x, p):
+    """``M(x, p)^{-1} F(x, p)`` (symbolic solve)."""
+    return vf.F(x, p) if vf.M is None else ca.solve(vf.M(x, p), vf.F(x, p))
+
+
 def flow(vf, settings: ShootingSettings) -> ca.Function:
     """Integrator of ``dx/ds = (T/m) M^{-1} F`` over ``s in [0, 1]``, params ``(T, p)``."""
     x = ca.MX.sym("x", vf.n)
     q = ca.MX.sym("q", 1 + len(vf.par_names))
     T, p = q[0], q[1:]
-    f = vf.F(x, p) if vf.M is None else ca.solve(vf.M(x, p), vf.F(x, p))
-    opts = {"abstol": settings.abstol, "reltol": settings.reltol,
-            "disable_internal_warnings": True} \
-        if settings.integrator != "rk" else {"number_of_finite_elements": 200}
     return ca.integrator("flow", settings.integrator,
-                         {"x": x, "p": q, "ode": T / settings.segments * f}, 0.0, 1.0, opts)
+                         {"x": x, "p": q, "ode": T / settings.segments * _rate(vf, x, p)},
+                         0.0, 1.0, options(settings))
+
+
+def segment_ode(vf, settings: ShootingSettings, free_idx: tuple) -> dict:
+    """ODE of one segment, ``dx/ds = (T/m) M^{-1} F``, whose parameter input is
+    ``p = (T, p_free)`` only; the full parameter vector enters as the control
+    ``u`` (its free entries unused), which the sensitivities do not differentiate."""
+    x = ca.MX.sym("x", vf.n)
+    q = ca.MX.sym("q", 1 + len(free_idx))
+    u = ca.MX.sym("u", len(vf.par_names))
+    p = ca.vertcat(*[q[1 + free_idx.index(i)] if i in free_idx else u[i]
+                     for i in range(len(vf.par_names))])
+    return {"x": x, "p": q, "u": u, "ode": q[0] / settings.segments * _rate(vf, x, p)}
+
+
+def segment_jacobian(vf, settings: ShootingSettings, free_idx: tuple) -> ca.Function:
+    """``(x0, (T, p_free), p) -> (xf, d xf/d x0, d xf/d (T, p_free))`` of one
+    segment (forward sensitivities in ``n + 1 + len(free)`` directions), built once
+    per VectorField, settings and free parameters."""
+    cache = vf.__dict__.setdefault("_shooting_segments", {})
+    key = (settings, tuple(free_idx))
+    if key not in cache:
+        integ = ca.integrator("segment", settings.integrator,
+                              segment_ode(vf, settings, tuple(free_idx)), 0.0, 1.0,
+                              options(settings))
+        cache[key] = integ.factory("segment_jac", ["x0", "p", "u"],
+                                   ["xf", "jac:xf:x0", "jac:xf:p"])
+    return cache[key]
 
 
 def builder(settings: ShootingSettings):
@@ -62,7 +108,14 @@ def builder(settings: ShootingSettings):
 
 class ShootingProblem(PeriodicProblem):
     """Branch of periodic orbits by multiple shooting (same arguments as
-    :class:`CycleProblem`, with :class:`ShootingSettings`)."""
+    :class:`CycleProblem`, with :class:`ShootingSettings`).
+
+    The residual integrates all segments without sensitivities. The Jacobian is,
+    with ``settings.jacobian == 'blocks'``, assembled from one sensitivity
+    integration per segment in the directions ``(x_i, T, p_free)``; with
+    ``'graph'``, CasADi's derivative of the whole mapped integrator. Either way the
+    last one is kept, so the Floquet multipliers at the tangent's ``X`` reuse it.
+    """
 
     def __init__(self, F, orbit, period: float, params: Mapping[str, float], active: str,
                  *, M=None, settings: ShootingSettings | None = None):
@@ -75,6 +128,9 @@ class ShootingProblem(PeriodicProblem):
                f"{settings.reltol:g}")
         self.system = bound(vf, key, p0, self._reference(xs[: vf.n], p0), self.free,
                             builder(settings))
+        self._segment = segment_jacobian(vf, settings, self.free_idx) \
+            if settings.jacobian == "blocks" else None
+        self._samplers, self._last = {}, (None, None)
 
     def residual(self, X) -> np.ndarray:
         """``G(X)``; an integrator failure gives ``inf`` (a failed Newton step, as data)."""
@@ -86,10 +142,58 @@ class ShootingProblem(PeriodicProblem):
     def jacobian(self, X):
         """Exact ``G_X`` from the integrator sensitivities (zero, hence singular for
         the corrector, if the integrator fails)."""
-        try:
-            return super().jacobian(X)
-        except RuntimeError:
+        if self._segment is None:
+            return self._graph_jacobian(X)
+        blocks = self.blocks(X)
+        if blocks is None:
             return sp.csc_matrix((self.system.compiled.n_equations, len(X)))
+        return self._assemble(*blocks)
+
+    def _graph_jacobian(self, X):
+        """CasADi's Jacobian of the whole shooting graph (kept for the last ``X``)."""
+        try:
+            J = super().jacobian(X)
+        except RuntimeError:
+            J = sp.csc_matrix((self.system.compiled.n_equations, len(X)))
+        self._last = (np.array(X), J)
+        return J
+
+    def blocks(self, X):
+        """``(A, B)``: ``A[i] = d phi / d x_i`` ``(m, n, n)`` and ``B[i] = d phi /
+        d (T, p_free)`` ``(m, n, 1 + n_free)`` of every segment at ``X`` (kept for
+        the last ``X``); None if the integrator fails."""
+        if self._last[0] is not None and np.array_equal(self._last[0], X):
+            return self._last[1]
+        q, u = self._segment_args(X)
+        try:
+            out = [self._segment(x, q, u) for x in self.points(X)]
+            blocks = (np.array([o[1].full() for o in out]), np.array([o[2].full() for o in out]))
+        except RuntimeError:
+            blocks = None
+        self._last = (np.array(X), blocks)
+        return blocks
+
+    def _segment_args(self, X):
+        """``(T, p_free)`` and the full parameter vector at ``X``."""
+        nf = len(self.free)
+        return np.r_[self.period(X), X[len(X) - nf:]], self.params(X)
+
+    def _assemble(self, A, B) -> sp.csc_matrix:
+        """``[A_i in (i, i), -I in (i, i+1 mod m), B_i in (i, (T, p_free)); f_ref^T in
+        (phase, x_0)]`` as one sparse matrix."""
+        m, n, nb = B.shape
+        seg = np.arange(m)[:, None, None] * n
+        r = seg + np.arange(n)[None, :, None]
+        eye = np.arange(m * n)
+        rows = [np.broadcast_to(r, A.shape), eye, np.broadcast_to(r, B.shape),
+                np.full(n, m * n)]
+        cols = [np.broadcast_to(seg + np.arange(n)[None, None, :], A.shape),
+                (eye + n) % (m * n), np.broadcast_to(m * n + np.arange(nb), B.shape),
+                np.arange(n)]
+        vals = [A, -np.ones(m * n), B, self.system.D[n:]]
+        flat = lambda parts: np.concatenate([np.ravel(v) for v in parts])
+        return sp.csc_matrix((flat(vals), (flat(rows), flat(cols))),
+                             shape=(m * n + 1, m * n + nb))
 
     def _reference(self, x, p) -> np.ndarray:
         M = self.vf.mass(x, p).toarray()
@@ -109,10 +213,40 @@ class ShootingProblem(PeriodicProblem):
     def columns(self, X) -> dict:
         return {"period": self.period(X)}
 
+    def sample(self, X, k: int) -> tuple[np.ndarray, np.ndarray]:
+        """``(t, x)``: the cycle at ``k`` outputs per segment, ``t = (i + j/k)/m`` in
+        ``[0, 1)`` and ``x`` of shape ``(m k, n)``, integrated without sensitivities
+        from each shooting point (``x[i k]`` is the shooting point ``x_i``). Raises
+        RuntimeError if the integrator fails."""
+        if not (isinstance(k, (int, np.integer)) and not isinstance(k, bool) and k >= 1):
+            raise ValueError(f"k must be a positive integer, got {k!r}")
+        integ = self._sampler(int(k))
+        q, u = self._segment_args(X)
+        xs = self.points(X)
+        out = [np.c_[x, integ(x0=x, p=q, u=u)["xf"].full()[:, :-1]].T for x in xs]
+        t = (np.arange(self.segments)[:, None] + np.arange(k)[None, :] / k).ravel()
+        return t / self.segments, np.concatenate(out)
+
+    def _sampler(self, k: int) -> ca.Function:
+        """Integrator of one segment with outputs at ``s = 1/k, ..., 1``."""
+        if k not in self._samplers:
+            ode = segment_ode(self.vf, self.settings, self.free_idx)
+            self._samplers[k] = ca.integrator("sampler", self.settings.integrator, ode, 0.0,
+                                              np.arange(1, k + 1) / k,
+                                              options(self.settings))
+        return self._samplers[k]
+
     def transfer_matrices(self, X) -> np.ndarray:
-        """``d phi / d x_i`` of every segment (their product is the monodromy matrix)."""
+        """``d phi / d x_i`` of every segment (their product is the monodromy
+        matrix), from the last Jacobian when it was taken at ``X``."""
         n, m = self.vf.n, self.segments
-        J = self.jacobian(X).tocsr()
+        if self._segment is not None:
+            blocks = self.blocks(X)
+            return np.zeros((m, n, n)) if blocks is None else blocks[0]
+        last = self._last
+        J = last[1] if last[0] is not None and np.array_equal(last[0], X) \
+            else self._graph_jacobian(X)
+        J = J.tocsr()
         return np.array([J[i * n:(i + 1) * n, i * n:(i + 1) * n].toarray() for i in range(m)])
 
     def multipliers(self, X) -> np.ndarray:
