@@ -216,7 +216,7 @@ def split(t: dict) -> str:
 def row(result: dict) -> str:
     """One Markdown table row of ``run_case``'s result."""
     g, b = result["times"]["graph"], result["times"]["blocks"]
-    ms = lambda key: f"{1e3 * g[key]:.2f} / {1e3 * b[key]:.2f} | {g[key] / b[key]:.0f}x"
+    ms = lambda key: f"{1e3 * g[key]:.2f} / {1e3 * b[key]:.2f} | {g[key] / b[key]:.1f}x"
     build = result["build"]
     return (f"| {result['n']} | {result['ntst']} | {result['nnz']:,} | "
             f"{build['graph']:.2f} / {build['blocks']:.2f} | {ms('jac')} | {ms('res')} | "

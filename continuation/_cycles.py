@@ -4,7 +4,9 @@ A cycle is "just another problem": ``X = (U, T, p)`` with ``U`` the node
 values of the collocation polynomial (see ``_collocation``), ``G`` the
 collocation equations ``M(u) u' = T F(u)`` plus the integral phase condition
 ``int <u, v'> dt = 0``. The reference ``v`` is the last accepted cycle
-(refreshed through ``Problem.accept``). Along the branch:
+(refreshed through ``Problem.accept``). ``G`` and its sparse Jacobian are evaluated
+by pointwise blocks (``_blocks``, ``CollocationSettings.jacobian = 'blocks'``) or by
+CasADi AD of the whole discretised residual (``'graph'``). Along the branch:
 
 * Floquet multipliers (``_floquet``) replace eigenvalues; the trivial
   multiplier's distance to 1 is recorded in ``tests['trivial_error']`` and the

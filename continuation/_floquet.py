@@ -3,8 +3,8 @@
 The linearized collocation equations of interval ``i`` (``T`` and ``p``
 fixed, ``v_{i,l}`` the node perturbations) read
 ``B_L v_{i,0} + B_R (v_{i,1}, ..., v_{i,NCOL}) = 0`` with ``B = d r_i / d u_i``
-the rows of the exact sparse CasADi Jacobian of the collocation system (it contains the ``(D_x M[v]) u'`` terms of a
-state-dependent mass). Eliminating the interior and right nodes gives the
+the rows of the exact sparse Jacobian of the collocation system (either backend; it contains the ``(D_x M[v]) u'``
+terms of a state-dependent mass). Eliminating the interior and right nodes gives the
 transfer ``v_{i+1,0} = A_i v_{i,0}``, ``A_i = -(B_R^{-1} B_L)[last n rows]``,
 and the monodromy matrix of the discretized variational equation is
 ``A_{N-1} ... A_0``. Its eigenvalues (the multipliers) are computed without
