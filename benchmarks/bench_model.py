@@ -27,7 +27,7 @@ import casadi
 import numpy as np
 
 from fsicas import Scene, build_model
-from fsicas.codegen import compile_function, compile_model
+from fsicas.model.codegen import compile_function, compile_model
 
 FUNCS = (("M", "mass"), ("F", "rhs"), ("dF/dx", "jac_rhs"))
 

@@ -25,11 +25,11 @@ import time
 import numpy as np
 
 from fsicas import Scene
-from fsicas.impact_map import MAP_SCENE, impact_map
-from fsicas.outcome import Criteria, classify
-from fsicas.run import guarded_model, run_case
-from fsicas.simulate import Settings, simulate
-from fsicas.steady import steady_state
+from fsicas.timedomain.impact_map import MAP_SCENE, impact_map
+from fsicas.timedomain.outcome import Criteria, classify
+from fsicas.timedomain.run import guarded_model, run_case
+from fsicas.timedomain.integrators import Settings, simulate
+from fsicas.linear.steady import steady_state
 
 CONTACT = dict(contact=True, contact_stiffness=1e8, contact_eps=1e-2)
 METHODS = {"idas": [1e-4, 1e-6, 1e-8, 1e-10], "cvodes": [1e-4, 1e-6, 1e-8, 1e-10],
@@ -115,8 +115,8 @@ def scaling(modes):
 
     import casadi as ca
 
-    from fsicas.breathing import PressureSchedule
-    from fsicas.simulate import _explicit_ode, _ode
+    from fsicas.timedomain.breathing import PressureSchedule
+    from fsicas.timedomain.integrators import _explicit_ode, _ode
 
     def per_call(f, *args):
         f(*args)

@@ -18,9 +18,9 @@ import time
 import numpy as np
 
 from fsicas import Scene, build_model, steady_state
-from fsicas.boundary import stability_boundary
-from fsicas.hopf import critical_velocity
-from fsicas.stability import eigenvalues
+from fsicas.linear.boundary import stability_boundary
+from fsicas.linear.hopf import critical_velocity
+from fsicas.linear.stability import eigenvalues
 
 
 def timed(fn, repeat=1):

@@ -21,17 +21,17 @@ from pathlib import Path
 import numpy as np
 
 from . import __version__
-from .beam import clamped_free_betas
-from .boundary import stability_boundary
-from .figures import _pyplot, plot_boundary, plot_mode_shapes
-from .impact_map import MAP_SCENE, impact_map
-from .model import build_model
-from .outcome import Criteria
-from .plots_time import plot_cycle, plot_map
-from .run import run_case
+from .model.beam import clamped_free_betas
+from .linear.boundary import stability_boundary
+from .plots.linear import _pyplot, plot_boundary, plot_mode_shapes
+from .timedomain.impact_map import MAP_SCENE, impact_map
+from .model.assembly import build_model
+from .timedomain.outcome import Criteria
+from .plots.timedomain import plot_cycle, plot_map
+from .timedomain.run import run_case
 from .scene import Scene
-from .simulate import Settings
-from .steady import steady_state, straight_pressure_drop
+from .timedomain.integrators import Settings
+from .linear.steady import steady_state, straight_pressure_drop
 
 __all__ = ["PAPER_SCENE", "PAPER_CONTACT", "HOLDING_CONTACT", "impacting_cycle", "run_paper", "summary"]
 

@@ -12,8 +12,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .channel import Profile
-from .quadrature import default_quad_nodes, min_quad_nodes
+from .profile import Profile
 from .units import Scales
 
 try:  # Python >= 3.11
@@ -22,6 +21,16 @@ except ModuleNotFoundError:  # pragma: no cover
     import tomli as tomllib
 
 __all__ = ["Scene", "load_scene"]
+
+
+def default_quad_nodes(n_modes: int) -> int:
+    """Nodes that integrate products of modes up to n_modes to round-off, with margin."""
+    return 2 * n_modes + 20
+
+
+def min_quad_nodes(n_modes: int) -> int:
+    """Fewest nodes accepted: below 2N the mass matrix of mode N is not resolved."""
+    return 2 * n_modes
 
 
 @dataclass(frozen=True)

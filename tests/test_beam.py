@@ -4,8 +4,8 @@ import pytest
 import scipy.optimize
 from scipy.integrate import cumulative_simpson
 
-from fsicas.beam import clamped_free_betas, clamped_free_modes
-from fsicas.quadrature import gauss_legendre
+from fsicas.model.beam import clamped_free_betas, clamped_free_modes
+from fsicas.model.quadrature import gauss_legendre
 
 # Published roots of cos(b) cosh(b) = -1 (e.g. Blevins, Formulas for natural frequency).
 PUBLISHED = [1.875104068711961, 4.694091132974175, 7.854757438237613, 10.99554073487547,

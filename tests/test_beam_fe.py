@@ -1,4 +1,4 @@
-"""Hermite-cubic FE modes of non-uniform clamped–free beams (fsicas.beam_fe).
+"""Hermite-cubic FE modes of non-uniform clamped–free beams (fsicas.model.beam_fe).
 
 Theory used for the bounds below:
 * conforming Galerkin (Rayleigh–Ritz) eigenvalues are upper bounds and converge as
@@ -17,9 +17,9 @@ import scipy.optimize
 import scipy.special
 from numpy.polynomial import legendre
 
-from fsicas import beam_fe
-from fsicas.beam import clamped_free_betas, clamped_free_modes
-from fsicas.beam_fe import nonuniform_beam_modes
+from fsicas.model import beam_fe
+from fsicas.model.beam import clamped_free_betas, clamped_free_modes
+from fsicas.model.beam_fe import nonuniform_beam_modes
 
 X = np.linspace(0.0, 1.0, 2001)
 ORIGIN = np.array([0.0])

@@ -5,9 +5,9 @@ import pytest
 import scipy.optimize
 
 from fsicas import Scene, build_model, steady_state
-from fsicas.breathing import PressureSchedule
-from fsicas.simulate import Settings, simulate
-from fsicas.stability import eigenvalues
+from fsicas.timedomain.breathing import PressureSchedule
+from fsicas.timedomain.integrators import Settings, simulate
+from fsicas.linear.stability import eigenvalues
 
 
 def test_breath_amplitude_turns_where_the_growth_rate_changes_sign():

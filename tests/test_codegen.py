@@ -1,4 +1,4 @@
-"""Compiled C code (fsicas.codegen): agreement with CasADi, on-disk cache, errors."""
+"""Compiled C code (fsicas.model.codegen): agreement with CasADi, on-disk cache, errors."""
 import subprocess
 import sys
 import textwrap
@@ -8,8 +8,8 @@ import numpy as np
 import pytest
 
 from fsicas import Profile, Scene, build_model, steady_state
-from fsicas import codegen
-from fsicas.codegen import compile_function, compile_model
+from fsicas.model import codegen
+from fsicas.model.codegen import compile_function, compile_model
 
 pytestmark = pytest.mark.skipif(
     not any(__import__("shutil").which(c) for c in ("gcc", "cc", "clang")),
@@ -97,7 +97,8 @@ def test_cache_is_hit_by_a_new_process(tmp_path):
     files = {p: p.stat().st_mtime_ns for p in tmp_path.glob("*.so")}
     assert len(files) == 4
     script = textwrap.dedent(f"""
-        from fsicas import Scene, build_model, codegen
+        from fsicas import Scene, build_model
+        from fsicas.model import codegen
         codegen.compile_model(build_model(Scene(modes=3)), cache_dir={str(tmp_path)!r})
         print(codegen.compile_count)
     """)
@@ -126,7 +127,8 @@ def test_different_structures_get_different_entries(tmp_path):
 def test_parallel_processes_share_one_entry(tmp_path):
     script = textwrap.dedent(f"""
         import numpy as np
-        from fsicas import Scene, build_model, codegen
+        from fsicas import Scene, build_model
+        from fsicas.model import codegen
         m = build_model(Scene(modes=5))
         f = codegen.compile_function(m.jac_rhs, cache_dir={str(tmp_path)!r})
         x = np.full(12, 0.2)

@@ -4,8 +4,8 @@ import numpy as np
 import pytest
 
 from fsicas import Scene, build_model, steady_state
-from fsicas.model import _ramp
-from fsicas.simulate import Settings, simulate
+from fsicas.model.contact import ramp
+from fsicas.timedomain.integrators import Settings, simulate
 
 SCENE = Scene(mstar=1.0, ustar=7.0, zeta=0.01, modes=6, contact=True, contact_stiffness=1e7,
               contact_eps=1e-2)
@@ -13,8 +13,8 @@ SCENE = Scene(mstar=1.0, ustar=7.0, zeta=0.01, modes=6, contact=True, contact_st
 
 def test_softplus_ramp_bounds():
     v = np.linspace(-1e-3, 1e-3, 2001)
-    exact = np.array(ca.evalf(_ramp(ca.DM(v), 0.0, 1e-4))).ravel()
-    smooth = np.array(ca.evalf(_ramp(ca.DM(v), 0.1, 1e-4))).ravel()
+    exact = np.array(ca.evalf(ramp(ca.DM(v), 0.0))).ravel()
+    smooth = np.array(ca.evalf(ramp(ca.DM(v), 0.1 * 1e-4))).ravel()
     assert np.array_equal(exact, np.maximum(0, v))
     width = 1e-5
     assert np.all(smooth >= exact) and np.max(smooth - exact) == pytest.approx(width * np.log(2), rel=1e-12)
@@ -72,3 +72,11 @@ def test_smooth_trajectory_converges_to_the_exact_one():
         errors.append(np.max(np.abs(tr.tip - ref.tip)))
     assert errors[1] < errors[0] / 3      # the smooth law converges to the kink as width -> 0
     assert errors[1] < 1e-2 * SCENE.hstar / 2
+
+
+def test_ramp_numpy_equals_casadi():
+    """The one contact law serves NumPy (gauges, energy) and CasADi (the model) alike."""
+    v = np.linspace(-1e-3, 1e-3, 2001)
+    for width in (0.0, 1e-5):
+        symbolic = np.array(ca.evalf(ramp(ca.DM(v), width))).ravel()
+        assert np.allclose(ramp(v, width), symbolic, rtol=1e-15, atol=1e-20)

@@ -8,12 +8,12 @@ import scipy.integrate
 
 import fsicas
 from fsicas.cycles import CycleBranch, CycleSettings, cycle_branch
-from fsicas.hopf import critical_velocity
+from fsicas.linear.hopf import critical_velocity
 from fsicas.model import build_model
-from fsicas.outcome import Criteria
-from fsicas.run import run_case
-from fsicas.simulate import Settings, gaps
-from fsicas.stability import linear_stability
+from fsicas.timedomain.outcome import Criteria
+from fsicas.timedomain.run import run_case
+from fsicas.timedomain.integrators import Settings, gaps
+from fsicas.linear.stability import linear_stability
 
 SUPER = fsicas.Scene(mstar=1.0, zeta=0.01, modes=4, contact_eps=1e-2)   # l1 < 0
 SUB = fsicas.Scene(mstar=0.2, zeta=0.01, modes=4)        # l1 > 0
@@ -138,7 +138,7 @@ def test_save_load_roundtrip(supercritical, tmp_path):
 
 
 def test_no_hopf_point_below_ustar_max_raises():
-    with pytest.raises(fsicas.hopf.CriticalVelocityError):
+    with pytest.raises(fsicas.linear.hopf.CriticalVelocityError):
         cycle_branch(SUPER, ustar_max=3.0, settings=CycleSettings(max_points=5))
 
 

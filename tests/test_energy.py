@@ -1,12 +1,13 @@
-"""Energy balance of settled cycles and flow conservation (fsicas.energy)."""
+"""Energy balance of settled cycles and flow conservation (fsicas.timedomain.energy)."""
 import numpy as np
 import pytest
 
 from fsicas import Scene
-from fsicas.energy import energy_balance, outlet_flow_rates
-from fsicas.outcome import contact_load, poincare_returns
-from fsicas.run import run_case
-from fsicas.simulate import Settings
+from fsicas.timedomain.energy import energy_balance, outlet_flow_rates
+from fsicas.model.contact import contact_load
+from fsicas.timedomain.outcome import poincare_returns
+from fsicas.timedomain.run import run_case
+from fsicas.timedomain.integrators import Settings
 
 
 def settled(scene, t_end, dt_out):

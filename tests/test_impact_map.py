@@ -4,7 +4,7 @@ import json
 import pytest
 
 from fsicas.cli import main
-from fsicas.impact_map import MAP_SCENE, impact_map, load_points
+from fsicas.timedomain.impact_map import MAP_SCENE, impact_map, load_points
 
 SCENE = MAP_SCENE.replace(modes=6)
 

@@ -1,25 +1,28 @@
-"""Impacting limit cycles by multiple shooting (fsicas.impacting), against the library's
+"""Impacting limit cycles by multiple shooting (fsicas.cycles.impacting), against the library's
 shooting Jacobian, collocation before contact and time integration after it."""
+
+from dataclasses import replace
 
 import numpy as np
 import pytest
 
 import continuation as C
 from fsicas import Scene
-from fsicas.hopf import PI, PI_SCALE, TIME_SCALE, flutter_field
-from fsicas.impacting import ImpactSettings, _BlockShooting, cycle_from_trajectory, \
-    impacting_branch, pre_contact_start, _shooting_points
+from fsicas.linear.hopf import PI, PI_SCALE, TIME_SCALE, flutter_field
+from fsicas.cycles.impacting import ImpactSettings, cycle_from_trajectory, \
+    impacting_branch, pre_contact_start, shooting_points
 from fsicas.model import build_model
-from fsicas.simulate import Settings, simulate
-from fsicas.steady import steady_state
+from fsicas.timedomain.integrators import Settings, simulate
+from fsicas.linear.steady import steady_state
 
 IMPACT = dict(contact=True, contact_stiffness=1e8, contact_eps=1e-2, contact_smoothing=0.1)
 
 
 def test_block_jacobian_equals_library_jacobian():
-    """The per-segment sensitivity Jacobian equals the library's (CasADi AD through the
-    mapped integrator) at an arbitrary point, N = 2, 3 segments; the closing residual of
-    shooting points from ``_shooting_points`` vanishes."""
+    """The per-segment sensitivity Jacobian (the library's default) equals the whole-graph
+    one (CasADi AD through the mapped integrator) on the model at an arbitrary point,
+    N = 2, 3 segments; the closing residual of shooting points from ``shooting_points``
+    vanishes."""
     scene = Scene(mstar=1.0, ustar=6.0, zeta=0.01, modes=2, **IMPACT)
     model = build_model(scene)
     vf = flutter_field(model)
@@ -29,15 +32,17 @@ def test_block_jacobian_equals_library_jacobian():
     shoot = C.ShootingSettings(segments=3, abstol=1e-10, reltol=1e-10, floquet="product")
     x0 = st.x.copy()
     x0[model.n_modes] += 0.02                          # q1: the beam displaced, at rest
-    orbit = _shooting_points(vf, x0, 0.13 * TIME_SCALE, params, 3, shoot)
-    problem = _BlockShooting(vf, orbit, 0.13 * TIME_SCALE, params, PI, shoot)
+    orbit = shooting_points(vf, x0, 0.13 * TIME_SCALE, params, 3, shoot)
+    problem = C.ShootingProblem(vf, orbit, 0.13 * TIME_SCALE, params, PI, settings=shoot)
+    graph = C.ShootingProblem(vf, orbit, 0.13 * TIME_SCALE, params, PI,
+                              settings=replace(shoot, jacobian="graph"))
     X = problem.X0
     r = problem.residual(X)
     assert np.max(np.abs(r[:2 * vf.n])) < 1e-8        # segments 0, 1 continue each other
-    J, J0 = problem.jacobian(X), C.ShootingProblem.jacobian(problem, X)
+    J, J0 = problem.jacobian(X), graph.jacobian(X)
     assert J.shape == J0.shape
     assert abs(J - J0).max() < 1e-6 * abs(J0).max()
-    assert problem.jacobian(X) is J                    # cached for the multipliers
+    assert problem.blocks(X) is problem.blocks(X)      # kept for the multipliers
 
 
 def test_cycle_from_trajectory_finds_subharmonic_period():
@@ -107,7 +112,7 @@ def test_period3_impacting_cycle_matches_time_integration():
     """M* = 1, U* = 7, N = 4, k* = 1e8: time integration settles on an impacting cycle of
     three tip swings; shooting from its last three swings converges to that cycle (period
     and tip amplitude as integrated), stable, and the continuation keeps it stable."""
-    from fsicas.run import run_case
+    from fsicas.timedomain.run import run_case
     scene = Scene(mstar=1.0, ustar=7.0, zeta=0.01, modes=4, **IMPACT)
     model = build_model(scene)
     run = run_case(scene, t_end=6.0, model=model, perturbation=0.3,

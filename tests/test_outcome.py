@@ -6,10 +6,10 @@ import pytest
 
 from fsicas import Scene
 from fsicas.cli import main
-from fsicas.outcome import Criteria, poincare_returns
-from fsicas.run import run_case
-from fsicas.simulate import Settings
-from fsicas.stability import eigenvalues
+from fsicas.timedomain.outcome import Criteria, poincare_returns
+from fsicas.timedomain.run import run_case
+from fsicas.timedomain.integrators import Settings
+from fsicas.linear.stability import eigenvalues
 
 BASE = Scene(mstar=1.0, ustar=6.5, zeta=0.01, modes=10)
 FAST = Settings(rtol=1e-8, atol=1e-10, dt_out=1e-3)

@@ -4,9 +4,9 @@ import pytest
 import scipy.optimize
 
 from fsicas import Scene, build_model, steady_state
-from fsicas.breathing import PressureSchedule
-from fsicas.simulate import Settings, eigenvector_state, gaps, initial_state, simulate
-from fsicas.stability import eigenvalues
+from fsicas.timedomain.breathing import PressureSchedule
+from fsicas.timedomain.integrators import Settings, eigenvector_state, gaps, initial_state, simulate
+from fsicas.linear.stability import eigenvalues
 
 BASE = Scene(mstar=1.0, ustar=7.0, zeta=0.01, modes=10)
 
@@ -132,7 +132,7 @@ def test_explicit_jacobian_through_the_mass_action_equals_ad_through_m():
     CVODES's custom Jacobian) equals CasADi's AD of solve(M, F), at a moving state with
     the contact load on and a time-dependent pressure drop."""
     import casadi as ca
-    from fsicas.simulate import _explicit_ode, _ode
+    from fsicas.timedomain.integrators import _explicit_ode, _ode
     scene = BASE.replace(modes=6, contact=True, contact_stiffness=1e6, contact_eps=1e-2)
     model = build_model(scene)
     steady = steady_state(scene, model)

@@ -3,10 +3,10 @@ import numpy as np
 import pytest
 
 from fsicas import Profile, Scene, build_model, steady_state
-from fsicas.outcome import poincare_returns
-from fsicas.hopf import critical_velocity
-from fsicas.run import run_case
-from fsicas.simulate import Settings, eigenvector_state, simulate
+from fsicas.timedomain.outcome import poincare_returns
+from fsicas.linear.hopf import critical_velocity
+from fsicas.timedomain.run import run_case
+from fsicas.timedomain.integrators import Settings, eigenvector_state, simulate
 
 OUTCOMES = {"decay", "lco", "contact", "impacting_lco", "unsettled"}
 BASE = Scene(mstar=1.0, ustar=7.0, zeta=0.01, modes=10)
@@ -91,7 +91,7 @@ def test_long_run_without_drift():
 @pytest.mark.slow
 def test_many_modes_n80_linear_growth():
     """N = 80 (IDAS): early growth still matches the leading eigenvalue."""
-    from fsicas.stability import eigenvalues
+    from fsicas.linear.stability import eigenvalues
     scene = BASE.replace(modes=80)
     model = build_model(scene)
     steady = steady_state(scene, model)

@@ -26,8 +26,8 @@ def add_cycle_commands(sub, add_scene_options) -> None:
 
 
 def _cmd_cycles(args) -> dict:
-    from .cli import scene_from_args
-    from .cycles import CycleSettings, cycle_branch
+    from ..cli import scene_from_args
+    from ..cycles.collocation import CycleSettings, cycle_branch
     scene = scene_from_args(args)
     if scene.contact:
         raise ValueError("cycles are continued on the contact-free model: drop --contact")
@@ -48,7 +48,7 @@ def plot_branch(branch, path) -> None:
     """Tip half-amplitude and period against U*: stable solid, unstable dashed; folds
     (triangles) and the first contact (star)."""
     import numpy as np
-    from .figures import _pyplot
+    from ..plots.linear import _pyplot
     plt = _pyplot()
     u, stable = branch.column("ustar"), branch.column("stable")
     fig, axes = plt.subplots(1, 2, figsize=(9, 3.6))

@@ -23,12 +23,12 @@ from pathlib import Path
 import numpy as np
 from tqdm import tqdm
 
-from .hopf import critical_velocity
-from .model import build_model
+from ..linear.hopf import critical_velocity
+from ..model.assembly import build_model
 from .outcome import Criteria
 from .run import guarded_model, run_case
-from .scene import Scene
-from .simulate import Settings
+from ..scene import Scene
+from .integrators import Settings
 
 __all__ = ["MAP_SCENE", "MapResult", "impact_map", "stability_boundary", "load_points"]
 

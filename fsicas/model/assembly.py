@@ -29,10 +29,11 @@ from dataclasses import dataclass, field
 import casadi as ca
 import numpy as np
 
+from . import contact
 from .beam import ModalBasis, clamped_free_modes
 from .beam_fe import default_n_elements, nonuniform_beam_modes
 from .quadrature import composite_gauss_legendre, gauss_legendre
-from .scene import Scene
+from ..scene import Scene
 
 __all__ = ["Model", "build_model", "modal_basis", "parameter_names"]
 
@@ -120,10 +121,14 @@ class Model:
         n = self.n_modes
         return x[:n], x[n:2 * n], x[2 * n:]
 
+    def basis_at(self, xs) -> ModalBasis:
+        """The scene's modes at the points ``xs`` (see :func:`modal_basis`)."""
+        return modal_basis(self.scene, xs)
+
     def deflection(self, x, xs) -> np.ndarray:
         """Beam deflection y(xs) = Σ phi_n(xs) q_n."""
         _, q, _ = self.split(x)
-        return modal_basis(self.scene, xs).phi.T @ q
+        return self.basis_at(xs).phi.T @ q
 
     def xdot(self, x, p) -> np.ndarray:
         """Solve M xdot = F for the time derivative at (x, p)."""
@@ -178,9 +183,9 @@ def _equations(scene, basis, tip, w, x, par, v):
     force_beam = -2 * zeta * omega * r - omega**2 * q
     force_Q = []
     inv_hw = []
-    for c, s in ((0, -1.0), (1, 1.0)):
+    for c, s in enumerate(contact.WALL_SIGNS):
         H = walls[c](basis.x)
-        h = H + s * y
+        h = contact.gap(H, y, s)
         inv_h = 1.0 / h
         u = (Q[c] - s * run) * inv_h
         gt = u * (f * ca.fabs(u) - s * ydot) * inv_h
@@ -221,35 +226,14 @@ def _mass_action(basis, mstar, inv_hw, v):
     a = ca.mtimes(basis.Phi.T, vr)
     beam = 0
     rows_Q = []
-    for c, s in ((0, -1.0), (1, 1.0)):
+    for c, s in enumerate(contact.WALL_SIGNS):
         beam += inv_hw[c] * (s * vQ[c] - a)
         rows_Q.append(ca.dot(inv_hw[c], vQ[c] - s * a))
     return ca.vertcat(vr + mstar * ca.mtimes(basis.Psi, beam), vq, *rows_Q)
 
 
 def _contact_force(scene, basis, w, h, s, par):
-    """Modal projection of the regularized impact load of wall c (paper Eq. 16).
-
-    ``f_c(x) = s_c k w_1^2 max(0, eps - h_c)`` pushes the beam away from wall c, with
-    k = k* (per unit length, relative to the first-mode stiffness w_1^2) and
-    eps = (eps/H) H*/2.
-    """
-    k = par["contact_stiffness"] * basis.omega[0] ** 2
+    """Modal projection ``∫ f_c phi_n`` of the impact load of wall c (:mod:`.contact`)."""
+    k = contact.stiffness(par["contact_stiffness"], basis.omega[0])
     eps = par["contact_eps"] * scene.hstar / 2
-    load = s * k * _ramp(eps - h, scene.contact_smoothing, eps)
-    return ca.mtimes(basis.phi, w * load)
-
-
-def _ramp(v, smoothing: float, eps):
-    """``max(0, v)``, or with ``smoothing`` > 0 the softplus
-    ``width log(1 + exp(v / width))`` of ``width = smoothing · eps``.
-
-    Written as ``max(0, v) + width log1p(exp(-|v| / width))``: no overflow, and the two
-    kinks cancel, so it is C-infinity. It exceeds max(0, v) by at most width·log 2 (at
-    v = 0) and by ``width·exp(-|v|/width)`` away from it: a force of relative size
-    e^-10 already ten widths outside the contact zone.
-    """
-    if smoothing == 0:
-        return ca.fmax(0, v)
-    width = smoothing * eps
-    return ca.fmax(0, v) + width * ca.log1p(ca.exp(-ca.fabs(v) / width))
+    return ca.mtimes(basis.phi, w * contact.wall_load(h, s, k, eps, scene.contact_smoothing))

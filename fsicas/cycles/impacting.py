@@ -39,14 +39,15 @@ import scipy.sparse as sp
 
 import continuation as C
 
-from .cycles import GAP_POINTS, BranchRecord, CycleRecord
-from .hopf import LOG_M, PI, PI_SCALE, TIME_SCALE, flutter_field, pi_of, steady_ustar
-from .model import Model, build_model, modal_basis
-from .scene import Scene
-from .steady import steady_state
+from ..model import contact
+from .collocation import BranchRecord, CycleRecord
+from ..linear.hopf import LOG_M, PI, PI_SCALE, TIME_SCALE, flutter_field, pi_of, steady_ustar
+from ..model.assembly import Model, build_model
+from ..scene import Scene
+from ..linear.steady import steady_state
 
 __all__ = ["ImpactSettings", "ImpactPoint", "ImpactBranch", "impacting_branch",
-           "cycle_from_trajectory", "pre_contact_start"]
+           "cycle_from_trajectory", "pre_contact_start", "shooting_points"]
 
 
 @dataclass(frozen=True)
@@ -117,69 +118,6 @@ class ImpactBranch(BranchRecord):
                    d["wall_time"])
 
 
-class _BlockShooting(C.ShootingProblem):
-    """``ShootingProblem`` with the Jacobian assembled from per-segment sensitivities in
-    the directions (x_i, T, Π) only, cached for the last X (the multipliers reuse it)."""
-
-    def __init__(self, vf, orbit, period, params, active, settings: C.ShootingSettings):
-        super().__init__(vf, orbit, period, params, active, settings=settings)
-        n, m = vf.n, self.segments
-        x, q = ca.MX.sym("x", n), ca.MX.sym("q", 2)                 # q = (T, Π)
-        k = self.free_idx[0]
-        p0 = [float(v) for v in self.system.p0]
-        p = ca.vertcat(*[q[1] if i == k else p0[i] for i in range(len(p0))])
-        f = ca.solve(vf.M(x, p), vf.F(x, p))
-        opts = {"abstol": settings.abstol, "reltol": settings.reltol,
-                "disable_internal_warnings": True}
-        ode = {"x": x, "p": q, "ode": q[0] / m * f}
-        integ = ca.integrator("segment", settings.integrator, ode, 0.0, 1.0, opts)
-        self._segment = integ.factory("segment_jac", ["x0", "p"], ["xf", "jac:xf:x0", "jac:xf:p"])
-        self._sampler = {}
-        self._ode, self._opts = ode, opts
-        self._cache = (None, None)
-
-    def jacobian(self, X):
-        if self._cache[0] is not None and np.array_equal(self._cache[0], X):
-            return self._cache[1]
-        n, m = self.vf.n, self.segments
-        xs, q = self.points(X), np.array([self.period(X), X[-1]])
-        rows, cols, vals = [], [], []
-        try:
-            for i in range(m):
-                _, A, B = self._segment(xs[i], q)
-                A, B = np.asarray(A), np.asarray(B)
-                r = np.repeat(np.arange(i * n, (i + 1) * n), n)
-                c = np.tile(np.arange(i * n, (i + 1) * n), n)
-                j = (i + 1) % m
-                rows += [r, np.arange(i * n, (i + 1) * n), np.repeat(np.arange(i * n, (i + 1) * n), 2)]
-                cols += [c, np.arange(j * n, (j + 1) * n), np.tile([n * m, n * m + 1], n)]
-                vals += [A.ravel(), -np.ones(n), B.ravel()]
-        except RuntimeError:
-            J = sp.csc_matrix((n * m + 1, n * m + 2))
-            self._cache = (np.array(X), J)
-            return J
-        rows.append(np.full(n, n * m))
-        cols.append(np.arange(n))
-        vals.append(self.system.D[n:])
-        J = sp.csc_matrix((np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))),
-                          shape=(n * m + 1, n * m + 2))
-        self._cache = (np.array(X), J)
-        return J
-
-    def sample(self, X, k: int) -> tuple[np.ndarray, np.ndarray]:
-        """(t/T in [0, 1), states (m k, n)): ``k`` outputs per segment, integrated without
-        sensitivities from each shooting point."""
-        if k not in self._sampler:
-            self._sampler[k] = ca.integrator("sampler", self.settings.integrator, self._ode, 0.0,
-                                             np.arange(1, k + 1) / k, self._opts)
-        m = self.segments
-        q = np.array([self.period(X), X[-1]])
-        out = [np.c_[self.points(X)[i], np.asarray(self._sampler[k](x0=self.points(X)[i], p=q)["xf"])[:, :-1]]
-               for i in range(m)]
-        t = (np.arange(m)[:, None] + np.arange(k)[None, :] / k).ravel() / m
-        return t, np.concatenate([o.T for o in out])
-
-
 def impacting_branch(scene: Scene, state, period: float, pressure_drop: float, *,
                      model: Model | None = None, ustar_min: float = 0.0, ustar_max: float = 12.0,
                      direction: int = 1, settings: ImpactSettings = ImpactSettings()
@@ -201,33 +139,29 @@ def impacting_branch(scene: Scene, state, period: float, pressure_drop: float, *
     params = {PI: pressure_drop / (scene.mstar * PI_SCALE), LOG_M: math.log10(scene.mstar)}
     params.update({k: values[k] for k in vf.par_names[2:]})
     shoot = C.ShootingSettings(segments=settings.segments, abstol=settings.tol,
-                               reltol=settings.tol, floquet="product")
+                               reltol=settings.tol, floquet="product", jacobian="blocks")
     m = settings.segments
     try:
-        orbit = _shooting_points(vf, np.asarray(state, float), period * TIME_SCALE, params, m,
+        orbit = shooting_points(vf, np.asarray(state, float), period * TIME_SCALE, params, m,
                                  shoot)
     except RuntimeError as err:                  # CVODES failure, e.g. a gap closing
         return ImpactBranch(scene, model.scene.contact_gap, [], "failed",
                             f"the start cycle could not be integrated over one period: {err}",
                             time.perf_counter() - start)
-    problem = _BlockShooting(vf, orbit, period * TIME_SCALE, params, PI, shoot)
-    gauge = _ImpactGauge(problem, model, st.x, settings.samples)
+    problem = C.ShootingProblem(vf, orbit, period * TIME_SCALE, params, PI, settings=shoot)
+    gauge = _ImpactGauge(model, st.x, settings.samples)
     pi_lo = pi_of(scene, model, ustar_min) if ustar_min > 0 else 0.0
     steps = C.ContinuationSettings(
         ds=settings.ds, ds_min=1e-6, ds_max=settings.ds_max, direction=direction,
         max_steps=max(settings.max_points - 1, 1),
         bounds={PI: (pi_lo, pi_of(scene, model, ustar_max))},
         newton=C.NewtonSettings(tol=settings.newton_tol, max_iter=8), detect=False)
-    iterator = C.ContinuationIterator(problem, C.PALC(), steps)
-    points, t_last = [], time.perf_counter()
-    for step in iterator:
-        points.append(gauge.measure(step.X, time.perf_counter() - t_last))
-        t_last = time.perf_counter()
-        if len(points) == settings.max_points:
-            break
+    branch = C.continuation(problem, settings=steps, record=gauge.record)
+    points = [ImpactPoint.from_columns(branch.columns, k) for k in range(len(branch.s))]
+    points = points[:settings.max_points]
     status = "max_points" if len(points) == settings.max_points else \
-        {"bound": "bound", "max_steps": "max_points"}.get(iterator.status, "failed")
-    return ImpactBranch(scene, model.scene.contact_gap, points, status, iterator.message,
+        {"bound": "bound", "max_steps": "max_points"}.get(branch.status, "failed")
+    return ImpactBranch(scene, model.scene.contact_gap, points, status, branch.message,
                         time.perf_counter() - start)
 
 
@@ -268,7 +202,7 @@ def cycle_from_trajectory(model: Model, t, x, max_subcycles: int = 6, tol: float
     return xc[-1], float(tc[-1] - tc[-1 - k]), k
 
 
-def _shooting_points(vf, x0, period, params, m, shoot) -> np.ndarray:
+def shooting_points(vf, x0, period, params, m, shoot) -> np.ndarray:
     """The m shooting points along the flow from x0 (one period, m equal segments)."""
     x, q = ca.MX.sym("x", vf.n), ca.MX.sym("q", len(vf.par_names))
     f = ca.solve(vf.M(x, q), vf.F(x, q))
@@ -281,37 +215,32 @@ def _shooting_points(vf, x0, period, params, m, shoot) -> np.ndarray:
 
 
 class _ImpactGauge:
-    """Physical quantities of shooting unknowns X = (x_0..x_{m-1}, 100 T, Π)."""
+    """Physical quantities of shooting unknowns X = (x_0..x_{m-1}, 100 T, Π), as branch
+    columns (the fields of :class:`ImpactPoint`)."""
 
-    def __init__(self, problem: _BlockShooting, model: Model, x_eq, samples: int):
-        self.problem, self.model, self.vf = problem, model, problem.vf
-        self.n, self.samples = model.n_modes, samples
+    def __init__(self, model: Model, x_eq, samples: int):
+        self.model, self.n, self.samples = model, model.n_modes, samples
         self.eps = model.scene.contact_gap
         self.tip = model.tip.phi[:, 1]
-        self.phi = modal_basis(model.scene, GAP_POINTS).phi
-        self.walls = np.array([w(GAP_POINTS) for w in model.scene.walls])
         self.x_eq = np.asarray(x_eq, dtype=float)
+        self.t_last = time.perf_counter()
 
-    def measure(self, X, wall_time: float) -> ImpactPoint:
-        p = self.problem.params(X)
-        mu = self.problem.multipliers(X)
+    def record(self, problem, X) -> dict:
+        """The columns of one branch point (multipliers from the cached Jacobian)."""
+        p = problem.params(X)
+        mu = problem.multipliers(X)
         rest = np.delete(mu, np.argmin(np.abs(mu - 1.0)))
-        _, u = self.problem.sample(X, self.samples)
-        Q = u[:, self.n:2 * self.n]
-        y = Q @ self.tip
-        yq = Q @ self.phi
-        gap = np.minimum(self.walls[0] - yq, self.walls[1] + yq).min(axis=1)
+        Q = problem.sample(X, self.samples)[1][:, self.n:2 * self.n]
+        y, gap = Q @ self.tip, contact.min_gap(self.model, Q)
         inside = gap < self.eps
         impacts = int(np.sum(inside & ~np.roll(inside, 1))) if not inside.all() else 1
-        mstar = 10 ** p[self.vf.par_index(LOG_M)]
-        return ImpactPoint(ustar=self._ustar(p), pressure_drop=float(X[-1] * PI_SCALE * mstar),
-                           period=self.problem.period(X) / TIME_SCALE,
-                           tip_amplitude=float(y.max() - y.min()) / 2, min_gap=float(gap.min()),
-                           gap_ratio=float(gap.min() / self.eps), impacts=impacts,
-                           multipliers=mu, stable=bool(np.all(np.abs(rest) < 1.0)),
-                           state=self.problem.state(X).copy(), wall_time=wall_time)
-
-    def _ustar(self, p) -> float:
-        """U* of the steady state at the parameters p (warm-started from the last one)."""
-        ustar, self.x_eq = steady_ustar(self.vf, p, self.x_eq, self.model.scene.hstar)
-        return ustar
+        mstar = 10 ** p[problem.vf.par_index(LOG_M)]
+        ustar, self.x_eq = steady_ustar(problem.vf, p, self.x_eq, self.model.scene.hstar)
+        now = time.perf_counter()
+        wall, self.t_last = now - self.t_last, now
+        return dict(ustar=ustar, pressure_drop=float(X[-1] * PI_SCALE * mstar),
+                    period=problem.period(X) / TIME_SCALE,
+                    tip_amplitude=float(y.max() - y.min()) / 2, min_gap=float(gap.min()),
+                    gap_ratio=float(gap.min() / self.eps), impacts=impacts, multipliers=mu,
+                    stable=bool(np.all(np.abs(rest) < 1.0)), state=problem.state(X).copy(),
+                    wall_time=wall)

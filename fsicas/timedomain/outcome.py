@@ -31,10 +31,11 @@ import numpy as np
 import scipy.interpolate
 import scipy.optimize
 
-from .simulate import CHECK_POINTS, Trajectory, gaps
-from .model import Model
+from ..model.contact import GAP_POINTS, contact_load, gaps, reference_force
+from .integrators import Trajectory
+from ..model.assembly import Model
 
-__all__ = ["Criteria", "Outcome", "classify", "Monitor", "contact_load", "poincare_returns"]
+__all__ = ["Criteria", "Outcome", "classify", "Monitor", "poincare_returns"]
 
 
 @dataclass(frozen=True)
@@ -104,24 +105,6 @@ def poincare_returns(t, y, y_ref=None):
     return np.array(times), np.array(index, dtype=int)
 
 
-def contact_load(model: Model, X, xs=CHECK_POINTS) -> tuple[np.ndarray, np.ndarray]:
-    """Impact load density ``|F_i(x)| = k w1² max(0, eps − h_c)`` summed over the walls.
-
-    Returns (samples × points density, total ∫|F_i| dx by the trapezoid rule on ``xs``).
-    The exact (non-smoothed) law of the model, also when the scene smooths it.
-    """
-    s = model.scene
-    k = s.contact_stiffness * model.basis.omega[0] ** 2
-    pen = np.clip(s.contact_gap - gaps(model, X, xs), 0.0, None).sum(axis=1)
-    density = k * pen
-    return density, np.trapezoid(density, xs, axis=1)
-
-
-def reference_force(model: Model) -> float:
-    """``F0 = m f1² H`` with m = 1, f1 = w1 / 2π, H = H*/2 (ERRATA item 6)."""
-    return (model.basis.omega[0] / (2 * np.pi)) ** 2 * model.scene.hstar / 2
-
-
 def _cycles(t, X, model):
     """Periods, amplitudes, Poincaré points and return indices of the complete cycles."""
     n = model.n_modes
@@ -185,12 +168,12 @@ def _first_contact(t, X, model):
         return None
     k = int(np.argmax(touch))
     if k == 0:
-        return 0, float(t[0]), float(CHECK_POINTS[np.argmin(h[0].min(axis=0))])
+        return 0, float(t[0]), float(GAP_POINTS[np.argmin(h[0].min(axis=0))])
     state = scipy.interpolate.BarycentricInterpolator(t[max(0, k - 3):k + 1], X[max(0, k - 3):k + 1])
     smallest = lambda s: gaps(model, state(s))[0].min(axis=0)
     tc = scipy.optimize.brentq(lambda s: smallest(s).min() - eps, t[k - 1], t[k],
                                xtol=1e-14 * max(1.0, abs(t[k])))
-    return k, float(tc), float(CHECK_POINTS[np.argmin(smallest(tc))])
+    return k, float(tc), float(GAP_POINTS[np.argmin(smallest(tc))])
 
 
 def classify(traj: Trajectory, steady, criteria: Criteria = Criteria()) -> Outcome:
@@ -206,7 +189,7 @@ def _classify(t, X, model, steady, crit, final, closed=False):
     if contact is None and closed:
         # the gap went from > eps to 0 between the last sample and the solver failure
         h = gaps(model, X[-1:])[0]
-        contact = len(t) - 1, float(t[-1]), float(CHECK_POINTS[np.argmin(h.min(axis=0))])
+        contact = len(t) - 1, float(t[-1]), float(GAP_POINTS[np.argmin(h.min(axis=0))])
     stop_on_contact = (not scene.contact) if crit.stop_on_contact is None else crit.stop_on_contact
     info = {}
     if contact is not None:
@@ -249,7 +232,7 @@ def _impacts(t, X, model, m):
     on = total > 0
     starts = np.flatnonzero(on & ~np.r_[False, on[:-1]])
     ends = np.flatnonzero(on & ~np.r_[on[1:], False])
-    positions = sorted({round(float(CHECK_POINTS[np.argmax(density[a:b + 1].max(axis=0))]), 3)
+    positions = sorted({round(float(GAP_POINTS[np.argmax(density[a:b + 1].max(axis=0))]), 3)
                         for a, b in zip(starts, ends)})
     return dict(max_impact_force=float(total.max() / reference_force(model)),
                 impacts_per_cycle=starts.size / m, contact_positions=positions)

@@ -32,16 +32,17 @@ import scipy.integrate
 import scipy.linalg
 
 from .breathing import N_SCHEDULE_PARAMS, PressureSchedule, schedule_expression
-from .model import Model, modal_basis
-from .steady import SteadyState
+from ..model import contact
+from ..model.assembly import Model
+from ..model.contact import GAP_POINTS, gaps
+from ..linear.steady import SteadyState
 
 __all__ = ["Settings", "Trajectory", "Integrator", "simulate", "initial_state", "gaps",
            "eigenvector_state",
-           "CHECK_POINTS"]
+           "GAP_POINTS"]
 
 METHODS = ("cvodes", "idas", "radau", "bdf")
 #: Points along the beam where the gaps are checked (and contact is detected).
-CHECK_POINTS = np.linspace(0.0, 1.0, 101)
 
 
 @dataclass(frozen=True)
@@ -119,15 +120,6 @@ class Trajectory:
         return self.x[:, :self.model.n_modes] @ self.model.tip.phi[:, 1]
 
 
-def gaps(model: Model, X, xs=CHECK_POINTS) -> np.ndarray:
-    """Gaps ``h_c(xs)`` of the samples X (rows are states): shape (samples, 2, len(xs))."""
-    X = np.atleast_2d(X)
-    n = model.n_modes
-    y = X[:, n:2 * n] @ modal_basis(model.scene, xs).phi
-    H = np.array([w(xs) for w in model.scene.walls])
-    return np.stack([H[0] - y, H[1] + y], axis=1)
-
-
 def initial_state(model: Model, steady: SteadyState, perturbation=1e-2) -> np.ndarray:
     """Steady state plus a perturbation of the modal displacements.
 
@@ -150,7 +142,7 @@ def initial_state(model: Model, steady: SteadyState, perturbation=1e-2) -> np.nd
     x0[n:2 * n] += dq
     h = gaps(model, x0)
     _check(float(h.min()) > 0, f"perturbation puts the beam through a wall (min gap {h.min():.3g} "
-           f"<= 0 at x = {CHECK_POINTS[np.argmin(h.min(axis=1)[0])]:.3g}); use a smaller perturbation")
+           f"<= 0 at x = {GAP_POINTS[np.argmin(h.min(axis=1)[0])]:.3g}); use a smaller perturbation")
     return x0
 
 
@@ -221,10 +213,10 @@ def _nan_if_closed(model: Model, x, F):
     instead of an endless step-size collapse.
     """
     n = model.n_modes
-    xs = np.union1d(CHECK_POINTS, model.basis.x)
-    y = ca.mtimes(modal_basis(model.scene, xs).phi.T, x[n:2 * n])
-    H = [np.asarray(w(xs), float) for w in model.scene.walls]
-    gap = ca.fmin(ca.mmin(H[0] - y), ca.mmin(H[1] + y))
+    xs = np.union1d(GAP_POINTS, model.basis.x)
+    y = ca.mtimes(model.basis_at(xs).phi.T, x[n:2 * n])
+    h = contact.wall_gaps([np.asarray(w(xs), float) for w in model.scene.walls], y)
+    gap = ca.fmin(ca.mmin(h[0]), ca.mmin(h[1]))
     return ca.if_else(gap > 0, F, np.nan * ca.DM.ones(F.shape[0]))
 
 

@@ -9,7 +9,7 @@ from __future__ import annotations
 import numpy as np
 from numpy.polynomial.legendre import leggauss
 
-__all__ = ["gauss_legendre", "composite_gauss_legendre", "default_quad_nodes", "min_quad_nodes"]
+__all__ = ["gauss_legendre", "composite_gauss_legendre"]
 
 
 def gauss_legendre(n_nodes: int) -> tuple[np.ndarray, np.ndarray]:
@@ -20,14 +20,6 @@ def gauss_legendre(n_nodes: int) -> tuple[np.ndarray, np.ndarray]:
     return 0.5 * (xi + 1.0), 0.5 * w
 
 
-def default_quad_nodes(n_modes: int) -> int:
-    """Nodes that integrate products of modes up to n_modes to round-off, with margin."""
-    return 2 * n_modes + 20
-
-
-def min_quad_nodes(n_modes: int) -> int:
-    """Fewest nodes accepted: below 2N the mass matrix of mode N is not resolved."""
-    return 2 * n_modes
 
 
 def composite_gauss_legendre(n_intervals: int, points: int) -> tuple[np.ndarray, np.ndarray]:

@@ -30,17 +30,17 @@ from __future__ import annotations
 import json
 import math
 import time
-from dataclasses import asdict, dataclass, field, replace
+from dataclasses import asdict, dataclass, field, fields, replace
 
 import numpy as np
 import scipy.optimize
 
 import continuation as C
 
-from .hopf import LOG_M, PI, PI_SCALE, TIME_SCALE, CriticalVelocityError, HopfPoint, \
+from ..linear.hopf import LOG_M, PI, PI_SCALE, TIME_SCALE, CriticalVelocityError, HopfPoint, \
     critical_velocity, flutter_problem, pi_of, steady_ustar
-from .model import Model, build_model, modal_basis
-from .scene import Scene
+from ..model.assembly import Model, build_model, modal_basis
+from ..scene import Scene
 
 __all__ = ["CycleSettings", "CyclePoint", "CycleBranch", "CycleRecord", "BranchRecord", "cycle_branch"]
 
@@ -88,11 +88,24 @@ class CycleRecord:
         return d
 
     @classmethod
+    def from_columns(cls, columns: dict, k: int):
+        """The record of point ``k`` of a branch whose columns hold every field."""
+        return cls(**{f.name: _scalar(columns[f.name][k]) for f in fields(cls)
+                      if f.name in columns})
+
+    @classmethod
     def from_json(cls, d: dict):
         d = {k: v for k, v in d.items() if k not in cls._derived}
         d["multipliers"] = np.array([complex(a, b) for a, b in d["multipliers"]])
         d["state"] = np.array(d["state"], dtype=float)
         return cls(**d)
+
+
+def _scalar(value):
+    """A column entry as a plain Python value (arrays are copied)."""
+    if isinstance(value, np.ndarray) and value.ndim:
+        return value.copy()
+    return value.item() if isinstance(value, (np.generic, np.ndarray)) else value
 
 
 class BranchRecord:

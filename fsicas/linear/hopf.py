@@ -20,8 +20,8 @@ import numpy as np
 
 import continuation as C
 
-from .model import Model, build_model, modal_basis
-from .scene import Scene
+from ..model.assembly import Model, build_model, modal_basis
+from ..scene import Scene
 from .steady import steady_state
 
 __all__ = ["HopfPoint", "CriticalVelocityError", "flutter_problem", "hopf_points",

@@ -40,7 +40,7 @@ from typing import Callable
 import numpy as np
 import scipy.linalg
 
-from fsicas.beam import ModalBasis
+from .beam import ModalBasis
 
 __all__ = ["nonuniform_beam_modes", "default_n_elements"]
 

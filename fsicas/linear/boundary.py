@@ -28,8 +28,8 @@ from .hopf import (LOG_M, PI, PI_SCALE, TIME_SCALE, CriticalVelocityError, HopfP
                    hopf_points)
 from .stability import eigenvalues
 from .steady import steady_state
-from .model import Model, build_model, modal_basis
-from .scene import Scene
+from ..model.assembly import Model, build_model, modal_basis
+from ..scene import Scene
 
 __all__ = ["HopfCurve", "ModeSwitch", "StabilityBoundary", "stability_boundary", "parse_mstar"]
 

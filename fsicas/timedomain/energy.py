@@ -25,9 +25,10 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.integrate import simpson
 
-from .fields import flow_fields
-from .model import modal_basis
-from .simulate import Trajectory
+from ..model import contact
+from ..model.fields import flow_fields
+from ..model.assembly import modal_basis
+from .integrators import Trajectory
 
 __all__ = ["EnergyBalance", "energy_balance", "outlet_flow_rates"]
 
@@ -67,29 +68,10 @@ def _powers(traj: Trajectory, k: int, xs, phi_xs, phi_nodes, weights):
     ydot = phi_xs.T @ r
     fluid = simpson(fields.load * ydot, x=xs)
     zeta, w = scene.zeta_modes, model.basis.omega
-    contact = 0.0
+    impact = 0.0
     if scene.contact:
-        contact = float(r @ _contact_modal(model, x, phi_nodes, weights))
-    return fluid, contact, float(np.sum(2 * zeta * w * r**2)), float(np.sum(r**2 + (w * x[n:2 * n])**2) / 2)
-
-
-def _contact_modal(model, x, phi, weights):
-    """``c_n = ∫ f_contact φ_n`` on the model's nodes, f = Σ_c s_c k w1² max(0, eps − h_c)."""
-    scene, n = model.scene, model.n_modes
-    y = phi.T @ x[n:2 * n]
-    H = [w(model.basis.x) for w in scene.walls]
-    k = scene.contact_stiffness * model.basis.omega[0] ** 2
-    eps = scene.contact_gap
-    load = -k * _ramp(eps - (H[0] - y), scene.contact_smoothing * eps) \
-        + k * _ramp(eps - (H[1] + y), scene.contact_smoothing * eps)
-    return phi @ (weights * load)
-
-
-def _ramp(v, width):
-    """max(0, v), or its softplus of ``width`` (as :func:`fsicas.model._ramp`)."""
-    if width == 0:
-        return np.maximum(0.0, v)
-    return np.maximum(0.0, v) + width * np.log1p(np.exp(-np.abs(v) / width))
+        impact = float(r @ contact.modal_load(model, x, phi_nodes, weights))
+    return fluid, impact, float(np.sum(2 * zeta * w * r**2)), float(np.sum(r**2 + (w * x[n:2 * n])**2) / 2)
 
 
 def energy_balance(traj: Trajectory, t_a: float, t_b: float, points: int = 2001) -> EnergyBalance:

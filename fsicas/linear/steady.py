@@ -17,8 +17,8 @@ import casadi as ca
 import numpy as np
 import scipy.optimize
 
-from .model import Model, build_model
-from .scene import Scene
+from ..model.assembly import Model, build_model
+from ..scene import Scene
 
 __all__ = ["SteadyState", "SteadyStateError", "steady_state", "straight_pressure_drop"]
 

@@ -15,11 +15,11 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from .breathing import PressureSchedule
-from .model import Model, build_model
+from ..model.assembly import Model, build_model
 from .outcome import Criteria, Monitor, Outcome, classify
-from .scene import Scene
-from .simulate import Settings, Trajectory, simulate
-from .steady import SteadyState, steady_state
+from ..scene import Scene
+from .integrators import Settings, Trajectory, simulate
+from ..linear.steady import SteadyState, steady_state
 
 __all__ = ["Run", "run_case", "guarded_model"]
 

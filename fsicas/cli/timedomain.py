@@ -57,7 +57,7 @@ def _grid(text: str, name: str, log: bool) -> np.ndarray:
 
 
 def _schedule(args, scene):
-    from .breathing import PressureSchedule
+    from ..timedomain.breathing import PressureSchedule
     if args.schedule == "ramp":
         return PressureSchedule.ramp(args.ustar_start, scene.ustar, args.ramp_time)
     if args.schedule == "breath":
@@ -66,9 +66,9 @@ def _schedule(args, scene):
 
 
 def _cmd_simulate(args) -> dict:
-    from .cli import scene_from_args
-    from .run import run_case
-    from .simulate import Settings
+    from ..cli import scene_from_args
+    from ..timedomain.run import run_case
+    from ..timedomain.integrators import Settings
     if not args.t_end > 0:
         raise ValueError(f"--t-end must be > 0, got {args.t_end}")
     settings = Settings(method=args.method, rtol=args.rtol, atol=args.atol, dt_out=args.dt_out)
@@ -76,7 +76,7 @@ def _cmd_simulate(args) -> dict:
     run = run_case(scene, args.t_end, settings=settings, schedule=_schedule(args, scene),
                    perturbation=args.perturbation, stop_early=not args.full)
     if args.plot:
-        from .plots_time import plot_cycle, plot_run
+        from ..plots.timedomain import plot_cycle, plot_run
         plot_run(run, args.plot)
         if run.outcome.period is not None:
             stem, dot, ext = args.plot.rpartition(".")
@@ -85,7 +85,7 @@ def _cmd_simulate(args) -> dict:
 
 
 def _cmd_map(args) -> dict:
-    from .impact_map import MAP_SCENE, impact_map
+    from ..timedomain.impact_map import MAP_SCENE, impact_map
     ustars, mstars = _grid(args.ustar, "ustar", False), _grid(args.mstar, "mstar", True)
     scene = MAP_SCENE.replace(modes=args.modes)
     if args.dask:
@@ -100,6 +100,6 @@ def _cmd_map(args) -> dict:
         result = impact_map(ustars, mstars, args.out, scene=scene, t_end=args.t_end,
                             workers=args.workers)
     if args.plot:
-        from .plots_time import plot_map
+        from ..plots.timedomain import plot_map
         plot_map(result, args.plot)
     return {**result.to_json(), "out": args.out}

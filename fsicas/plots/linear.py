@@ -3,9 +3,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from .boundary import StabilityBoundary
-from .model import Model
-from .stability import linear_stability
+from ..linear.boundary import StabilityBoundary
+from ..model.assembly import Model
+from ..linear.stability import linear_stability
 
 __all__ = ["plot_boundary", "plot_mode_shapes"]
 

@@ -10,8 +10,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from .model import modal_basis
-from .outcome import contact_load, reference_force
+from ..model.assembly import modal_basis
+from ..model.contact import contact_load, reference_force
 
 __all__ = ["plot_run", "plot_map", "plot_cycle", "cycle_window"]
 

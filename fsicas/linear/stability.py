@@ -12,8 +12,8 @@ from dataclasses import dataclass, field
 import numpy as np
 import scipy.linalg
 
-from .model import Model, build_model, modal_basis
-from .scene import Scene
+from ..model.assembly import Model, build_model, modal_basis
+from ..scene import Scene
 from .steady import SteadyState, steady_state
 
 __all__ = ["LinearStability", "eigenvalues", "linear_stability", "normalized_shape"]

@@ -14,8 +14,8 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.integrate import cumulative_simpson
 
-from .model import modal_basis
-from .scene import Scene
+from .assembly import modal_basis
+from ..scene import Scene
 
 __all__ = ["FlowFields", "flow_fields"]
 

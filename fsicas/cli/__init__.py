@@ -11,11 +11,11 @@ import time
 
 import numpy as np
 
-from .beam import clamped_free_betas
-from .model import build_model
-from .scene import Scene, load_scene
-from .hopf import CriticalVelocityError
-from .steady import SteadyStateError, steady_state
+from ..model.beam import clamped_free_betas
+from ..model.assembly import build_model
+from ..scene import Scene, load_scene
+from ..linear.hopf import CriticalVelocityError
+from ..linear.steady import SteadyStateError, steady_state
 
 __all__ = ["main"]
 
@@ -60,12 +60,12 @@ def _cmd_steady(args) -> dict:
 
 
 def _cmd_eig(args) -> dict:
-    from .stability import linear_stability
+    from ..linear.stability import linear_stability
     scene = scene_from_args(args)
     model = build_model(scene)
     result = linear_stability(scene, model)
     if args.plot:
-        from .figures import _pyplot
+        from ..plots.linear import _pyplot
         plt = _pyplot()
         fig, ax = plt.subplots(figsize=(5, 4))
         ax.plot(result.growth_rate, result.omega, "o", ms=4)
@@ -77,14 +77,14 @@ def _cmd_eig(args) -> dict:
 
 
 def _cmd_boundary(args) -> dict:
-    from .boundary import parse_mstar, stability_boundary
+    from ..linear.boundary import parse_mstar, stability_boundary
     mstars = parse_mstar(args.mstar_values)
     scene = scene_from_args(args)
     model = build_model(scene)
     boundary = stability_boundary(scene, mstars, model, ustar_max=args.ustar_max,
                                   refine=not args.no_refine)
     if args.plot:
-        from .figures import plot_boundary, plot_mode_shapes
+        from ..plots.linear import plot_boundary, plot_mode_shapes
         plot_boundary(boundary, args.plot)
         stem = args.plot.rsplit(".", 1)
         plot_mode_shapes(boundary, model, f"{stem[0]}_modes.{stem[1] if len(stem) > 1 else 'png'}")
@@ -95,7 +95,7 @@ def _cmd_boundary(args) -> dict:
 
 def _cmd_paper(args) -> dict:
     """The main job: the paper's core numbers on its embedded default configuration."""
-    from .paper import run_paper, summary
+    from ..paper import run_paper, summary
     report = run_paper(out=args.out, quick=args.quick)
     return report if args.json else {**summary(report), "written to": args.out}
 
@@ -128,9 +128,9 @@ def _parser() -> argparse.ArgumentParser:
     p.add_argument("--quick", action="store_true", help="coarser grids (for a smoke test)")
     p.add_argument("--json", action="store_true")
     p.set_defaults(run=_cmd_paper)
-    from .cli_time import add_time_commands   # simulate, map (docs/simulate.md)
+    from .timedomain import add_time_commands   # simulate, map (docs/simulate.md)
     add_time_commands(sub, _add_scene_options)
-    from .cli_cycles import add_cycle_commands   # cycles (docs/cycles.md)
+    from .cycles import add_cycle_commands   # cycles (docs/cycles.md)
     add_cycle_commands(sub, _add_scene_options)
     return parser
 

@@ -1,0 +1,12 @@
+"""The linear wing: steady state, linear stability, flutter onset (Hopf points) and the
+stability boundary in (M*, U*), through the generic ``continuation`` library."""
+
+from .boundary import HopfCurve, ModeSwitch, StabilityBoundary, stability_boundary
+from .hopf import CriticalVelocityError, HopfPoint, critical_velocity, hopf_points
+from .stability import LinearStability, eigenvalues, linear_stability
+from .steady import SteadyState, SteadyStateError, steady_state, straight_pressure_drop
+
+__all__ = ["HopfCurve", "ModeSwitch", "StabilityBoundary", "stability_boundary",
+           "CriticalVelocityError", "HopfPoint", "critical_velocity", "hopf_points",
+           "LinearStability", "eigenvalues", "linear_stability", "SteadyState",
+           "SteadyStateError", "steady_state", "straight_pressure_drop"]

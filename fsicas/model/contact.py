@@ -1,0 +1,110 @@
+"""Wall contact: the gap geometry, the regularized impact law and its reference force.
+
+Gaps (y positive towards wall 1, ``H_c`` the wall profiles)::
+
+    h_1(x) = H_1(x) - y(x),    h_2(x) = H_2(x) + y(x)
+
+Impact load of wall c on the beam (paper Eq. 16, signs ``s_1 = -1, s_2 = +1``)::
+
+    f_c(x) = s_c k ramp(eps - h_c(x)),   k = k* w_1^2,   eps = (eps/H) H*/2
+
+with ``ramp = max(0, .)`` (the exact law) or its softplus of width ``smoothing * eps``.
+One home for these formulas: the CasADi model, the energy balance, the outcome
+measures and the cycle gauges all call them, symbolically or on NumPy arrays.
+"""
+from __future__ import annotations
+
+import casadi as ca
+import numpy as np
+
+__all__ = ["GAP_POINTS", "WALL_SIGNS", "ramp", "stiffness", "gap", "wall_gaps", "gaps", "modal_gaps", "min_gap", "wall_load", "modal_load",
+           "contact_load", "reference_force"]
+
+GAP_POINTS = np.linspace(0.0, 1.0, 101)
+"""Points x/L where gaps are sampled by the outcome checks, the gauges and the plots."""
+
+WALL_SIGNS = (-1.0, 1.0)
+"""``s_c``: wall 1 (above, y > 0 closes it) and wall 2 (below)."""
+
+_SYMBOLIC = (ca.SX, ca.MX, ca.DM)
+
+
+def ramp(v, width: float):
+    """``max(0, v)``, or for ``width > 0`` the softplus ``width log(1 + exp(v / width))``.
+
+    Written as ``max(0, v) + width log1p(exp(-|v| / width))``: no overflow, and the two
+    kinks cancel, so it is C-infinity. It exceeds max(0, v) by at most width·log 2 (at
+    v = 0) and by ``width·exp(-|v|/width)`` away from it. Works on CasADi symbols and on
+    NumPy arrays alike.
+    """
+    lib = ca if isinstance(v, _SYMBOLIC) else np
+    exact = ca.fmax(0, v) if lib is ca else np.maximum(0.0, v)
+    if isinstance(width, (int, float)) and width == 0:
+        return exact
+    return exact + width * lib.log1p(lib.exp(-lib.fabs(v) / width))
+
+
+def stiffness(contact_stiffness, omega_1: float):
+    """``k = k* w_1^2``: the paper's k* is relative to the first-mode stiffness."""
+    return contact_stiffness * omega_1 ** 2
+
+
+def gap(H, y, sign: float):
+    """``h_c = H_c + s_c y``: the gap to wall c of profile ``H_c`` at deflection y."""
+    return H + sign * y
+
+
+def wall_gaps(walls, y) -> tuple:
+    """``(h_1, h_2) = (H_1 - y, H_2 + y)`` for wall values ``walls = (H_1, H_2)``."""
+    return tuple(gap(H, y, s) for H, s in zip(walls, WALL_SIGNS))
+
+
+def modal_load(model, x, phi, weights) -> np.ndarray:
+    """``c_n = Σ_j w_j f(x_j) phi_n(x_j)``, f the scene's law summed over both walls."""
+    s, n = model.scene, model.n_modes
+    y = phi.T @ x[n:2 * n]
+    H = [w(model.basis.x) for w in s.walls]
+    k = stiffness(s.contact_stiffness, model.basis.omega[0])
+    load = sum(wall_load(h, sign, k, s.contact_gap, s.contact_smoothing)
+               for h, sign in zip(wall_gaps(H, y), WALL_SIGNS))
+    return phi @ (weights * load)
+
+
+def gaps(model, X, xs=GAP_POINTS) -> np.ndarray:
+    """Gaps ``h_c(xs)`` of the states X (rows): shape (samples, 2, len(xs))."""
+    X = np.atleast_2d(X)
+    n = model.n_modes
+    return modal_gaps(model, X[:, n:2 * n], xs)
+
+
+def modal_gaps(model, q, xs=GAP_POINTS) -> np.ndarray:
+    """Gaps ``h_c(xs)`` for modal displacements q (rows): shape (samples, 2, len(xs))."""
+    y = np.atleast_2d(q) @ model.basis_at(xs).phi
+    return np.stack(wall_gaps([w(xs)[None, :] for w in model.scene.walls], y), axis=1)
+
+
+def min_gap(model, q, xs=GAP_POINTS) -> np.ndarray:
+    """``min_{x, c} h_c(x)`` per row of modal displacements q."""
+    return modal_gaps(model, q, xs).min(axis=(1, 2))
+
+
+def wall_load(h, sign: float, k, eps, smoothing: float):
+    """``f_c = s_c k ramp(eps - h_c)``: the load density of one wall on the beam."""
+    return sign * k * ramp(eps - h, smoothing * eps if smoothing else 0.0)
+
+
+def contact_load(model, X, xs=GAP_POINTS) -> tuple[np.ndarray, np.ndarray]:
+    """Impact load density ``|f| = k max(0, eps - h_c)`` summed over the walls.
+
+    Returns (samples × points density, total ∫|f| dx by the trapezoid rule on ``xs``).
+    The exact (non-smoothed) law, also when the scene smooths it.
+    """
+    s = model.scene
+    k = stiffness(s.contact_stiffness, model.basis.omega[0])
+    density = k * ramp(s.contact_gap - gaps(model, X, xs), 0.0).sum(axis=1)
+    return density, np.trapezoid(density, xs, axis=1)
+
+
+def reference_force(model) -> float:
+    """``F0 = m f1² H`` with m = 1, f1 = w1 / 2π, H = H*/2 (the force scale of Fig. 9)."""
+    return (model.basis.omega[0] / (2 * np.pi)) ** 2 * model.scene.hstar / 2
