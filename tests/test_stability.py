@@ -8,7 +8,8 @@ import scipy.optimize
 import continuation as C
 from fsicas import Profile, Scene, SteadyStateError, build_model, clamped_free_modes, steady_state
 from fsicas.linear.boundary import parse_mstar, stability_boundary
-from fsicas.linear.hopf import critical_velocity, flutter_field, hopf_points
+from fsicas.linear.adapter import flutter_field
+from fsicas.linear.hopf import critical_velocity, hopf_points
 from fsicas.model.quadrature import gauss_legendre
 from fsicas.linear.stability import eigenvalues, linear_stability
 

@@ -23,9 +23,9 @@ import numpy as np
 
 import continuation as C
 
-from .hopf import (LOG_M, PI, PI_SCALE, TIME_SCALE, CriticalVelocityError, HopfPoint,
-                   _eigenvector_q, _hopf_point, dominant_mode, flutter_field, flutter_problem,
-                   hopf_points)
+from .adapter import LOG_M, PI, PI_SCALE, TIME_SCALE, flutter_field
+from .hopf import (CriticalVelocityError, HopfPoint, dominant_mode, eigenvector_q, flutter_problem,
+                   hopf_point_from, hopf_points)
 from .stability import eigenvalues
 from .steady import steady_state
 from ..model.assembly import Model, build_model, modal_basis
@@ -208,7 +208,7 @@ def _trace(scene, model, h: HopfPoint, index: int, window, ustar_max, first_piec
     keep = kappa > 0           # neutral-saddle stretches are not Hopf points
     x, params, omega = x[keep], params[keep], np.sqrt(kappa[keep])
     names = lower.par_names
-    modes = np.array([dominant_mode(model, _eigenvector_q(model, xk, dict(zip(names, pk)), wk))
+    modes = np.array([dominant_mode(model, eigenvector_q(model, xk, dict(zip(names, pk)), wk))
                       for xk, pk, wk in zip(x, params, omega)], dtype=int)
     lm = params[:, names.index(LOG_M)]
     return HopfCurve(index, 10 ** lm, x[:, -2:].sum(axis=1) / scene.hstar, omega * TIME_SCALE,
@@ -263,7 +263,7 @@ def _refine(scene, model, mstar, x, params, omega):
     located = C.hopf_point(problem, x, omega / TIME_SCALE)
     if located.status != "converged" or located.data.get("omega", 0.0) <= 0:
         return None
-    h = _hopf_point(model, scene, located)
+    h = hopf_point_from(model, scene, located)
     below = scene.replace(mstar=float(mstar), ustar=0.99 * h.ustar)
     if eigenvalues(model, steady_state(below, model))[0].real > 0:
         return "unstable"

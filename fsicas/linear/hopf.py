@@ -1,14 +1,11 @@
 """Flutter onset: Hopf points of the steady branch in U*, through ``continuation``.
 
-The model is handed to the generic library through a thin adapter that makes the whole
-(M*, U*) plane well scaled for pseudo-arclength steps (whose length mixes all unknowns):
-the parameters become ``kinematic_pressure_drop = Δp / (M* PI_SCALE)`` (Δp/M* ≈ 3.3 U*^2
-at the paper's values, whatever M*) and ``log10_mstar``, and time is measured in units of
-T / TIME_SCALE (M is multiplied by TIME_SCALE), so that Hopf frequencies (20–600 in units
-of 1/T) and kappa = omega^2 are O(1). l1 is invariant under that time scaling. The steady branch is continued in the first from a small U*; each
-Hopf point found is located by the library (Newton on the Hopf system), with its first
-Lyapunov coefficient l1 (< 0: supercritical, a small stable cycle is born; > 0:
-subcritical, a jump to large amplitude with hysteresis).
+The model is handed to the library through the adapter of :mod:`fsicas.linear.adapter`
+(parameters Π = Δp/(M* PI_SCALE) and log10 M*, time in units of T/TIME_SCALE). The
+steady branch is continued in Π from a small U*; each Hopf point found is located by the
+library (Newton on the Hopf system), with its first Lyapunov coefficient l1 (< 0:
+supercritical, a small stable cycle is born; > 0: subcritical, a jump to large amplitude
+with hysteresis).
 """
 from __future__ import annotations
 
@@ -22,13 +19,11 @@ import continuation as C
 
 from ..model.assembly import Model, build_model, modal_basis
 from ..scene import Scene
+from .adapter import LOG_M, PI, PI_SCALE, TIME_SCALE, dense, flutter_field, pi_of
 from .steady import steady_state
 
 __all__ = ["HopfPoint", "CriticalVelocityError", "flutter_problem", "hopf_points",
-           "critical_velocity", "reparametrized_field", "pi_of", "steady_ustar", "dense"]
-
-PI, LOG_M = "kinematic_pressure_drop", "log10_mstar"
-PI_SCALE, TIME_SCALE = 100.0, 100.0
+           "critical_velocity", "dominant_mode", "hopf_point_from", "eigenvector_q"]
 
 
 class CriticalVelocityError(RuntimeError):
@@ -61,36 +56,6 @@ class HopfPoint:
                 "dominant_mode": self.dominant_mode}
 
 
-def reparametrized_field(model: Model) -> tuple[ca.Function, ca.Function, list[str]]:
-    """F and M with parameters (Δp/(M* PI_SCALE), log10 M*, the rest, in order); M is
-    multiplied by TIME_SCALE (time in units of T/TIME_SCALE)."""
-    rest = [name for name in model.parameter_names if name not in ("pressure_drop", "mstar")]
-    names = [PI, LOG_M, *rest]
-    x = ca.MX.sym("x", model.n_state)
-    q = ca.MX.sym("p", len(names))
-    value = {name: q[i] for i, name in enumerate(names)}
-    mstar = 10 ** value[LOG_M]
-    value.update(pressure_drop=value[PI] * PI_SCALE * mstar, mstar=mstar)
-    p = ca.vertcat(*[value[name] for name in model.parameter_names])
-    F = ca.Function("F", [x, q], [model.rhs(x, p)], ["x", "p"], ["F"])
-    M = ca.Function("M", [x, q], [TIME_SCALE * model.mass(x, p)], ["x", "p"], ["M"])
-    return F, M, names
-
-
-_FIELDS: dict[int, tuple] = {}
-
-
-def flutter_field(model: Model) -> C.VectorField:
-    """The reparametrized VectorField of ``model``, built once per model (the library
-    caches its compiled augmented systems on it). Kept as MX: the dense modal blocks
-    would be multiplied out by an SX expansion (40x slower to build at N = 10)."""
-    entry = _FIELDS.get(id(model))
-    if entry is None or entry[0] is not model:
-        F, M, names = reparametrized_field(model)
-        entry = _FIELDS[id(model)] = (model, C.VectorField(F, M, tuple(names), expand=False))
-    return entry[1]
-
-
 def flutter_problem(scene: Scene, model: Model, ustar_start: float) -> C.EquilibriumProblem:
     """Equilibrium problem in Π from the steady state at ``ustar_start``."""
     st = steady_state(scene.replace(ustar=ustar_start), model)
@@ -117,10 +82,10 @@ def dominant_mode(model: Model, q_part: np.ndarray) -> int:
     return int(np.argmax(np.abs(q_part) ** 2)) + 1
 
 
-def _hopf_point(model: Model, scene: Scene, point) -> HopfPoint:
+def hopf_point_from(model: Model, scene: Scene, point) -> HopfPoint:
     x = np.asarray(point.x)
     omega = float(point.data["omega"]) * TIME_SCALE
-    q = _eigenvector_q(model, x, point.params, omega / TIME_SCALE)
+    q = eigenvector_q(model, x, point.params, omega / TIME_SCALE)
     mstar = 10 ** point.params[LOG_M]
     return HopfPoint(mstar=mstar, ustar=float(x[-2:].sum() / scene.hstar),
                      pressure_drop=float(point.params[PI] * PI_SCALE * mstar), omega=omega,
@@ -129,7 +94,7 @@ def _hopf_point(model: Model, scene: Scene, point) -> HopfPoint:
                      precision=float(point.precision), x=x, point=point)
 
 
-def _eigenvector_q(model: Model, x, params, omega) -> np.ndarray:
+def eigenvector_q(model: Model, x, params, omega) -> np.ndarray:
     """q-part of the eigenvector of J v = i omega M v at a Hopf point (inverse iteration)."""
     vf = flutter_field(model)
     p = np.array([params[k] for k in vf.par_names])
@@ -138,11 +103,6 @@ def _eigenvector_q(model: Model, x, params, omega) -> np.ndarray:
     k = int(np.argmin(np.abs(lam - 1j * omega)))
     n = model.n_modes
     return vec[n:2 * n, k]
-
-
-def dense(a) -> np.ndarray:
-    """A NumPy array of a sparse or dense matrix."""
-    return a.toarray() if hasattr(a, "toarray") else np.asarray(a)
 
 
 def hopf_points(scene: Scene, model: Model | None = None, ustar_max: float = 40.0,
@@ -160,7 +120,7 @@ def hopf_points(scene: Scene, model: Model | None = None, ustar_max: float = 40.
         raise CriticalVelocityError(
             f"the steady state is already unstable at U* = {ustar_start:g} (M* = {scene.mstar:g}); "
             "lower ustar_start")
-    return [_hopf_point(model, scene, h) for h in branch.special("hopf")]
+    return [hopf_point_from(model, scene, h) for h in branch.special("hopf")]
 
 
 def critical_velocity(scene: Scene, model: Model | None = None, ustar_max: float = 40.0,
@@ -168,20 +128,3 @@ def critical_velocity(scene: Scene, model: Model | None = None, ustar_max: float
     """The first Hopf point (flutter onset) of the steady branch, or None below ustar_max."""
     points = hopf_points(scene, model, ustar_max, ustar_start)
     return points[0] if points else None
-
-
-def steady_ustar(vf, p, x_guess, hstar: float) -> tuple[float, np.ndarray]:
-    """U* = (Q1 + Q2)/H* of the steady state of the adapted field ``vf`` at parameters p,
-    and that state (Newton from ``x_guess``, to |F| < 1e-12): the inverse of :func:`pi_of`."""
-    x = np.asarray(x_guess, dtype=float)
-    for _ in range(30):
-        F = np.asarray(vf.rhs(x, p), dtype=float).ravel()
-        if np.max(np.abs(F)) < 1e-12:
-            break
-        x = x - np.linalg.solve(dense(vf.jac_x(x, p)), F)
-    return float(x[-2:].sum() / hstar), x
-
-
-def pi_of(scene: Scene, model: Model, ustar: float) -> float:
-    """Scaled kinematic pressure drop Δp/(M* PI_SCALE) of the steady state at ``ustar``."""
-    return steady_state(scene.replace(ustar=ustar), model).pressure_drop / (scene.mstar * PI_SCALE)

@@ -68,7 +68,7 @@ def quadrature_rule(scene: Scene) -> tuple[np.ndarray, np.ndarray]:
     return composite_gauss_legendre(elements, max(4, -(-scene.n_quad // elements)))
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class Model:
     """CasADi functions of one scene structure; parameters are symbolic inputs.
 
@@ -76,6 +76,7 @@ class Model:
     ``mass_action(x, p, v)`` gives ``M(x, p) v`` in O(N K) operations without forming M
     (the implicit residual ``M z − F`` of time integration).
     ``tip`` maps x to (y(1), dy/dt(1)). Use :meth:`parameters` for the numeric p.
+    Models compare and hash by identity (caches keyed by a model die with it).
     """
 
     scene: Scene
