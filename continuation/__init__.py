@@ -35,7 +35,7 @@ from ._switching import cycle_from_hopf, cycle_from_pd
 from ._vectorfield import VectorField
 
 __all__ = [
-    "Branch", "CollocationSettings", "ContinuationIterator", "ContinuationSettings",
+    "Branch", "Event", "Status", "CollocationSettings", "ContinuationIterator", "ContinuationSettings",
     "CycleProblem", "EigenSettings", "ShootingProblem", "ShootingSettings", "cycle_from_hopf",
     "cycle_from_pd",
     "EquilibriumProblem", "FoldCurveProblem", "HopfCurveProblem", "NewtonSettings",

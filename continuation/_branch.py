@@ -38,6 +38,9 @@ class SpecialPoint:
         ``bracket``; the real scalar values of the ``record`` callback at the point;
         for user events also ``s`` (arclength from point ``index - 1``) and
         ``value`` (the event function there).
+    record : everything the ``record`` callback returned at the point, arrays
+        included (not saved by ``to_json``/``Branch.save``: its scalars are in ``data``).
+    unknowns : the problem's unknowns ``X`` at the point (empty when not known).
     """
 
     kind: str
@@ -48,6 +51,8 @@ class SpecialPoint:
     precision: float
     data: dict = field(default_factory=dict)
     message: str = ""
+    record: dict = field(default_factory=dict, repr=False, compare=False)
+    unknowns: np.ndarray = field(default_factory=lambda: np.zeros(0), repr=False, compare=False)
 
     def to_json(self) -> dict:
         return {"kind": self.kind, "index": self.index, "params": self.params,

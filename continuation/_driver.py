@@ -234,8 +234,10 @@ class _Run:
                   if _crossed(self.prev[2][e.name], cur[2][e.name])]
         found = [f for f in found if f is not None]
         for f in found:
-            f.point.data.update({k: v for k, v in _scalars(self.record(problem, f.X))
-                                 .items() if k not in f.point.data})
+            record = self.record(problem, f.X)
+            f.point.data.update({k: v for k, v in _scalars(record).items()
+                                 if k not in f.point.data})
+            f.point.record.update(record)
         return sorted(found, key=lambda f: f.s)
 
     def user_special(self, problem, event: Event, cur) -> _Found:
@@ -249,7 +251,7 @@ class _Run:
         data = {"bracket": float(loc.bracket), "s": loc.s, "value": loc.value}
         point = SpecialPoint(event.name, len(self.rec.X), problem.state(loc.X),
                              problem.par_dict(loc.X), status, float(loc.bracket), data,
-                             loc.message)
+                             loc.message, unknowns=np.array(loc.X))
         return _Found(loc.s, point, np.array(loc.X), event, loc)
 
     def located_step(self, problem, hit: _Found):
@@ -340,7 +342,7 @@ def _special(problem, kind, a, b, settings, index, stats) -> _Found | None:
     message = "; ".join(m for m in (loc.message, desc.message) if m)
     precision = desc.precision if desc.precision > 0 else loc.bracket
     point = SpecialPoint(kind, index, problem.state(desc.X), problem.par_dict(desc.X),
-                         status, float(precision), data, message)
+                         status, float(precision), data, message, unknowns=np.array(desc.X))
     return _Found(loc.s, point, np.array(desc.X))
 
 

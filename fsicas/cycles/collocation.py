@@ -16,36 +16,43 @@ guess), which is continued by pseudo-arclength collocation in the adapter's para
   distance eps = ``scene.contact_gap``.
 
 Extrema over the cycle are taken on the collocation polynomial (16 samples per mesh
-interval, 201 points along the beam) and refined in t by Brent's method. A cycle fold
-(the parameter's tangent component changes sign) is located as the extremum of Π along
-the arclength; the first contact (min gap = eps) by Brent's root finder on the arclength
-between the two points that bracket it; each evaluation there is one PALC corrector
-from the earlier point, as the library's own event location does. The mesh is
-re-equidistributed every few points (the cycle sharpens as the gap closes). The run stops at the
-first contact (the contact-free model ends there), at ``ustar_max`` or after
-``max_points``.
+interval, ``fsicas.model.contact.GAP_POINTS`` along the beam) and refined in t by
+Brent's method (:mod:`fsicas.cycles.gauge` holds the rest of the measures). The branch
+is one call of ``continuation.continuation``: the library locates cycle folds (the
+parameter's tangent component changes sign) and the first contact, a user event
+``gap_ratio - 1``, on the arclength with its corrector; its ``record`` hook measures every
+point, and it re-meshes every few points (the cycle sharpens as the gap closes). The run
+stops at the first contact (the contact-free model ends there), at ``ustar_max`` or
+after ``max_points``.
 """
 from __future__ import annotations
 
-import json
 import math
 import time
-from dataclasses import asdict, dataclass, field, fields, replace
+from dataclasses import dataclass, field
+from typing import Literal
 
 import numpy as np
 import scipy.optimize
 
 import continuation as C
 
-from ..linear.hopf import LOG_M, PI, PI_SCALE, TIME_SCALE, CriticalVelocityError, HopfPoint, \
-    critical_velocity, flutter_problem, pi_of, steady_ustar
-from ..model.assembly import Model, build_model, modal_basis
+from ..linear.adapter import PI, pi_of
+from ..linear.hopf import CriticalVelocityError, HopfPoint, critical_velocity, flutter_problem
+from ..model.assembly import Model, build_model
 from ..scene import Scene
+from .gauge import Gauge
+from .records import BranchRecord, CycleRecord, check_settings
 
-__all__ = ["CycleSettings", "CyclePoint", "CycleBranch", "CycleRecord", "BranchRecord", "cycle_branch"]
+__all__ = ["CycleSettings", "CyclePoint", "CycleBranch", "CycleKind", "CycleStatus",
+           "cycle_branch"]
 
-#: points along the beam where the gap is evaluated (endpoints included)
-GAP_POINTS = np.linspace(0.0, 1.0, 201)
+CycleKind = Literal["regular", "fold", "contact"]
+"""A branch point, a located cycle fold, or the located first wall contact."""
+
+CycleStatus = Literal["contact", "bound", "max_points", "failed"]
+"""Why a collocation branch ended: first contact, U* reached ``ustar_max``, the point
+budget, or a corrector failure (``message`` says why)."""
 
 
 @dataclass(frozen=True)
@@ -67,63 +74,13 @@ class CycleSettings:
     adapt_every: int = 5
     stop_at_contact: bool = True
 
-
-class CycleRecord:
-    """JSON of a frozen cycle dataclass with array fields ``multipliers`` (complex) and
-    ``state``; ``_derived`` names properties written for readers and skipped on reading."""
-
-    _derived: tuple = ()
-
-    @property
-    def nontrivial_multipliers(self) -> np.ndarray:
-        """All multipliers but the one nearest 1 (the trivial one)."""
-        mu = np.asarray(self.multipliers)
-        return np.delete(mu, np.argmin(np.abs(mu - 1.0)))
-
-    def to_json(self) -> dict:
-        d = {k: v for k, v in asdict(self).items() if k not in ("multipliers", "state")}
-        d.update({k: getattr(self, k) for k in self._derived})
-        d["state"] = [float(v) for v in self.state]
-        d["multipliers"] = [[float(m.real), float(m.imag)] for m in np.asarray(self.multipliers)]
-        return d
-
-    @classmethod
-    def from_columns(cls, columns: dict, k: int):
-        """The record of point ``k`` of a branch whose columns hold every field."""
-        return cls(**{f.name: _scalar(columns[f.name][k]) for f in fields(cls)
-                      if f.name in columns})
-
-    @classmethod
-    def from_json(cls, d: dict):
-        d = {k: v for k, v in d.items() if k not in cls._derived}
-        d["multipliers"] = np.array([complex(a, b) for a, b in d["multipliers"]])
-        d["state"] = np.array(d["state"], dtype=float)
-        return cls(**d)
-
-
-def _scalar(value):
-    """A column entry as a plain Python value (arrays are copied)."""
-    if isinstance(value, np.ndarray) and value.ndim:
-        return value.copy()
-    return value.item() if isinstance(value, (np.generic, np.ndarray)) else value
-
-
-class BranchRecord:
-    """A branch of cycle points: ``column(name)`` along it, ``save(path)`` / ``load(path)``
-    through its ``to_json`` / ``from_json``."""
-
-    def column(self, name: str) -> np.ndarray:
-        """One quantity along the branch, e.g. ``column("ustar")``."""
-        return np.array([getattr(p, name) for p in self.points])
-
-    def save(self, path) -> None:
-        with open(path, "w") as f:
-            json.dump(self.to_json(), f, indent=1)
-
-    @classmethod
-    def load(cls, path):
-        with open(path) as f:
-            return cls.from_json(json.load(f))
+    def __post_init__(self):
+        check_settings(self, integers=("ntst", "ncol", "max_points"),
+                       positives=("dp", "ds", "ds_max", "tol"),
+                       nonnegative_integers=("adapt_every",))
+        if not isinstance(self.stop_at_contact, bool):
+            raise ValueError(f"CycleSettings.stop_at_contact must be a bool, "
+                             f"got {self.stop_at_contact!r}")
 
 
 @dataclass(frozen=True)
@@ -141,7 +98,7 @@ class CyclePoint(CycleRecord):
     gap_ratio: float
     multipliers: np.ndarray = field(repr=False)
     stable: bool = True
-    kind: str = "regular"
+    kind: CycleKind = "regular"
     state: np.ndarray = field(repr=False, default=None)
     located: bool = True
 
@@ -166,7 +123,7 @@ class CycleBranch(BranchRecord):
     points: list
     folds: list
     contact: CyclePoint | None
-    status: str
+    status: CycleStatus
     message: str
     wall_time: float
 
@@ -199,140 +156,90 @@ def cycle_branch(scene: Scene, model: Model | None = None, *, ustar_max: float =
     hopf = hopf or critical_velocity(scene, model, ustar_max=ustar_max)
     if hopf is None:
         raise CriticalVelocityError(f"no Hopf point below U* = {ustar_max:g} at M* = {scene.mstar:g}")
-    problem = C.cycle_from_hopf(flutter_problem(scene, model, min(0.2, hopf.ustar / 2)), hopf.point,
-                                dp=settings.dp,
-                                settings=C.CollocationSettings(ntst=settings.ntst, ncol=settings.ncol,
-                                                               floquet="product",
-                                                               adapt_every=settings.adapt_every))
-    gauge = _Gauge(problem, model, hopf.x)
-    steps = C.ContinuationSettings(
+    collocation = C.CollocationSettings(ntst=settings.ntst, ncol=settings.ncol, floquet="product",
+                                        adapt_every=settings.adapt_every)
+    problem = C.cycle_from_hopf(flutter_problem(scene, model, min(0.2, hopf.ustar / 2)),
+                                hopf.point, dp=settings.dp, settings=collocation)
+    gauge = _ProfileGauge(model, hopf.x)
+    contact = C.Event("contact", gauge.contact_function, terminal=settings.stop_at_contact)
+    branch = C.continuation(problem, settings=_steps(problem, scene, model, ustar_max, settings),
+                            events=[contact], record=gauge.record)
+    return _result(scene, gauge.eps, hopf, branch, settings, time.perf_counter() - start)
+
+
+def _steps(problem, scene, model, ustar_max, settings) -> C.ContinuationSettings:
+    """Arclength steps in Π up to ``ustar_max``; folds detected from the tangent (no
+    multipliers in the library's monitor: the gauge computes them once per point)."""
+    return C.ContinuationSettings(
         ds=settings.ds, ds_min=1e-9, ds_max=settings.ds_max, direction=problem.hopf_direction,
         max_steps=settings.max_points - 1, bounds={PI: (0.0, pi_of(scene, model, ustar_max))},
-        newton=C.NewtonSettings(tol=settings.tol), detect=False)
-    points, folds, contact, prev, tau_ref = [], [], None, None, None
-    while True:
-        iterator = C.ContinuationIterator(problem, C.PALC(), steps, tau_ref)
-        restart = None
-        for step in iterator:
-            if tau_ref is not None and step.ds == 0.0:     # restart point, already recorded
-                prev = (step, prev[1])
-                continue
-            point = gauge.measure(step.X)
-            if contact is None and prev is not None and \
-                    (prev[1].gap_ratio - 1) * (point.gap_ratio - 1) < 0:
-                contact = gauge.locate("contact", prev[0], step, steps.newton)
-                if settings.stop_at_contact:
-                    break
-            if prev is not None and prev[0].tau[-1] * step.tau[-1] < 0:
-                folds.append(gauge.locate("fold", prev[0], step, steps.newton))
-            points.append(point)
-            prev = (step, point)
-            restart = problem.restart(step.X) if len(points) < settings.max_points else None
-            if restart is not None:
-                break
-        if restart is None or (contact is not None and settings.stop_at_contact):
-            break
-        problem, X_new = restart                  # re-meshed: same NTST, equidistributed error
-        gauge.problem = problem
-        tau_ref = np.zeros(X_new.size)
-        tau_ref[-2:] = step.tau[-2:]              # only T and Π keep their meaning
-        steps = replace(steps, ds=min(max(iterator.ds, steps.ds_min), steps.ds_max),
-                        max_steps=settings.max_points - len(points))
-    status, message = _status(iterator, contact, settings)
-    return CycleBranch(scene, gauge.eps, hopf.to_json(), points, folds, contact, status, message,
-                       time.perf_counter() - start)
+        newton=C.NewtonSettings(tol=settings.tol), compute_eigenvalues=False)
 
 
-def _status(iterator, contact, settings) -> tuple[str, str]:
+def _result(scene, eps, hopf, branch, settings, wall_time) -> CycleBranch:
+    """The branch's points (the located contact is its own record, not a point), its
+    located folds and contact, status and message."""
+    points = [CyclePoint.from_columns(branch.columns, k) for k in range(len(branch.s))]
+    contacts = [_special(sp, "contact") for sp in branch.special("contact")]
+    if branch.status == "event":
+        points = points[:-1]
+    folds = [_special(sp, "fold") for sp in branch.special("fold")]
+    contact = contacts[0] if contacts else None
+    status, message = _status(branch, contact, settings)
+    return CycleBranch(scene, eps, hopf.to_json(), points, folds, contact, status, message,
+                       wall_time)
+
+
+def _special(sp, kind: str) -> CyclePoint:
+    """A located special point of the library as a cycle point of ``kind``."""
+    return CyclePoint.from_columns(sp.record, None, kind=kind, located=sp.status == "converged")
+
+
+def _status(branch, contact, settings) -> tuple[CycleStatus, str]:
     if contact is not None and settings.stop_at_contact:
         return "contact", f"first contact (min gap = eps) at U* = {contact.ustar:.8g}"
-    if iterator.status == "bound":
+    if branch.status == "bound":
         return "bound", "U* reached ustar_max"
-    if iterator.status == "max_steps":
+    if branch.status == "max_steps":
         return "max_points", f"reached max_points = {settings.max_points}"
-    return "failed", iterator.message
+    return "failed", branch.message
 
 
-class _Gauge:
-    """Physical quantities of collocation unknowns X = (nodes, 100 T, Π)."""
+class _ProfileGauge(Gauge):
+    """Extrema over the cycle from the collocation polynomial of X = (nodes, 100 T, Π)."""
 
-    def __init__(self, problem, model: Model, x_eq):
-        self.problem, self.model, self.vf = problem, model, problem.vf
-        self.n = model.n_modes
-        self.eps = model.scene.contact_gap
-        self.tip = model.tip.phi[:, 1]
-        self.phi = modal_basis(model.scene, GAP_POINTS).phi          # (N, len(GAP_POINTS))
-        self.walls = np.array([w(GAP_POINTS) for w in model.scene.walls])
-        self.x_eq = np.asarray(x_eq, dtype=float)
+    def __init__(self, model: Model, x_eq):
+        super().__init__(model, x_eq)
+        self._last_gap = (None, None)
 
-    # -- per point -------------------------------------------------------------------
-    def measure(self, X, kind: str = "regular") -> CyclePoint:
-        """U*, Δp, T, tip half-amplitude, min gap, multipliers and stability of X."""
-        p = self.problem.params(X)
-        mu = self.problem.multipliers(X)
-        rest = np.delete(mu, np.argmin(np.abs(mu - 1.0)))
-        y_max = -self._extremum(X, lambda Q: -(Q @ self.tip))
-        y_min = self._extremum(X, lambda Q: Q @ self.tip)
-        gap = self._extremum(X, self._gap)
-        mstar = 10 ** p[self.vf.par_index(LOG_M)]
-        return CyclePoint(ustar=self._ustar(p), pressure_drop=float(X[-1] * PI_SCALE * mstar),
-                          period=self.problem.period(X) / TIME_SCALE,
-                          tip_amplitude=(y_max - y_min) / 2, min_gap=gap, gap_ratio=gap / self.eps,
-                          multipliers=mu, stable=bool(np.all(np.abs(rest) < 1.0)), kind=kind,
-                          state=self.problem.state(X).copy())
+    def record(self, problem, X) -> dict:
+        """The fields of :class:`CyclePoint` at X (branch columns)."""
+        y_max = -self._extremum(problem, X, lambda q: -self.tip(q))
+        y_min = self._extremum(problem, X, self.tip)
+        gap = self.gap(problem, X)
+        return {**self.common(problem, X), "tip_amplitude": (y_max - y_min) / 2,
+                "min_gap": gap, "gap_ratio": gap / self.eps}
 
-    def _gap(self, Q) -> np.ndarray:
-        """min over x and both channels of h_c(x) for modal displacements Q (rows)."""
-        y = Q @ self.phi
-        return np.minimum(self.walls[0] - y, self.walls[1] + y).min(axis=1)
+    def contact_function(self, problem, X) -> float:
+        """``min gap / eps - 1``: zero at the first wall contact."""
+        return self.gap(problem, X) / self.eps - 1.0
 
-    def _extremum(self, X, f) -> float:
+    def gap(self, problem, X) -> float:
+        """min over the cycle of the gap (kept for the last X: event and record share it)."""
+        key = (id(problem), np.asarray(X).tobytes())
+        if self._last_gap[0] != key:
+            self._last_gap = (key, self._extremum(problem, X, self.min_gap))
+        return self._last_gap[1]
+
+    def _extremum(self, problem, X, f) -> float:
         """min_t f(q(t)) over the cycle: on 16 samples per mesh interval, refined by
         bounded Brent between the neighbours of the best sample."""
-        q = lambda t: self.problem.evaluate(X, np.atleast_1d(t) % 1.0)[:, self.n:2 * self.n]
-        mesh = self.problem.mesh
+        q = lambda t: problem.evaluate(X, np.atleast_1d(t) % 1.0)[:, self.n:2 * self.n]
+        mesh = problem.mesh
         t = (mesh[:-1, None] + np.diff(mesh)[:, None] * np.arange(16) / 16).ravel()
         values = f(q(t))
         k = int(np.argmin(values))
         t_lo, t_hi = t[k - 1] if k else t[-1] - 1, t[k + 1] if k + 1 < t.size else 1.0
         res = scipy.optimize.minimize_scalar(lambda t: float(f(q(t))[0]), method="bounded",
-                                             bounds=(t_lo, t_hi),
-                                             options={"xatol": 1e-12})
+                                             bounds=(t_lo, t_hi), options={"xatol": 1e-12})
         return float(min(res.fun, values[k]))
-
-    def _ustar(self, p) -> float:
-        """U* of the steady state at the parameters p (warm-started from the last one)."""
-        ustar, self.x_eq = steady_ustar(self.vf, p, self.x_eq, self.model.scene.hstar)
-        return ustar
-
-    # -- special points --------------------------------------------------------------
-    def locate(self, kind: str, a, b, newton) -> CyclePoint:
-        """The ``kind`` ("fold" or "contact") point between steps a and b; if a corrector
-        fails or the sign change is lost, b itself with ``located=False``."""
-        try:
-            return (self.fold if kind == "fold" else self.contact)(a, b, newton)
-        except (RuntimeError, ValueError):
-            return replace(self.measure(b.X, kind), located=False)
-
-    def _on_arc(self, a, s: float, newton):
-        """The branch point at arclength s from step a (PALC corrector)."""
-        res = C.correct(self.problem, a.X + s * a.tau, a.tau, newton)
-        if not res.converged:
-            raise RuntimeError(f"corrector failed while locating a point: {res.message}")
-        return res.X
-
-    def fold(self, a, b, newton) -> CyclePoint:
-        """Cycle fold between steps a and b: the extremum of Π along the arclength."""
-        sign = 1.0 if a.tau[-1] > 0 else -1.0          # Π increases towards the fold: a maximum
-        sb = float(a.tau @ (b.X - a.X))
-        res = scipy.optimize.minimize_scalar(lambda s: -sign * self._on_arc(a, s, newton)[-1],
-                                             method="bounded", bounds=(0.0, sb),
-                                             options={"xatol": 1e-10 * abs(sb)})
-        return self.measure(self._on_arc(a, res.x, newton), "fold")
-
-    def contact(self, a, b, newton) -> CyclePoint:
-        """First contact between steps a and b: min gap = eps, by Brent on the arclength."""
-        sb = float(a.tau @ (b.X - a.X))
-        gap = lambda s: self._extremum(self._on_arc(a, s, newton), self._gap) - self.eps
-        s = scipy.optimize.brentq(gap, 0.0, sb, xtol=1e-14, rtol=1e-12)
-        return self.measure(self._on_arc(a, s, newton), "contact")

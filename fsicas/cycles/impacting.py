@@ -32,22 +32,26 @@ from __future__ import annotations
 import math
 import time
 from dataclasses import dataclass, field
+from typing import Literal
 
 import casadi as ca
 import numpy as np
-import scipy.sparse as sp
 
 import continuation as C
 
-from ..model import contact
-from .collocation import BranchRecord, CycleRecord
-from ..linear.hopf import LOG_M, PI, PI_SCALE, TIME_SCALE, flutter_field, pi_of, steady_ustar
+from ..linear.adapter import LOG_M, PI, PI_SCALE, TIME_SCALE, flutter_field, pi_of
 from ..model.assembly import Model, build_model
 from ..scene import Scene
 from ..linear.steady import steady_state
+from .gauge import Gauge
+from .records import BranchRecord, CycleRecord, check_settings
 
 __all__ = ["ImpactSettings", "ImpactPoint", "ImpactBranch", "impacting_branch",
-           "cycle_from_trajectory", "pre_contact_start", "shooting_points"]
+           "cycle_from_trajectory", "pre_contact_start", "shooting_points", "ImpactStatus"]
+
+ImpactStatus = Literal["bound", "max_points", "failed"]
+"""Why a shooting branch ended: U* left [ustar_min, ustar_max], the point budget, or a
+failure of the start integration or of the corrector (``message`` says why)."""
 
 
 @dataclass(frozen=True)
@@ -67,14 +71,8 @@ class ImpactSettings:
     samples: int = 2000
 
     def __post_init__(self):
-        for name in ("segments", "max_points", "samples"):
-            v = getattr(self, name)
-            if not (isinstance(v, int) and v >= 1):
-                raise ValueError(f"ImpactSettings.{name} must be a positive integer, got {v!r}")
-        for name in ("tol", "newton_tol", "ds", "ds_max"):
-            v = getattr(self, name)
-            if not (isinstance(v, (int, float)) and math.isfinite(v) and v > 0):
-                raise ValueError(f"ImpactSettings.{name} must be a positive number, got {v!r}")
+        check_settings(self, integers=("segments", "max_points", "samples"),
+                       positives=("tol", "newton_tol", "ds", "ds_max"))
 
 
 @dataclass(frozen=True)
@@ -102,7 +100,7 @@ class ImpactBranch(BranchRecord):
     scene: Scene
     eps: float
     points: list
-    status: str
+    status: ImpactStatus
     message: str
     wall_time: float
 
@@ -133,36 +131,50 @@ def impacting_branch(scene: Scene, state, period: float, pressure_drop: float, *
     if not scene.contact:
         raise ValueError("impacting_branch needs scene.contact = True (the impact law)")
     model = model or build_model(scene)
-    vf = flutter_field(model)
-    st = steady_state(scene, model)
-    values = dict(zip(model.parameter_names, st.p))
-    params = {PI: pressure_drop / (scene.mstar * PI_SCALE), LOG_M: math.log10(scene.mstar)}
-    params.update({k: values[k] for k in vf.par_names[2:]})
+    vf, st = flutter_field(model), steady_state(scene, model)
+    params = _field_parameters(vf, model, st, scene, pressure_drop)
     shoot = C.ShootingSettings(segments=settings.segments, abstol=settings.tol,
                                reltol=settings.tol, floquet="product", jacobian="blocks")
-    m = settings.segments
     try:
-        orbit = shooting_points(vf, np.asarray(state, float), period * TIME_SCALE, params, m,
-                                 shoot)
+        orbit = shooting_points(vf, np.asarray(state, float), period * TIME_SCALE, params,
+                                settings.segments, shoot)
     except RuntimeError as err:                  # CVODES failure, e.g. a gap closing
         return ImpactBranch(scene, model.scene.contact_gap, [], "failed",
                             f"the start cycle could not be integrated over one period: {err}",
                             time.perf_counter() - start)
     problem = C.ShootingProblem(vf, orbit, period * TIME_SCALE, params, PI, settings=shoot)
     gauge = _ImpactGauge(model, st.x, settings.samples)
+    branch = C.continuation(problem, record=gauge.record, settings=_steps(
+        scene, model, ustar_min, ustar_max, direction, settings))
+    return _result(scene, model, branch, settings, time.perf_counter() - start)
+
+
+def _field_parameters(vf, model, steady, scene, pressure_drop) -> dict:
+    """The adapter's parameters (Π, log10 M*, the rest) at ``pressure_drop``."""
+    values = dict(zip(model.parameter_names, steady.p))
+    params = {PI: pressure_drop / (scene.mstar * PI_SCALE), LOG_M: math.log10(scene.mstar)}
+    params.update({k: values[k] for k in vf.par_names[2:]})
+    return params
+
+
+def _steps(scene, model, ustar_min, ustar_max, direction, settings) -> C.ContinuationSettings:
+    """Arclength steps in Π between the steady Π of ``ustar_min`` and ``ustar_max``."""
     pi_lo = pi_of(scene, model, ustar_min) if ustar_min > 0 else 0.0
-    steps = C.ContinuationSettings(
+    return C.ContinuationSettings(
         ds=settings.ds, ds_min=1e-6, ds_max=settings.ds_max, direction=direction,
         max_steps=max(settings.max_points - 1, 1),
         bounds={PI: (pi_lo, pi_of(scene, model, ustar_max))},
         newton=C.NewtonSettings(tol=settings.newton_tol, max_iter=8), detect=False)
-    branch = C.continuation(problem, settings=steps, record=gauge.record)
+
+
+def _result(scene, model, branch, settings, wall_time) -> ImpactBranch:
+    """The branch's points as :class:`ImpactPoint` records, with the status."""
     points = [ImpactPoint.from_columns(branch.columns, k) for k in range(len(branch.s))]
     points = points[:settings.max_points]
     status = "max_points" if len(points) == settings.max_points else \
         {"bound": "bound", "max_steps": "max_points"}.get(branch.status, "failed")
     return ImpactBranch(scene, model.scene.contact_gap, points, status, branch.message,
-                        time.perf_counter() - start)
+                        wall_time)
 
 
 def pre_contact_start(branch, min_gap_ratio: float = 3.0):
@@ -214,33 +226,22 @@ def shooting_points(vf, x0, period, params, m, shoot) -> np.ndarray:
     return np.vstack([x0, xs])                   # the orbit at t = 0, 1/m, ..., (m - 1)/m
 
 
-class _ImpactGauge:
-    """Physical quantities of shooting unknowns X = (x_0..x_{m-1}, 100 T, Π), as branch
-    columns (the fields of :class:`ImpactPoint`)."""
+class _ImpactGauge(Gauge):
+    """Measures of shooting unknowns X = (x_0..x_{m-1}, 100 T, Π) on ``samples`` outputs
+    per segment (not refined), as branch columns (the fields of :class:`ImpactPoint`)."""
 
     def __init__(self, model: Model, x_eq, samples: int):
-        self.model, self.n, self.samples = model, model.n_modes, samples
-        self.eps = model.scene.contact_gap
-        self.tip = model.tip.phi[:, 1]
-        self.x_eq = np.asarray(x_eq, dtype=float)
-        self.t_last = time.perf_counter()
+        super().__init__(model, x_eq)
+        self.samples, self.t_last = samples, time.perf_counter()
 
     def record(self, problem, X) -> dict:
-        """The columns of one branch point (multipliers from the cached Jacobian)."""
-        p = problem.params(X)
-        mu = problem.multipliers(X)
-        rest = np.delete(mu, np.argmin(np.abs(mu - 1.0)))
-        Q = problem.sample(X, self.samples)[1][:, self.n:2 * self.n]
-        y, gap = Q @ self.tip, contact.min_gap(self.model, Q)
+        """The columns of one branch point (multipliers from the kept Jacobian)."""
+        q = problem.sample(X, self.samples)[1][:, self.n:2 * self.n]
+        y, gap = self.tip(q), self.min_gap(q)
         inside = gap < self.eps
         impacts = int(np.sum(inside & ~np.roll(inside, 1))) if not inside.all() else 1
-        mstar = 10 ** p[problem.vf.par_index(LOG_M)]
-        ustar, self.x_eq = steady_ustar(problem.vf, p, self.x_eq, self.model.scene.hstar)
         now = time.perf_counter()
         wall, self.t_last = now - self.t_last, now
-        return dict(ustar=ustar, pressure_drop=float(X[-1] * PI_SCALE * mstar),
-                    period=problem.period(X) / TIME_SCALE,
-                    tip_amplitude=float(y.max() - y.min()) / 2, min_gap=float(gap.min()),
-                    gap_ratio=float(gap.min() / self.eps), impacts=impacts, multipliers=mu,
-                    stable=bool(np.all(np.abs(rest) < 1.0)), state=problem.state(X).copy(),
-                    wall_time=wall)
+        return {**self.common(problem, X), "tip_amplitude": float(y.max() - y.min()) / 2,
+                "min_gap": float(gap.min()), "gap_ratio": float(gap.min() / self.eps),
+                "impacts": impacts, "wall_time": wall}

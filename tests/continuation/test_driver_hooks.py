@@ -136,3 +136,18 @@ def test_hook_validation(models):
     with pytest.raises(ValueError, match="hopf"):
         C.continuation(pr, settings=_down(2), events=[C.Event("hopf_complex",
                                                                lambda pr, X: 0.0)])
+
+
+def test_special_points_keep_the_whole_record_and_their_unknowns(models):
+    """A located point carries the record's arrays (not only its scalars) and the
+    problem's unknowns there: the fold of x' = p - x^2 is at X = (0, 0), the event
+    x = 1/2 at X = (1/2, 1/4), with the record evaluated at those X."""
+    br = C.continuation(_fold_problem(models), settings=_down(),
+                        events=[C.Event("half", lambda pr, X: X[0] - 0.5)],
+                        record=lambda pr, X: {"X": np.array(X), "x2": X[0] ** 2})
+    (half,), (fold,) = br.special("half"), br.special("fold")
+    assert np.allclose(half.unknowns, [0.5, 0.25], atol=1e-8)
+    assert np.array_equal(half.record["X"], half.unknowns)
+    assert np.allclose(fold.unknowns, [0.0, 0.0], atol=1e-6)
+    assert np.array_equal(fold.record["X"], fold.unknowns)
+    assert "X" not in half.data and abs(half.data["x2"] - 0.25) < 1e-8

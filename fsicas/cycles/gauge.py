@@ -1,0 +1,52 @@
+"""Physical quantities of a cycle on the adapter's field, for both routes.
+
+A cycle problem of :mod:`continuation` on ``flutter_field`` has unknowns
+``X = (profile, 100 T, Π)``. Per point the gauge reports:
+
+- ``ustar``: (Q1 + Q2)/H* of the *steady state at the same pressure drop* (time
+  integration holds Δp at the steady value of the requested U*, so a cycle "at U*" is
+  the cycle at that Δp), by Newton warm-started from the last point;
+- ``pressure_drop`` Δp = 100 M* Π, the period in units of T, the Floquet multipliers and
+  stability (all non-trivial multipliers inside the unit circle), the state at phase 0;
+- from the profile, by the route: the tip half-amplitude (max − min of y(1, t))/2 and
+  the minimal gap min_{x,t} h_c(x, t) with its ratio to eps (:mod:`fsicas.model.contact`).
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from ..linear.adapter import LOG_M, PI_SCALE, TIME_SCALE, steady_ustar
+from ..model import contact
+
+__all__ = ["Gauge", "PERIOD_COLUMN"]
+
+PERIOD_COLUMN = "cycle_period"
+"""Branch column of the period in units of T (the library's ``period`` is in T/100)."""
+
+
+class Gauge:
+    """Common measures of cycle unknowns X; the routes add amplitude and gap."""
+
+    def __init__(self, model, x_eq):
+        self.model, self.n = model, model.n_modes
+        self.eps = model.scene.contact_gap
+        self.x_eq = np.asarray(x_eq, dtype=float)
+
+    def common(self, problem, X) -> dict:
+        """U*, Δp, period, multipliers, stability and state at X."""
+        p = problem.params(X)
+        mu = problem.multipliers(X)
+        rest = np.delete(mu, np.argmin(np.abs(mu - 1.0)))
+        mstar = 10 ** p[problem.vf.par_index(LOG_M)]
+        ustar, self.x_eq = steady_ustar(problem.vf, p, self.x_eq, self.model.scene.hstar)
+        return {"ustar": ustar, "pressure_drop": float(X[-1] * PI_SCALE * mstar),
+                PERIOD_COLUMN: problem.period(X) / TIME_SCALE, "multipliers": mu,
+                "stable": bool(np.all(np.abs(rest) < 1.0)), "state": problem.state(X).copy()}
+
+    def tip(self, q) -> np.ndarray:
+        """Tip deflection y(1) for modal displacements q (rows)."""
+        return np.asarray(q) @ self.model.tip.phi[:, 1]
+
+    def min_gap(self, q) -> np.ndarray:
+        """``min_{x, c} h_c(x)`` per row of modal displacements q."""
+        return contact.min_gap(self.model, q)

@@ -1,0 +1,92 @@
+"""Records of cycle branches: a cycle point's JSON, a branch's columns and its file.
+
+:class:`CycleRecord` is the base of the frozen point dataclasses of both routes
+(collocation and shooting); :class:`BranchRecord` of their branches.
+"""
+from __future__ import annotations
+
+import json
+import math
+from dataclasses import asdict, fields
+
+import numpy as np
+
+__all__ = ["CycleRecord", "BranchRecord", "plain_value", "check_settings"]
+
+
+class CycleRecord:
+    """JSON of a frozen cycle dataclass with array fields ``multipliers`` (complex) and
+    ``state``; ``_derived`` names properties written for readers and skipped on reading."""
+
+    _derived: tuple = ()
+
+    @property
+    def nontrivial_multipliers(self) -> np.ndarray:
+        """All multipliers but the one nearest 1 (the trivial one)."""
+        mu = np.asarray(self.multipliers)
+        return np.delete(mu, np.argmin(np.abs(mu - 1.0)))
+
+    def to_json(self) -> dict:
+        d = {k: v for k, v in asdict(self).items() if k not in ("multipliers", "state")}
+        d.update({k: getattr(self, k) for k in self._derived})
+        d["state"] = [float(v) for v in self.state]
+        d["multipliers"] = [[float(m.real), float(m.imag)] for m in np.asarray(self.multipliers)]
+        return d
+
+    @classmethod
+    def from_columns(cls, columns: dict, k: int, **fixed):
+        """The record of point ``k`` of a branch's (or a special point's) columns;
+        ``period`` is read from the ``cycle_period`` column; ``fixed`` sets fields."""
+        names = {f.name: "cycle_period" if f.name == "period" else f.name for f in fields(cls)}
+        values = {f: plain_value(columns[c][k] if k is not None else columns[c])
+                  for f, c in names.items() if c in columns}
+        return cls(**{**values, **fixed})
+
+    @classmethod
+    def from_json(cls, d: dict):
+        d = {k: v for k, v in d.items() if k not in cls._derived}
+        d["multipliers"] = np.array([complex(a, b) for a, b in d["multipliers"]])
+        d["state"] = np.array(d["state"], dtype=float)
+        return cls(**d)
+
+
+def plain_value(value):
+    """A column entry as a plain Python value (arrays are copied)."""
+    if isinstance(value, np.ndarray) and value.ndim:
+        return value.copy()
+    return value.item() if isinstance(value, (np.generic, np.ndarray)) else value
+
+
+class BranchRecord:
+    """A branch of cycle points: ``column(name)`` along it, ``save(path)`` / ``load(path)``
+    through its ``to_json`` / ``from_json``."""
+
+    def column(self, name: str) -> np.ndarray:
+        """One quantity along the branch, e.g. ``column("ustar")``."""
+        return np.array([getattr(p, name) for p in self.points])
+
+    def save(self, path) -> None:
+        with open(path, "w") as f:
+            json.dump(self.to_json(), f, indent=1)
+
+    @classmethod
+    def load(cls, path):
+        with open(path) as f:
+            return cls.from_json(json.load(f))
+
+
+def check_settings(settings, integers: tuple = (), positives: tuple = (),
+                   nonnegative_integers: tuple = ()) -> None:
+    """ValueError naming the first field of ``settings`` that is not a positive integer,
+    a positive finite number or a non-negative integer, as its group requires."""
+    kind = type(settings).__name__
+    for name in integers + nonnegative_integers:
+        v, low = getattr(settings, name), 0 if name in nonnegative_integers else 1
+        if not (isinstance(v, int) and not isinstance(v, bool) and v >= low):
+            what = "a non-negative" if low == 0 else "a positive"
+            raise ValueError(f"{kind}.{name} must be {what} integer, got {v!r}")
+    for name in positives:
+        v = getattr(settings, name)
+        if not (isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v)
+                and v > 0):
+            raise ValueError(f"{kind}.{name} must be a positive number, got {v!r}")
