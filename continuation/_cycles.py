@@ -133,7 +133,7 @@ class CycleProblem(PeriodicProblem):
         self.mesh = _check_mesh(mesh, self.ntst)
         self._accepted = 0
         self._last_jacobian = None
-        U = _sample(orbit, colloc.node_times(self.mesh, self.ncol), vf.n)
+        U = sample_orbit(orbit, colloc.node_times(self.mesh, self.ncol), vf.n)
         self.X0 = np.concatenate([U, [float(period), p0[self.free_idx[0]]]])
         D = np.concatenate([np.diff(self.mesh), self._phase(U)])
         kind, build = _collocation_system(settings)
@@ -263,7 +263,7 @@ def _nearest_complex_modulus(mu) -> float:
     return float(np.abs(cplx[np.argmin(np.abs(np.abs(cplx) - 1.0))]))
 
 
-def _sample(orbit, t, n) -> np.ndarray:
+def sample_orbit(orbit, t, n) -> np.ndarray:
     """Guess values at the node times, flattened node by node."""
     if callable(orbit):
         try:

@@ -30,7 +30,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from . import _floquet
-from ._cycles import PeriodicProblem, _sample
+from ._cycles import PeriodicProblem, sample_orbit
 from ._settings import ShootingSettings
 from ._symbolic import CompiledSystem
 from ._systems import bound
@@ -122,7 +122,7 @@ class ShootingProblem(PeriodicProblem):
         settings = ShootingSettings() if settings is None else settings
         p0 = self._setup(F, M, params, active, period, settings, ShootingSettings)
         vf, self.segments = self.vf, settings.segments
-        xs = _sample(orbit, np.arange(self.segments) / self.segments, vf.n)
+        xs = sample_orbit(orbit, np.arange(self.segments) / self.segments, vf.n)
         self.X0 = np.concatenate([xs, [float(period), p0[self.free_idx[0]]]])
         key = (f"shooting_{self.segments}_{settings.integrator}_{settings.abstol:g}_"
                f"{settings.reltol:g}")
