@@ -16,7 +16,8 @@ import sys
 from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 
-from fsicas.paper import HOLDING_CONTACT, PAPER_CONTACT, impacting_cycle
+from fsicas.paper import impacting_cycle
+from fsicas.timedomain.impacting_run import HOLDING_CONTACT, PAPER_CONTACT
 
 
 def one(args):

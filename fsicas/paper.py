@@ -21,28 +21,22 @@ from pathlib import Path
 import numpy as np
 
 from . import __version__
-from .model.beam import clamped_free_betas
 from .linear.boundary import stability_boundary
-from .plots.linear import _pyplot, plot_boundary, plot_mode_shapes
-from .timedomain.impact_map import MAP_SCENE, impact_map
-from .model.assembly import build_model
-from .timedomain.outcome import Criteria
-from .plots.timedomain import plot_cycle, plot_map
-from .timedomain.run import run_case
-from .scene import Scene
-from .timedomain.integrators import Settings
 from .linear.steady import steady_state, straight_pressure_drop
+from .model.assembly import build_model
+from .model.beam import clamped_free_betas
+from .plots.linear import plot_boundary, plot_boundary_variants, plot_mode_shapes
+from .plots.timedomain import plot_cycle, plot_map
+from .scene import Scene
+from .timedomain.impact_map import impact_map
+from .timedomain.impacting_run import HOLDING_CONTACT, PAPER_CONTACT, impacting_run
 
-__all__ = ["PAPER_SCENE", "PAPER_CONTACT", "HOLDING_CONTACT", "impacting_cycle", "run_paper", "summary"]
+__all__ = ["PAPER_SCENE", "VARIANTS", "CYCLE_USTARS", "impacting_cycle", "run_paper", "summary"]
 
 PAPER_SCENE = Scene(mstar=1.0, ustar=5.0, hstar=0.1, friction=0.14, k0=0.0, kl=1.0,
                     zeta=0.0, modes=10)
 VARIANTS = {"zeta = 0.01": dict(zeta=0.01), "H* = 1/20": dict(hstar=0.05),
             "H* = 1/5": dict(hstar=0.2)}
-#: The paper's contact law (Figs. 6-9), which does not hold the beam under the ERRATA's
-#: reading, and the stiffest tested law that does (docs/simulate.md, "Decision").
-PAPER_CONTACT = dict(contact_stiffness=1e6, contact_eps=1e-3)
-HOLDING_CONTACT = dict(contact_stiffness=1e8, contact_eps=1e-2)
 CYCLE_USTARS = (7.0, 8.5, 10.0)
 
 
@@ -76,37 +70,22 @@ def run_paper(out="results", quick: bool = False) -> dict:
 
 def _variants(scene, mstars, reference, path) -> dict:
     """Boundaries with structural damping and other confinements, drawn together."""
-    plt = _pyplot()
-    fig, ax = plt.subplots(figsize=(6, 4))
     curves = {"paper (zeta = 0, H* = 1/10)": reference}
     for label, change in VARIANTS.items():
         variant = scene.replace(**change)
         curves[label] = stability_boundary(variant, mstars, build_model(variant), refine=False)
-    summary = {}
-    for label, b in curves.items():
-        pts = [p for p in b.points if p["ustar_crit"] is not None]
-        ax.semilogx([p["mstar"] for p in pts], [p["ustar_crit"] for p in pts], ".-", label=label)
-        summary[label] = [{"mstar": p["mstar"], "ustar_crit": p["ustar_crit"],
-                           "freq_ratio": p["freq_ratio"]} for p in pts]
-    ax.set(xlabel="M*", ylabel="U*_c", title="effect of damping and confinement")
-    ax.legend(fontsize=8)
-    fig.tight_layout()
-    fig.savefig(path, dpi=120)
-    plt.close(fig)
-    return summary
+    plot_boundary_variants(curves, path)
+    return {label: [{"mstar": p["mstar"], "ustar_crit": p["ustar_crit"], "freq_ratio": p["freq_ratio"]}
+                    for p in b.points if p["ustar_crit"] is not None]
+            for label, b in curves.items()}
 
 
 def impacting_cycle(ustar: float, modes: int = 10, contact: dict = HOLDING_CONTACT,
                     t_end: float = 4.0, plot=None, tol: float = 2e-2) -> dict:
-    """One run of the paper's impacting points (1a-c): M* = 1, zeta = 0.01, H* = 1/10, from a
-    perturbation of 0.3 H*/2, IDAS rtol 1e-7, samples every 2e-5; the last 4 cycles are
-    measured and called settled when they agree to ``tol`` (the run's ``convergence``
-    says how closely). Returns the run's JSON (plus U*, N, the contact law); ``plot``: the
-    Figs. 6-9 panels of the last cycle, if one settled."""
-    scene = MAP_SCENE.replace(ustar=ustar, modes=modes, contact=True, **contact)
-    settings = Settings(method="idas", rtol=1e-7, atol=1e-9, dt_out=2e-5, chunk=0.25)
-    run = run_case(scene, t_end, settings=settings, perturbation=0.3, stop_early=False,
-                   criteria=Criteria(cycles=4, tol_impacting=tol))
+    """One of the paper's impacting points (1a-c), run by
+    :func:`fsicas.timedomain.impacting_run.impacting_run`; returns the run's JSON (plus U*,
+    N, the contact law). ``plot``: the Figs. 6-9 panels of the last cycle, if one settled."""
+    run = impacting_run(ustar, modes, contact, t_end, tol)
     if plot is not None and run.outcome.period is not None:
         plot_cycle(run, plot)
     return {**run.to_json(), "ustar": ustar, "modes": modes, **contact}

@@ -145,8 +145,8 @@ def test_no_hopf_point_below_ustar_max_raises():
 def test_cli_cycles_json_and_files(tmp_path, capsys):
     """``fsicas lco`` (the contract's name; alias ``cycles``) on the package's parser."""
     import json
-    from fsicas.cli import _parser
-    parser = _parser()
+    from fsicas.cli import build_parser
+    parser = build_parser()
     args = parser.parse_args(["lco", "--mstar", "1", "--zeta", "0.01", "--modes", "4",
                               "--max-points", "12", "--out", str(tmp_path / "b.json"),
                               "--plot", str(tmp_path / "b.png"), "--json"])

@@ -1,17 +1,22 @@
 """CLI commands of the time integration: ``fsicas simulate`` and ``fsicas map``.
 
-Registered by :func:`add_time_commands` from ``fsicas.cli._parser``; the JSON contract
-(keys) is in ``docs/simulate.md``.
+Registered by :func:`add_time_commands` from :func:`fsicas.cli.build_parser`; the JSON
+contract (keys) is in ``docs/simulate.md``.
 """
 from __future__ import annotations
 
-
-import numpy as np
+from ..plots.timedomain import plot_cycle, plot_map, plot_run
+from ..timedomain.breathing import PressureSchedule
+from ..timedomain.impact_map import MAP_SCENE, impact_map
+from ..timedomain.integrators import Settings
+from ..timedomain.run import run_case
+from .ranges import parse_range
+from .scene_options import add_scene_options, scene_from_args
 
 __all__ = ["add_time_commands"]
 
 
-def add_time_commands(sub, add_scene_options) -> None:
+def add_time_commands(sub) -> None:
     """Add the ``simulate`` and ``map`` subcommands."""
     p = sub.add_parser("simulate", help="nonlinear time integration and outcome classification")
     add_scene_options(p)
@@ -29,6 +34,10 @@ def add_time_commands(sub, add_scene_options) -> None:
     p.add_argument("--full", action="store_true", help="run to --t-end (no early stop)")
     p.add_argument("--plot", metavar="FILE", help="figure of the run (and FILE_cycle if settled)")
     p.set_defaults(run=_cmd_simulate)
+    _add_map_command(sub)
+
+
+def _add_map_command(sub) -> None:
     p = sub.add_parser("map", help="impact-boundary map in (U*, M*) (paper Fig. 4)")
     p.add_argument("--ustar", default="4:14:11", metavar="LO:HI:COUNT", help="U* grid (linear)")
     p.add_argument("--mstar", default="0.1:10:7", metavar="LO:HI:COUNT", help="M* grid (log)")
@@ -43,21 +52,7 @@ def add_time_commands(sub, add_scene_options) -> None:
     p.set_defaults(run=_cmd_map)
 
 
-def _grid(text: str, name: str, log: bool) -> np.ndarray:
-    try:
-        if ":" in text:
-            lo, hi, count = text.split(":")
-            lo, hi, count = float(lo), float(hi), int(count)
-            if count < 1 or (log and (lo <= 0 or hi <= 0)):
-                raise ValueError
-            return np.geomspace(lo, hi, count) if log else np.linspace(lo, hi, count)
-        return np.array([float(v) for v in text.split(",")])
-    except ValueError:
-        raise ValueError(f"--{name} must be LO:HI:COUNT or a comma list, got {text!r}") from None
-
-
 def _schedule(args, scene):
-    from ..timedomain.breathing import PressureSchedule
     if args.schedule == "ramp":
         return PressureSchedule.ramp(args.ustar_start, scene.ustar, args.ramp_time)
     if args.schedule == "breath":
@@ -66,9 +61,6 @@ def _schedule(args, scene):
 
 
 def _cmd_simulate(args) -> dict:
-    from ..cli import scene_from_args
-    from ..timedomain.run import run_case
-    from ..timedomain.integrators import Settings
     if not args.t_end > 0:
         raise ValueError(f"--t-end must be > 0, got {args.t_end}")
     settings = Settings(method=args.method, rtol=args.rtol, atol=args.atol, dt_out=args.dt_out)
@@ -76,7 +68,6 @@ def _cmd_simulate(args) -> dict:
     run = run_case(scene, args.t_end, settings=settings, schedule=_schedule(args, scene),
                    perturbation=args.perturbation, stop_early=not args.full)
     if args.plot:
-        from ..plots.timedomain import plot_cycle, plot_run
         plot_run(run, args.plot)
         if run.outcome.period is not None:
             stem, dot, ext = args.plot.rpartition(".")
@@ -85,8 +76,8 @@ def _cmd_simulate(args) -> dict:
 
 
 def _cmd_map(args) -> dict:
-    from ..timedomain.impact_map import MAP_SCENE, impact_map
-    ustars, mstars = _grid(args.ustar, "ustar", False), _grid(args.mstar, "mstar", True)
+    ustars = parse_range(args.ustar, "ustar", log=False)
+    mstars = parse_range(args.mstar, "mstar", log=True)
     scene = MAP_SCENE.replace(modes=args.modes)
     if args.dask:
         try:
@@ -100,6 +91,5 @@ def _cmd_map(args) -> dict:
         result = impact_map(ustars, mstars, args.out, scene=scene, t_end=args.t_end,
                             workers=args.workers)
     if args.plot:
-        from ..plots.timedomain import plot_map
         plot_map(result, args.plot)
     return {**result.to_json(), "out": args.out}

@@ -1,30 +1,39 @@
-"""Figures of the linear analysis (paper Figs. 2 and 3), Matplotlib with the Agg backend."""
+"""Figures of the linear analysis (paper Figs. 2 and 3)."""
 from __future__ import annotations
 
 import numpy as np
 
 from ..linear.boundary import StabilityBoundary
+from .backend import pyplot
 from ..model.assembly import Model
 from ..linear.stability import linear_stability
 
-__all__ = ["plot_boundary", "plot_mode_shapes"]
-
-
-def _pyplot():
-    import matplotlib
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-    return plt
+__all__ = ["plot_boundary", "plot_mode_shapes", "plot_eigenvalues", "plot_boundary_variants"]
 
 
 def plot_boundary(boundary: StabilityBoundary, path=None):
     """Fig. 2: U*_c(M*) with all traced Hopf curves (left), frequency ratio (middle) and
     the first Lyapunov coefficient l1 along the boundary (right; > 0: subcritical)."""
-    plt = _pyplot()
+    plt = pyplot()
     fig, (left, right, crit) = plt.subplots(1, 3, figsize=(15, 4))
+    pts = [p for p in boundary.points if p["ustar_crit"] is not None]
+    u = _onset_panels(left, right, boundary, pts)
+    _criticality_panel(crit, pts)
+    top = 1.3 * max(u) if len(u) else 1.0
+    left.set(xlabel="M*", ylabel="U*", ylim=(0, top), title="flutter boundary (grey: Hopf curves)")
+    right.set(xlabel="M*", ylabel="omega / omega_1", title="frequency at onset")
+    fig.tight_layout()
+    if path:
+        fig.savefig(path, dpi=120)
+        plt.close(fig)
+    return fig
+
+
+def _onset_panels(left, right, boundary: StabilityBoundary, pts: list[dict]) -> np.ndarray:
+    """U*_c (over the grey Hopf curves) and the frequency ratio against M*, one colour per
+    branch, subcritical points crossed, mode switches dotted; returns the onsets U*_c."""
     for c in boundary.curves:
         left.semilogx(c.mstar, c.ustar, color="0.8", lw=0.8)
-    pts = [p for p in boundary.points if p["ustar_crit"] is not None]
     m = np.array([p["mstar"] for p in pts])
     u = np.array([p["ustar_crit"] for p in pts])
     ratio = np.array([p["freq_ratio"] for p in pts])
@@ -41,26 +50,23 @@ def plot_boundary(boundary: StabilityBoundary, path=None):
     for s in boundary.switches:
         left.axvline(s.mstar, color="0.6", ls=":", lw=0.8)
         right.axvline(s.mstar, color="0.6", ls=":", lw=0.8)
+    return u
+
+
+def _criticality_panel(ax, pts: list[dict]) -> None:
+    """The first Lyapunov coefficient l1 along the boundary (symlog)."""
     with_l1 = [p for p in pts if "l1" in p]
     if with_l1:
-        crit.semilogx([p["mstar"] for p in with_l1], [p["l1"] for p in with_l1], "k.-")
-        crit.set_yscale("symlog", linthresh=1e-3)
-        crit.axhline(0.0, color="0.5", lw=0.8)
-    crit.set(xlabel="M*", ylabel="l1", title="criticality (l1 > 0: subcritical, hysteresis)")
-    top = 1.3 * max(u) if len(u) else 1.0
-    left.set(xlabel="M*", ylabel="U*", ylim=(0, top), title="flutter boundary (grey: Hopf curves)")
-    right.set(xlabel="M*", ylabel="omega / omega_1", title="frequency at onset")
-    fig.tight_layout()
-    if path:
-        fig.savefig(path, dpi=120)
-        plt.close(fig)
-    return fig
+        ax.semilogx([p["mstar"] for p in with_l1], [p["l1"] for p in with_l1], "k.-")
+        ax.set_yscale("symlog", linthresh=1e-3)
+        ax.axhline(0.0, color="0.5", lw=0.8)
+    ax.set(xlabel="M*", ylabel="l1", title="criticality (l1 > 0: subcritical, hysteresis)")
 
 
 def plot_mode_shapes(boundary: StabilityBoundary, model: Model, path=None):
     """Fig. 3: complex mode shape (Re blue, Im red, motion grey) at the middle point of
     each branch segment of the boundary."""
-    plt = _pyplot()
+    plt = pyplot()
     pts = [p for p in boundary.points if p["ustar_crit"] is not None]
     segments: dict[int, list[dict]] = {}
     for p in pts:
@@ -83,3 +89,30 @@ def plot_mode_shapes(boundary: StabilityBoundary, model: Model, path=None):
         fig.savefig(path, dpi=120)
         plt.close(fig)
     return fig
+
+
+def plot_eigenvalues(result, scene, path) -> None:
+    """Eigenvalue map of a linear stability analysis: growth rate against frequency."""
+    plt = pyplot()
+    fig, ax = plt.subplots(figsize=(5, 4))
+    ax.plot(result.growth_rate, result.omega, "o", ms=4)
+    ax.axvline(0, color="k", lw=0.8)
+    ax.set(xlabel="growth rate (1/T)", ylabel="omega (1/T)",
+           title=f"M*={scene.mstar:g}, U*={scene.ustar:g}, N={scene.modes}")
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
+
+
+def plot_boundary_variants(curves: dict, path) -> None:
+    """Several flutter boundaries U*_c(M*) on one axis, labelled by the keys of ``curves``
+    (label -> :class:`StabilityBoundary`)."""
+    plt = pyplot()
+    fig, ax = plt.subplots(figsize=(6, 4))
+    for label, boundary in curves.items():
+        pts = [p for p in boundary.points if p["ustar_crit"] is not None]
+        ax.semilogx([p["mstar"] for p in pts], [p["ustar_crit"] for p in pts], ".-", label=label)
+    ax.set(xlabel="M*", ylabel="U*_c", title="effect of damping and confinement")
+    ax.legend(fontsize=8)
+    fig.tight_layout()
+    fig.savefig(path, dpi=120)
+    plt.close(fig)

@@ -1,4 +1,4 @@
-"""Figures of time integrations (Matplotlib, Agg): a run, the impact map, impacting cycles.
+"""Figures of time integrations: a run, the impact map, impacting cycles.
 
 - :func:`plot_run`: tip displacement, flow rates and impact force against time.
 - :func:`plot_map`: Fig. 4, outcomes on the (U*, M*) grid with the linear boundary.
@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from .backend import pyplot
 from ..model.assembly import modal_basis
 from ..model.contact import contact_load, reference_force
 
@@ -19,16 +20,9 @@ _COLORS = {"decay": "tab:green", "lco": "tab:orange", "contact": "tab:blue",
            "impacting_lco": "tab:purple", "unsettled": "tab:gray", "error": "k"}
 
 
-def _pyplot():
-    import matplotlib
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-    return plt
-
-
 def plot_run(run, path) -> None:
     """Tip displacement / (H*/2), flow rates and impact force / F0 against time."""
-    plt = _pyplot()
+    plt = pyplot()
     tr, model = run.trajectory, run.model
     fig, ax = plt.subplots(3, 1, figsize=(7, 7), sharex=True)
     ax[0].plot(tr.t, tr.tip / (model.scene.hstar / 2), lw=0.7)
@@ -50,7 +44,7 @@ def plot_run(run, path) -> None:
 
 def plot_map(result, path) -> None:
     """Fig. 4: outcome of each (U*, M*) point and the linear stability boundary."""
-    plt = _pyplot()
+    plt = pyplot()
     fig, ax = plt.subplots(figsize=(7, 5))
     for kind, color in _COLORS.items():
         pts = [(p["ustar"], p["mstar"]) for p in result.points if p["outcome"] == kind]
@@ -83,46 +77,67 @@ def cycle_window(run, cycles: int = 1) -> slice:
 
 def plot_cycle(run, path, snapshots: int = 24) -> None:
     """Figs. 6–9 of one run's last settled cycle in one figure (2 x 4 panels)."""
-    plt = _pyplot()
-    tr, model, scene = run.trajectory, run.model, run.scene
-    n, T = scene.modes, run.outcome.period
+    plt = pyplot()
+    scene, T = run.scene, run.outcome.period
     w = cycle_window(run)
-    t, X = tr.t[w], tr.x[w]
+    t, X = run.trajectory.t[w], run.trajectory.x[w]
     tau = (t - t[0]) / T
     fig, ax = plt.subplots(2, 4, figsize=(17, 7))
-    xs = np.linspace(0, 1, 201)
-    phi = modal_basis(scene, xs).phi
-    for k in np.linspace(0, len(t) - 1, snapshots).astype(int):
-        ax[0, 0].plot(xs, X[k, n:2 * n] @ phi, lw=0.6, color="tab:blue")
-    ax[0, 0].axhline(scene.walls[0](1.0), color="k")
-    ax[0, 0].axhline(-scene.walls[1](1.0), color="k")
-    ax[0, 0].set(title="beam snapshots (Fig. 6)", xlabel="x", ylabel="y")
-    for m in range(min(n, 6)):
-        ax[0, 1].plot(tau, X[:, m], lw=0.7, label=f"r{m + 1}")
-    ax[0, 1].set(title="modal velocities (Fig. 7)", xlabel="t / T0")
-    ax[0, 1].legend(fontsize=7)
-    ax[0, 2].plot(tau, X[:, -2], label="Q1")
-    ax[0, 2].plot(tau, X[:, -1], label="Q2")
-    ax[0, 2].axhline(run.steady.x[-2], color="k", ls=":", lw=0.8)
-    ax[0, 2].set(title="flow rates (Fig. 7)", xlabel="t / T0")
-    ax[0, 2].legend(fontsize=7)
-    tip, vtip = tr.tip[w], tr.tip_velocity[w]
-    ax[0, 3].plot(tip, vtip, lw=0.7)
-    ax[0, 3].set(title="tip phase portrait (Fig. 8)", xlabel="y(1)", ylabel="dy/dt(1)")
-    ax[1, 0].plot(tau, tip)
-    ax[1, 0].set(title="tip displacement (Fig. 8)", xlabel="t / T0")
-    _spectrum(ax[1, 1], tr, T)
-    rms = np.sqrt(np.mean((X[:, n:2 * n] - X[:, n:2 * n].mean(axis=0)) ** 2, axis=0))
-    ax[1, 2].semilogy(np.arange(1, n + 1), rms, "o-", ms=3)
-    ax[1, 2].set(title="RMS of q_n (Fig. 8)", xlabel="mode n")
-    _, total = contact_load(model, X)
-    ax[1, 3].plot(tau, total / reference_force(model))
-    ax[1, 3].set(title="impact force / F0 (Fig. 9)", xlabel="t / T0")
-    fig.suptitle(f"U* = {scene.ustar:g}, M* = {scene.mstar:g}, N = {n}: {run.outcome.outcome}, "
-                 f"T0 = {T:.4g}")
+    _snapshots_panel(ax[0, 0], scene, X, snapshots)
+    _flow_panels(ax[0, 1], ax[0, 2], run, tau, X)
+    _tip_panels(ax[0, 3], ax[1, 0], run.trajectory, w, tau)
+    _spectrum(ax[1, 1], run.trajectory, T)
+    _rms_and_force_panels(ax[1, 2], ax[1, 3], run.model, tau, X)
+    fig.suptitle(f"U* = {scene.ustar:g}, M* = {scene.mstar:g}, N = {scene.modes}: "
+                 f"{run.outcome.outcome}, T0 = {T:.4g}")
     fig.tight_layout()
     fig.savefig(path, dpi=110)
     plt.close(fig)
+
+
+def _snapshots_panel(ax, scene, X, snapshots: int) -> None:
+    """Fig. 6: beam shapes through the cycle between the walls at the tip."""
+    n, xs = scene.modes, np.linspace(0, 1, 201)
+    phi = modal_basis(scene, xs).phi
+    for k in np.linspace(0, len(X) - 1, snapshots).astype(int):
+        ax.plot(xs, X[k, n:2 * n] @ phi, lw=0.6, color="tab:blue")
+    ax.axhline(scene.walls[0](1.0), color="k")
+    ax.axhline(-scene.walls[1](1.0), color="k")
+    ax.set(title="beam snapshots (Fig. 6)", xlabel="x", ylabel="y")
+
+
+def _flow_panels(ax_r, ax_q, run, tau, X) -> None:
+    """Fig. 7: the first modal velocities and the two flow rates over the cycle."""
+    for m in range(min(run.scene.modes, 6)):
+        ax_r.plot(tau, X[:, m], lw=0.7, label=f"r{m + 1}")
+    ax_r.set(title="modal velocities (Fig. 7)", xlabel="t / T0")
+    ax_r.legend(fontsize=7)
+    ax_q.plot(tau, X[:, -2], label="Q1")
+    ax_q.plot(tau, X[:, -1], label="Q2")
+    ax_q.axhline(run.steady.x[-2], color="k", ls=":", lw=0.8)
+    ax_q.set(title="flow rates (Fig. 7)", xlabel="t / T0")
+    ax_q.legend(fontsize=7)
+
+
+def _tip_panels(ax_phase, ax_tip, tr, w: slice, tau) -> None:
+    """Fig. 8: tip phase portrait and tip displacement over the cycle."""
+    tip, vtip = tr.tip[w], tr.tip_velocity[w]
+    ax_phase.plot(tip, vtip, lw=0.7)
+    ax_phase.set(title="tip phase portrait (Fig. 8)", xlabel="y(1)", ylabel="dy/dt(1)")
+    ax_tip.plot(tau, tip)
+    ax_tip.set(title="tip displacement (Fig. 8)", xlabel="t / T0")
+
+
+def _rms_and_force_panels(ax_rms, ax_force, model, tau, X) -> None:
+    """Fig. 8: RMS of the modal displacements; Fig. 9: impact force / F0 over the cycle."""
+    n = model.scene.modes
+    q = X[:, n:2 * n]
+    rms = np.sqrt(np.mean((q - q.mean(axis=0)) ** 2, axis=0))
+    ax_rms.semilogy(np.arange(1, n + 1), rms, "o-", ms=3)
+    ax_rms.set(title="RMS of q_n (Fig. 8)", xlabel="mode n")
+    _, total = contact_load(model, X)
+    ax_force.plot(tau, total / reference_force(model))
+    ax_force.set(title="impact force / F0 (Fig. 9)", xlabel="t / T0")
 
 
 def _spectrum(ax, tr, T):

@@ -1,0 +1,78 @@
+"""CLI commands of the linear analysis: ``fsicas modes``, ``steady``, ``eig`` and
+``boundary`` (docs/stability.md)."""
+from __future__ import annotations
+
+from ..linear.boundary import stability_boundary
+from ..linear.stability import linear_stability
+from ..linear.steady import steady_state
+from ..model.assembly import build_model
+from ..model.beam import clamped_free_betas
+from ..plots.linear import plot_boundary, plot_eigenvalues, plot_mode_shapes
+from .ranges import parse_range
+from .scene_options import add_scene_options, scene_from_args
+
+__all__ = ["add_linear_commands"]
+
+
+def add_linear_commands(sub) -> None:
+    """Add the ``modes``, ``steady``, ``eig`` and ``boundary`` subcommands."""
+    p = sub.add_parser("modes", help="in-vacuo clamped-free beam modes")
+    p.add_argument("--modes", type=int, default=10)
+    p.add_argument("--json", action="store_true")
+    p.set_defaults(run=_cmd_modes)
+    p = sub.add_parser("steady", help="steady state: pressure drop, flow split, static deflection")
+    add_scene_options(p)
+    p.set_defaults(run=_cmd_steady)
+    p = sub.add_parser("eig", help="eigenvalues of the linearization at the steady state")
+    add_scene_options(p)
+    p.add_argument("--plot", metavar="FILE", help="write the eigenvalue map to FILE")
+    p.set_defaults(run=_cmd_eig)
+    _add_boundary_command(sub)
+
+
+def _add_boundary_command(sub) -> None:
+    p = sub.add_parser("boundary", help="flutter boundary U*_c(M*) from Hopf-curve continuation")
+    add_scene_options(p, mstar=False)
+    p.add_argument("--mstar", dest="mstar_values", required=True, metavar="LIST_OR_RANGE",
+                   help="0.1,1,10 or lo:hi:count (log-spaced)")
+    p.add_argument("--ustar-max", type=float, default=40.0, help="search Hopf points below this U*")
+    p.add_argument("--no-refine", action="store_true",
+                   help="interpolate along the Hopf curves instead of locating each point")
+    p.add_argument("--plot", metavar="FILE", help="write Fig. 2 to FILE and Fig. 3 to FILE_modes")
+    p.set_defaults(run=_cmd_boundary)
+
+
+def _cmd_modes(args) -> dict:
+    if args.modes is None or args.modes < 1:
+        raise ValueError(f"--modes must be an integer >= 1, got {args.modes}")
+    beta = clamped_free_betas(args.modes)
+    return {"beta": beta.tolist(), "omega": (beta**2).tolist()}
+
+
+def _cmd_steady(args) -> dict:
+    scene = scene_from_args(args)
+    model = build_model(scene)
+    return steady_state(scene, model).to_json(model)
+
+
+def _cmd_eig(args) -> dict:
+    scene = scene_from_args(args)
+    result = linear_stability(scene, build_model(scene))
+    if args.plot:
+        plot_eigenvalues(result, scene, args.plot)
+    return result.to_json()
+
+
+def _cmd_boundary(args) -> dict:
+    mstars = parse_range(args.mstar_values, "mstar", log=True)
+    scene = scene_from_args(args)
+    model = build_model(scene)
+    boundary = stability_boundary(scene, mstars, model, ustar_max=args.ustar_max,
+                                  refine=not args.no_refine)
+    if args.plot:
+        plot_boundary(boundary, args.plot)
+        stem = args.plot.rsplit(".", 1)
+        plot_mode_shapes(boundary, model, f"{stem[0]}_modes.{stem[1] if len(stem) > 1 else 'png'}")
+    out = boundary.to_json()
+    out.pop("curves")
+    return out
