@@ -7,6 +7,7 @@ import numpy as np
 import pytest
 
 from fsicas.cli import main
+from fsicas.cli.ranges import parse_range
 
 
 def run_json(capsys, argv):
@@ -91,3 +92,37 @@ def test_boundary_json(capsys):
 def test_boundary_rejects_bad_ranges(capsys):
     code, out = run_json(capsys, ["boundary", "--mstar", "0:10:5", "--json"])
     assert code == 2 and "mstar" in out["error"]
+
+
+def test_bad_mstar_grids_fail_clearly():
+    """(Moved from test_stability with the parser: the same inputs, the same match.)"""
+    for text in ("0,1,10", "-1:10:5", "a,b", "0.1:0:5", ""):
+        with pytest.raises(ValueError, match="mstar"):
+            parse_range(text, "mstar", log=True)
+
+
+def test_ranges_keep_each_options_spacing():
+    """--mstar ranges are log-spaced (README: ``--mstar 0.01:100:41``), --ustar ranges
+    evenly spaced (``--ustar 2:16:15``); lists are taken as given."""
+    m = parse_range("0.01:100:41", "mstar", log=True)
+    assert m[0] == 0.01 and m[-1] == 100.0 and m[20] == pytest.approx(1.0, rel=1e-15)
+    assert np.allclose(np.diff(np.log10(m)), 0.1, rtol=1e-12)
+    assert np.array_equal(parse_range("2:16:15", "ustar"), np.arange(2.0, 17.0))
+    assert np.array_equal(parse_range("0.5,1,2", "mstar", log=True), [0.5, 1.0, 2.0])
+    assert np.array_equal(parse_range("-6.5,0", "ustar"), [-6.5, 0.0])
+
+
+@pytest.mark.parametrize("text, log", [("1:2", False), ("1:2:0", False), ("a,1", False),
+                                       ("nan,1", False), ("0.1:10:x", True), ("1,-2", True)])
+def test_bad_ranges_name_the_option_and_the_accepted_forms(text, log):
+    with pytest.raises(ValueError) as err:
+        parse_range(text, "grid", log=log)
+    message = str(err.value)
+    assert message.startswith("--grid must be a comma list")
+    assert "LO:HI:COUNT" in message and "COUNT >= 1" in message and repr(text) in message
+    assert ("log-spaced" in message and "> 0" in message) if log else "evenly spaced" in message
+
+
+def test_map_rejects_a_bad_grid_without_a_traceback(capsys):
+    code, out = run_json(capsys, ["map", "--ustar", "4:14", "--json"])
+    assert code == 2 and out["error"].startswith("--ustar must be")

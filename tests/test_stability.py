@@ -7,7 +7,7 @@ import scipy.optimize
 
 import continuation as C
 from fsicas import Profile, Scene, SteadyStateError, build_model, clamped_free_modes, steady_state
-from fsicas.linear.boundary import parse_mstar, stability_boundary
+from fsicas.linear.boundary import stability_boundary
 from fsicas.linear.adapter import flutter_field
 from fsicas.linear.hopf import critical_velocity, hopf_points
 from fsicas.model.quadrature import gauss_legendre
@@ -158,9 +158,6 @@ def test_boundary_is_continuous_between_switches(boundary):
 
 
 def test_bad_requests_fail_clearly():
-    for text in ("0,1,10", "-1:10:5", "a,b", "0.1:0:5", ""):
-        with pytest.raises(ValueError, match="mstar"):
-            parse_mstar(text)
     with pytest.raises(ValueError, match="mstars"):
         stability_boundary(Scene(modes=3), [0.0, 1.0])
     with pytest.raises(ValueError, match="quad_nodes"):
