@@ -1,24 +1,34 @@
 """fsicas: a flexible cantilever in confined axial flow (bulk-flow model on CasADi).
 
 Data flow: Scene (what) -> build_model (CasADi functions) -> analyses -> results.
+The wings (``fsicas.model``, ``fsicas.linear``, ``fsicas.cycles``, ``fsicas.timedomain``,
+``fsicas.plots``) hold the rest of the public API, each in its ``__all__``.
 """
 __version__ = "0.1.0"
 
-from .model.beam import ModalBasis, clamped_free_betas, clamped_free_modes
+from .cycles import (CycleBranch, CyclePoint, CycleSettings, ImpactBranch, ImpactPoint,
+                     ImpactSettings, cycle_branch, impacting_branch)
+from .linear import (CriticalVelocityError, HopfPoint, LinearStability, StabilityBoundary,
+                     SteadyState, SteadyStateError, critical_velocity, hopf_points,
+                     linear_stability, stability_boundary, steady_state,
+                     straight_pressure_drop)
+from .model import (FlowFields, ModalBasis, Model, build_model, clamped_free_betas,
+                    clamped_free_modes, flow_fields, parameter_names)
 from .profile import Profile
-from .model.fields import FlowFields, flow_fields
-from .model.assembly import Model, build_model, parameter_names
 from .scene import Scene, load_scene
-from .linear.steady import SteadyState, SteadyStateError, steady_state, straight_pressure_drop
+from .timedomain import (Criteria, MapResult, Outcome, PressureSchedule, Run, Trajectory,
+                         classify, energy_balance, impact_map, run_case, simulate)
 from .units import Scales, friction_from_reynolds
-from .linear.stability import LinearStability, linear_stability
-from .linear.hopf import CriticalVelocityError, HopfPoint, critical_velocity, hopf_points
-from .linear.boundary import StabilityBoundary, stability_boundary
 
 __all__ = [
-    "ModalBasis", "clamped_free_betas", "clamped_free_modes", "Profile", "FlowFields",
-    "flow_fields", "Model", "build_model", "parameter_names", "Scene", "load_scene",
-    "SteadyState", "SteadyStateError", "steady_state", "straight_pressure_drop", "Scales",
-    "friction_from_reynolds", "LinearStability", "linear_stability", "CriticalVelocityError",
-    "HopfPoint", "critical_velocity", "hopf_points", "StabilityBoundary", "stability_boundary",
+    "Scene", "load_scene", "Profile", "Scales", "friction_from_reynolds",
+    "ModalBasis", "clamped_free_betas", "clamped_free_modes", "FlowFields", "flow_fields",
+    "Model", "build_model", "parameter_names",
+    "SteadyState", "SteadyStateError", "steady_state", "straight_pressure_drop",
+    "LinearStability", "linear_stability", "CriticalVelocityError", "HopfPoint",
+    "critical_velocity", "hopf_points", "StabilityBoundary", "stability_boundary",
+    "CycleSettings", "CyclePoint", "CycleBranch", "cycle_branch",
+    "ImpactSettings", "ImpactPoint", "ImpactBranch", "impacting_branch",
+    "PressureSchedule", "Trajectory", "simulate", "Criteria", "Outcome", "classify",
+    "Run", "run_case", "MapResult", "impact_map", "energy_balance",
 ]
