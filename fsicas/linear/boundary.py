@@ -28,10 +28,10 @@ from .hopf import (CriticalVelocityError, HopfPoint, dominant_mode, eigenvector_
                    hopf_point_from, hopf_points)
 from .stability import eigenvalues
 from .steady import steady_state
-from ..model.assembly import Model, build_model, modal_basis
+from ..model.assembly import Model, build_model
 from ..scene import Scene
 
-__all__ = ["HopfCurve", "ModeSwitch", "StabilityBoundary", "stability_boundary", "parse_mstar"]
+__all__ = ["HopfCurve", "ModeSwitch", "StabilityBoundary", "stability_boundary"]
 
 
 @dataclass(frozen=True)
@@ -111,25 +111,6 @@ class StabilityBoundary:
                 "curves": [{"branch": c.index, "mstar": c.mstar.tolist(), "ustar": c.ustar.tolist(),
                             "omega": c.omega.tolist()} for c in self.curves],
                 "wall_time": self.wall_time}
-
-
-def parse_mstar(text: str) -> np.ndarray:
-    """``0.1,1,10`` (a list) or ``0.01:100:200`` (200 log-spaced values)."""
-    try:
-        if ":" in text:
-            lo, hi, count = text.split(":")
-            lo, hi, count = float(lo), float(hi), int(count)
-            if lo <= 0 or hi <= 0:
-                raise ValueError("bounds must be > 0")
-            values = np.logspace(math.log10(lo), math.log10(hi), count)
-        else:
-            values = np.array([float(v) for v in text.split(",")])
-    except ValueError as err:
-        raise ValueError(f"--mstar must be a list like 0.1,1,10 or a range lo:hi:count with "
-                         f"0 < lo, hi; got {text!r} ({err})") from None
-    if values.size == 0 or np.any(~np.isfinite(values)) or np.any(values <= 0):
-        raise ValueError(f"--mstar values must be finite and > 0, got {text!r}")
-    return values
 
 
 def stability_boundary(scene: Scene, mstars, model: Model | None = None,
@@ -237,7 +218,7 @@ def _boundary_point(scene, model, curves, mstar, refine) -> dict:
         return {"mstar": float(mstar), "ustar_crit": None, "omega": None, "freq_ratio": None,
                 "branch": None}
     u, w, piece = lowest
-    omega_1 = float(modal_basis(scene, [1.0]).omega[0])
+    omega_1 = model.omega_1
     point = {"mstar": float(mstar), "ustar_crit": float(u), "omega": float(w),
              "freq_ratio": float(w / omega_1), "branch": int(piece), "refined": False}
     if refine:

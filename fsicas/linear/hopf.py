@@ -17,9 +17,10 @@ import numpy as np
 
 import continuation as C
 
-from ..model.assembly import Model, build_model, modal_basis
+from ..model.assembly import Model, build_model
 from ..scene import Scene
 from .adapter import LOG_M, PI, PI_SCALE, TIME_SCALE, dense, flutter_field, pi_of
+from .stability import generalized_eigen
 from .steady import steady_state
 
 __all__ = ["HopfPoint", "CriticalVelocityError", "flutter_problem", "hopf_points",
@@ -67,14 +68,15 @@ def flutter_problem(scene: Scene, model: Model, ustar_start: float) -> C.Equilib
     return C.EquilibriumProblem(vf, st.x, params, PI)
 
 
-def _settings(pi_start: float, pi_max: float, max_steps: int = 1000) -> C.ContinuationSettings:
+def _settings(pi_start: float, pi_max: float, max_steps: int = 1000,
+              stop_at: tuple = ()) -> C.ContinuationSettings:
     """Steps of at most pi_max/150 in Π (≈ U*^2): a pocket of stability between two Hopf
     points closer than one step would leave the unstable count unchanged and be missed,
     and two Hopf points in one step (near a crossing of Hopf curves) would be confused."""
     ds_max = pi_max / 150
     return C.ContinuationSettings(ds=ds_max / 4, ds_min=1e-10 * pi_max, ds_max=ds_max,
                                   max_steps=max_steps, bounds={PI: (0.0, pi_max)},
-                                  locate_tol=1e-12)
+                                  locate_tol=1e-12, stop_at=stop_at)
 
 
 def dominant_mode(model: Model, q_part: np.ndarray) -> int:
@@ -89,31 +91,34 @@ def hopf_point_from(model: Model, scene: Scene, point) -> HopfPoint:
     mstar = 10 ** point.params[LOG_M]
     return HopfPoint(mstar=mstar, ustar=float(x[-2:].sum() / scene.hstar),
                      pressure_drop=float(point.params[PI] * PI_SCALE * mstar), omega=omega,
-                     freq_ratio=omega / float(modal_basis(scene, [1.0]).omega[0]),
+                     freq_ratio=omega / model.omega_1,
                      l1=float(point.data.get("l1", np.nan)), dominant_mode=dominant_mode(model, q),
                      precision=float(point.precision), x=x, point=point)
 
 
 def eigenvector_q(model: Model, x, params, omega) -> np.ndarray:
-    """q-part of the eigenvector of J v = i omega M v at a Hopf point (inverse iteration)."""
+    """q-part of the eigenvector of ``J v = lambda M v`` (adapted field, time in units of
+    T/TIME_SCALE) whose eigenvalue is nearest ``i omega`` at a Hopf point."""
     vf = flutter_field(model)
     p = np.array([params[k] for k in vf.par_names])
-    J, Mm = dense(vf.jac_x(x, p)), dense(vf.mass(x, p))
-    lam, vec = np.linalg.eig(np.linalg.solve(Mm, J))
+    lam, vec = generalized_eigen(dense(vf.jac_x(x, p)), dense(vf.mass(x, p)))
     k = int(np.argmin(np.abs(lam - 1j * omega)))
     n = model.n_modes
     return vec[n:2 * n, k]
 
 
 def hopf_points(scene: Scene, model: Model | None = None, ustar_max: float = 40.0,
-                ustar_start: float = 0.2) -> list[HopfPoint]:
-    """All Hopf points of the steady branch for U* in (ustar_start, ustar_max), in order."""
+                ustar_start: float = 0.2, *, first_only: bool = False) -> list[HopfPoint]:
+    """All Hopf points of the steady branch for U* in (ustar_start, ustar_max), in order;
+    with ``first_only`` the branch ends at the step past the first one (and the list
+    holds the Hopf points of that step only)."""
     if not 0 < ustar_start < ustar_max:
         raise ValueError(f"need 0 < ustar_start < ustar_max, got {ustar_start}, {ustar_max}")
     model = model or build_model(scene)
     problem = flutter_problem(scene, model, ustar_start)
     pi_max = pi_of(scene, model, ustar_max)
-    branch = C.continuation(problem, settings=_settings(problem.X0[-1], pi_max))
+    stop_at = ("hopf",) if first_only else ()
+    branch = C.continuation(problem, settings=_settings(problem.X0[-1], pi_max, stop_at=stop_at))
     if branch.status == "failed":
         raise CriticalVelocityError(f"steady branch lost at M* = {scene.mstar:g}: {branch.message}")
     if branch.n_unstable is not None and len(branch.n_unstable) and branch.n_unstable[0] > 0:
@@ -126,5 +131,5 @@ def hopf_points(scene: Scene, model: Model | None = None, ustar_max: float = 40.
 def critical_velocity(scene: Scene, model: Model | None = None, ustar_max: float = 40.0,
                       ustar_start: float = 0.2) -> HopfPoint | None:
     """The first Hopf point (flutter onset) of the steady branch, or None below ustar_max."""
-    points = hopf_points(scene, model, ustar_max, ustar_start)
+    points = hopf_points(scene, model, ustar_max, ustar_start, first_only=True)
     return points[0] if points else None

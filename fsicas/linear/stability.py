@@ -16,22 +16,31 @@ from ..model.assembly import Model, build_model, modal_basis
 from ..scene import Scene
 from .steady import SteadyState, steady_state
 
-__all__ = ["LinearStability", "eigenvalues", "linear_stability", "normalized_shape"]
+__all__ = ["LinearStability", "eigenvalues", "generalized_eigen", "linear_stability",
+           "normalized_shape", "steady_eigen"]
 
 
-def _eig(model: Model, steady: SteadyState):
-    J = np.array(model.jac_rhs(steady.x, steady.p))
-    M = np.array(model.mass(steady.x, steady.p))
-    lam, vec = scipy.linalg.eig(J, M)
+def generalized_eigen(J, M) -> tuple[np.ndarray, np.ndarray]:
+    """Finite eigenpairs of ``J v = lambda M v`` (dense QZ, ``scipy.linalg.eig(J, M)``),
+    sorted by decreasing real part, then decreasing imaginary part (of a conjugate pair,
+    the one with Im > 0 comes first). Returns (lambda, V) with V[:, k] for lambda[k]."""
+    lam, vec = scipy.linalg.eig(np.asarray(J, dtype=float), np.asarray(M, dtype=float))
     finite = np.isfinite(lam)
     lam, vec = lam[finite], vec[:, finite]
     order = np.lexsort((-lam.imag, -lam.real))
     return lam[order], vec[:, order]
 
 
+def steady_eigen(model: Model, steady: SteadyState) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`generalized_eigen` of ``F_x v = lambda M v`` at a steady state."""
+    J = np.array(model.jac_rhs(steady.x, steady.p))
+    M = np.array(model.mass(steady.x, steady.p))
+    return generalized_eigen(J, M)
+
+
 def eigenvalues(model: Model, steady: SteadyState) -> np.ndarray:
     """Finite eigenvalues sorted by decreasing real part (then decreasing Im)."""
-    return _eig(model, steady)[0]
+    return steady_eigen(model, steady)[0]
 
 
 def normalized_shape(model: Model, vector: np.ndarray, x) -> tuple[np.ndarray, np.ndarray]:
@@ -94,6 +103,5 @@ def linear_stability(scene: Scene, model: Model | None = None) -> LinearStabilit
     """Steady state of ``scene`` and the eigen-analysis of its linearization."""
     model = model or build_model(scene)
     steady = steady_state(scene, model)
-    lam, vec = _eig(model, steady)
-    omega_1 = float(modal_basis(scene, [1.0]).omega[0])
-    return LinearStability(scene, steady, lam, vec, omega_1)
+    lam, vec = steady_eigen(model, steady)
+    return LinearStability(scene, steady, lam, vec, model.omega_1)

@@ -98,6 +98,22 @@ class Model:
     def n_state(self) -> int:
         return 2 * self.scene.modes + 2
 
+    @property
+    def omega_1(self) -> float:
+        """First in-vacuo circular frequency omega_1 (units of 1/T): ``beta_1^2`` for the
+        uniform beam, the lowest FE eigenvalue's root for a non-uniform one."""
+        return float(self.basis.omega[0])
+
+    def tip_deflection(self, x) -> np.ndarray | float:
+        """Tip displacement ``y(1) = Σ phi_n(1) q_n`` of one state (a float) or of the rows
+        of an array of states."""
+        n = self.n_modes
+        return _tip(np.asarray(x, dtype=float)[..., n:2 * n], self.tip.phi[:, 1])
+
+    def tip_velocity(self, x) -> np.ndarray | float:
+        """Tip velocity ``dy/dt(1) = Σ phi_n(1) r_n`` of one state or of rows of states."""
+        return _tip(np.asarray(x, dtype=float)[..., :self.n_modes], self.tip.phi[:, 1])
+
     def index(self, name: str) -> int:
         """Position of parameter ``name`` in p."""
         try:
@@ -134,6 +150,12 @@ class Model:
     def xdot(self, x, p) -> np.ndarray:
         """Solve M xdot = F for the time derivative at (x, p)."""
         return np.linalg.solve(np.array(self.mass(x, p)), np.array(self.rhs(x, p)).ravel())
+
+
+def _tip(modal, phi_tip) -> np.ndarray | float:
+    """``modal @ phi_tip``: a float for one vector, an array for rows."""
+    y = modal @ phi_tip
+    return float(y) if np.ndim(y) == 0 else y
 
 
 # -- assembly -------------------------------------------------------------------------

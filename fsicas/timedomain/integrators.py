@@ -29,12 +29,12 @@ from dataclasses import dataclass, field
 import casadi as ca
 import numpy as np
 import scipy.integrate
-import scipy.linalg
 
 from .breathing import N_SCHEDULE_PARAMS, PressureSchedule, schedule_expression
 from ..model import contact
 from ..model.assembly import Model
 from ..model.contact import GAP_POINTS, gaps
+from ..linear.stability import steady_eigen
 from ..linear.steady import SteadyState
 
 __all__ = ["Settings", "Trajectory", "Integrator", "simulate", "initial_state", "gaps",
@@ -112,12 +112,12 @@ class Trajectory:
     @property
     def tip(self) -> np.ndarray:
         """Tip displacement y(1, t)."""
-        n = self.model.n_modes
-        return self.x[:, n:2 * n] @ self.model.tip.phi[:, 1]
+        return self.model.tip_deflection(self.x)
 
     @property
     def tip_velocity(self) -> np.ndarray:
-        return self.x[:, :self.model.n_modes] @ self.model.tip.phi[:, 1]
+        """Tip velocity dy/dt(1, t)."""
+        return self.model.tip_velocity(self.x)
 
 
 def initial_state(model: Model, steady: SteadyState, perturbation=1e-2) -> np.ndarray:
@@ -149,15 +149,10 @@ def initial_state(model: Model, steady: SteadyState, perturbation=1e-2) -> np.nd
 def eigenvector_state(model: Model, steady: SteadyState, size: float):
     """Steady state plus ``size`` times the real part of the leading eigenvector, scaled to
     a unit tip deviation; and that eigenvalue (largest real part of ``F_x v = λ M v``)."""
-    J = np.array(model.jac_rhs(steady.x, steady.p))
-    M = np.array(model.mass(steady.x, steady.p))
-    lam, V = scipy.linalg.eig(J, M)
-    lam = np.where(np.isfinite(lam), lam, -np.inf)
-    k = int(np.argmax(lam.real))
-    v = V[:, k].real
-    n = model.n_modes
-    v = v / abs(v[n:2 * n] @ model.tip.phi[:, 1])
-    return _checked_x0(model, steady.x + size * v), lam[k]
+    lam, V = steady_eigen(model, steady)
+    v = V[:, 0].real
+    v = v / abs(model.tip_deflection(v))
+    return _checked_x0(model, steady.x + size * v), lam[0]
 
 
 # -- compiled right-hand sides --------------------------------------------------------

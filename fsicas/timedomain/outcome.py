@@ -107,8 +107,7 @@ def poincare_returns(t, y, y_ref=None):
 
 def _cycles(t, X, model):
     """Periods, amplitudes, Poincaré points and return indices of the complete cycles."""
-    n = model.n_modes
-    y = X[:, n:2 * n] @ model.tip.phi[:, 1]
+    y = model.tip_deflection(X)
     times, idx = poincare_returns(t, y)
     if times.size < 2:
         return None
