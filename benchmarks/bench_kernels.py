@@ -125,17 +125,34 @@ class Timed:
             self.total += time.perf_counter() - t0
 
 
+class TimedKernel:
+    """A :class:`continuation._blocks.PointKernel` whose ``evaluate`` is timed."""
+
+    def __init__(self, kernel):
+        self.kernel, self.total = kernel, 0.0
+
+    def __getattr__(self, name):
+        return getattr(self.kernel, name)
+
+    def evaluate(self, *args):
+        t0 = time.perf_counter()
+        try:
+            return self.kernel.evaluate(*args)
+        finally:
+            self.total += time.perf_counter() - t0
+
+
 def instrument(case: Case) -> list:
-    """Wrap the CasADi calls of ``case``'s compiled system in :class:`Timed`."""
+    """Wrap the CasADi calls of ``case``'s compiled system in timers (idempotent)."""
     compiled = case.problem.system.compiled
     if case.backend == "graph":
-        timers = [Timed(compiled._g), Timed(compiled._jy), Timed(compiled._jp)]
-        compiled._g, compiled._jy, compiled._jp = timers
-        return timers
-    kr = compiled.kernel
-    timers = [Timed(kr.values), Timed(kr.jacobians)]
-    compiled.kernel = dataclasses.replace(kr, values=timers[0], jacobians=timers[1])
-    return timers
+        if not isinstance(compiled._g, Timed):
+            compiled._g, compiled._jy, compiled._jp = (
+                Timed(compiled._g), Timed(compiled._jy), Timed(compiled._jp))
+        return [compiled._g, compiled._jy, compiled._jp]
+    if not isinstance(compiled.kernel, TimedKernel):
+        compiled.kernel = TimedKernel(compiled.kernel)
+    return [compiled.kernel]
 
 
 def once(fun) -> float:

@@ -30,6 +30,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from ._collocation import collocation, interval_nodes
+from ._compile import compiled_or_none
 from ._symbolic import BufferedFunction, as_sx_function
 from ._systems import system
 
@@ -37,23 +38,92 @@ from ._systems import system
 KERNEL_OUTPUTS = ("F", "Mv", "Fx", "Mvx", "M", "Fp", "Mvp")
 
 
-@dataclass(frozen=True)
+class Pointwise:
+    """The single-point expressions of a VectorField in ``(x, v, p)``: ``F``, ``M v``,
+    ``F_x``, ``d(M v)/dx``, ``M`` and the union ``pattern`` of the structural patterns
+    of the three matrices (they are projected on it)."""
+
+    def __init__(self, vf):
+        S, n = vf.sym, vf.n
+        self.n, self.n_par = n, len(vf.par_names)
+        self.x, self.v, self.p = S.sym("x", n), S.sym("v", n), S.sym("p", self.n_par)
+        self.f, m = vf.F_expr(self.x, self.p), vf.M_expr(self.x, self.p)
+        self.mv = ca.mtimes(m, self.v)
+        self.fx, self.mvx = ca.jacobian(self.f, self.x), ca.jacobian(self.mv, self.x)
+        self.m = ca.sparsify(m) if S is ca.SX else m
+        self.pattern = self.fx.sparsity().unite(self.mvx.sparsity()).unite(self.m.sparsity())
+
+    def values(self) -> ca.Function:
+        """``(x, v, p) -> (F, M v)``."""
+        return ca.Function("colloc_point_values", [self.x, self.v, self.p], [self.f, self.mv])
+
+    def jacobians(self, par_columns) -> ca.Function:
+        """``(x, v, p) -> KERNEL_OUTPUTS``, the parameter derivatives only in the
+        directions ``par_columns`` (forward AD with a selection seed, ``n x k`` each)."""
+        nz = lambda a: ca.project(a, self.pattern).nz[:]
+        cols = tuple(par_columns)
+        seed = ca.DM(np.eye(self.n_par)[:, list(cols)]) if cols else ca.DM(self.n_par, 0)
+        dp = lambda e: ca.vec(ca.densify(ca.jtimes(e, self.p, seed))) if cols else \
+            ca.DM(0, 1)
+        name = "colloc_point_jacobians_p" + "_".join(map(str, cols))
+        return ca.Function(name, [self.x, self.v, self.p],
+                           [self.f, self.mv, nz(self.fx), nz(self.mvx), nz(self.m),
+                            dp(self.f), dp(self.mv)])
+
+
+def pointwise_functions(vf, par_columns=None):
+    """``(values, jacobians, pattern)``: single-point CasADi functions of ``(x, v, p)``
+    (``jacobians`` with parameter derivatives in ``par_columns``, default all)."""
+    pw = Pointwise(vf)
+    cols = range(pw.n_par) if par_columns is None else par_columns
+    return pw.values(), pw.jacobians(cols), pw.pattern
+
+
 class PointKernel:
     """``(x[n x K], v[n x K], p) ->`` pointwise values at ``K`` points.
 
-    ``values`` gives ``(F, M v)`` (each ``n x K``); ``jacobians`` gives
+    ``values`` gives ``(F, M v)`` (each ``n x K``); ``jacobians(par_columns)`` gives
     ``KERNEL_OUTPUTS``: ``F, M v``, the nonzeros on the pattern ``rows, cols`` (``s``
-    entries, CasADi CCS order) of ``F_x``, ``d(M v)/dx`` and ``M`` (each ``s x K``),
-    and ``F_p``, ``d(M v)/dp`` (``vec`` of ``n x n_par`` each, ``n n_par x K``).
+    entries, CasADi CCS order) of ``F_x``, ``d(M v)/dx`` and ``M`` (each ``s x K``), and
+    ``F_p``, ``d(M v)/dp`` in the directions ``par_columns`` (``vec`` of ``n x k``
+    each, ``n k x K``), built once per tuple of columns.
+
+    ``backend`` 'mx': the single-point functions mapped over the points in CasADi's
+    virtual machine (expanded to SX when the VectorField is SX); 'compiled': each
+    single-point function compiled to C (``_compile``, cached on disk independently
+    of ``K``) and mapped; when it cannot be compiled the kernel stays 'mx'.
     """
 
-    n: int
-    n_par: int
-    K: int
-    rows: np.ndarray
-    cols: np.ndarray
-    values: BufferedFunction
-    jacobians: BufferedFunction
+    def __init__(self, vf, K: int, backend: str = "mx", cache_dir=None):
+        self.pointwise = Pointwise(vf)
+        self.n, self.n_par, self.K = self.pointwise.n, self.pointwise.n_par, K
+        rows, cols = self.pointwise.pattern.get_triplet()
+        self.rows, self.cols = np.asarray(rows), np.asarray(cols)
+        self.expand, self.cache_dir = vf.sym is ca.SX, cache_dir
+        self.backend = backend
+        self.values = self._mapped(self.pointwise.values())
+        self._jacobians: dict = {}
+
+    def jacobians(self, par_columns) -> BufferedFunction:
+        """The mapped Jacobian kernel with parameter directions ``par_columns``."""
+        key = tuple(int(c) for c in par_columns)
+        if key not in self._jacobians:
+            self._jacobians[key] = self._mapped(self.pointwise.jacobians(key))
+        return self._jacobians[key]
+
+    def _mapped(self, fun: ca.Function) -> BufferedFunction:
+        """``fun`` (SX when ``expand``) compiled if the backend says so, mapped over
+        ``K`` columns of ``x, v`` (``p`` shared)."""
+        fun = as_sx_function(fun) if self.expand else fun
+        if self.backend == "compiled":
+            fast = compiled_or_none(fun, self.cache_dir)
+            if fast is None:
+                self.backend = "mx"
+            else:
+                fun = fast
+        mapped = fun.map(fun.name() + f"_{self.K}", "serial", self.K, [2], [])
+        return BufferedFunction(as_sx_function(mapped) if self.expand and
+                                self.backend == "mx" else mapped)
 
     def evaluate(self, fun, x, v, p) -> list:
         """Outputs of ``fun`` at points ``x, v`` (``(K, n)`` each) as ``(K, size)`` arrays."""
@@ -61,42 +131,9 @@ class PointKernel:
         return [o.reshape(self.K, -1) for o in out]
 
 
-def pointwise_functions(vf):
-    """``(values, jacobians, pattern)``: single-point CasADi functions of ``(x, v, p)``.
-
-    ``pattern`` is the union of the structural patterns of ``F_x``, ``d(M v)/dx``
-    and ``M``; the matrix outputs are projected on it."""
-    S, n = vf.sym, vf.n
-    x, v, p = S.sym("x", n), S.sym("v", n), S.sym("p", len(vf.par_names))
-    f, m = vf.F_expr(x, p), vf.M_expr(x, p)
-    mv = ca.mtimes(m, v)
-    fx, mvx = ca.jacobian(f, x), ca.jacobian(mv, x)
-    m = ca.sparsify(m) if S is ca.SX else m
-    pattern = fx.sparsity().unite(mvx.sparsity()).unite(m.sparsity())
-    nz = lambda a: ca.project(a, pattern).nz[:]
-    dense = lambda a: ca.vec(ca.densify(a))
-    values = ca.Function("colloc_point_values", [x, v, p], [f, mv])
-    jacobians = ca.Function("colloc_point_jacobians", [x, v, p],
-                            [f, mv, nz(fx), nz(mvx), nz(m),
-                             dense(ca.jacobian(f, p)), dense(ca.jacobian(mv, p))])
-    return values, jacobians, pattern
-
-
-def _mapped(fun: ca.Function, K: int, expand: bool) -> BufferedFunction:
-    """``fun`` mapped over ``K`` columns of ``x, v`` (``p`` shared), as one SX
-    function when ``expand``."""
-    mapped = fun.map(fun.name() + f"_{K}", "serial", K, [2], [])
-    return BufferedFunction(as_sx_function(mapped) if expand else mapped)
-
-
-def point_kernel(vf, K: int) -> PointKernel:
-    """The pointwise kernel of ``vf`` at ``K`` points. Expanded to SX when the
-    vector field is SX (a VectorField built with ``expand=False`` keeps MX)."""
-    values, jacobians, pattern = pointwise_functions(vf)
-    rows, cols = pattern.get_triplet()
-    expand = vf.sym is ca.SX
-    return PointKernel(vf.n, len(vf.par_names), K, np.asarray(rows), np.asarray(cols),
-                       _mapped(values, K, expand), _mapped(jacobians, K, expand))
+def point_kernel(vf, K: int, backend: str = "mx") -> PointKernel:
+    """The pointwise kernel of ``vf`` at ``K`` points (see :class:`PointKernel`)."""
+    return PointKernel(vf, K, backend)
 
 
 @dataclass(frozen=True)
@@ -205,26 +242,26 @@ class BlockCollocationSystem:
         """``[G_Y, G_p[:, par_columns]]`` as one sparse matrix (see the module doc)."""
         U, T, h, c, hk = self._split(Y, D)
         x, v = self.points(U)
-        kr = self.kernel
-        F, Mv, Fx, Mvx, M, Fp, Mvp = kr.evaluate(kr.jacobians, x, v, P)
+        kr, cols = self.kernel, tuple(par_columns)
+        F, Mv, Fx, Mvx, M, Fp, Mvp = kr.evaluate(kr.jacobians(cols), x, v, P)
         W = (Mvx - (hk * T)[:, None] * Fx).reshape(self.ntst, self.ncol, -1)
         Mb = M.reshape(self.ntst, self.ncol, -1)
         blocks = np.einsum("iks,kl->ikls", W, self.col.P) + \
             np.einsum("iks,kl->ikls", Mb, self.col.Dm)
-        cols = list(par_columns)
-        Gp = Mvp.reshape(kr.K, kr.n_par, kr.n)[:, cols, :] - \
-            (hk * T)[:, None, None] * Fp.reshape(kr.K, kr.n_par, kr.n)[:, cols, :]
+        Gp = (Mvp - (hk * T)[:, None] * Fp).reshape(kr.K, len(cols), kr.n)
         vals = np.concatenate([blocks.ravel(), (-hk[:, None] * F).ravel(), c,
                                Gp.transpose(1, 0, 2).ravel()])
         return self._layout(len(cols)).matrix(vals)
 
 
-def builder(ntst: int, ncol: int):
+def builder(ntst: int, ncol: int, backend: str = "mx"):
     """``builder(vf) -> BlockCollocationSystem``; the pointwise kernel is built once
-    per VectorField and number of points ``NTST NCOL`` (cached with its systems)."""
+    per VectorField, number of points ``NTST NCOL`` and backend ('mx' or 'compiled',
+    cached with its systems)."""
     def build(vf) -> BlockCollocationSystem:
         K = ntst * ncol
-        kernel = system(vf, f"collocation_points_{K}", lambda vf: point_kernel(vf, K))
+        kernel = system(vf, f"collocation_points_{K}_{backend}",
+                        lambda vf: point_kernel(vf, K, backend))
         return BlockCollocationSystem(kernel, ntst, ncol)
 
     return build

@@ -32,7 +32,7 @@ from . import _floquet
 from . import _mesh
 from ._equilibrium import make_field, param_vector
 from ._problem import Description, PointInfo, Problem
-from ._settings import CollocationSettings
+from ._settings import CollocationSettings, kernel_backend
 from ._systems import bound
 
 
@@ -238,7 +238,8 @@ def _collocation_system(settings: CollocationSettings) -> tuple:
     ntst, ncol = settings.ntst, settings.ncol
     if settings.jacobian == "graph":
         return f"collocation_{ntst}_{ncol}", colloc.builder(ntst, ncol)
-    return f"collocation_blocks_{ntst}_{ncol}", _blocks.builder(ntst, ncol)
+    backend = kernel_backend(settings.backend)
+    return f"collocation_blocks_{ntst}_{ncol}_{backend}", _blocks.builder(ntst, ncol, backend)
 
 
 def _check_mesh(mesh, ntst) -> np.ndarray:

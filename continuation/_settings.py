@@ -8,6 +8,7 @@ naming the field.
 from __future__ import annotations
 
 import math
+import os
 from dataclasses import dataclass, field
 from types import MappingProxyType
 from typing import Mapping
@@ -101,6 +102,8 @@ class ContinuationSettings:
     step_grow, step_shrink : factor applied after an easy step (Newton in at
         most ``easy_iterations`` iterations) / after a failed corrector.
     detect : compute test functions and locate special points.
+    stop_at : kinds of special points (e.g. ``("hopf",)``) that end the run at the
+        step past the first one found (status 'stopped'): nothing further is computed.
     locate_tol : arclength tolerance of the special-point location.
     progress : show a tqdm progress bar (off by default).
     """
@@ -117,6 +120,7 @@ class ContinuationSettings:
     step_shrink: float = 0.5
     easy_iterations: int = 3
     detect: bool = True
+    stop_at: tuple = ()
     compute_eigenvalues: bool = True
     locate_tol: float = 1e-10
     locate_max_iter: int = 60
@@ -140,6 +144,9 @@ class ContinuationSettings:
         if not isinstance(self.eigen, EigenSettings):
             raise ValueError("ContinuationSettings.eigen must be an EigenSettings")
         object.__setattr__(self, "bounds", MappingProxyType(_check_bounds(self.bounds)))
+        if not (isinstance(self.stop_at, tuple) and all(isinstance(k, str) for k in self.stop_at)):
+            raise ValueError("ContinuationSettings.stop_at must be a tuple of special-point "
+                             f"kinds (str), got {self.stop_at!r}")
 
 
 def _check_bounds(bounds) -> dict:
@@ -157,6 +164,20 @@ def _check_bounds(bounds) -> dict:
     return checked
 
 
+#: kernel backends of CollocationSettings.backend; the first is the default
+BACKENDS = ("mx", "compiled")
+
+
+def kernel_backend(backend: str | None) -> str:
+    """``backend``, or when None ``$CONTINUATION_BACKEND`` (validated), else 'mx'."""
+    if backend is not None:
+        return backend
+    env = os.environ.get("CONTINUATION_BACKEND", "").strip()
+    if env and env not in BACKENDS:
+        raise ValueError(f"CONTINUATION_BACKEND must be 'mx' or 'compiled', got {env!r}")
+    return env or BACKENDS[0]
+
+
 @dataclass(frozen=True)
 class CollocationSettings:
     """Orthogonal collocation of periodic orbits.
@@ -172,6 +193,10 @@ class CollocationSettings:
     'blocks' (default; one mapped CasADi call for ``F``, ``F_x``, ``M``, ... at all
     collocation points, the matrix assembled by NumPy) or 'graph' (CasADi AD of the
     whole discretised residual; the reference path).
+    backend : how the 'blocks' kernel is evaluated: 'mx' (CasADi's virtual machine) or
+    'compiled' (C compiled once per vector field and cached on disk, see
+    ``docs/performance.md``; falls back to 'mx' without a C compiler); None (default):
+    ``$CONTINUATION_BACKEND`` if set, else 'mx'.
     """
 
     ntst: int = 20
@@ -181,9 +206,13 @@ class CollocationSettings:
     unstable_tol: float = 1e-8
     adapt_every: int = 0
     jacobian: str = "blocks"
+    backend: str | None = None
 
     def __post_init__(self):
         _positive_int(self, "ntst", "ncol", "pencil_max")
+        if self.backend is not None and self.backend not in BACKENDS:
+            raise ValueError("CollocationSettings.backend must be None, 'mx' or 'compiled', "
+                             f"got {self.backend!r}")
         if self.jacobian not in ("blocks", "graph"):
             raise ValueError("CollocationSettings.jacobian must be 'blocks' or 'graph', "
                              f"got {self.jacobian!r}")

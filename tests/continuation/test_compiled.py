@@ -1,0 +1,158 @@
+"""Compiled collocation kernels (``CollocationSettings(backend='compiled')``) against the
+CasADi virtual machine ('mx'): residuals, Jacobians and Floquet multipliers agree to
+1e-12 relative; the on-disk cache, the environment switch and the fallback without a
+compiler."""
+
+import os
+import pathlib
+import subprocess
+import sys
+import textwrap
+
+import casadi as ca
+import numpy as np
+import pytest
+
+import continuation as C
+from continuation import _compile
+
+RTOL = 1e-12
+
+needs_compiler = pytest.mark.skipif(not _compile.has_compiler(),
+                                    reason="no C compiler found (gcc, cc, clang or $CC)")
+
+
+def _rel(a, b) -> float:
+    """max |a - b| / max |a|."""
+    a, b = np.asarray(a), np.asarray(b)
+    return float(np.max(np.abs(a - b)) / max(np.max(np.abs(a)), 1e-300))
+
+
+def _mx_field(models):
+    """The two-parameter mass model kept MX (``expand=False``)."""
+    F, M = models.mass_model(with_q=True)
+    x, p = ca.MX.sym("x", 2), ca.MX.sym("p", 2)
+    Fm, Mm = ca.Function("F", [x, p], [F(x, p)]), ca.Function("M", [x, p], [M(x, p)])
+    return C.VectorField(Fm, Mm, ("p", "q"), expand=False)
+
+
+def _mx_van_der_pol(models):
+    """Van der Pol kept MX."""
+    F = models.van_der_pol()
+    x, p = ca.MX.sym("x", 2), ca.MX.sym("p", 1)
+    return C.VectorField(ca.Function("F", [x, p], [F(x, p)]), None, ("mu",), expand=False)
+
+
+def _cases(models):
+    """``name -> (F, M, params, active, guess, period)``."""
+    F_m, M_m = models.mass_model(with_q=True)
+    ring = lambda t: 1.0 + 0.3 * models.van_der_pol_guess(t)
+    return {
+        "van_der_pol": (models.van_der_pol(), None, {"mu": 1.0}, "mu",
+                        models.van_der_pol_guess, 6.6),
+        "brusselator": (models.brusselator(), None, {"A": 1.0, "B": 3.0}, "B",
+                        lambda t: np.array([1.0, 3.0]) + 0.5 * models.van_der_pol_guess(t),
+                        7.0),
+        "van_der_pol_mx": (_mx_van_der_pol(models), None, {"mu": 1.0}, "mu",
+                           models.van_der_pol_guess, 6.6),
+        "mass_model": (F_m, M_m, {"p": 0.6, "q": 1.0}, "q", ring, 12.0),
+        "mass_model_mx": (_mx_field(models), None, {"p": 0.6, "q": 1.0}, "p", ring, 12.0),
+    }
+
+
+def _problem(case, backend, ntst=7, ncol=3):
+    F, M, params, active, guess, period = case
+    settings = C.CollocationSettings(ntst=ntst, ncol=ncol, backend=backend)
+    return C.CycleProblem(F, guess, period, params, active, M=M, settings=settings)
+
+
+@pytest.fixture
+def cache(tmp_path, monkeypatch):
+    monkeypatch.setenv("CONTINUATION_CACHE", str(tmp_path))
+    return tmp_path
+
+
+@needs_compiler
+@pytest.mark.parametrize("name", ["van_der_pol", "brusselator", "mass_model",
+                                  "mass_model_mx", "van_der_pol_mx"])
+def test_compiled_kernel_equals_mx(models, cache, name):
+    case = _cases(models)[name]
+    mx, fast = _problem(case, "mx"), _problem(case, "compiled")
+    assert fast.system.compiled.kernel.backend == "compiled"
+    assert mx.system.compiled.kernel.backend == "mx"
+    X = mx.X0 + 0.05 * np.random.default_rng(0).standard_normal(mx.X0.size)
+    fast.system.D = mx.system.D.copy()
+    assert _rel(mx.residual(X), fast.residual(X)) < RTOL
+    Y, p, D = X[:-1], mx.params(X), mx.system.D
+    for cols in [(0,), (1,), (1, 0), ()]:
+        if max(cols, default=0) < len(p):
+            Jm = mx.system.compiled.jacobian(Y, p, D, cols).toarray()
+            Jc = fast.system.compiled.jacobian(Y, p, D, cols).toarray()
+            assert _rel(Jm, Jc) < RTOL
+    assert list(cache.glob("*.so"))
+
+
+@needs_compiler
+@pytest.mark.parametrize("name", ["van_der_pol", "van_der_pol_mx"])
+def test_compiled_multipliers_equal_mx(models, cache, name):
+    case = _cases(models)[name]
+    mx, fast = _problem(case, "mx", ntst=12, ncol=4), _problem(case, "compiled", ntst=12, ncol=4)
+    X = models.corrected(mx)
+    fast.system.D = mx.system.D.copy()
+    mu_m, mu_c = mx.multipliers(X), fast.multipliers(X)
+    assert np.max(np.abs(mu_m - mu_c)) < RTOL * max(1.0, np.max(np.abs(mu_m)))
+
+
+@needs_compiler
+def test_kernel_library_is_shared_by_meshes_and_processes(models, cache):
+    case = _cases(models)["van_der_pol"]
+    _problem(case, "compiled", ntst=6, ncol=4).jacobian(_problem(case, "mx", 6, 4).X0)
+    libraries = {p: p.stat().st_mtime_ns for p in cache.glob("*.so")}
+    before = _compile.compile_count
+    other = _problem(case, "compiled", ntst=9, ncol=3)          # another K: same libraries
+    other.jacobian(other.X0)
+    assert _compile.compile_count == before
+    script = textwrap.dedent(f"""
+        import sys; sys.path.insert(0, {str(pathlib.Path(__file__).parent)!r})
+        import conftest, continuation as C
+        from continuation import _compile
+        pr = C.CycleProblem(conftest.van_der_pol(), conftest.van_der_pol_guess, 6.6,
+                            {{"mu": 1.0}}, "mu", settings=C.CollocationSettings(ntst=5))
+        pr.jacobian(pr.X0)
+        print(_compile.compile_count, pr.system.compiled.kernel.backend)
+    """)
+    env = {"CONTINUATION_CACHE": str(cache), "CONTINUATION_BACKEND": "compiled"}
+    out = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True,
+                         check=True, env={**os.environ, **env})
+    assert out.stdout.split() == ["0", "compiled"]
+    assert {p: p.stat().st_mtime_ns for p in cache.glob("*.so")} == libraries
+    assert [p for p in cache.iterdir() if p.suffix != ".so"] == []
+
+
+def test_missing_compiler_falls_back_to_mx(models, cache, monkeypatch):
+    monkeypatch.setenv("CC", "no-such-compiler-continuation")
+    prob = _problem(_cases(models)["van_der_pol"], "compiled", ntst=5, ncol=2)
+    assert prob.system.compiled.kernel.backend == "mx"
+    assert np.all(np.isfinite(prob.jacobian(prob.X0).data))
+    assert not list(cache.glob("*.so"))
+
+
+def test_backend_setting_and_environment_are_validated(monkeypatch):
+    with pytest.raises(ValueError, match="CollocationSettings.backend"):
+        C.CollocationSettings(backend="jit")
+    from continuation._settings import kernel_backend
+    monkeypatch.delenv("CONTINUATION_BACKEND", raising=False)
+    assert kernel_backend(None) == "mx"
+    monkeypatch.setenv("CONTINUATION_BACKEND", "compiled")
+    assert kernel_backend(None) == "compiled" and kernel_backend("mx") == "mx"
+    monkeypatch.setenv("CONTINUATION_BACKEND", "fast")
+    with pytest.raises(ValueError, match="CONTINUATION_BACKEND"):
+        kernel_backend(None)
+
+
+def test_cache_dir_follows_the_environment(tmp_path, monkeypatch):
+    monkeypatch.setenv("CONTINUATION_CACHE", str(tmp_path / "c"))
+    assert _compile.default_cache_dir() == tmp_path / "c"
+    monkeypatch.delenv("CONTINUATION_CACHE")
+    monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path / "xdg"))
+    assert _compile.default_cache_dir() == tmp_path / "xdg" / "continuation"
