@@ -18,7 +18,8 @@ FORMAT = "continuation.Branch/1"
 #: 'max_steps' (``settings.max_steps`` points computed), 'bound' (a free parameter
 #: left ``settings.bounds``), 'failed' (the corrector failed at ``ds_min``, the start
 #: point did not converge), 'event' (a terminal :class:`Event` was located; the
-#: branch ends at it), 'stopped' (the ``stop`` predicate returned True or a message)
+#: branch ends at it), 'stopped' (the ``stop`` predicate returned True or a message, or a
+#: kind of ``ContinuationSettings.stop_at`` was found)
 Status = Literal["max_steps", "bound", "failed", "event", "stopped"]
 
 #: special-point kinds of the built-in problems (user events may not reuse them)

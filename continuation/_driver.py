@@ -183,6 +183,10 @@ class _Run:
             self.rec.special += [f.point for f in found]
             self.add(problem, cur, hit.event if hit is not None else None)
         self.prev = cur
+        stops = [f.point.kind for f in found if f.point.kind in self.settings.stop_at]
+        if stops and self.halt is None:
+            self.halt = ("stopped", f"stopped at the first {stops[0]!r} (before point "
+                                    f"{len(self.rec.X) - 1})")
 
     def add(self, problem, cur, terminal: Event | None) -> None:
         """Append ``cur`` to the branch; then apply ``terminal`` or ``stop``."""

@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
+from typing import Literal
 
 import casadi as ca
 import numpy as np
@@ -23,8 +24,12 @@ from .adapter import LOG_M, PI, PI_SCALE, TIME_SCALE, dense, flutter_field, pi_o
 from .stability import generalized_eigen
 from .steady import steady_state
 
-__all__ = ["HopfPoint", "CriticalVelocityError", "flutter_problem", "hopf_points",
+__all__ = ["Criticality", "HopfPoint", "CriticalVelocityError", "flutter_problem", "hopf_points",
            "critical_velocity", "dominant_mode", "hopf_point_from", "eigenvector_q"]
+
+#: Sign of the first Lyapunov coefficient at a Hopf point: l1 < 0 "supercritical" (a small
+#: stable cycle is born), l1 > 0 "subcritical" (a jump to large amplitude, hysteresis).
+Criticality = Literal["supercritical", "subcritical"]
 
 
 class CriticalVelocityError(RuntimeError):
@@ -50,10 +55,15 @@ class HopfPoint:
     def supercritical(self) -> bool:
         return self.l1 < 0
 
+    @property
+    def criticality(self) -> Criticality:
+        """"supercritical" (l1 < 0) or "subcritical" (otherwise, also for l1 = NaN)."""
+        return "supercritical" if self.supercritical else "subcritical"
+
     def to_json(self) -> dict:
         return {"mstar": self.mstar, "ustar_crit": self.ustar, "pressure_drop": self.pressure_drop,
                 "omega": self.omega, "freq_ratio": self.freq_ratio, "l1": self.l1,
-                "criticality": "supercritical" if self.supercritical else "subcritical",
+                "criticality": self.criticality,
                 "dominant_mode": self.dominant_mode}
 
 

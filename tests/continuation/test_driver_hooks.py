@@ -151,3 +151,18 @@ def test_special_points_keep_the_whole_record_and_their_unknowns(models):
     assert np.allclose(fold.unknowns, [0.0, 0.0], atol=1e-6)
     assert np.array_equal(fold.record["X"], fold.unknowns)
     assert "X" not in half.data and abs(half.data["x2"] - 0.25) < 1e-8
+
+
+def test_stop_at_ends_the_run_past_the_first_special_point_of_a_kind(models):
+    """x' = p - x^2 followed down through its fold at p = 0: with stop_at = ('fold',)
+    the run ends at the first point past the fold (it lies between the last two points),
+    with the fold located as without stop_at."""
+    full = C.continuation(_fold_problem(models), settings=_down())
+    short = C.continuation(_fold_problem(models), settings=_down(stop_at=("fold",)))
+    (fold,) = short.special("fold")
+    assert short.status == "stopped" and "'fold'" in short.message
+    assert fold.index == len(short.s) - 1 < len(full.s) - 1
+    assert abs(fold.params["p"] - full.special("fold")[0].params["p"]) < 1e-12
+    assert abs(fold.params["p"]) < 1e-8
+    with pytest.raises(ValueError, match="stop_at"):
+        C.ContinuationSettings(stop_at="fold")
