@@ -116,7 +116,7 @@ def scaling(modes):
     import casadi as ca
 
     from fsicas.timedomain.breathing import PressureSchedule
-    from fsicas.timedomain.integrators import _explicit_ode, _ode
+    from fsicas.timedomain.integrators import explicit_ode, ode_symbols
 
     def per_call(f, *args):
         f(*args)
@@ -131,9 +131,9 @@ def scaling(modes):
         scene = Scene(mstar=1.0, ustar=8.5, zeta=0.01, modes=n, **CONTACT)
         model, _ = guarded_model(scene)
         steady = steady_state(scene, model)
-        x, pe, t, p_t, F = _ode(model)
+        x, pe, t, p_t, F = ode_symbols(model)
         z = ca.MX.sym("z", model.n_state)
-        xdot, jac = _explicit_ode(model, x, pe, t, p_t, F)
+        xdot, jac = explicit_ode(model, x, pe, t, p_t, F)
         free = model.mass_action(x, p_t, z) - F
         assembled = ca.mtimes(model.mass(x, p_t), z) - F
         xz = ca.vertcat(x, z)

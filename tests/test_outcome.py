@@ -4,15 +4,11 @@ import json
 import numpy as np
 import pytest
 
-from fsicas import Scene
 from fsicas.cli import main
 from fsicas.timedomain.outcome import Criteria, poincare_returns
 from fsicas.timedomain.run import run_case
 from fsicas.timedomain.integrators import Settings
 from fsicas.linear.stability import eigenvalues
-
-BASE = Scene(mstar=1.0, ustar=6.5, zeta=0.01, modes=10)
-FAST = Settings(rtol=1e-8, atol=1e-10, dt_out=1e-3)
 
 
 def test_poincare_returns_of_a_sine_with_chatter():
@@ -30,37 +26,37 @@ def test_criteria_validated():
         Criteria(tol=2.0)
 
 
-def test_decay_below_onset():
-    run = run_case(BASE.replace(ustar=4.0), 20.0, settings=FAST)
+def test_decay_below_onset(damped_scene_u6_5, outcome_settings):
+    run = run_case(damped_scene_u6_5.replace(ustar=4.0), 20.0, settings=outcome_settings)
     assert run.outcome.outcome == "decay" and run.trajectory.t[-1] < 20.0   # stopped early
 
 
-def test_limit_cycle_near_onset_has_the_hopf_frequency():
+def test_limit_cycle_near_onset_has_the_hopf_frequency(damped_scene_u6_5, outcome_settings):
     """Above onset (U*_c = 5.611) the cycle's frequency stays near |Im(lambda)|."""
-    run = run_case(BASE, 20.0, settings=FAST)
+    run = run_case(damped_scene_u6_5, 20.0, settings=outcome_settings)
     o = run.outcome
     omega = abs(eigenvalues(run.model, run.steady)[0].imag)
     assert o.outcome == "lco" and not o.contact and o.convergence < 1e-3
     assert o.frequency == pytest.approx(omega, rel=5e-2)     # weakly nonlinear shift only
-    assert 0 < o.tip_amplitude < BASE.hstar / 2
+    assert 0 < o.tip_amplitude < damped_scene_u6_5.hstar / 2
     assert 0 < o.mean_flow_reduction < 0.2                   # fluttering beam reduces the mean flow
 
 
-def test_contact_without_contact_model_stops_the_run():
-    run = run_case(BASE.replace(ustar=8.0), 20.0, settings=FAST)
+def test_contact_without_contact_model_stops_the_run(damped_scene_u6_5, outcome_settings):
+    run = run_case(damped_scene_u6_5.replace(ustar=8.0), 20.0, settings=outcome_settings)
     o = run.outcome
     assert o.outcome == "contact" and o.contact and o.first_contact_time < 3.0
     assert 0.0 <= o.first_contact_position <= 1.0
     assert run.trajectory.status == "success"
 
 
-def test_first_contact_is_located_between_output_samples():
+def test_first_contact_is_located_between_output_samples(damped_scene_u6_5):
     """Event location: the contact time from samples 2e-3 apart equals the one from
     samples 2e-5 apart (both located on the interpolating cubic) to far below either
     step, and lies inside the last sample interval, not on a sample."""
     times = []
     for dt_out in (2e-3, 2e-5):
-        run = run_case(BASE.replace(ustar=8.0), 20.0,
+        run = run_case(damped_scene_u6_5.replace(ustar=8.0), 20.0,
                        settings=Settings(rtol=1e-10, atol=1e-12, dt_out=dt_out))
         o = run.outcome
         assert o.outcome == "contact" and run.trajectory.status == "success"
@@ -69,8 +65,8 @@ def test_first_contact_is_located_between_output_samples():
     assert times[0] == pytest.approx(times[1], abs=1e-7)
 
 
-def test_short_run_is_unsettled():
-    run = run_case(BASE, 0.5, settings=FAST)
+def test_short_run_is_unsettled(damped_scene_u6_5, outcome_settings):
+    run = run_case(damped_scene_u6_5, 0.5, settings=outcome_settings)
     assert run.outcome.outcome == "unsettled"
 
 
@@ -95,9 +91,9 @@ def test_cli_simulate_bad_input(capsys, argv, field):
     assert code == 2 and field in out["error"]
 
 
-def test_full_contact_free_run_still_ends_at_contact():
+def test_full_contact_free_run_still_ends_at_contact(damped_scene_u6_5, outcome_settings):
     """stop_early=False keeps a run to t_end, but a contact-free beam cannot pass a wall."""
-    run = run_case(BASE.replace(ustar=8.0), 20.0, settings=FAST, stop_early=False)
+    run = run_case(damped_scene_u6_5.replace(ustar=8.0), 20.0, settings=outcome_settings, stop_early=False)
     assert run.outcome.outcome == "contact" and run.trajectory.t[-1] < 3.0
-    lco = run_case(BASE, 3.0, settings=FAST, stop_early=False)
+    lco = run_case(damped_scene_u6_5, 3.0, settings=outcome_settings, stop_early=False)
     assert lco.trajectory.t[-1] == pytest.approx(3.0)          # no early stop otherwise

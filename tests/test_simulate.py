@@ -8,12 +8,10 @@ from fsicas.timedomain.breathing import PressureSchedule
 from fsicas.timedomain.integrators import Settings, eigenvector_state, gaps, initial_state, simulate
 from fsicas.linear.stability import eigenvalues
 
-BASE = Scene(mstar=1.0, ustar=7.0, zeta=0.01, modes=10)
-
 
 @pytest.fixture(scope="module")
-def model():
-    return build_model(BASE)
+def model(damped_scene_u7):
+    return build_model(damped_scene_u7)
 
 
 def leading_mode_start(model, steady, size):
@@ -29,8 +27,8 @@ def tip_growth_rate(traj, steady, t_from):
 
 
 @pytest.mark.parametrize("ustar", [4.0, 7.0])
-def test_early_growth_rate_and_frequency_match_the_leading_eigenvalue(model, ustar):
-    steady = steady_state(BASE.replace(ustar=ustar), model)
+def test_early_growth_rate_and_frequency_match_the_leading_eigenvalue(model, ustar, damped_scene_u7):
+    steady = steady_state(damped_scene_u7.replace(ustar=ustar), model)
     x0, lam = leading_mode_start(model, steady, 1e-6)
     assert lam == pytest.approx(eigenvalues(model, steady)[0], rel=1e-10)
     traj = simulate(model, steady, 1.0, x0=x0, settings=Settings(rtol=1e-10, atol=1e-15, dt_out=2e-4))
@@ -39,12 +37,12 @@ def test_early_growth_rate_and_frequency_match_the_leading_eigenvalue(model, ust
     assert omega == pytest.approx(abs(lam.imag), rel=5e-4)
 
 
-def test_onset_of_oscillation_brackets_the_linear_instability(model):
-    rate = lambda u: eigenvalues(model, steady_state(BASE.replace(ustar=u), model))[0].real
+def test_onset_of_oscillation_brackets_the_linear_instability(model, damped_scene_u7):
+    rate = lambda u: eigenvalues(model, steady_state(damped_scene_u7.replace(ustar=u), model))[0].real
     u_c = scipy.optimize.brentq(rate, 5.0, 6.5, xtol=1e-10)
     growth = []
     for u in (u_c - 0.1, u_c + 0.1):
-        steady = steady_state(BASE.replace(ustar=u), model)
+        steady = steady_state(damped_scene_u7.replace(ustar=u), model)
         x0, lam = leading_mode_start(model, steady, 1e-6)
         traj = simulate(model, steady, 3.0, x0=x0, settings=Settings(rtol=1e-10, atol=1e-15, dt_out=5e-4))
         measured, _ = tip_growth_rate(traj, steady, 0.0)
@@ -53,8 +51,8 @@ def test_onset_of_oscillation_brackets_the_linear_instability(model):
     assert growth[0] < -0.05 and growth[1] > 0.05          # stable below, growing above
 
 
-def test_casadi_and_scipy_routes_agree(model):
-    steady = steady_state(BASE, model)
+def test_casadi_and_scipy_routes_agree(model, damped_scene_u7):
+    steady = steady_state(damped_scene_u7, model)
     runs = {m: simulate(model, steady, 0.3, settings=Settings(method=m, rtol=1e-10, atol=1e-13, chunk=0.15))
             for m in ("cvodes", "idas", "radau")}
     ref = runs["radau"].x
@@ -67,16 +65,16 @@ def test_casadi_and_scipy_routes_agree(model):
             assert err < 1e-6, (m, b, err)
 
 
-def test_schedule_time_input_matches_piecewise_constant_drive(model):
+def test_schedule_time_input_matches_piecewise_constant_drive(model, damped_scene_u7):
     """A ramp fed as a time input equals chunks of constant Δp in the limit: check Δp(t)."""
-    steady = steady_state(BASE, model)
+    steady = steady_state(damped_scene_u7, model)
     sched = PressureSchedule.ramp(3.0, 7.0, 0.2)
     traj = simulate(model, steady, 0.3, schedule=sched, settings=Settings(chunk=0.1))
     c = steady.pressure_drop / 49.0
     u = np.interp(traj.t, [0.0, 0.2, 0.3], [3.0, 7.0, 7.0])
     assert np.allclose(traj.pressure_drop, c * u**2, rtol=1e-13)
     # the flow follows: total inlet flow rate rises from the U*=3 level towards U*=7
-    q = traj.x[:, -2:].sum(axis=1) / BASE.hstar
+    q = traj.x[:, -2:].sum(axis=1) / damped_scene_u7.hstar
     assert q[0] == pytest.approx(7.0, rel=1e-12)   # starts from the steady state at U_ref
     assert q[np.searchsorted(traj.t, 0.05)] < 6.5
 
@@ -94,8 +92,8 @@ def test_straight_channel_pressure_coefficient_is_exact():
     (dict(t_end=0.0), "t_end"), (dict(t_end=-1.0), "t_end"), (dict(t_end=np.nan), "t_end"),
     (dict(perturbation=30.0), "perturbation"),
 ])
-def test_bad_run_input_raises_before_work(model, kwargs, field):
-    steady = steady_state(BASE, model)
+def test_bad_run_input_raises_before_work(model, kwargs, field, damped_scene_u7):
+    steady = steady_state(damped_scene_u7, model)
     args = dict(t_end=1.0, perturbation=1e-2) | kwargs
     with pytest.raises(ValueError, match=field):
         simulate(model, steady, args["t_end"], perturbation=args["perturbation"])
@@ -111,15 +109,15 @@ def test_settings_out_of_range_raise(kwargs, field):
         Settings(**kwargs)
 
 
-def test_perturbation_array_shape_checked(model):
-    steady = steady_state(BASE, model)
+def test_perturbation_array_shape_checked(model, damped_scene_u7):
+    steady = steady_state(damped_scene_u7, model)
     with pytest.raises(ValueError, match="perturbation"):
         initial_state(model, steady, np.zeros(3))
 
 
-def test_closing_gap_is_a_reported_failure_not_nan():
+def test_closing_gap_is_a_reported_failure_not_nan(damped_scene_u7):
     """A contact law too soft for the impact: the gap closes; the run says so, no NaN."""
-    scene = BASE.replace(ustar=8.0, contact=True, contact_stiffness=1e4, contact_eps=1e-3)
+    scene = damped_scene_u7.replace(ustar=8.0, contact=True, contact_stiffness=1e4, contact_eps=1e-3)
     model = build_model(scene)
     steady = steady_state(scene, model)
     traj = simulate(model, steady, 3.0, settings=Settings(rtol=1e-7, atol=1e-9))
@@ -127,17 +125,17 @@ def test_closing_gap_is_a_reported_failure_not_nan():
     assert np.all(np.isfinite(traj.x)) and traj.t[-1] < 3.0
 
 
-def test_explicit_jacobian_through_the_mass_action_equals_ad_through_m():
+def test_explicit_jacobian_through_the_mass_action_equals_ad_through_m(damped_scene_u7):
     """``M⁻¹(F_y − ∂(M v)/∂y|_{v=xdot})`` for y = x, pe, t (the SciPy routes' Jacobian and
     CVODES's custom Jacobian) equals CasADi's AD of solve(M, F), at a moving state with
     the contact load on and a time-dependent pressure drop."""
     import casadi as ca
-    from fsicas.timedomain.integrators import _explicit_ode, _ode
-    scene = BASE.replace(modes=6, contact=True, contact_stiffness=1e6, contact_eps=1e-2)
+    from fsicas.timedomain.integrators import explicit_ode, ode_symbols
+    scene = damped_scene_u7.replace(modes=6, contact=True, contact_stiffness=1e6, contact_eps=1e-2)
     model = build_model(scene)
     steady = steady_state(scene, model)
-    x, pe, t, p_t, F = _ode(model)
-    xdot, jac = _explicit_ode(model, x, pe, t, p_t, F)
+    x, pe, t, p_t, F = ode_symbols(model)
+    xdot, jac = explicit_ode(model, x, pe, t, p_t, F)
     plain = ca.solve(model.mass(x, p_t), F)
     rng = np.random.default_rng(1)
     x0 = steady.x.copy()

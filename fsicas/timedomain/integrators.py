@@ -8,7 +8,7 @@ Routes (``Settings.method``):
   residual and its Jacobian never form M, and no linear solve appears inside them.
 - ``cvodes``: CasADi's CVODES (BDF, Newton with an exact dense Jacobian) on the explicit
   form ``xdot = M(x)^{-1} F(x)``; the Jacobian includes the derivative of M, through the
-  matrix-free ``M v`` (:func:`_explicit_ode`); about 4x dearer per step than IDAS at N = 40.
+  matrix-free ``M v`` (:func:`explicit_ode`); about 4x dearer per step than IDAS at N = 40.
 - ``radau`` / ``bdf``: SciPy's ``solve_ivp`` with the same compiled right-hand side and its
   exact Jacobian: an independent check and the benchmark's baseline.
 
@@ -25,6 +25,7 @@ from __future__ import annotations
 import math
 import time
 from dataclasses import dataclass, field
+from typing import Literal
 
 import casadi as ca
 import numpy as np
@@ -38,7 +39,7 @@ from ..linear.stability import steady_eigen
 from ..linear.steady import SteadyState
 
 __all__ = ["Settings", "Trajectory", "Integrator", "simulate", "initial_state", "gaps",
-           "eigenvector_state",
+           "eigenvector_state", "ode_symbols", "explicit_ode",
            "GAP_POINTS"]
 
 METHODS = ("cvodes", "idas", "radau", "bdf")
@@ -156,7 +157,7 @@ def eigenvector_state(model: Model, steady: SteadyState, size: float):
 
 
 # -- compiled right-hand sides --------------------------------------------------------
-def _ode(model: Model):
+def ode_symbols(model: Model):
     """Symbols and the explicit ODE of the model with time and schedule as inputs.
 
     Extended parameters ``pe = (p, sched, t_offset)``: Δp in p is replaced by the
@@ -172,7 +173,7 @@ def _ode(model: Model):
     return x, pe, t, p_t, _nan_if_closed(model, x, model.rhs(x, p_t))
 
 
-def _explicit_ode(model: Model, x, pe, t, p_t, F):
+def explicit_ode(model: Model, x, pe, t, p_t, F):
     """``xdot = M⁻¹F`` as a call to a Function of (x, pe, t) whose Jacobian CasADi does not
     derive by AD through M, and a Function ``J(t, x, pe)`` of that Jacobian's x-block:
 
@@ -230,7 +231,7 @@ class Integrator:
     _idas: tuple = None
 
     def __post_init__(self):
-        x, pe, t, p_t, F = _ode(self.model)
+        x, pe, t, p_t, F = ode_symbols(self.model)
         s = self.settings
         grid = list(np.linspace(0.0, self.span, self.n_out + 1)[1:])
         opts = {"abstol": s.atol, "reltol": s.rtol, "max_num_steps": s.max_steps,
@@ -242,7 +243,7 @@ class Integrator:
             self._idas = (dae, grid, {**opts, "calc_ic": False, "suppress_algebraic": True})
             self._zfun = ca.Function("z0", [x, pe, t], [ca.solve(self.model.mass(x, p_t), F)])
             return
-        xdot, jac = _explicit_ode(self.model, x, pe, t, p_t, F)
+        xdot, jac = explicit_ode(self.model, x, pe, t, p_t, F)
         if s.method == "cvodes":
             self._fn = ca.integrator("sim", "cvodes", {"x": x, "p": pe, "t": t, "ode": xdot},
                                      0.0, grid, opts)
