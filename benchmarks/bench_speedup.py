@@ -1,0 +1,97 @@
+"""Speed-up of the working tree over an earlier revision, side by side in one run.
+
+Each row runs the same task in fresh processes, alternating the old tree (``--baseline``,
+unpacked from git) and the working tree, and prints the median times, the median of the
+pairwise ratios old/new and the largest difference between the two trees' results
+(the error between routes: both compute the same quantity):
+
+- ``eig``: one eigen-analysis (steady state + generalized eigenproblem) at M* = 1, U* = 5,
+  median of 20 calls (value: the flutter eigenvalue near 45.6i);
+- ``ucrit``: one flutter onset U*_c at M* = 1 on a built model, after a warm-up at
+  M* = 1.1 (value: U*_c and omega);
+- ``boundary``: the Fig. 2 boundary over ``--points`` log-spaced M* in [0.01, 100]
+  (value: U*_c at every M*);
+- ``cycle``: cost per point of a collocation branch of 8 cycles from the Hopf point at
+  M* = 1 (NTST = 20, NCOL = 4), after a warm-up branch of 2 points that builds the
+  systems (value: period and Π of the last cycle).
+
+    python benchmarks/bench_speedup.py [--baseline 1ba3c13] [--modes 10] [--tasks eig ucrit]
+"""
+from __future__ import annotations
+
+import argparse
+import os
+import platform
+
+from baseline import Baseline, compare
+
+PRELUDE = """
+import json, sys, time
+import numpy as np
+import fsicas
+n = int(sys.argv[1])
+scene = fsicas.Scene(mstar=1.0, ustar=5.0, modes=n)
+model = fsicas.build_model(scene)
+def done(t, value):
+    print(json.dumps({"time": t, "value": [float(v) for v in value]}))
+"""
+
+TASKS = {
+    "eig": """
+fsicas.linear_stability(scene, model)
+times = []
+for _ in range(20):
+    t0 = time.perf_counter(); a = fsicas.linear_stability(scene, model)
+    times.append(time.perf_counter() - t0)
+lam = np.asarray(a.eigenvalues)
+lam = lam[np.argmin(np.abs(lam - 45.6j))]
+done(float(np.median(times)), [lam.real, lam.imag])
+""",
+    "ucrit": """
+fsicas.critical_velocity(scene.replace(mstar=1.1), model)
+t0 = time.perf_counter(); h = fsicas.critical_velocity(scene, model)
+done(time.perf_counter() - t0, [h.ustar, h.omega])
+""",
+    "boundary": """
+points = int(sys.argv[2])
+t0 = time.perf_counter(); b = fsicas.stability_boundary(scene, np.logspace(-2, 2, points), model)
+t = time.perf_counter() - t0
+rows = [p.to_json() if hasattr(p, "to_json") else p for p in b.points]
+done(t, [r["ustar_crit"] or 0.0 for r in rows])
+""",
+    "cycle": """
+from fsicas.cycles import CycleSettings, cycle_branch
+hopf = fsicas.critical_velocity(scene, model)
+cycle_branch(scene, model, settings=CycleSettings(max_points=2), hopf=hopf)
+t0 = time.perf_counter()
+br = cycle_branch(scene, model, settings=CycleSettings(max_points=8, adapt_every=0), hopf=hopf)
+t = (time.perf_counter() - t0) / len(br.points)
+last = br.points[-1]
+done(t, [last.period, last.pressure_drop])
+""",
+}
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--baseline", default="1ba3c13", help="git revision to compare with")
+    parser.add_argument("--modes", type=int, nargs="+", default=[10])
+    parser.add_argument("--tasks", nargs="+", choices=sorted(TASKS), default=sorted(TASKS))
+    parser.add_argument("--points", type=int, default=41, help="M* values of 'boundary'")
+    parser.add_argument("--repeats", type=int, default=3)
+    args = parser.parse_args()
+    print(f"machine: {platform.machine()}, {os.cpu_count()} cores, load "
+          f"{os.getloadavg()[0]:.1f}, python {platform.python_version()}; "
+          f"baseline {args.baseline}")
+    print("| task | N | old s | new s | speed-up (median of pairs) | max |Δ result| |")
+    print("|---|---|---|---|---|---|")
+    with Baseline(args.baseline) as base:
+        for task in args.tasks:
+            for n in args.modes:
+                c = compare(base.path, PRELUDE + TASKS[task], [n, args.points], args.repeats)
+                print(f"| {task} | {n} | {c.old:.4g} | {c.new:.4g} | {c.speedup:.1f}x | "
+                      f"{c.difference:.1e} |", flush=True)
+
+
+if __name__ == "__main__":
+    main()
