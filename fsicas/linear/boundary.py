@@ -17,21 +17,73 @@ from __future__ import annotations
 
 import math
 import time
-from dataclasses import dataclass, field
+from collections.abc import Mapping
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
 import continuation as C
 
 from .adapter import LOG_M, PI, PI_SCALE, TIME_SCALE, flutter_field
-from .hopf import (CriticalVelocityError, HopfPoint, dominant_mode, eigenvector_q, flutter_problem,
+from .hopf import (Criticality, CriticalVelocityError, HopfPoint, dominant_mode, eigenvector_q, flutter_problem,
                    hopf_point_from, hopf_points)
 from .stability import eigenvalues
 from .steady import steady_state
 from ..model.assembly import Model, build_model
 from ..scene import Scene
 
-__all__ = ["HopfCurve", "ModeSwitch", "StabilityBoundary", "stability_boundary"]
+__all__ = ["BoundaryPoint", "HopfCurve", "ModeSwitch", "StabilityBoundary",
+           "stability_boundary"]
+
+@dataclass(frozen=True)
+class BoundaryPoint(Mapping):
+    """The stability boundary at one M*: the lowest Hopf curve there.
+
+    Also a read-only mapping of its JSON (:meth:`to_json`): ``point["ustar_crit"]``,
+    ``"l1" in point`` (only after a refinement) read as on the CLI's JSON.
+
+    ``ustar_crit``, ``omega``, ``freq_ratio`` (= omega/omega_1) and ``branch`` (the piece of
+    the lowest curve) are None where no traced curve reaches this M*. ``refined``: the
+    values come from a Hopf location at this M* (then ``l1``, ``criticality`` and
+    ``dominant_mode`` are set), else they are interpolated on the traced curve.
+    ``missed``: the refinement found the steady state already unstable just below, i.e. a
+    lower Hopf curve was not traced.
+    """
+
+    mstar: float
+    ustar_crit: float | None = None
+    omega: float | None = None
+    freq_ratio: float | None = None
+    branch: int | None = None
+    refined: bool = False
+    missed: bool = False
+    l1: float | None = None
+    criticality: Criticality | None = None
+    dominant_mode: int | None = None
+
+    def to_json(self) -> dict:
+        """``fsicas boundary --json`` point: mstar, ustar_crit, omega, freq_ratio, branch;
+        where a curve was found also refined (and missed when true), and after a refinement
+        l1, criticality and dominant_mode."""
+        out = {"mstar": self.mstar, "ustar_crit": self.ustar_crit, "omega": self.omega,
+               "freq_ratio": self.freq_ratio, "branch": self.branch}
+        if self.ustar_crit is None:
+            return out
+        out["refined"] = self.refined
+        if self.missed:
+            out["missed"] = True
+        if self.refined:
+            out.update(l1=self.l1, criticality=self.criticality, dominant_mode=self.dominant_mode)
+        return out
+
+    def __getitem__(self, key: str):
+        return self.to_json()[key]
+
+    def __iter__(self):
+        return iter(self.to_json())
+
+    def __len__(self) -> int:
+        return len(self.to_json())
 
 
 @dataclass(frozen=True)
@@ -100,13 +152,13 @@ class ModeSwitch:
 @dataclass(frozen=True)
 class StabilityBoundary:
     scene: Scene
-    points: list[dict]
+    points: list[BoundaryPoint]
     curves: list[HopfCurve] = field(repr=False)
     switches: list[ModeSwitch]
     wall_time: float
 
     def to_json(self) -> dict:
-        return {"points": self.points,
+        return {"points": [p.to_json() for p in self.points],
                 "switches": [vars(s) for s in self.switches],
                 "curves": [{"branch": c.index, "mstar": c.mstar.tolist(), "ustar": c.ustar.tolist(),
                             "omega": c.omega.tolist()} for c in self.curves],
@@ -137,7 +189,7 @@ def stability_boundary(scene: Scene, mstars, model: Model | None = None,
     _add_curves(scene, model, curves, found, window, ceiling)
     points = [_boundary_point(scene, model, curves, m, refine) for m in mstars]
     for _ in range(3):   # a refinement that starts unstable reveals a curve the seeds missed
-        missed = [p["mstar"] for p in points if p.get("missed")]
+        missed = [p.mstar for p in points if p.missed]
         if not missed:
             break
         found = [hopf_points(scene.replace(mstar=m), model, ustar_max) for m in missed]
@@ -211,26 +263,23 @@ def _lowest(curves, log_m):
     return best
 
 
-def _boundary_point(scene, model, curves, mstar, refine) -> dict:
+def _boundary_point(scene, model, curves, mstar, refine) -> BoundaryPoint:
     log_m = math.log10(mstar)
     lowest = _lowest(curves, log_m)
     if lowest is None:
-        return {"mstar": float(mstar), "ustar_crit": None, "omega": None, "freq_ratio": None,
-                "branch": None}
+        return BoundaryPoint(float(mstar))
     u, w, piece = lowest
-    omega_1 = model.omega_1
-    point = {"mstar": float(mstar), "ustar_crit": float(u), "omega": float(w),
-             "freq_ratio": float(w / omega_1), "branch": int(piece), "refined": False}
-    if refine:
-        curve = next(c for c in curves if piece in set(c.pieces.tolist()))
-        h = _refine(scene, model, mstar, *curve.guess(log_m, piece))
-        if h == "unstable":
-            point["missed"] = True
-        elif h is not None:
-            point.update(ustar_crit=h.ustar, omega=h.omega, freq_ratio=h.freq_ratio, l1=h.l1,
-                         criticality="supercritical" if h.l1 < 0 else "subcritical",
-                         dominant_mode=h.dominant_mode, refined=True)
-    return point
+    point = BoundaryPoint(float(mstar), float(u), float(w), float(w / model.omega_1), int(piece))
+    if not refine:
+        return point
+    curve = next(c for c in curves if piece in set(c.pieces.tolist()))
+    h = _refine(scene, model, mstar, *curve.guess(log_m, piece))
+    if h == "unstable":
+        return replace(point, missed=True)
+    if h is None:
+        return point
+    return replace(point, ustar_crit=h.ustar, omega=h.omega, freq_ratio=h.freq_ratio, l1=h.l1,
+                   criticality=h.criticality, dominant_mode=h.dominant_mode, refined=True)
 
 
 def _refine(scene, model, mstar, x, params, omega):

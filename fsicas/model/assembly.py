@@ -198,23 +198,15 @@ def _equations(scene, basis, tip, w, x, par, v):
     y = ca.mtimes(phi.T, q)              # deflection at nodes
     ydot = ca.mtimes(phi.T, r)
     run = ca.mtimes(Phi.T, r)            # ∫_0^x dy/dt at nodes
-    y_tip = ca.dot(tip.phi[:, 1], q)
-    run_tip = ca.dot(tip.Phi[:, 1], r)
-    walls = scene.walls
+    kin = dict(y=y, ydot=ydot, run=run, y_tip=ca.dot(tip.phi[:, 1], q),
+               run_tip=ca.dot(tip.Phi[:, 1], r))
     mass_rr = ca.DM.eye(n)
     mass_rQ, mass_Qr, mass_QQ = [], [], []
     force_beam = -2 * zeta * omega * r - omega**2 * q
     force_Q = []
     inv_hw = []
     for c, s in enumerate(contact.WALL_SIGNS):
-        H = walls[c](basis.x)
-        h = contact.gap(H, y, s)
-        inv_h = 1.0 / h
-        u = (Q[c] - s * run) * inv_h
-        gt = u * (f * ca.fabs(u) - s * ydot) * inv_h
-        u_in = Q[c] / float(walls[c](0.0))
-        u_out = (Q[c] - s * run_tip) / (float(walls[c](1.0)) + s * y_tip)
-        wh = w * inv_h                                         # quadrature weight / h
+        h, wh, u, gt, u_in, u_out = _channel(scene, basis, w, Q[c], c, s, f, kin)
         inv_hw.append(wh)
         mass_rQ.append(mstar * s * ca.mtimes(Psi, wh))
         mass_rr = mass_rr - mstar * ca.mtimes(Psi, ca.mtimes(ca.diag(wh), Phi.T))
@@ -227,14 +219,33 @@ def _equations(scene, basis, tip, w, x, par, v):
                        - ca.dot(w, gt))
         if scene.contact:
             force_beam += _contact_force(scene, basis, w, h, s, par)
+    return _blocks(n, mass_rr, mass_rQ, mass_Qr, mass_QQ), ca.vertcat(force_beam, r, *force_Q), \
+        _mass_action(basis, mstar, inv_hw, v)
+
+
+def _channel(scene, basis, w, Q_c, c, s, f, kin):
+    """Flow of channel c at the nodes: ``h_c = H_c + s_c y``, ``w/h_c``,
+    ``u_c = (Q_c − s_c ∫_0^x dy/dt)/h_c``, ``gt_c = u_c (f|u_c| − s_c dy/dt)/h_c`` and the
+    inlet and outlet velocities u_c0, u_c1."""
+    wall = scene.walls[c]
+    h = contact.gap(wall(basis.x), kin["y"], s)
+    inv_h = 1.0 / h
+    u = (Q_c - s * kin["run"]) * inv_h
+    gt = u * (f * ca.fabs(u) - s * kin["ydot"]) * inv_h
+    u_in = Q_c / float(wall(0.0))
+    u_out = (Q_c - s * kin["run_tip"]) / (float(wall(1.0)) + s * kin["y_tip"])
+    return h, w * inv_h, u, gt, u_in, u_out                   # w * inv_h: quadrature weight / h
+
+
+def _blocks(n, mass_rr, mass_rQ, mass_Qr, mass_QQ):
+    """M from its (r, q, Q) blocks."""
     zeros = ca.DM.zeros(n, n)
     mass = ca.blockcat([
         [mass_rr, zeros, ca.horzcat(*mass_rQ)],
         [zeros, ca.DM.eye(n), ca.DM.zeros(n, 2)],
         [ca.vertcat(mass_Qr[0], mass_Qr[1]), ca.DM.zeros(2, n), ca.diag(ca.vertcat(*mass_QQ))],
     ])
-    force = ca.vertcat(force_beam, r, *force_Q)
-    return mass, force, _mass_action(basis, mstar, inv_hw, v)
+    return mass
 
 
 def _mass_action(basis, mstar, inv_hw, v):

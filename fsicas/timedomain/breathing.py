@@ -28,21 +28,25 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import Literal, get_args
 
 import casadi as ca
 import numpy as np
 
-__all__ = ["PressureSchedule", "schedule_expression", "N_SCHEDULE_PARAMS"]
+__all__ = ["PressureSchedule", "ScheduleKind", "schedule_expression", "N_SCHEDULE_PARAMS"]
 
 N_SCHEDULE_PARAMS = 6
-_KINDS = ("constant", "ramp", "breath")
+#: U*(t) shape (module docstring): "constant", "ramp" from ustar_start to ustar over
+#: duration, "breath" periodic up to the peak ustar.
+ScheduleKind = Literal["constant", "ramp", "breath"]
+_KINDS = get_args(ScheduleKind)
 
 
 @dataclass(frozen=True)
 class PressureSchedule:
     """U*(t) prescription; see the module docstring. ``duration``/``period`` > 0."""
 
-    kind: str = "constant"
+    kind: ScheduleKind = "constant"
     ustar: float = 0.0            # constant value, ramp end U1, or breath peak
     ustar_start: float = 0.0      # ramp start U0
     duration: float = 1.0         # ramp duration

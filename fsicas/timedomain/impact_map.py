@@ -18,6 +18,7 @@ import os
 import time
 from concurrent.futures import Executor, ProcessPoolExecutor, as_completed
 from dataclasses import dataclass
+from typing import Literal, Union
 from pathlib import Path
 
 import numpy as np
@@ -25,28 +26,34 @@ from tqdm import tqdm
 
 from ..linear.hopf import critical_velocity
 from ..model.assembly import build_model
-from .outcome import Criteria
+from .outcome import Criteria, OutcomeKind
 from .run import guarded_model, run_case
 from ..scene import Scene
 from .integrators import Settings
 
-__all__ = ["MAP_SCENE", "MapResult", "impact_map", "stability_boundary", "load_points"]
+__all__ = ["MAP_SCENE", "MapOutcome", "MapResult", "impact_map", "stability_boundary", "load_points"]
 
 MAP_SCENE = Scene(mstar=1.0, ustar=5.0, hstar=0.1, friction=0.14, k0=0.0, kl=1.0, zeta=0.01,
                   modes=10)
 _MODELS: dict = {}
 
 
+#: The ``outcome`` of a map point: an :data:`~fsicas.timedomain.outcome.OutcomeKind`, or
+#: "error" when the point could not run (its ``message`` says why).
+MapOutcome = Union[OutcomeKind, Literal["error"]]
+
+
 @dataclass(frozen=True)
 class MapResult:
-    """Points (dicts with ustar, mstar, outcome, ...) and the linear boundary."""
+    """Points (dicts with ustar, mstar, outcome: :data:`MapOutcome`, ...) and the linear
+    boundary."""
 
     points: list
     boundary: dict
     wall_time: float
     computed: int
 
-    def counts(self) -> dict:
+    def counts(self) -> dict[MapOutcome, int]:
         out = {}
         for p in self.points:
             out[p["outcome"]] = out.get(p["outcome"], 0) + 1

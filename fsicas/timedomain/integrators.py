@@ -25,7 +25,7 @@ from __future__ import annotations
 import math
 import time
 from dataclasses import dataclass, field
-from typing import Literal
+from typing import Literal, get_args
 
 import casadi as ca
 import numpy as np
@@ -38,12 +38,16 @@ from ..model.contact import GAP_POINTS, gaps
 from ..linear.stability import steady_eigen
 from ..linear.steady import SteadyState
 
-__all__ = ["Settings", "Trajectory", "Integrator", "simulate", "initial_state", "gaps",
-           "eigenvector_state", "ode_symbols", "explicit_ode",
+__all__ = ["Settings", "Trajectory", "TrajectoryStatus", "Method", "Integrator", "simulate",
+           "initial_state", "gaps", "eigenvector_state", "ode_symbols", "explicit_ode",
            "GAP_POINTS"]
 
-METHODS = ("cvodes", "idas", "radau", "bdf")
-#: Points along the beam where the gaps are checked (and contact is detected).
+#: Integration route (module docstring).
+Method = Literal["cvodes", "idas", "radau", "bdf"]
+METHODS = get_args(Method)
+#: "success": integrated to t_end or stopped by the monitor; "failed": a solver failure
+#: or a bad sample (message says which); the samples end at the last good one.
+TrajectoryStatus = Literal["success", "failed"]
 
 
 @dataclass(frozen=True)
@@ -56,7 +60,7 @@ class Settings:
     (atol ≲ 1e-16 for |z| ~ 100) it fails with IDA_CONV_FAIL (reported); use cvodes there.
     """
 
-    method: str = "idas"
+    method: Method = "idas"
     rtol: float = 1e-8
     atol: float = 1e-10
     dt_out: float = 1e-3
@@ -89,8 +93,10 @@ def _num(name: str, value) -> float:
 class Trajectory:
     """Samples ``x[k]`` at times ``t[k]`` (t[0] = 0 is the initial state).
 
-    status: "success" or "failed" (message says why, t ends at the last good sample);
-    stop_reason: "t_end" or the monitor's reason; steps: solver steps taken.
+    status: :data:`TrajectoryStatus` (message says why, t ends at the last good sample);
+    stop_reason: "t_end" or the monitor's reason (for the outcome monitor of
+    :func:`fsicas.timedomain.run.run_case` an :data:`~fsicas.timedomain.outcome.OutcomeKind`);
+    steps: solver steps taken.
     """
 
     model: Model = field(repr=False)
@@ -98,7 +104,7 @@ class Trajectory:
     x: np.ndarray
     pressure_drop: np.ndarray
     p: np.ndarray
-    status: str
+    status: TrajectoryStatus
     message: str
     stop_reason: str
     steps: int
@@ -216,40 +222,27 @@ def _nan_if_closed(model: Model, x, F):
     return ca.if_else(gap > 0, F, np.nan * ca.DM.ones(F.shape[0]))
 
 
-@dataclass
+@dataclass(frozen=True)
 class Integrator:
-    """One integrator for one model, method and output grid of a chunk; reusable."""
+    """One integrator for one model, method and output grid of a chunk; reusable.
+
+    The CasADi objects of the route are built once in ``__post_init__`` into private,
+    non-compared fields (``_idas``, ``_zfun`` for IDAS; ``_fn`` for CVODES; ``_rhs``,
+    ``_jac`` for SciPy)."""
 
     model: Model
     settings: Settings
     span: float
     n_out: int
-    _fn: object = None
-    _rhs: object = None
-    _jac: object = None
-    _zfun: object = None
-    _idas: tuple = None
+    _fn: object = field(default=None, init=False, repr=False, compare=False)
+    _rhs: object = field(default=None, init=False, repr=False, compare=False)
+    _jac: object = field(default=None, init=False, repr=False, compare=False)
+    _zfun: object = field(default=None, init=False, repr=False, compare=False)
+    _idas: tuple = field(default=None, init=False, repr=False, compare=False)
 
     def __post_init__(self):
-        x, pe, t, p_t, F = ode_symbols(self.model)
-        s = self.settings
-        grid = list(np.linspace(0.0, self.span, self.n_out + 1)[1:])
-        opts = {"abstol": s.atol, "reltol": s.rtol, "max_num_steps": s.max_steps,
-                "disable_internal_warnings": True, "regularity_check": True}
-        if s.method == "idas":   # needs no Jacobian of M⁻¹F (0.12 s to build at N = 40)
-            z = ca.MX.sym("z", self.model.n_state)
-            residual = self.model.mass_action(x, p_t, z) - F     # M z − F without forming M
-            dae = {"x": x, "z": z, "p": pe, "t": t, "ode": z, "alg": residual}
-            self._idas = (dae, grid, {**opts, "calc_ic": False, "suppress_algebraic": True})
-            self._zfun = ca.Function("z0", [x, pe, t], [ca.solve(self.model.mass(x, p_t), F)])
-            return
-        xdot, jac = explicit_ode(self.model, x, pe, t, p_t, F)
-        if s.method == "cvodes":
-            self._fn = ca.integrator("sim", "cvodes", {"x": x, "p": pe, "t": t, "ode": xdot},
-                                     0.0, grid, opts)
-        else:
-            self._rhs = ca.Function("f", [t, x, pe], [xdot])
-            self._jac = jac
+        for name, value in _compiled(self.model, self.settings, self.span, self.n_out).items():
+            object.__setattr__(self, name, value)
 
     def run(self, x0, pe) -> tuple[np.ndarray, int]:
         """States at the chunk's output grid (n_state, n_out) and the solver steps."""
@@ -291,6 +284,25 @@ class Integrator:
         if sol.status != 0:
             raise RuntimeError(f"solve_ivp ({s.method}): {sol.message}")
         return sol.y, int(sol.t.size and sol.nfev)  # SciPy exposes no step count: report f-evals
+
+
+def _compiled(model: Model, s: Settings, span: float, n_out: int) -> dict:
+    """The CasADi objects of an :class:`Integrator`'s route, by private field name."""
+    x, pe, t, p_t, F = ode_symbols(model)
+    grid = list(np.linspace(0.0, span, n_out + 1)[1:])
+    opts = {"abstol": s.atol, "reltol": s.rtol, "max_num_steps": s.max_steps,
+            "disable_internal_warnings": True, "regularity_check": True}
+    if s.method == "idas":   # needs no Jacobian of M⁻¹F (0.12 s to build at N = 40)
+        z = ca.MX.sym("z", model.n_state)
+        residual = model.mass_action(x, p_t, z) - F     # M z − F without forming M
+        dae = {"x": x, "z": z, "p": pe, "t": t, "ode": z, "alg": residual}
+        return {"_idas": (dae, grid, {**opts, "calc_ic": False, "suppress_algebraic": True}),
+                "_zfun": ca.Function("z0", [x, pe, t], [ca.solve(model.mass(x, p_t), F)])}
+    xdot, jac = explicit_ode(model, x, pe, t, p_t, F)
+    if s.method == "cvodes":
+        return {"_fn": ca.integrator("sim", "cvodes", {"x": x, "p": pe, "t": t, "ode": xdot},
+                                     0.0, grid, opts)}
+    return {"_rhs": ca.Function("f", [t, x, pe], [xdot]), "_jac": jac}
 
 
 def pressure_coefficient(model: Model, steady: SteadyState, schedule: PressureSchedule) -> float:

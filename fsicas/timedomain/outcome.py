@@ -26,6 +26,7 @@ between returns k and k+1: its period ``T_k``, its tip half-amplitude
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from typing import Literal
 
 import numpy as np
 import scipy.interpolate
@@ -35,7 +36,13 @@ from ..model.contact import GAP_POINTS, contact_load, gaps, reference_force
 from .integrators import Trajectory
 from ..model.assembly import Model
 
-__all__ = ["Criteria", "Outcome", "classify", "Monitor", "poincare_returns"]
+__all__ = ["Criteria", "Outcome", "OutcomeKind", "classify", "Monitor", "poincare_returns"]
+
+#: What a run did (module docstring): "decay" back to the steady state; "lco" a settled
+#: limit cycle without contact; "impacting_lco" a settled cycle with wall contact;
+#: "contact" a gap reached the contact distance but no impacting cycle settled (or the
+#: contact-free run stopped there); "unsettled" none of these by the end of the run.
+OutcomeKind = Literal["decay", "lco", "impacting_lco", "contact", "unsettled"]
 
 
 @dataclass(frozen=True)
@@ -67,7 +74,7 @@ class Outcome:
     ``1 − mean(Q1+Q2)/(Q1+Q2)_steady`` over the settled cycles.
     """
 
-    outcome: str
+    outcome: OutcomeKind
     period: float | None = None
     frequency: float | None = None
     tip_amplitude: float | None = None
@@ -245,7 +252,7 @@ class Monitor:
         self.model, self.steady, self.criteria = model, steady, criteria
         self.contact_only = contact_only
 
-    def __call__(self, t, X):
+    def __call__(self, t, X) -> OutcomeKind | None:
         if self.contact_only:   # run to t_end, but a contact-free run still ends at contact
             return "contact" if _first_contact(t, X, self.model) is not None else None
         out = _classify(t, X, self.model, self.steady, self.criteria, final=False)
