@@ -16,15 +16,26 @@ backends alternate inside each repetition, so machine noise hits both alike):
 * ``kernel``, ``LU``, ``rest``: fractions of ``step`` inside the CasADi calls, inside
   SuperLU (factorization and solve), and in the remaining Python/NumPy work.
 
+Model rows (``--modes``): the flutter model (``fsicas``, MX field, n = 2N + 2 states,
+15 parameters) from its first Hopf point at M* = 1, the cycle branch in the scaled
+pressure drop; per variant (``graph``, ``blocks+mx``, ``blocks+compiled``) the cost of
+one continuation point (corrector, tangent, Floquet multipliers) over a few points,
+the variants stepping in turn from the same start; ``build`` is the first build of the
+problem and its first Jacobian (for ``compiled`` the C compilation into an empty
+cache), ``load`` the same with the libraries cached. A shooting row (``--shooting``)
+times corrector iterations of blocks vs graph shooting Jacobians. The model rows live
+in ``bench_kernels_model.py`` (they import fsicas).
+
     python benchmarks/bench_kernels.py [--sizes 8 20 42 80] [--ntsts 10 20 40 80]
         [--ntst 20] [--scaling-n 20] [--ncol 4] [--reps 5] [--coupling mx global chain]
+        [--modes 4 10 20] [--points 4] [--shooting 4] [--no-generic]
 """
 
 from __future__ import annotations
 
 import argparse
-import dataclasses
 import os
+import sys
 import time
 from typing import NamedTuple
 
@@ -263,6 +274,10 @@ def parse_args(argv=None):
     ap.add_argument("--reps", type=int, default=5)
     ap.add_argument("--coupling", choices=tuple(COUPLINGS), nargs="+",
                     default=["mx", "global"])
+    ap.add_argument("--modes", type=int, nargs="*", default=[])
+    ap.add_argument("--points", type=int, default=4)
+    ap.add_argument("--shooting", type=int, nargs="*", default=[])
+    ap.add_argument("--no-generic", action="store_true")
     return ap.parse_args(argv)
 
 
@@ -275,12 +290,17 @@ def main(argv=None) -> None:
     args = parse_args(argv)
     t0 = time.perf_counter()
     print(f"Machine: {machine()}; NCOL = {args.ncol}, {args.reps} repetitions")
-    for coupling in args.coupling:
+    for coupling in ([] if args.no_generic else args.coupling):
         label = COUPLINGS[coupling]
         table(f"{label}: scaling with n (NTST = {args.ntst})",
               [(n, args.ntst) for n in args.sizes], args.ncol, args.reps, coupling)
         table(f"{label}: scaling with NTST (n = {args.scaling_n})",
               [(args.scaling_n, m) for m in args.ntsts], args.ncol, args.reps, coupling)
+    if args.modes or args.shooting:
+        sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+        import bench_kernels_model as flutter        # needs fsicas
+        flutter.model_table(args.modes, args.ntst, args.points)
+        flutter.shooting_table(args.shooting, args.reps)
     print(f"\nTotal {time.perf_counter() - t0:.0f} s; machine at the end: {machine()}")
 
 

@@ -30,7 +30,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from ._collocation import collocation, interval_nodes
-from ._compile import compiled_or_none
+from ._compile import compiled_or_none, has_compiler
 from ._symbolic import BufferedFunction, as_sx_function
 from ._systems import system
 
@@ -57,26 +57,22 @@ class Pointwise:
         """``(x, v, p) -> (F, M v)``."""
         return ca.Function("colloc_point_values", [self.x, self.v, self.p], [self.f, self.mv])
 
-    def jacobians(self, par_columns) -> ca.Function:
-        """``(x, v, p) -> KERNEL_OUTPUTS``, the parameter derivatives only in the
-        directions ``par_columns`` (forward AD with a selection seed, ``n x k`` each)."""
+    def jacobians(self, k: int) -> ca.Function:
+        """``(x, v, p, E) -> KERNEL_OUTPUTS`` with the parameter derivatives in the ``k``
+        directions ``E`` (``n_par x k``; forward AD, ``vec`` of ``n x k`` each)."""
         nz = lambda a: ca.project(a, self.pattern).nz[:]
-        cols = tuple(par_columns)
-        seed = ca.DM(np.eye(self.n_par)[:, list(cols)]) if cols else ca.DM(self.n_par, 0)
-        dp = lambda e: ca.vec(ca.densify(ca.jtimes(e, self.p, seed))) if cols else \
-            ca.DM(0, 1)
-        name = "colloc_point_jacobians_p" + "_".join(map(str, cols))
-        return ca.Function(name, [self.x, self.v, self.p],
+        E = type(self.x).sym("E", self.n_par, k)
+        dp = lambda e: ca.vec(ca.densify(ca.jtimes(e, self.p, E))) if k else ca.DM(0, 1)
+        return ca.Function(f"colloc_point_jacobians_{k}", [self.x, self.v, self.p, E],
                            [self.f, self.mv, nz(self.fx), nz(self.mvx), nz(self.m),
                             dp(self.f), dp(self.mv)])
 
 
-def pointwise_functions(vf, par_columns=None):
+def pointwise_functions(vf, k=None):
     """``(values, jacobians, pattern)``: single-point CasADi functions of ``(x, v, p)``
-    (``jacobians`` with parameter derivatives in ``par_columns``, default all)."""
+    (``jacobians`` also of ``E``, ``k`` parameter directions, default all)."""
     pw = Pointwise(vf)
-    cols = range(pw.n_par) if par_columns is None else par_columns
-    return pw.values(), pw.jacobians(cols), pw.pattern
+    return pw.values(), pw.jacobians(pw.n_par if k is None else k), pw.pattern
 
 
 class PointKernel:
@@ -86,12 +82,15 @@ class PointKernel:
     ``KERNEL_OUTPUTS``: ``F, M v``, the nonzeros on the pattern ``rows, cols`` (``s``
     entries, CasADi CCS order) of ``F_x``, ``d(M v)/dx`` and ``M`` (each ``s x K``), and
     ``F_p``, ``d(M v)/dp`` in the directions ``par_columns`` (``vec`` of ``n x k``
-    each, ``n k x K``), built once per tuple of columns.
+    each, ``n k x K``), one function per number ``k`` of directions (the seed is an
+    input, so one compiled library serves every single free parameter).
 
     ``backend`` 'mx': the single-point functions mapped over the points in CasADi's
-    virtual machine (expanded to SX when the VectorField is SX); 'compiled': each
-    single-point function compiled to C (``_compile``, cached on disk independently
-    of ``K``) and mapped; when it cannot be compiled the kernel stays 'mx'.
+    virtual machine (expanded to SX when the VectorField is SX); 'compiled': the
+    single-point Jacobian function compiled to C (``_compile``, cached on disk
+    independently of ``K``) and mapped; ``values`` (the residual, about 5 % of the cost
+    of the Jacobian kernel) stays in the virtual machine, which saves a compilation.
+    When the Jacobian cannot be compiled the kernel stays 'mx'.
     """
 
     def __init__(self, vf, K: int, backend: str = "mx", cache_dir=None):
@@ -100,35 +99,49 @@ class PointKernel:
         rows, cols = self.pointwise.pattern.get_triplet()
         self.rows, self.cols = np.asarray(rows), np.asarray(cols)
         self.expand, self.cache_dir = vf.sym is ca.SX, cache_dir
-        self.backend = backend
-        self.values = self._mapped(self.pointwise.values())
+        self.backend = backend if backend == "mx" or has_compiler() else "mx"
+        self.values = self._mapped(self.pointwise.values(), compile=False)
         self._jacobians: dict = {}
 
-    def jacobians(self, par_columns) -> BufferedFunction:
-        """The mapped Jacobian kernel with parameter directions ``par_columns``."""
-        key = tuple(int(c) for c in par_columns)
-        if key not in self._jacobians:
-            self._jacobians[key] = self._mapped(self.pointwise.jacobians(key))
-        return self._jacobians[key]
+    def jacobians(self, par_columns) -> "SeededKernel":
+        """The mapped Jacobian kernel with parameter directions ``par_columns`` (one
+        function per number of directions, the directions are an input)."""
+        cols = tuple(int(c) for c in par_columns)
+        if len(cols) not in self._jacobians:
+            self._jacobians[len(cols)] = self._mapped(self.pointwise.jacobians(len(cols)))
+        seed = np.eye(self.n_par)[:, list(cols)].ravel(order="F")
+        return SeededKernel(self._jacobians[len(cols)], seed)
 
-    def _mapped(self, fun: ca.Function) -> BufferedFunction:
-        """``fun`` (SX when ``expand``) compiled if the backend says so, mapped over
-        ``K`` columns of ``x, v`` (``p`` shared)."""
+    def _mapped(self, fun: ca.Function, compile: bool = True) -> BufferedFunction:
+        """``fun`` (SX when ``expand``) compiled if ``compile`` and the backend say so,
+        mapped over ``K`` columns of ``x, v`` (the other inputs shared)."""
         fun = as_sx_function(fun) if self.expand else fun
-        if self.backend == "compiled":
+        compiled = False
+        if compile and self.backend == "compiled":
             fast = compiled_or_none(fun, self.cache_dir)
             if fast is None:
                 self.backend = "mx"
             else:
-                fun = fast
-        mapped = fun.map(fun.name() + f"_{self.K}", "serial", self.K, [2], [])
-        return BufferedFunction(as_sx_function(mapped) if self.expand and
-                                self.backend == "mx" else mapped)
+                fun, compiled = fast, True
+        shared = list(range(2, fun.n_in()))
+        mapped = fun.map(fun.name() + f"_{self.K}", "serial", self.K, shared, [])
+        expand = self.expand and not compiled
+        return BufferedFunction(as_sx_function(mapped) if expand else mapped)
 
     def evaluate(self, fun, x, v, p) -> list:
         """Outputs of ``fun`` at points ``x, v`` (``(K, n)`` each) as ``(K, size)`` arrays."""
         out = fun(x, v, p)
         return [o.reshape(self.K, -1) for o in out]
+
+
+class SeededKernel:
+    """A mapped Jacobian kernel called as ``(x, v, p)`` with its seed ``E`` bound."""
+
+    def __init__(self, fun: BufferedFunction, seed: np.ndarray):
+        self.fun, self.seed = fun, seed
+
+    def __call__(self, x, v, p) -> list:
+        return self.fun(x, v, p, self.seed)
 
 
 def point_kernel(vf, K: int, backend: str = "mx") -> PointKernel:
