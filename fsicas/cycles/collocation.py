@@ -42,7 +42,7 @@ from ..linear.hopf import CriticalVelocityError, HopfPoint, critical_velocity, f
 from ..model.assembly import Model, build_model
 from ..scene import Scene
 from .gauge import Gauge
-from .records import BranchRecord, CycleRecord, check_settings
+from .records import BranchRecord, CycleMeasures, check_settings
 
 __all__ = ["CycleSettings", "CyclePoint", "CycleBranch", "CycleKind", "CycleStatus",
            "cycle_branch"]
@@ -84,18 +84,12 @@ class CycleSettings:
 
 
 @dataclass(frozen=True)
-class CyclePoint(CycleRecord):
+class CyclePoint(CycleMeasures):
     """One cycle. ``kind``: "regular", "fold" (cycle fold) or "contact" (first contact);
     ``state``: the model state x = (r, q, Q1, Q2) on the cycle at its phase 0 (a start
     point for time integration at ``pressure_drop``); ``located``: False for a special
     point whose location failed (the branch point just past it is reported)."""
 
-    ustar: float
-    pressure_drop: float
-    period: float
-    tip_amplitude: float
-    min_gap: float
-    gap_ratio: float
     multipliers: np.ndarray = field(repr=False)
     stable: bool = True
     kind: CycleKind = "regular"

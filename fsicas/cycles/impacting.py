@@ -44,7 +44,7 @@ from ..model.assembly import Model, build_model
 from ..scene import Scene
 from ..linear.steady import steady_state
 from .gauge import Gauge
-from .records import BranchRecord, CycleRecord, check_settings
+from .records import BranchRecord, CycleMeasures, check_settings
 
 __all__ = ["ImpactSettings", "ImpactPoint", "ImpactBranch", "impacting_branch",
            "cycle_from_trajectory", "pre_contact_start", "shooting_points", "ImpactStatus"]
@@ -76,15 +76,9 @@ class ImpactSettings:
 
 
 @dataclass(frozen=True)
-class ImpactPoint(CycleRecord):
+class ImpactPoint(CycleMeasures):
     """One cycle of the impacting branch (``state``: the model state at phase 0)."""
 
-    ustar: float
-    pressure_drop: float
-    period: float
-    tip_amplitude: float
-    min_gap: float
-    gap_ratio: float
     impacts: int
     multipliers: np.ndarray = field(repr=False)
     stable: bool = True
@@ -199,7 +193,7 @@ def cycle_from_trajectory(model: Model, t, x, max_subcycles: int = 6, tol: float
     the time over the fewest crossings k (<= ``max_subcycles``) after which the state
     returns within ``tol`` (relative, max-norm), else the k of the closest return."""
     t, x = np.asarray(t, float), np.asarray(x, float)
-    y = x[:, model.n_modes:2 * model.n_modes] @ model.tip.phi[:, 1]
+    y = model.tip_deflection(x)
     y = y - np.mean(y[3 * len(y) // 4:])
     i = np.where((y[:-1] < 0) & (y[1:] >= 0))[0]
     s = -y[i] / (y[i + 1] - y[i])

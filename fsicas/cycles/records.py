@@ -7,11 +7,11 @@ from __future__ import annotations
 
 import json
 import math
-from dataclasses import asdict, fields
+from dataclasses import asdict, dataclass, fields
 
 import numpy as np
 
-__all__ = ["CycleRecord", "BranchRecord", "plain_value", "check_settings"]
+__all__ = ["CycleRecord", "CycleMeasures", "BranchRecord", "plain_value", "check_settings"]
 
 
 class CycleRecord:
@@ -48,6 +48,20 @@ class CycleRecord:
         d["multipliers"] = np.array([complex(a, b) for a, b in d["multipliers"]])
         d["state"] = np.array(d["state"], dtype=float)
         return cls(**d)
+
+
+@dataclass(frozen=True)
+class CycleMeasures(CycleRecord):
+    """What both routes measure of a cycle (:mod:`fsicas.cycles.gauge`): U* and Δp of
+    the steady state at the same pressure drop, the period (units of T), the tip
+    half-amplitude, the minimal gap over the cycle and its ratio to eps."""
+
+    ustar: float
+    pressure_drop: float
+    period: float
+    tip_amplitude: float
+    min_gap: float
+    gap_ratio: float
 
 
 def plain_value(value):
