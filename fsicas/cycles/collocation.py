@@ -1,9 +1,9 @@
 """Flutter limit cycles versus U*: collocation continuation from the first Hopf point.
 
-The first Hopf point of the steady branch (:func:`fsicas.hopf.critical_velocity`) is the
+The first Hopf point of the steady branch (:func:`fsicas.linear.hopf.critical_velocity`) is the
 start; ``continuation.cycle_from_hopf`` switches onto the cycle branch (normal-form
 guess), which is continued by pseudo-arclength collocation in the adapter's parameter
-Π = Δp/(100 M*) (``fsicas.hopf``: time in units of T/100, so the library's period is
+Π = Δp/(100 M*) (``fsicas.linear.adapter``: time in units of T/100, so the library's period is
 100 T). Every point is converted back to physical quantities:
 
 - U*: the inlet velocity (Q1 + Q2)/H* of the *steady state at the same pressure drop*

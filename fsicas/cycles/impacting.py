@@ -7,7 +7,7 @@ acts for a small fraction of the period and a fixed collocation mesh does not re
 (``continuation.ShootingProblem``: ``m`` segments of the flow of ``M^{-1} F`` integrated
 by CVODES, whose adaptive steps resolve each impact, and its forward sensitivities for
 the exact Jacobian), on the same reparametrised field as the Hopf and collocation
-analyses (``fsicas.hopf.flutter_field``: parameter Π = Δp/(100 M*), time in units of
+analyses (``fsicas.linear.adapter.flutter_field``: parameter Π = Δp/(100 M*), time in units of
 T/100), with the contact law on.
 
 The library's shooting Jacobian differentiates the mapped integrator as one CasADi

@@ -1,7 +1,7 @@
 """Stability boundary in the (M*, U*) plane as the lower envelope of Hopf curves.
 
 1. Seeds: at a few M* (one per decade by default) every Hopf point of the steady branch
-   up to ``ustar_max`` is found by continuation in U* (:func:`fsicas.hopf.hopf_points`).
+   up to ``ustar_max`` is found by continuation in U* (:func:`fsicas.linear.hopf.hopf_points`).
 2. Each Hopf point not already on a traced curve starts a two-parameter continuation of
    its Hopf curve in (log10 M*, Δp/M*), both ways, inside the window.
 3. At each requested M*, the boundary is the lowest U* over all curves (the first loss of

@@ -65,7 +65,7 @@ def compile_model(model, cache_dir=None, flags=None, timeout: float | None = Non
     """Copy of ``model`` whose mass, rhs, jac_rhs and jac_rhs_p are compiled C code.
 
     ``derivatives=True`` makes the compiled rhs differentiable (needed where rhs is
-    composed symbolically and differentiated, e.g. :func:`fsicas.steady.steady_state`).
+    composed symbolically and differentiated, e.g. :func:`fsicas.linear.steady.steady_state`).
     """
     compiled = {name: compile_function(getattr(model, name), cache_dir, flags, timeout,
                                        derivatives=derivatives and name == "rhs")

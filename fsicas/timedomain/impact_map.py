@@ -1,6 +1,6 @@
 """Impact-boundary map in the (U*, M*) plane (paper, Fig. 4).
 
-Every grid point is one classified run (:func:`fsicas.run.run_case`) of the contact-free
+Every grid point is one classified run (:func:`fsicas.timedomain.run.run_case`) of the contact-free
 scene, stopped at the first contact (H* = 1/10, f = 0.14, zeta = 0.01, N = 10 by
 default). Points run in parallel in a :class:`concurrent.futures.ProcessPoolExecutor` on
 the local cores, or in any ``concurrent.futures`` executor passed in, e.g. a Dask
@@ -147,7 +147,7 @@ def impact_map(ustars, mstars, path, *, scene: Scene = MAP_SCENE, t_end: float =
 
 def stability_boundary(scene: Scene, mstars, ustars) -> dict:
     """Critical U* per M* of the contact-free model: the first Hopf point of the steady
-    branch (:func:`fsicas.hopf.critical_velocity`), searched up to 1.5 x the largest U*
+    branch (:func:`fsicas.linear.hopf.critical_velocity`), searched up to 1.5 x the largest U*
     of the map."""
     base = scene.replace(contact=False)
     model = build_model(base)

@@ -13,7 +13,7 @@ Routes (``Settings.method``):
   exact Jacobian: an independent check and the benchmark's baseline.
 
 Time is an input of the integrator: the pressure drop is ``Δp(t)`` of a
-:class:`~fsicas.breathing.PressureSchedule`. The run is integrated in chunks of about
+:class:`~fsicas.timedomain.breathing.PressureSchedule`. The run is integrated in chunks of about
 ``Settings.chunk`` time units, each returning the state on a uniform output grid of step
 ``dt_out``; after each chunk the samples are checked (finite, both gaps ``h_c > 0`` at
 101 points along the beam) and handed to a ``monitor`` (outcome classification) that may
@@ -387,7 +387,7 @@ def _recover(model, integrator, x, pe, t0, refine=50):
     The chunk is re-run in (up to) 20 pieces, the failing piece one output step at a
     time, and the failing step in ``refine`` sub-steps: the last samples before a failure
     (e.g. a closing gap) are ``dt_out / refine`` apart, close enough to locate the
-    contact (:mod:`fsicas.outcome`).
+    contact (:mod:`fsicas.timedomain.outcome`).
     """
     span, n_out = integrator.span, integrator.n_out
     pieces = math.gcd(n_out, 20)

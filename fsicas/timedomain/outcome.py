@@ -245,7 +245,7 @@ def _impacts(t, X, model, m):
 
 
 class Monitor:
-    """Stop rule for :func:`fsicas.simulate.simulate`: classifies after each chunk
+    """Stop rule for :func:`fsicas.timedomain.integrators.simulate`: classifies after each chunk
     (``contact_only``: stops only at contact, for contact-free runs kept to t_end)."""
 
     def __init__(self, model: Model, steady, criteria: Criteria = Criteria(), contact_only: bool = False):
