@@ -8,7 +8,7 @@ import pytest
 
 import continuation as C
 from fsicas import Scene
-from fsicas.linear.hopf import PI, PI_SCALE, TIME_SCALE, flutter_field
+from fsicas.linear.adapter import PI, PI_SCALE, TIME_SCALE, flutter_field
 from fsicas.cycles.impacting import ImpactSettings, cycle_from_trajectory, \
     impacting_branch, pre_contact_start, shooting_points
 from fsicas.model import build_model
