@@ -130,7 +130,7 @@ def test_explicit_jacobian_through_the_mass_action_equals_ad_through_m(damped_sc
     CVODES's custom Jacobian) equals CasADi's AD of solve(M, F), at a moving state with
     the contact load on and a time-dependent pressure drop."""
     import casadi as ca
-    from fsicas.timedomain.integrators import explicit_ode, ode_symbols
+    from fsicas.timedomain.rhs import explicit_ode, ode_symbols
     scene = damped_scene_u7.replace(modes=6, contact=True, contact_stiffness=1e6, contact_eps=1e-2)
     model = build_model(scene)
     steady = steady_state(scene, model)

@@ -8,7 +8,7 @@ Routes (``Settings.method``):
   residual and its Jacobian never form M, and no linear solve appears inside them.
 - ``cvodes``: CasADi's CVODES (BDF, Newton with an exact dense Jacobian) on the explicit
   form ``xdot = M(x)^{-1} F(x)``; the Jacobian includes the derivative of M, through the
-  matrix-free ``M v`` (:func:`explicit_ode`); about 4x dearer per step than IDAS at N = 40.
+  matrix-free ``M v`` (:func:`fsicas.timedomain.rhs.explicit_ode`); about 4x dearer per step than IDAS at N = 40.
 - ``radau`` / ``bdf``: SciPy's ``solve_ivp`` with the same compiled right-hand side and its
   exact Jacobian: an independent check and the benchmark's baseline.
 
@@ -31,16 +31,15 @@ import casadi as ca
 import numpy as np
 import scipy.integrate
 
-from .breathing import N_SCHEDULE_PARAMS, PressureSchedule, schedule_expression
-from ..model import contact
+from .breathing import PressureSchedule
+from .rhs import compiled_route
 from ..model.assembly import Model
 from ..model.contact import GAP_POINTS, gaps
 from ..linear.stability import steady_eigen
 from ..linear.steady import SteadyState
 
 __all__ = ["Settings", "Trajectory", "TrajectoryStatus", "Method", "Integrator", "simulate",
-           "initial_state", "gaps", "eigenvector_state", "ode_symbols", "explicit_ode",
-           "GAP_POINTS"]
+           "initial_state", "gaps", "eigenvector_state", "GAP_POINTS"]
 
 #: Integration route (module docstring).
 Method = Literal["cvodes", "idas", "radau", "bdf"]
@@ -162,66 +161,6 @@ def eigenvector_state(model: Model, steady: SteadyState, size: float):
     return _checked_x0(model, steady.x + size * v), lam[0]
 
 
-# -- compiled right-hand sides --------------------------------------------------------
-def ode_symbols(model: Model):
-    """Symbols and the explicit ODE of the model with time and schedule as inputs.
-
-    Extended parameters ``pe = (p, sched, t_offset)``: Δp in p is replaced by the
-    schedule's Δp(t_offset + t).
-    """
-    nx, npar = model.n_state, len(model.parameter_names)
-    x = ca.MX.sym("x", nx)
-    pe = ca.MX.sym("pe", npar + N_SCHEDULE_PARAMS + 1)
-    t = ca.MX.sym("t")
-    p, sched, t0 = pe[:npar], pe[npar:npar + N_SCHEDULE_PARAMS], pe[-1]
-    i = model.index("pressure_drop")
-    p_t = ca.vertcat(p[:i], schedule_expression(t0 + t, sched), p[i + 1:])
-    return x, pe, t, p_t, _nan_if_closed(model, x, model.rhs(x, p_t))
-
-
-def explicit_ode(model: Model, x, pe, t, p_t, F):
-    """``xdot = M⁻¹F`` as a call to a Function of (x, pe, t) whose Jacobian CasADi does not
-    derive by AD through M, and a Function ``J(t, x, pe)`` of that Jacobian's x-block:
-
-        d(M⁻¹F)/dy = M⁻¹ (F_y − ∂(M v)/∂y |_{v = xdot}),   y in (x, pe, t),
-
-    where the derivative of M enters only through the matrix-free ``M v``: O(N K) per
-    direction instead of O(N² K) (x-block 3.5 instead of 18 ms at N = 40). It is the
-    Function's ``custom_jacobian``, so CVODES's Newton matrix uses it too (7.8 instead of
-    17.6 ms per evaluation at N = 40: CVODES gets all three blocks).
-    """
-    M = model.mass(x, p_t)
-    xdot = ca.solve(M, F)
-    args = [x, pe, t]
-
-    def jacobian(y):
-        v = ca.MX.sym("v", model.n_state)
-        dMv = ca.Function("dMv", [*args, v], [ca.jacobian(model.mass_action(x, p_t, v), y)])
-        return ca.solve(M, ca.jacobian(F, y) - dMv(*args, xdot))
-
-    blocks = ca.horzsplit(jacobian(ca.vertcat(*args)), np.cumsum([0, *(a.numel() for a in args)]).tolist())
-    custom = ca.Function("jac_xdot", [*args, ca.MX.sym("out", model.n_state)], blocks,
-                         ["x", "pe", "t", "out_xdot"], ["jac_xdot_x", "jac_xdot_pe", "jac_xdot_t"])
-    f = ca.Function("xdot", args, [xdot], ["x", "pe", "t"], ["xdot"],
-                    {"custom_jacobian": custom, "jac_penalty": 0, "never_inline": True})
-    return f(x, pe, t), ca.Function("J", [t, x, pe], [jacobian(x)])
-
-
-def _nan_if_closed(model: Model, x, F):
-    """F, or NaN once a gap at the check points or the nodes is <= 0.
-
-    The flow is singular at ``h_c = 0``; NaN makes the solver's error test fail at once,
-    so a closing gap ends the chunk with a solver error (reported) in a few steps
-    instead of an endless step-size collapse.
-    """
-    n = model.n_modes
-    xs = np.union1d(GAP_POINTS, model.basis.x)
-    y = ca.mtimes(model.basis_at(xs).phi.T, x[n:2 * n])
-    h = contact.wall_gaps([np.asarray(w(xs), float) for w in model.scene.walls], y)
-    gap = ca.fmin(ca.mmin(h[0]), ca.mmin(h[1]))
-    return ca.if_else(gap > 0, F, np.nan * ca.DM.ones(F.shape[0]))
-
-
 @dataclass(frozen=True)
 class Integrator:
     """One integrator for one model, method and output grid of a chunk; reusable.
@@ -241,7 +180,7 @@ class Integrator:
     _idas: tuple = field(default=None, init=False, repr=False, compare=False)
 
     def __post_init__(self):
-        for name, value in _compiled(self.model, self.settings, self.span, self.n_out).items():
+        for name, value in compiled_route(self.model, self.settings, self.span, self.n_out).items():
             object.__setattr__(self, name, value)
 
     def run(self, x0, pe) -> tuple[np.ndarray, int]:
@@ -284,25 +223,6 @@ class Integrator:
         if sol.status != 0:
             raise RuntimeError(f"solve_ivp ({s.method}): {sol.message}")
         return sol.y, int(sol.t.size and sol.nfev)  # SciPy exposes no step count: report f-evals
-
-
-def _compiled(model: Model, s: Settings, span: float, n_out: int) -> dict:
-    """The CasADi objects of an :class:`Integrator`'s route, by private field name."""
-    x, pe, t, p_t, F = ode_symbols(model)
-    grid = list(np.linspace(0.0, span, n_out + 1)[1:])
-    opts = {"abstol": s.atol, "reltol": s.rtol, "max_num_steps": s.max_steps,
-            "disable_internal_warnings": True, "regularity_check": True}
-    if s.method == "idas":   # needs no Jacobian of M⁻¹F (0.12 s to build at N = 40)
-        z = ca.MX.sym("z", model.n_state)
-        residual = model.mass_action(x, p_t, z) - F     # M z − F without forming M
-        dae = {"x": x, "z": z, "p": pe, "t": t, "ode": z, "alg": residual}
-        return {"_idas": (dae, grid, {**opts, "calc_ic": False, "suppress_algebraic": True}),
-                "_zfun": ca.Function("z0", [x, pe, t], [ca.solve(model.mass(x, p_t), F)])}
-    xdot, jac = explicit_ode(model, x, pe, t, p_t, F)
-    if s.method == "cvodes":
-        return {"_fn": ca.integrator("sim", "cvodes", {"x": x, "p": pe, "t": t, "ode": xdot},
-                                     0.0, grid, opts)}
-    return {"_rhs": ca.Function("f", [t, x, pe], [xdot]), "_jac": jac}
 
 
 def pressure_coefficient(model: Model, steady: SteadyState, schedule: PressureSchedule) -> float:
