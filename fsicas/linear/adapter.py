@@ -13,14 +13,12 @@ coefficient l1 is invariant under that time scaling.
 """
 from __future__ import annotations
 
-import weakref
-
 import casadi as ca
 import numpy as np
 
 import continuation as C
 
-from ..model.assembly import Model
+from ..model.assembly import Model, per_model
 from ..scene import Scene
 from .steady import SteadyStateError, steady_state
 
@@ -47,20 +45,13 @@ def reparametrized_field(model: Model) -> tuple[ca.Function, ca.Function, list[s
     return F, M, names
 
 
-# One VectorField per live Model (Models hash by identity); an entry dies with its model.
-# The value holds only CasADi Functions, no reference back to the model.
-_FIELDS: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
-
-
+@per_model
 def flutter_field(model: Model) -> C.VectorField:
     """The reparametrized VectorField of ``model``, built once per model (the library
     caches its compiled augmented systems on it). Kept as MX: the dense modal blocks
     would be multiplied out by an SX expansion (40x slower to build at N = 10)."""
-    vf = _FIELDS.get(model)
-    if vf is None:
-        F, M, names = reparametrized_field(model)
-        vf = _FIELDS[model] = C.VectorField(F, M, tuple(names), expand=False)
-    return vf
+    F, M, names = reparametrized_field(model)
+    return C.VectorField(F, M, tuple(names), expand=False)
 
 
 def dense(a) -> np.ndarray:

@@ -24,7 +24,10 @@ def generalized_eigen(J, M) -> tuple[np.ndarray, np.ndarray]:
     """Finite eigenpairs of ``J v = lambda M v`` (dense QZ, ``scipy.linalg.eig(J, M)``),
     sorted by decreasing real part, then decreasing imaginary part (of a conjugate pair,
     the one with Im > 0 comes first). Returns (lambda, V) with V[:, k] for lambda[k]."""
-    lam, vec = scipy.linalg.eig(np.asarray(J, dtype=float), np.asarray(M, dtype=float))
+    J, M = np.array(J, dtype=float), np.array(M, dtype=float)      # copies: overwritten
+    if not (np.all(np.isfinite(J)) and np.all(np.isfinite(M))):
+        raise ValueError("generalized_eigen: J and M must be finite")
+    lam, vec = scipy.linalg.eig(J, M, overwrite_a=True, overwrite_b=True, check_finite=False)
     finite = np.isfinite(lam)
     lam, vec = lam[finite], vec[:, finite]
     order = np.lexsort((-lam.imag, -lam.real))

@@ -17,7 +17,7 @@ import casadi as ca
 import numpy as np
 import scipy.optimize
 
-from ..model.assembly import Model, build_model
+from ..model.assembly import Model, build_model, per_model
 from ..scene import Scene
 
 __all__ = ["SteadyState", "SteadyStateError", "steady_state", "straight_pressure_drop"]
@@ -80,8 +80,10 @@ def steady_state(scene: Scene, model: Model | None = None, tol: float = 1e-12) -
     return SteadyState(scene, x, p, float(z[-1]), res, time.perf_counter() - start)
 
 
+@per_model
 def _system(model: Model):
-    """CasADi residual and Jacobian of the steady system in z = (q, Q, Δp) given (p, U*)."""
+    """CasADi residual and Jacobian of the steady system in z = (q, Q, Δp) given (p, U*),
+    built once per model."""
     n = model.n_modes
     z = ca.MX.sym("z", n + 3)
     p = ca.MX.sym("p", len(model.parameter_names))
@@ -104,19 +106,31 @@ def _initial_guess(scene: Scene) -> np.ndarray:
 
 
 def _solve(residual_fn, jacobian_fn, z0, p, ustar, tol):
-    """MINPACK hybr with exact Jacobian, then Newton polishing; None if it fails."""
+    """MINPACK hybr with exact Jacobian, then up to 3 Newton steps of polishing (none
+    once the residual is at rounding level); None if it fails. A guess that already
+    solves the system to rounding (the closed form of a symmetric straight channel) is
+    taken as it is."""
     fun = lambda z: np.array(residual_fn(z, p, ustar)).ravel()
     jac = lambda z: np.array(jacobian_fn(z, p, ustar))
-    sol = scipy.optimize.root(fun, z0, jac=jac, method="hybr", options={"xtol": 1e-14})
-    z = sol.x
-    for _ in range(3):
+    z, r = z0, fun(z0)
+    if not _at_rounding(r, z):
+        z = scipy.optimize.root(fun, z0, jac=jac, method="hybr", options={"xtol": 1e-14}).x
         r = fun(z)
+    for _ in range(3):
         if not np.all(np.isfinite(r)):
             return None
+        if _at_rounding(r, z):
+            break
         z = z - np.linalg.solve(jac(z), r)
-    res = float(np.max(np.abs(fun(z))))
+        r = fun(z)
+    res = float(np.max(np.abs(r)))
     scale = 1.0 + float(np.max(np.abs(z)))
     return (z, res) if np.isfinite(res) and res <= tol * scale * 1e3 else None
+
+
+def _at_rounding(r, z) -> bool:
+    """``max |r| <= 1e-14 (1 + max |z|)``: nothing left for Newton to improve."""
+    return bool(np.all(np.isfinite(r)) and np.max(np.abs(r)) <= 1e-14 * (1.0 + np.max(np.abs(z))))
 
 
 def _homotopy(residual_fn, jacobian_fn, z0, p, ustar, tol, steps: int = 40):

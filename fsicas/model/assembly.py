@@ -24,6 +24,8 @@ smooth except for the contact kink ``max(0, eps - h_c)``.
 """
 from __future__ import annotations
 
+import functools
+import weakref
 from dataclasses import dataclass, field
 
 import casadi as ca
@@ -35,7 +37,7 @@ from .beam_fe import default_n_elements, nonuniform_beam_modes
 from .quadrature import composite_gauss_legendre, gauss_legendre
 from ..scene import Scene
 
-__all__ = ["Model", "build_model", "modal_basis", "parameter_names"]
+__all__ = ["Model", "build_model", "modal_basis", "parameter_names", "per_model"]
 
 _FLOW_PARAMS = ("pressure_drop", "mstar", "friction", "k0", "kl")
 _CONTACT_PARAMS = ("contact_stiffness", "contact_eps")
@@ -156,6 +158,21 @@ def _tip(modal, phi_tip) -> np.ndarray | float:
     """``modal @ phi_tip``: a float for one vector, an array for rows."""
     y = modal @ phi_tip
     return float(y) if np.ndim(y) == 0 else y
+
+
+def per_model(build):
+    """Decorator: ``build(model)`` runs once per live :class:`Model` (Models hash by
+    identity); the entry dies with its model. ``build`` must return objects that hold no
+    reference back to the model (CasADi Functions built from it do not)."""
+    cache = weakref.WeakKeyDictionary()
+
+    @functools.wraps(build)
+    def get(model):
+        if model not in cache:
+            cache[model] = build(model)
+        return cache[model]
+
+    return get
 
 
 # -- assembly -------------------------------------------------------------------------
