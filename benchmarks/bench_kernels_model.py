@@ -73,8 +73,8 @@ def flutter_cycle(eq, hopf, jacobian: str, backend: str, ntst: int):
 
 def cached_load(eq, hopf, ntst: int) -> float:
     """Build time of the compiled variant once its libraries are on disk (new field)."""
-    from continuation import _compile
-    _compile._LOADED.clear()
+    from continuation import compilation
+    compilation._LOADED.clear()
     eq2, hopf2 = flutter_start(eq.vf.n // 2 - 1)
     return flutter_cycle(eq2, hopf2, "blocks", "compiled", ntst)[1]
 

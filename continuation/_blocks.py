@@ -19,6 +19,9 @@ blocks on the union ``S`` of their structural patterns); the matrix is assembled
 NumPy on a sparsity pattern fixed per ``(NTST, NCOL)``: the CSC index arrays and the
 permutation from the assembly order to CSC order are computed once, each Jacobian
 is one kernel call, two broadcasts, one ``np.take`` and one CSC construction.
+``F_p`` and ``d(M v)/dp`` are only evaluated in the free parameter directions. The
+kernel runs in CasADi's virtual machine or as compiled C (``CollocationSettings.backend``,
+see :class:`PointKernel`).
 """
 
 from __future__ import annotations
@@ -30,7 +33,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from ._collocation import collocation, interval_nodes
-from ._compile import compiled_or_none, has_compiler
+from .compilation import compiled_or_none, has_compiler
 from ._symbolic import BufferedFunction, as_sx_function
 from ._systems import system
 
@@ -87,7 +90,7 @@ class PointKernel:
 
     ``backend`` 'mx': the single-point functions mapped over the points in CasADi's
     virtual machine (expanded to SX when the VectorField is SX); 'compiled': the
-    single-point Jacobian function compiled to C (``_compile``, cached on disk
+    single-point Jacobian function compiled to C (``continuation.compilation``, cached on disk
     independently of ``K``) and mapped; ``values`` (the residual, about 5 % of the cost
     of the Jacobian kernel) stays in the virtual machine, which saves a compilation.
     When the Jacobian cannot be compiled the kernel stays 'mx'.

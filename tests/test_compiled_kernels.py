@@ -5,11 +5,11 @@ import numpy as np
 import pytest
 
 import continuation as C
-from continuation import _compile
+from continuation import compilation
 from fsicas import Scene, build_model
 from fsicas.linear.hopf import critical_velocity, flutter_problem
 
-pytestmark = pytest.mark.skipif(not _compile.has_compiler(),
+pytestmark = pytest.mark.skipif(not compilation.has_compiler(),
                                 reason="no C compiler found (gcc, cc, clang or $CC)")
 
 RTOL = 1e-12

@@ -1,6 +1,6 @@
 """Compiled C code for CasADi functions, cached on disk by structure.
 
-The generic machinery lives in the continuation library (``continuation._compile``:
+The generic machinery lives in the continuation library (``continuation.compilation``:
 code generation, the system C compiler, the on-disk cache keyed by ``fn.serialize()``
 and the flags, atomic writes); this module sets fsicas' cache directory
 (``$FSICAS_CACHE`` or ``~/.cache/fsicas``) and compiles a whole model.
@@ -26,8 +26,8 @@ from pathlib import Path
 
 import casadi as ca
 
-from continuation import _compile
-from continuation._compile import default_flags, find_compiler
+from continuation import compilation
+from continuation.compilation import default_flags, find_compiler
 
 __all__ = ["compile_function", "compile_model", "default_cache_dir", "find_compiler",
            "default_flags"]
@@ -52,12 +52,12 @@ def compile_function(fn: ca.Function, cache_dir=None, flags=None,
     Raises RuntimeError when no C compiler is available or compilation fails.
     """
     global compile_count
-    before = _compile.compile_count
+    before = compilation.compile_count
     cache = default_cache_dir() if cache_dir is None else cache_dir
     try:
-        return _compile.compile_function(fn, cache, flags, timeout, derivatives)
+        return compilation.compile_function(fn, cache, flags, timeout, derivatives)
     finally:
-        compile_count += _compile.compile_count - before
+        compile_count += compilation.compile_count - before
 
 
 def compile_model(model, cache_dir=None, flags=None, timeout: float | None = None,

@@ -14,11 +14,11 @@ import numpy as np
 import pytest
 
 import continuation as C
-from continuation import _compile
+from continuation import compilation
 
 RTOL = 1e-12
 
-needs_compiler = pytest.mark.skipif(not _compile.has_compiler(),
+needs_compiler = pytest.mark.skipif(not compilation.has_compiler(),
                                     reason="no C compiler found (gcc, cc, clang or $CC)")
 
 
@@ -108,18 +108,18 @@ def test_kernel_library_is_shared_by_meshes_and_processes(models, cache):
     case = _cases(models)["van_der_pol"]
     _problem(case, "compiled", ntst=6, ncol=4).jacobian(_problem(case, "mx", 6, 4).X0)
     libraries = {p: p.stat().st_mtime_ns for p in cache.glob("*.so")}
-    before = _compile.compile_count
+    before = compilation.compile_count
     other = _problem(case, "compiled", ntst=9, ncol=3)          # another K: same libraries
     other.jacobian(other.X0)
-    assert _compile.compile_count == before
+    assert compilation.compile_count == before
     script = textwrap.dedent(f"""
         import sys; sys.path.insert(0, {str(pathlib.Path(__file__).parent)!r})
         import conftest, continuation as C
-        from continuation import _compile
+        from continuation import compilation
         pr = C.CycleProblem(conftest.van_der_pol(), conftest.van_der_pol_guess, 6.6,
                             {{"mu": 1.0}}, "mu", settings=C.CollocationSettings(ntst=5))
         pr.jacobian(pr.X0)
-        print(_compile.compile_count, pr.system.compiled.kernel.backend)
+        print(compilation.compile_count, pr.system.compiled.kernel.backend)
     """)
     env = {"CONTINUATION_CACHE": str(cache), "CONTINUATION_BACKEND": "compiled"}
     out = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True,
@@ -152,7 +152,7 @@ def test_backend_setting_and_environment_are_validated(monkeypatch):
 
 def test_cache_dir_follows_the_environment(tmp_path, monkeypatch):
     monkeypatch.setenv("CONTINUATION_CACHE", str(tmp_path / "c"))
-    assert _compile.default_cache_dir() == tmp_path / "c"
+    assert compilation.default_cache_dir() == tmp_path / "c"
     monkeypatch.delenv("CONTINUATION_CACHE")
     monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path / "xdg"))
-    assert _compile.default_cache_dir() == tmp_path / "xdg" / "continuation"
+    assert compilation.default_cache_dir() == tmp_path / "xdg" / "continuation"

@@ -1,4 +1,4 @@
-"""CasADi Functions compiled to C, cached on disk by structure.
+"""CasADi Functions compiled to C, cached on disk by structure (``continuation.compilation``).
 
 ``compile_function(fn)`` generates C for ``fn`` (``casadi.CodeGenerator``), compiles it
 into a shared library with the system C compiler (``-fPIC -shared``) and loads it with
@@ -33,6 +33,9 @@ import warnings
 from pathlib import Path
 
 import casadi as ca
+
+__all__ = ["compile_function", "compiled_or_none", "default_cache_dir", "default_flags",
+           "find_compiler", "has_compiler", "library_path"]
 
 _FLAGS_SX = ("-O1",)
 _FLAGS_OTHER = ("-O3",)
