@@ -116,7 +116,7 @@ def scaling(modes):
     import casadi as ca
 
     from fsicas.timedomain.breathing import PressureSchedule
-    from fsicas.timedomain.integrators import explicit_ode, ode_symbols
+    from fsicas.timedomain.rhs import explicit_ode, ode_symbols
 
     def per_call(f, *args):
         f(*args)
