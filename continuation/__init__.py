@@ -23,7 +23,8 @@ Plotting lives in ``continuation.plotting`` (Matplotlib is imported there only).
 from ._branch import Branch, SpecialPoint, Status
 from ._curves import FoldCurveProblem, HopfCurveProblem
 from ._cycles import CycleProblem
-from ._driver import Event, continuation
+from ._driver import continuation
+from ._hooks import Event
 from ._equilibrium import EquilibriumProblem, hopf_point
 from ._lyapunov import first_lyapunov
 from ._palc import ContinuationIterator, Step, correct

@@ -7,48 +7,19 @@ problems that ask for it and collects everything into a :class:`Branch`.
 
 from __future__ import annotations
 
-import math
 import time
-from dataclasses import dataclass, replace
+from dataclasses import replace
 from typing import Callable, Mapping, NamedTuple
 
 import numpy as np
 from tqdm.auto import tqdm
 
-from ._branch import BUILTIN_KINDS, Branch, SpecialPoint
+from ._branch import Branch, SpecialPoint
+from ._hooks import Event, Hooks, check_hooks, crossed, scalars, stopped
 from ._locate import Located, locate
 from ._palc import ContinuationIterator, Step, tangent
 from ._problem import Problem
 from ._settings import PALC, ContinuationSettings
-
-
-@dataclass(frozen=True)
-class Event:
-    """A user event: a zero of ``function(problem, X) -> float`` on the branch.
-
-    ``function`` is evaluated at every accepted point (``X``: the problem's
-    unknowns); a sign change between consecutive points is located like the
-    built-in events (Illinois regula falsi in arclength, each trial point
-    corrected by PALC, to ``settings.locate_tol``) and recorded as a
-    :class:`SpecialPoint` of kind ``name``. A ``terminal`` event ends the branch
-    at the located point (``Branch.status == 'event'``).
-    """
-
-    name: str
-    function: Callable
-    terminal: bool = False
-
-    def __post_init__(self):
-        if not (isinstance(self.name, str) and self.name.isidentifier()):
-            raise ValueError(f"Event.name must be an identifier string, got {self.name!r}")
-        if self.name in BUILTIN_KINDS:
-            raise ValueError(f"Event.name {self.name!r} is a built-in special-point kind; "
-                             f"use another name (built-in: {BUILTIN_KINDS})")
-        if not callable(self.function):
-            raise ValueError("Event.function must be callable (problem, X) -> float, got "
-                             f"{type(self.function).__name__}")
-        if not isinstance(self.terminal, bool):
-            raise ValueError(f"Event.terminal must be a bool, got {self.terminal!r}")
 
 
 def continuation(problem: Problem, algorithm: PALC | None = None,
@@ -72,7 +43,7 @@ def continuation(problem: Problem, algorithm: PALC | None = None,
     algorithm = PALC() if algorithm is None else algorithm
     settings = ContinuationSettings() if settings is None else settings
     _check(problem, algorithm, settings)
-    hooks = _hooks(events, record, stop)
+    hooks = check_hooks(events, record, stop)
     t0 = time.perf_counter()
     with tqdm(total=settings.max_steps + 1, disable=not settings.progress,
               desc=f"{problem.kind} continuation", leave=False) as bar:
@@ -84,30 +55,6 @@ def continuation(problem: Problem, algorithm: PALC | None = None,
     message = f"reached max_steps = {settings.max_steps}" if it.status == "max_steps" \
         else it.message  # a restarted segment only knows its remaining budget
     return run.rec.branch(it.status, message, it.failure, stats)
-
-
-@dataclass(frozen=True)
-class _Hooks:
-    events: tuple
-    record: Callable | None
-    stop: Callable | None
-
-
-def _hooks(events, record, stop) -> _Hooks:
-    """Validated ``events``, ``record``, ``stop`` (ValueError naming the argument)."""
-    events = (events,) if isinstance(events, Event) else tuple(events)
-    bad = [e for e in events if not isinstance(e, Event)]
-    if bad:
-        raise ValueError(f"events must be continuation.Event instances, got "
-                         f"{type(bad[0]).__name__}")
-    names = [e.name for e in events]
-    if len(set(names)) != len(names):
-        raise ValueError(f"events must have distinct names, got {names}")
-    for label, fun in (("record", record), ("stop", stop)):
-        if fun is not None and not callable(fun):
-            raise ValueError(f"{label} must be None or a callable (problem, X), got "
-                             f"{type(fun).__name__}")
-    return _Hooks(events, record, stop)
 
 
 def _run_segments(problem, algorithm, settings, run):
@@ -164,7 +111,7 @@ class _Run:
     """One run: the recorder, the user hooks, the previous point
     ``(step, info, event values)`` and ``halt = (status, message)`` once ended."""
 
-    def __init__(self, rec, hooks: _Hooks, settings, bar):
+    def __init__(self, rec, hooks: Hooks, settings, bar):
         self.rec, self.hooks, self.settings, self.bar = rec, hooks, settings, bar
         self.prev, self.halt = None, None
         self._cache = (None, {})
@@ -204,7 +151,7 @@ class _Run:
             self.halt = ("event", f"terminal event {terminal.name!r} at point {index} "
                                   f"({where})")
         elif self.hooks.stop is not None:
-            self.halt = _stopped(self.hooks.stop(problem, step.X), index)
+            self.halt = stopped(self.hooks.stop(problem, step.X), index)
 
     def event_values(self, problem, X) -> dict:
         """``{name: function(problem, X)}`` of the user events."""
@@ -235,11 +182,11 @@ class _Run:
             return []
         found = _detect(problem, self.prev[:2], cur[:2], self.settings, self.rec)
         found += [self.user_special(problem, e, cur) for e in self.hooks.events
-                  if _crossed(self.prev[2][e.name], cur[2][e.name])]
+                  if crossed(self.prev[2][e.name], cur[2][e.name])]
         found = [f for f in found if f is not None]
         for f in found:
             record = self.record(problem, f.X)
-            f.point.data.update({k: v for k, v in _scalars(record).items()
+            f.point.data.update({k: v for k, v in scalars(record).items()
                                  if k not in f.point.data})
             f.point.record.update(record)
         return sorted(found, key=lambda f: f.s)
@@ -268,32 +215,6 @@ class _Run:
         step = Step(loc.X, tau, loc.s, loc.iterations, loc.residual, lu)
         info = problem.monitor(loc.X, tau, lu, self.settings)
         return step, info, self.event_values(problem, loc.X)
-
-
-def _stopped(result, index):
-    """``('stopped', message)`` when the ``stop`` predicate's ``result`` is true."""
-    if not result:
-        return None
-    if isinstance(result, str):
-        return ("stopped", result)
-    return ("stopped", f"stop predicate returned True at point {index}")
-
-
-def _crossed(a: float, b: float) -> bool:
-    """A sign change from ``a`` to ``b`` (``b`` exactly zero counts once)."""
-    if not (math.isfinite(a) and math.isfinite(b)):
-        return False
-    return a * b < 0 or (b == 0.0 and a != 0.0)
-
-
-def _scalars(values: Mapping) -> dict:
-    """The real scalar entries of ``values`` as floats."""
-    out = {}
-    for k, v in values.items():
-        a = np.asarray(v)
-        if a.ndim == 0 and np.isrealobj(a) and a.dtype.kind in "biuf":
-            out[str(k)] = float(a)
-    return out
 
 
 def _add_time(stats, key, t0) -> None:

@@ -1,0 +1,152 @@
+"""The house rules of docs/architecture.md, read from the source (nothing is imported).
+
+Imports at any depth (function-level included) between fsicas modules follow the wing
+order; they form no cycle; no module imports another's private name; ``continuation``
+imports nothing of fsicas; every module declares ``__all__``; modules and functions stay
+small.
+"""
+import ast
+import statistics
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[1]
+
+#: who may import whom: a wing may import itself and the wings listed
+ALLOWED = {
+    "top": {"top"},
+    "model": {"top"},
+    "linear": {"top", "model"},
+    "cycles": {"top", "model", "linear"},
+    "timedomain": {"top", "model", "linear"},
+    "plots": {"top", "model", "linear", "cycles", "timedomain"},
+    "paper": {"top", "model", "linear", "cycles", "timedomain", "plots", "package"},
+    "cli": {"top", "model", "linear", "cycles", "timedomain", "plots", "paper", "package"},
+    "package": {"top", "model", "linear", "cycles", "timedomain", "plots"},
+}
+
+
+def _modules(package: str) -> dict[str, Path]:
+    """Dotted module name -> file, for every module of ``package``."""
+    out = {}
+    for path in sorted((ROOT / package).rglob("*.py")):
+        parts = list(path.relative_to(ROOT).with_suffix("").parts)
+        if parts[-1] == "__init__":
+            parts = parts[:-1]
+        out[".".join(parts)] = path
+    return out
+
+
+FSICAS, LIBRARY = _modules("fsicas"), _modules("continuation")
+
+
+def _resolve(module: str, node: ast.ImportFrom, path: Path) -> str:
+    """Absolute name of the module an ImportFrom reads from."""
+    if node.level == 0:
+        return node.module or ""
+    package = module.split(".") if path.name == "__init__.py" else module.split(".")[:-1]
+    base = package[:len(package) - node.level + 1]
+    return ".".join(base + ([node.module] if node.module else []))
+
+
+def _imports(module: str, path: Path):
+    """(imported module, names) for every import statement of the file, at any depth."""
+    for node in ast.walk(ast.parse(path.read_text())):
+        if isinstance(node, ast.Import):
+            for alias in node.names:
+                yield alias.name, []
+        elif isinstance(node, ast.ImportFrom):
+            yield _resolve(module, node, path), [a.name for a in node.names]
+
+
+def _edges(module: str, path: Path) -> set[str]:
+    """fsicas modules that ``module`` imports (a name that is a submodule counts as it)."""
+    out = set()
+    for target, names in _imports(module, path):
+        for name in names:
+            if f"{target}.{name}" in FSICAS:
+                out.add(f"{target}.{name}")
+            elif target in FSICAS:
+                out.add(target)
+        if not names and target in FSICAS:
+            out.add(target)
+    out.discard(module)
+    return out
+
+
+def _wing(module: str) -> str:
+    """``package`` (fsicas itself), a wing's or ``paper``'s name, else ``top``."""
+    parts = module.split(".")
+    if len(parts) == 1:
+        return "package"
+    return parts[1] if parts[1] in ALLOWED else "top"
+
+
+def test_imports_follow_the_wing_order():
+    wrong = [f"{m} -> {t}" for m, p in FSICAS.items() for t in _edges(m, p)
+             if _wing(t) != _wing(m) and _wing(t) not in ALLOWED[_wing(m)]]
+    assert not wrong, wrong
+
+
+def test_no_import_cycle_among_fsicas_modules():
+    graph = {m: _edges(m, p) for m, p in FSICAS.items()}
+    state, cycles = {}, []
+
+    def visit(m, stack):
+        state[m] = "open"
+        for t in sorted(graph[m]):
+            if state.get(t) == "open":
+                cycles.append(stack[stack.index(t):] + [t])
+            elif t not in state:
+                visit(t, stack + [t])
+        state[m] = "done"
+
+    for m in sorted(graph):
+        if m not in state:
+            visit(m, [m])
+    assert not cycles, cycles
+
+
+def test_continuation_imports_nothing_of_fsicas():
+    bad = [(m, t) for m, p in LIBRARY.items() for t, _ in _imports(m, p)
+           if t.split(".")[0] == "fsicas"]
+    assert not bad, bad
+
+
+def _private_import(module: str, target: str, name: str) -> bool:
+    """A private name of another module; a package's own private submodules (its
+    implementation, e.g. ``continuation._eigen`` inside ``continuation``) are not."""
+    if not name.startswith("_") or name.startswith("__") or target == module:
+        return False
+    same_package = target.split(".")[0] == module.split(".")[0]
+    return not (same_package and f"{target}.{name}" in {**FSICAS, **LIBRARY})
+
+
+@pytest.mark.parametrize("modules", [FSICAS, LIBRARY], ids=["fsicas", "continuation"])
+def test_no_module_imports_a_private_name_of_another(modules):
+    bad = [f"{m}: from {t} import {n}" for m, p in modules.items()
+           for t, names in _imports(m, p) for n in names if _private_import(m, t, n)]
+    assert not bad, bad
+
+
+def test_every_fsicas_module_declares_all():
+    missing = [m for m, p in FSICAS.items()
+               if p.name != "__main__.py" and "__all__" not in p.read_text()]
+    assert not missing, missing
+
+
+def test_modules_and_functions_stay_small():
+    """No module over 400 lines, no function over 40, median function <= 15 lines."""
+    lengths, long_functions = [], []
+    for m, p in {**FSICAS, **LIBRARY}.items():
+        text = p.read_text()
+        assert len(text.splitlines()) <= 400, f"{m}: {len(text.splitlines())} lines"
+        for node in ast.walk(ast.parse(text)):
+            if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef)):
+                n = node.end_lineno - node.lineno + 1
+                lengths.append(n)
+                if n > 40:
+                    long_functions.append(f"{m}.{node.name}: {n}")
+    assert not long_functions, long_functions
+    assert statistics.median(lengths) <= 15
