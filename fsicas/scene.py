@@ -7,11 +7,11 @@ Units and symbols are those of :mod:`fsicas.units`. Every field is checked in
 from __future__ import annotations
 
 import dataclasses
-import math
 from dataclasses import dataclass, field
 
 import numpy as np
 
+from .checks import finite_number, require
 from .profile import Profile
 from .units import Scales
 
@@ -161,51 +161,40 @@ def load_scene(path, **overrides) -> Scene:
 
 
 # -- validation ------------------------------------------------------------------------
-def _require(ok: bool, message: str) -> None:
-    if not ok:
-        raise ValueError(message)
-
-
-def _finite(name: str, value) -> float:
-    _require(isinstance(value, (int, float, np.floating, np.integer)) and not isinstance(value, bool)
-             and math.isfinite(value), f"{name} must be a finite number, got {value!r}")
-    return float(value)
-
-
 def _validate(s: Scene) -> None:
-    _require(isinstance(s.modes, (int, np.integer)) and not isinstance(s.modes, bool)
+    require(isinstance(s.modes, (int, np.integer)) and not isinstance(s.modes, bool)
              and s.modes >= 1, f"modes must be an integer >= 1, got {s.modes!r}")
-    _require(_finite("mstar", s.mstar) > 0, f"mstar must be > 0, got {s.mstar}")
-    _finite("ustar", s.ustar)
-    _require(_finite("hstar", s.hstar) > 0, f"hstar must be > 0, got {s.hstar}")
-    _require(_finite("friction", s.friction) >= 0, f"friction must be >= 0, got {s.friction}")
-    _require(_finite("k0", s.k0) >= 0, f"k0 must be >= 0, got {s.k0}")
-    _require(_finite("kl", s.kl) >= 0, f"kl must be >= 0, got {s.kl}")
+    require(finite_number("mstar", s.mstar) > 0, f"mstar must be > 0, got {s.mstar}")
+    finite_number("ustar", s.ustar)
+    require(finite_number("hstar", s.hstar) > 0, f"hstar must be > 0, got {s.hstar}")
+    require(finite_number("friction", s.friction) >= 0, f"friction must be >= 0, got {s.friction}")
+    require(finite_number("k0", s.k0) >= 0, f"k0 must be >= 0, got {s.k0}")
+    require(finite_number("kl", s.kl) >= 0, f"kl must be >= 0, got {s.kl}")
     zeta = np.atleast_1d(np.asarray(s.zeta, dtype=float))
-    _require(zeta.size in (1, s.modes), f"zeta must be a scalar or have one value per mode "
+    require(zeta.size in (1, s.modes), f"zeta must be a scalar or have one value per mode "
              f"({s.modes}), got {zeta.size} values")
-    _require(bool(np.all(np.isfinite(zeta)) and np.all(zeta >= 0)), "zeta must be finite and >= 0")
+    require(bool(np.all(np.isfinite(zeta)) and np.all(zeta >= 0)), "zeta must be finite and >= 0")
     if s.quad_nodes is not None:
-        _require(isinstance(s.quad_nodes, (int, np.integer)) and s.quad_nodes >= min_quad_nodes(s.modes),
+        require(isinstance(s.quad_nodes, (int, np.integer)) and s.quad_nodes >= min_quad_nodes(s.modes),
                  f"quad_nodes must be an integer >= 2*modes = {min_quad_nodes(s.modes)} to resolve "
                  f"mode {s.modes}, got {s.quad_nodes!r}")
     for name in ("channel1", "channel2", "thickness"):
         profile = getattr(s, name)
-        _require(profile is None or isinstance(profile, Profile), f"{name} must be a Profile or None")
+        require(profile is None or isinstance(profile, Profile), f"{name} must be a Profile or None")
         if profile is not None:
             profile.validate(name)
     if s.thickness is not None:
-        _require(abs(float(s.thickness(0.0)) - 1.0) <= 1e-12,
+        require(abs(float(s.thickness(0.0)) - 1.0) <= 1e-12,
                  f"thickness is relative to the root: thickness(0) must be 1, got {float(s.thickness(0.0))}")
     if s.channel1 is not None or s.channel2 is not None:
         w1, w2 = s.walls
         inlet = float(w1(0.0) + w2(0.0))
-        _require(abs(inlet - s.hstar) <= 1e-12 * s.hstar,
+        require(abs(inlet - s.hstar) <= 1e-12 * s.hstar,
                  f"hstar ({s.hstar}) must equal H1(0) + H2(0) = {inlet} of the given channels")
-    _require(isinstance(s.contact, (bool, np.bool_)), f"contact must be true or false, got {s.contact!r}")
-    _require(_finite("contact_stiffness", s.contact_stiffness) > 0,
+    require(isinstance(s.contact, (bool, np.bool_)), f"contact must be true or false, got {s.contact!r}")
+    require(finite_number("contact_stiffness", s.contact_stiffness) > 0,
              f"contact_stiffness must be > 0, got {s.contact_stiffness}")
-    _require(0 < _finite("contact_eps", s.contact_eps) < 1,
+    require(0 < finite_number("contact_eps", s.contact_eps) < 1,
              f"contact_eps (eps/H) must lie in (0, 1), got {s.contact_eps}")
-    _require(0 <= _finite("contact_smoothing", s.contact_smoothing) <= 1,
+    require(0 <= finite_number("contact_smoothing", s.contact_smoothing) <= 1,
              f"contact_smoothing (width / eps) must lie in [0, 1], got {s.contact_smoothing}")

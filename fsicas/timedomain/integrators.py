@@ -31,6 +31,7 @@ import casadi as ca
 import numpy as np
 import scipy.integrate
 
+from ..checks import finite_number, require
 from .breathing import PressureSchedule
 from .rhs import compiled_route
 from ..model.assembly import Model
@@ -69,23 +70,12 @@ class Settings:
     def __post_init__(self):
         if self.method not in METHODS:
             raise ValueError(f"method must be one of {METHODS}, got {self.method!r}")
-        _check(1e-13 <= _num("rtol", self.rtol) <= 1e-2, f"rtol must lie in [1e-13, 1e-2], got {self.rtol}")
-        _check(0 < _num("atol", self.atol) <= 1e-2, f"atol must lie in (0, 1e-2], got {self.atol}")
-        _check(_num("dt_out", self.dt_out) > 0, f"dt_out must be > 0, got {self.dt_out}")
-        _check(_num("chunk", self.chunk) >= self.dt_out, f"chunk must be >= dt_out, got {self.chunk}")
-        _check(isinstance(self.max_steps, int) and self.max_steps > 0,
+        require(1e-13 <= finite_number("rtol", self.rtol) <= 1e-2, f"rtol must lie in [1e-13, 1e-2], got {self.rtol}")
+        require(0 < finite_number("atol", self.atol) <= 1e-2, f"atol must lie in (0, 1e-2], got {self.atol}")
+        require(finite_number("dt_out", self.dt_out) > 0, f"dt_out must be > 0, got {self.dt_out}")
+        require(finite_number("chunk", self.chunk) >= self.dt_out, f"chunk must be >= dt_out, got {self.chunk}")
+        require(isinstance(self.max_steps, int) and self.max_steps > 0,
                f"max_steps must be a positive integer, got {self.max_steps!r}")
-
-
-def _check(ok: bool, message: str) -> None:
-    if not ok:
-        raise ValueError(message)
-
-
-def _num(name: str, value) -> float:
-    _check(isinstance(value, (int, float, np.floating, np.integer)) and not isinstance(value, bool)
-           and math.isfinite(value), f"{name} must be a finite number, got {value!r}")
-    return float(value)
 
 
 @dataclass(frozen=True)
@@ -138,16 +128,16 @@ def initial_state(model: Model, steady: SteadyState, perturbation=1e-2) -> np.nd
     n = model.n_modes
     x0 = np.array(steady.x, dtype=float)
     if np.isscalar(perturbation):
-        a = _num("perturbation", perturbation)
+        a = finite_number("perturbation", perturbation)
         w = model.basis.omega
         dq = a * model.scene.hstar / 2 * (w[0] / w) ** 2 / 2
     else:
         dq = np.asarray(perturbation, dtype=float)
-        _check(dq.shape == (n,) and bool(np.all(np.isfinite(dq))),
+        require(dq.shape == (n,) and bool(np.all(np.isfinite(dq))),
                f"perturbation must be a scalar or {n} finite modal displacements")
     x0[n:2 * n] += dq
     h = gaps(model, x0)
-    _check(float(h.min()) > 0, f"perturbation puts the beam through a wall (min gap {h.min():.3g} "
+    require(float(h.min()) > 0, f"perturbation puts the beam through a wall (min gap {h.min():.3g} "
            f"<= 0 at x = {GAP_POINTS[np.argmin(h.min(axis=1)[0])]:.3g}); use a smaller perturbation")
     return x0
 
@@ -243,7 +233,7 @@ def simulate(model: Model, steady: SteadyState, t_end: float, *, settings: Setti
     a non-None return stops the run with that ``stop_reason``. Bad input raises
     ValueError before any work; solver failures give ``status="failed"``.
     """
-    _check(_num("t_end", t_end) > 0, f"t_end must be > 0, got {t_end}")
+    require(finite_number("t_end", t_end) > 0, f"t_end must be > 0, got {t_end}")
     schedule = schedule or PressureSchedule.constant(steady.scene.ustar)
     x0 = initial_state(model, steady, perturbation) if x0 is None else _checked_x0(model, x0)
     n_chunks = max(1, math.ceil(t_end / settings.chunk - 1e-9))
@@ -256,9 +246,9 @@ def simulate(model: Model, steady: SteadyState, t_end: float, *, settings: Setti
 
 def _checked_x0(model, x0):
     x0 = np.asarray(x0, dtype=float)
-    _check(x0.shape == (model.n_state,) and bool(np.all(np.isfinite(x0))),
+    require(x0.shape == (model.n_state,) and bool(np.all(np.isfinite(x0))),
            f"x0 must hold {model.n_state} finite values")
-    _check(float(gaps(model, x0).min()) > 0, "x0 puts the beam through a wall (a gap h_c <= 0)")
+    require(float(gaps(model, x0).min()) > 0, "x0 puts the beam through a wall (a gap h_c <= 0)")
     return x0
 
 
