@@ -208,7 +208,7 @@ class _ProfileGauge(Gauge):
 
     def record(self, problem, X) -> dict:
         """The fields of :class:`CyclePoint` at X (branch columns)."""
-        y_max = -self._extremum(problem, X, lambda q: -self.tip(q))
+        y_max = -self._extremum(problem, X, lambda x: -self.tip(x))
         y_min = self._extremum(problem, X, self.tip)
         gap = self.gap(problem, X)
         return {**self.common(problem, X), "tip_amplitude": (y_max - y_min) / 2,
@@ -226,9 +226,9 @@ class _ProfileGauge(Gauge):
         return self._last_gap[1]
 
     def _extremum(self, problem, X, f) -> float:
-        """min_t f(q(t)) over the cycle: on 16 samples per mesh interval, refined by
+        """min_t f(x(t)) over the cycle: on 16 samples per mesh interval, refined by
         bounded Brent between the neighbours of the best sample."""
-        q = lambda t: problem.evaluate(X, np.atleast_1d(t) % 1.0)[:, self.n:2 * self.n]
+        q = lambda t: problem.evaluate(X, np.atleast_1d(t) % 1.0)
         mesh = problem.mesh
         t = (mesh[:-1, None] + np.diff(mesh)[:, None] * np.arange(16) / 16).ravel()
         values = f(q(t))

@@ -28,7 +28,7 @@ class Gauge:
     """Common measures of cycle unknowns X; the routes add amplitude and gap."""
 
     def __init__(self, model, x_eq):
-        self.model, self.n = model, model.n_modes
+        self.model = model
         self.eps = model.scene.contact_gap
         self.x_eq = np.asarray(x_eq, dtype=float)
 
@@ -43,10 +43,10 @@ class Gauge:
                 PERIOD_COLUMN: problem.period(X) / TIME_SCALE, "multipliers": mu,
                 "stable": bool(np.all(np.abs(rest) < 1.0)), "state": problem.state(X).copy()}
 
-    def tip(self, q) -> np.ndarray:
-        """Tip deflection y(1) for modal displacements q (rows)."""
-        return np.asarray(q) @ self.model.tip.phi[:, 1]
+    def tip(self, x) -> np.ndarray:
+        """Tip deflection y(1) of states x (rows)."""
+        return self.model.tip_deflection(x)
 
-    def min_gap(self, q) -> np.ndarray:
-        """``min_{x, c} h_c(x)`` per row of modal displacements q."""
-        return contact.min_gap(self.model, q)
+    def min_gap(self, x) -> np.ndarray:
+        """``min_{x, c} h_c(x)`` of each state (row): :func:`fsicas.model.contact.gaps`."""
+        return contact.gaps(self.model, x).min(axis=(1, 2))

@@ -230,8 +230,8 @@ class _ImpactGauge(Gauge):
 
     def record(self, problem, X) -> dict:
         """The columns of one branch point (multipliers from the kept Jacobian)."""
-        q = problem.sample(X, self.samples)[1][:, self.n:2 * self.n]
-        y, gap = self.tip(q), self.min_gap(q)
+        x = problem.sample(X, self.samples)[1]
+        y, gap = self.tip(x), self.min_gap(x)
         inside = gap < self.eps
         impacts = int(np.sum(inside & ~np.roll(inside, 1))) if not inside.all() else 1
         now = time.perf_counter()

@@ -17,8 +17,8 @@ from __future__ import annotations
 import casadi as ca
 import numpy as np
 
-__all__ = ["GAP_POINTS", "WALL_SIGNS", "ramp", "stiffness", "gap", "wall_gaps", "gaps", "modal_gaps", "min_gap", "wall_load", "modal_load",
-           "contact_load", "reference_force"]
+__all__ = ["GAP_POINTS", "WALL_SIGNS", "ramp", "stiffness", "gap", "wall_gaps", "gaps",
+           "wall_load", "modal_load", "contact_load", "reference_force"]
 
 GAP_POINTS = np.linspace(0.0, 1.0, 101)
 """Points x/L where gaps are sampled by the outcome checks, the gauges and the plots."""
@@ -64,7 +64,7 @@ def modal_load(model, x, phi, weights) -> np.ndarray:
     s, n = model.scene, model.n_modes
     y = phi.T @ x[n:2 * n]
     H = [w(model.basis.x) for w in s.walls]
-    k = stiffness(s.contact_stiffness, model.basis.omega[0])
+    k = stiffness(s.contact_stiffness, model.omega_1)
     load = sum(wall_load(h, sign, k, s.contact_gap, s.contact_smoothing)
                for h, sign in zip(wall_gaps(H, y), WALL_SIGNS))
     return phi @ (weights * load)
@@ -72,20 +72,9 @@ def modal_load(model, x, phi, weights) -> np.ndarray:
 
 def gaps(model, X, xs=GAP_POINTS) -> np.ndarray:
     """Gaps ``h_c(xs)`` of the states X (rows): shape (samples, 2, len(xs))."""
-    X = np.atleast_2d(X)
     n = model.n_modes
-    return modal_gaps(model, X[:, n:2 * n], xs)
-
-
-def modal_gaps(model, q, xs=GAP_POINTS) -> np.ndarray:
-    """Gaps ``h_c(xs)`` for modal displacements q (rows): shape (samples, 2, len(xs))."""
-    y = np.atleast_2d(q) @ model.basis_at(xs).phi
+    y = np.atleast_2d(X)[:, n:2 * n] @ model.basis_at(xs).phi
     return np.stack(wall_gaps([w(xs)[None, :] for w in model.scene.walls], y), axis=1)
-
-
-def min_gap(model, q, xs=GAP_POINTS) -> np.ndarray:
-    """``min_{x, c} h_c(x)`` per row of modal displacements q."""
-    return modal_gaps(model, q, xs).min(axis=(1, 2))
 
 
 def wall_load(h, sign: float, k, eps, smoothing: float):
@@ -100,11 +89,11 @@ def contact_load(model, X, xs=GAP_POINTS) -> tuple[np.ndarray, np.ndarray]:
     The exact (non-smoothed) law, also when the scene smooths it.
     """
     s = model.scene
-    k = stiffness(s.contact_stiffness, model.basis.omega[0])
+    k = stiffness(s.contact_stiffness, model.omega_1)
     density = k * ramp(s.contact_gap - gaps(model, X, xs), 0.0).sum(axis=1)
     return density, np.trapezoid(density, xs, axis=1)
 
 
 def reference_force(model) -> float:
     """``F0 = m f1² H`` with m = 1, f1 = w1 / 2π, H = H*/2 (the force scale of Fig. 9)."""
-    return (model.basis.omega[0] / (2 * np.pi)) ** 2 * model.scene.hstar / 2
+    return (model.omega_1 / (2 * np.pi)) ** 2 * model.scene.hstar / 2
