@@ -25,8 +25,8 @@ import numpy as np
 import scipy.sparse as sp
 
 from . import _eigen
-from ._equilibrium import (hopf_start, hopf_vectors, param_vector, real_null_vector,
-                           state_vector)
+from ._equilibrium import (hopf_start, hopf_system, hopf_vectors, param_vector,
+                           real_null_vector, state_vector)
 from ._lyapunov import first_lyapunov
 from ._newton import factorize
 from ._problem import Description, PointInfo, Problem
@@ -52,6 +52,7 @@ class HopfCurveProblem(Problem):
     """
 
     kind = "hopf"
+    builder = staticmethod(hopf_system)
 
     def __init__(self, vf: VectorField, x, params: Mapping[str, float], omega: float,
                  free: tuple, *, q=None):

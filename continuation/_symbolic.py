@@ -89,13 +89,20 @@ class CompiledSystem:
         separately: a few dense rows (normalizations ``c.v = 1``) would otherwise
         defeat the graph colouring of the sparse Jacobian (seconds at n = 1000).
     name : used to name the CasADi functions.
+    jacobians : optional ``(G_Y, G_p)`` expressions equal to the Jacobians of ``G``
+        (e.g. written from the structure of an augmented system, much cheaper to
+        evaluate than the AD of its second derivatives); default: AD of ``G``.
     """
 
-    def __init__(self, Y, P, D, G, name: str = "G"):
+    def __init__(self, Y, P, D, G, name: str = "G", jacobians=None):
         blocks = list(G) if isinstance(G, (list, tuple)) else [G]
         G = ca.vertcat(*blocks)
-        jy = ca.vertcat(*[ca.jacobian(g, Y) for g in blocks])
-        jp = ca.densify(ca.vertcat(*[ca.jacobian(g, P) for g in blocks]))
+        if jacobians is None:
+            jy = ca.vertcat(*[ca.jacobian(g, Y) for g in blocks])
+            jp = ca.vertcat(*[ca.jacobian(g, P) for g in blocks])
+        else:
+            jy, jp = jacobians
+        jp = ca.densify(jp)
         colind, row = jy.sparsity().get_ccs()
         self.pattern = ((G.numel(), Y.numel()), np.asarray(colind), np.asarray(row))
         self.n_state = Y.numel()
