@@ -25,7 +25,7 @@ import numpy as np
 import continuation as C
 
 from .adapter import LOG_M, PI, PI_SCALE, TIME_SCALE, flutter_field
-from .hopf import (Criticality, CriticalVelocityError, HopfPoint, dominant_mode, eigenvector_q, flutter_problem,
+from .hopf import (Criticality, CriticalVelocityError, HopfPoint, dominant_mode, flutter_problem,
                    hopf_point_from, hopf_points)
 from .stability import eigenvalues
 from .steady import steady_state
@@ -230,7 +230,7 @@ def _trace(scene, model, h: HopfPoint, index: int, window, ustar_max, first_piec
             bounds={LOG_M: window, PI: (0.0, pi_max)}, detect=False, compute_eigenvalues=False,
             newton=C.NewtonSettings(tol=1e-8))   # curve points only guide; points are refined
         branch = C.continuation(C.HopfCurveProblem.from_point(problem, h.point, LOG_M),
-                                settings=settings)
+                                settings=settings, record=_mode_recorder(model))
         if branch.status != "bound":
             status = f"{branch.status}: {branch.message}"
         halves.append(branch)
@@ -241,11 +241,26 @@ def _trace(scene, model, h: HopfPoint, index: int, window, ustar_max, first_piec
     keep = kappa > 0           # neutral-saddle stretches are not Hopf points
     x, params, omega = x[keep], params[keep], np.sqrt(kappa[keep])
     names = lower.par_names
-    modes = np.array([dominant_mode(model, eigenvector_q(model, xk, dict(zip(names, pk)), wk))
-                      for xk, pk, wk in zip(x, params, omega)], dtype=int)
+    modes = join(lower.columns["mode"], upper.columns["mode"])[keep].astype(int)
     lm = params[:, names.index(LOG_M)]
     return HopfCurve(index, 10 ** lm, x[:, -2:].sum(axis=1) / scene.hstar, omega * TIME_SCALE,
                      modes, status, int(first_piece), x, params)
+
+
+def _mode_recorder(model):
+    """``record`` hook of a Hopf curve: the dominant mode of the eigenvector
+    ``q = v - i w / omega`` of ``i omega`` carried by the unknowns ``X = (x, v, w, kappa,
+    ...)`` (0 where ``kappa <= 0``), instead of an eigen-decomposition per point."""
+    n = model.n_modes
+
+    def record(problem, X):
+        m, kappa = problem.vf.n, X[3 * problem.vf.n]
+        if kappa <= 0:
+            return {"mode": 0.0}
+        q = X[m: 2 * m] - 1j * X[2 * m: 3 * m] / np.sqrt(kappa)
+        return {"mode": float(dominant_mode(model, q[n: 2 * n]))}
+
+    return record
 
 
 def _pi_max(h: HopfPoint, ustar_max: float) -> float:
