@@ -180,11 +180,16 @@ def stability_boundary(scene: Scene, mstars, model: Model | None = None,
     lo, hi = math.log10(mstars[0]), math.log10(mstars[-1])
     seeds = _default_seeds(lo, hi) if seeds is None else np.asarray(seeds, float)
     window = (lo - 0.05, hi + 0.05)
-    found = [hopf_points(scene.replace(mstar=float(m)), model, ustar_max) for m in seeds]
-    firsts = [points[0].ustar for points in found if points]
+    firsts = [points[0].ustar for points in
+              (hopf_points(scene.replace(mstar=float(m)), model, ustar_max, first_only=True)
+               for m in seeds) if points]
     if not firsts:
         raise CriticalVelocityError(f"no flutter below U* = {ustar_max} at any seed M* {seeds}")
     ceiling = min(ustar_max, headroom * max(firsts))   # curves above this cannot be lowest
+    # the Hopf points up to the ceiling (with margin: none is in the step that ends a run)
+    search = lambda m: hopf_points(scene.replace(mstar=float(m)), model, ustar_max,
+                                   ustar_stop=1.05 * ceiling)
+    found = [search(m) for m in seeds]
     curves: list[HopfCurve] = []
     _add_curves(scene, model, curves, found, window, ceiling)
     points = [_boundary_point(scene, model, curves, m, refine) for m in mstars]
@@ -192,7 +197,7 @@ def stability_boundary(scene: Scene, mstars, model: Model | None = None,
         missed = [p.mstar for p in points if p.missed]
         if not missed:
             break
-        found = [hopf_points(scene.replace(mstar=m), model, ustar_max) for m in missed]
+        found = [search(m) for m in missed]
         _add_curves(scene, model, curves, found, window, ceiling)
         points = [_boundary_point(scene, model, curves, m, refine) for m in mstars]
     switches = _switches(curves, lo, hi)

@@ -79,13 +79,15 @@ def flutter_problem(scene: Scene, model: Model, ustar_start: float) -> C.Equilib
 
 
 def _settings(pi_start: float, pi_max: float, max_steps: int = 1000,
-              stop_at: tuple = ()) -> C.ContinuationSettings:
+              stop_at: tuple = (), pi_stop: float | None = None) -> C.ContinuationSettings:
     """Steps of at most pi_max/150 in Π (≈ U*^2): a pocket of stability between two Hopf
     points closer than one step would leave the unstable count unchanged and be missed,
-    and two Hopf points in one step (near a crossing of Hopf curves) would be confused."""
+    and two Hopf points in one step (near a crossing of Hopf curves) would be confused.
+    The branch ends at ``pi_stop`` (default ``pi_max``)."""
     ds_max = pi_max / 150
+    stop = pi_max if pi_stop is None else min(pi_stop, pi_max)
     return C.ContinuationSettings(ds=ds_max / 4, ds_min=1e-10 * pi_max, ds_max=ds_max,
-                                  max_steps=max_steps, bounds={PI: (0.0, pi_max)},
+                                  max_steps=max_steps, bounds={PI: (0.0, stop)},
                                   locate_tol=1e-12, stop_at=stop_at)
 
 
@@ -118,17 +120,23 @@ def eigenvector_q(model: Model, x, params, omega) -> np.ndarray:
 
 
 def hopf_points(scene: Scene, model: Model | None = None, ustar_max: float = 40.0,
-                ustar_start: float = 0.2, *, first_only: bool = False) -> list[HopfPoint]:
+                ustar_start: float = 0.2, *, first_only: bool = False,
+                ustar_stop: float | None = None) -> list[HopfPoint]:
     """All Hopf points of the steady branch for U* in (ustar_start, ustar_max), in order;
     with ``first_only`` the branch ends at the step past the first one (and the list
-    holds the Hopf points of that step only)."""
+    holds the Hopf points of that step only). ``ustar_stop`` (< ustar_max) ends the
+    branch there, with the steps of ``ustar_max``: the Hopf points below it are those of
+    the full search (same steps), the ones above it are not searched."""
     if not 0 < ustar_start < ustar_max:
         raise ValueError(f"need 0 < ustar_start < ustar_max, got {ustar_start}, {ustar_max}")
     model = model or build_model(scene)
     problem = flutter_problem(scene, model, ustar_start)
     pi_max = pi_of(scene, model, ustar_max)
+    pi_stop = None if ustar_stop is None or ustar_stop >= ustar_max else \
+        pi_of(scene, model, ustar_stop)
     stop_at = ("hopf",) if first_only else ()
-    branch = C.continuation(problem, settings=_settings(problem.X0[-1], pi_max, stop_at=stop_at))
+    branch = C.continuation(problem, settings=_settings(problem.X0[-1], pi_max, stop_at=stop_at,
+                                                        pi_stop=pi_stop))
     if branch.status == "failed":
         raise CriticalVelocityError(f"steady branch lost at M* = {scene.mstar:g}: {branch.message}")
     if branch.n_unstable is not None and len(branch.n_unstable) and branch.n_unstable[0] > 0:
