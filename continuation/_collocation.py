@@ -58,14 +58,21 @@ def collocation(ncol: int) -> Collocation:
 
 
 def lagrange(nodes: np.ndarray, s: np.ndarray):
-    """Values and derivatives ``L_l(s_k), L_l'(s_k)`` of the Lagrange basis."""
-    m = len(nodes)
-    V, dV = np.zeros((len(s), m)), np.zeros((len(s), m))
-    for l in range(m):
-        c = np.zeros(m)
-        c[l] = 1.0
-        poly = np.polynomial.Polynomial.fit(nodes, c, m - 1, domain=[0, 1], window=[0, 1])
-        V[:, l], dV[:, l] = poly(s), poly.deriv()(s)
+    """Values and derivatives ``L_l(s_k), L_l'(s_k)`` of the Lagrange basis:
+
+        L_l(s) = prod_{m != l} (s - x_m) / (x_l - x_m),
+        L_l'(s) = sum_{j != l} prod_{m != l, j} (s - x_m) / prod_{m != l} (x_l - x_m),
+
+    in closed form on arrays (no polynomial fit per call: the cycle gauges evaluate it
+    at every trial time)."""
+    x, s = np.asarray(nodes, dtype=float), np.atleast_1d(np.asarray(s, dtype=float))
+    m = len(x)
+    d = s[:, None] - x[None, :]                                      # (k, m)
+    other = ~np.eye(m, dtype=bool)
+    denom = np.array([np.prod(x[l] - x[other[l]]) for l in range(m)])
+    V = np.stack([np.prod(d[:, other[l]], axis=1) for l in range(m)], axis=1) / denom
+    dV = np.stack([sum(np.prod(d[:, other[l] & other[j]], axis=1)
+                       for j in range(m) if j != l) for l in range(m)], axis=1) / denom
     return V, dV
 
 

@@ -40,9 +40,16 @@ def reparametrized_field(model: Model) -> tuple[ca.Function, ca.Function, list[s
     mstar = 10 ** value[LOG_M]
     value.update(pressure_drop=value[PI] * PI_SCALE * mstar, mstar=mstar)
     p = ca.vertcat(*[value[name] for name in model.parameter_names])
-    F = ca.Function("F", [x, q], [model.rhs(x, p)], ["x", "p"], ["F"])
-    M = ca.Function("M", [x, q], [TIME_SCALE * model.mass(x, p)], ["x", "p"], ["M"])
+    F = ca.Function("F", [x, q], [_inline(model.rhs, x, p)], ["x", "p"], ["F"])
+    M = ca.Function("M", [x, q], [TIME_SCALE * _inline(model.mass, x, p)], ["x", "p"], ["M"])
     return F, M, names
+
+
+def _inline(fun: ca.Function, x, p):
+    """``fun(x, p)`` with the model's expression graph inlined, not as a call node: AD
+    of the flat graph (the library's Jacobians of F and M v) costs 2-3x less than AD
+    through a call of the model's Function (14 vs 34 ms for dF/dx at 80 points, N = 10)."""
+    return fun.call([x, p], True, False)[0]
 
 
 @per_model

@@ -101,3 +101,18 @@ def test_van_der_pol_large_mu_matches_dorodnitsyn_asymptotics(models):
     T3 = (3 - 2 * np.log(2)) * mu + 3 * a * mu ** (-1 / 3) - 2 / 3 * np.log(mu) / mu
     c = (mu * (T - T3))[mu >= 5]
     assert np.all((c > -1.75) & (c < -1.40)) and np.all(np.diff(c) > 0)
+
+
+def test_lagrange_basis_reproduces_polynomials_and_their_derivatives():
+    """Σ_l p(x_l) L_l(s) = p(s) and Σ_l p(x_l) L_l'(s) = p'(s) for every polynomial of
+    degree <= NCOL on the NCOL + 1 equispaced nodes (NCOL = 1..7), to rounding."""
+    from continuation._collocation import lagrange
+    rng = np.random.default_rng(3)
+    s = rng.random(40)
+    for ncol in range(1, 8):
+        nodes = np.linspace(0.0, 1.0, ncol + 1)
+        p = np.polynomial.Polynomial(rng.standard_normal(ncol + 1))
+        V, dV = lagrange(nodes, s)
+        assert np.max(np.abs(V @ p(nodes) - p(s))) < 1e-13 * np.max(np.abs(p(s)))
+        assert np.max(np.abs(dV @ p(nodes) - p.deriv()(s))) < 1e-12 * np.max(np.abs(p.deriv()(s)))
+        assert np.allclose(lagrange(nodes, nodes)[0], np.eye(ncol + 1), atol=1e-15)
