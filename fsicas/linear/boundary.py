@@ -19,6 +19,7 @@ import math
 import time
 from collections.abc import Mapping
 from dataclasses import dataclass, field, replace
+from functools import cached_property
 
 import numpy as np
 
@@ -115,23 +116,28 @@ class HopfCurve:
     def pieces(self) -> np.ndarray:
         """Branch id of each segment (length = points - 1): a new id after every fold in M*
         (the lower envelope jumps between pieces, even of one curve)."""
+        return self._pieces.copy()
+
+    @cached_property
+    def _pieces(self) -> np.ndarray:
         step = np.sign(np.diff(np.log10(self.mstar)))
         turns = np.concatenate([[0], np.cumsum(step[1:] * step[:-1] < 0)])
         return self.first_piece + turns
 
+    @cached_property
+    def _segments(self) -> tuple:
+        """Ends of the segments in log10 M*, U* and omega (arrays of length points - 1)."""
+        lm = np.log10(self.mstar)
+        ends = lambda arr: (arr[:-1], arr[1:])
+        return ends(lm), ends(self.ustar), ends(self.omega)
+
     def crossings(self, log_m: float) -> list[tuple[float, float, int]]:
         """(U*, omega, piece) where the curve passes log10 M* = log_m (linear interpolation)."""
-        lm = np.log10(self.mstar)
-        pieces = self.pieces
-        out = []
-        for i in range(len(lm) - 1):
-            a, b = lm[i], lm[i + 1]
-            if (a - log_m) * (b - log_m) <= 0 and a != b:
-                t = (log_m - a) / (b - a)
-                out.append((self.ustar[i] + t * (self.ustar[i + 1] - self.ustar[i]),
-                            self.omega[i] + t * (self.omega[i + 1] - self.omega[i]),
-                            int(pieces[i])))
-        return out
+        (a, b), (ua, ub), (wa, wb) = self._segments
+        i = np.flatnonzero(((a - log_m) * (b - log_m) <= 0) & (a != b))
+        t = (log_m - a[i]) / (b[i] - a[i])
+        u, w = ua[i] + t * (ub[i] - ua[i]), wa[i] + t * (wb[i] - wa[i])
+        return [(float(uk), float(wk), int(pk)) for uk, wk, pk in zip(u, w, self._pieces[i])]
 
 
 @dataclass(frozen=True)
