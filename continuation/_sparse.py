@@ -1,4 +1,9 @@
-"""Cheap CSC assembly for the bordered matrices built at every Newton step."""
+"""Cheap CSC assembly for the bordered matrices built at every Newton step.
+
+Each function builds its result with one ``csc_matrix`` construction from index
+arrays (no intermediate matrices): at a few hundred unknowns the constructions, not
+the arithmetic, are the cost.
+"""
 
 from __future__ import annotations
 
@@ -6,9 +11,13 @@ import numpy as np
 import scipy.sparse as sp
 
 
+def _csc(A) -> sp.csc_matrix:
+    return A if isinstance(A, sp.csc_matrix) else sp.csc_matrix(A)
+
+
 def append_row(A: sp.csc_matrix, row: np.ndarray) -> sp.csc_matrix:
     """``[A; row^T]`` for a CSC ``A`` and a dense row (one entry per column)."""
-    A = sp.csc_matrix(A)
+    A = _csc(A)
     m, ncol = A.shape
     indptr = A.indptr + np.arange(ncol + 1)
     last = indptr[1:] - 1
@@ -23,9 +32,16 @@ def append_row(A: sp.csc_matrix, row: np.ndarray) -> sp.csc_matrix:
 
 def append_columns(A: sp.csc_matrix, cols: np.ndarray) -> sp.csc_matrix:
     """``[A, cols]`` for a CSC ``A`` and dense columns ``cols`` (m x k), zeros dropped."""
-    A = sp.csc_matrix(A)
+    A = _csc(A)
+    return columns_appended(A.data, (A.shape, A.indptr, A.indices), cols)
+
+
+def columns_appended(values: np.ndarray, pattern: tuple, cols: np.ndarray) -> sp.csc_matrix:
+    """``[A, cols]`` for ``A`` given by its nonzeros ``values`` and CCS ``pattern``
+    ``(shape, colind, row)``, and dense columns ``cols`` (m x k), zeros dropped."""
+    (m, n), colind, row = pattern
     nz = [np.flatnonzero(c) for c in cols.T]
-    indptr = np.concatenate([A.indptr, A.nnz + np.cumsum([len(i) for i in nz])])
-    indices = np.concatenate([A.indices, *nz]).astype(A.indices.dtype)
-    data = np.concatenate([A.data, *[c[i] for c, i in zip(cols.T, nz)]])
-    return sp.csc_matrix((data, indices, indptr), shape=(A.shape[0], A.shape[1] + cols.shape[1]))
+    indptr = np.concatenate([colind, colind[-1] + np.cumsum([len(i) for i in nz])])
+    indices = np.concatenate([row, *nz]).astype(row.dtype)
+    data = np.concatenate([values, *[c[i] for c, i in zip(cols.T, nz)]])
+    return sp.csc_matrix((data, indices, indptr), shape=(m, n + cols.shape[1]))

@@ -12,7 +12,7 @@ import casadi as ca
 import numpy as np
 import scipy.sparse as sp
 
-from ._sparse import append_columns
+from ._sparse import columns_appended
 
 
 def as_sx_function(fun: ca.Function) -> ca.Function:
@@ -117,9 +117,8 @@ class CompiledSystem:
 
     def jacobian(self, Y, P, D, par_columns) -> sp.csc_matrix:
         """``[G_Y, G_p[:, par_columns]]`` as one sparse matrix."""
-        jy = to_csc(self._jy(Y, P, D)[0], self.pattern)
         jp = self._jp(Y, P, D)[0].reshape(self.n_equations, -1, order="F")
-        return append_columns(jy, jp[:, list(par_columns)])
+        return columns_appended(self._jy(Y, P, D)[0], self.pattern, jp[:, list(par_columns)])
 
 
 class BoundSystem:
