@@ -33,9 +33,14 @@ class LU:
 
     def __init__(self, lu, q):
         self.lu, self.q = lu, q
-        self.U, self.perm_r = lu.U, lu.perm_r
+        self.perm_r = lu.perm_r
         self.perm_c = np.empty_like(lu.perm_c)
         self.perm_c[q] = lu.perm_c
+
+    @property
+    def U(self) -> sp.csc_matrix:
+        """The upper factor (a copy, built on request: most factors are only solved with)."""
+        return self.lu.U
 
     def solve(self, b, trans: str = "N") -> np.ndarray:
         if trans == "N":
