@@ -19,7 +19,7 @@ def append_row(A: sp.csc_matrix, row: np.ndarray) -> sp.csc_matrix:
     """``[A; row^T]`` for a CSC ``A`` and a dense row (one entry per column)."""
     A = _csc(A)
     m, ncol = A.shape
-    indptr = A.indptr + np.arange(ncol + 1)
+    indptr = A.indptr + np.arange(ncol + 1, dtype=A.indptr.dtype)
     last = indptr[1:] - 1
     keep = np.ones(A.nnz + ncol, dtype=bool)
     keep[last] = False
@@ -41,7 +41,8 @@ def columns_appended(values: np.ndarray, pattern: tuple, cols: np.ndarray) -> sp
     ``(shape, colind, row)``, and dense columns ``cols`` (m x k), zeros dropped."""
     (m, n), colind, row = pattern
     nz = [np.flatnonzero(c) for c in cols.T]
-    indptr = np.concatenate([colind, colind[-1] + np.cumsum([len(i) for i in nz])])
+    counts = np.array([len(i) for i in nz], dtype=colind.dtype)
+    indptr = np.concatenate([colind, colind[-1] + np.cumsum(counts, dtype=colind.dtype)])
     indices = np.concatenate([row, *nz]).astype(row.dtype)
     data = np.concatenate([values, *[c[i] for c, i in zip(cols.T, nz)]])
     return sp.csc_matrix((data, indices, indptr), shape=(m, n + cols.shape[1]))
