@@ -9,7 +9,9 @@ From a point ``X_k`` with unit tangent ``tau_k`` (``G_X(X_k) tau_k = 0``):
 * tangent: ``[G_X(X_{k+1}); tau_k^T] t = e_{m+1}``, ``tau_{k+1} = t / |t|``
   (so ``tau_{k+1} . tau_k > 0``: orientation is kept), or the secant; for
   problems whose ``monitor`` does not use the factors (``monitor_uses_lu``
-  False) it is solved by refinement on the corrector's last factors;
+  False), and for all problems when ``settings.detect`` is False (then the
+  recorded branch-point test is the sign on those nearby factors), it is solved by
+  refinement on the corrector's last factors;
 * step control: ``ds <- min(grow ds, ds_max)`` after at most
   ``easy_iterations`` Newton iterations; on failure ``ds <- shrink ds`` and
   retry; below ``ds_min`` the run stops with status ``'failed'`` and the last
@@ -153,7 +155,9 @@ class ContinuationIterator:
             tau = tau / np.linalg.norm(tau)
             lu = factorize(bordered(self.problem.jacobian(res.X), tau))
         else:
-            reuse = None if self.problem.monitor_uses_lu else res.lu
+            # the factors of [G_X; tau^T] are only needed by the detection of special points
+            exact = self.problem.monitor_uses_lu and self.settings.detect
+            reuse = None if exact else res.lu
             tau, lu = tangent(self.problem, res.X, step.tau, reuse)
         if tau is None or lu is None:
             return None
