@@ -66,6 +66,13 @@ def state_vector(vf: VectorField, x0, label: str = "x0") -> np.ndarray:
     return x
 
 
+def equilibrium_system(vf: VectorField) -> CompiledSystem:
+    """The equilibrium system ``F(x, p) = 0`` of ``_systems`` with the field's function
+    inlined (:func:`_flat_field`): its Jacobian evaluates 2x faster for a modal model."""
+    x, p = vf.sym.sym("x", vf.n), vf.sym.sym("p", len(vf.par_names))
+    return CompiledSystem(x, p, vf.sym.sym("D", 0), _flat_field(vf, x, p)[0], "equilibrium")
+
+
 class EquilibriumProblem(Problem):
     """Branch of equilibria ``F(x, p) = 0`` in the parameter ``active``.
 
@@ -79,6 +86,7 @@ class EquilibriumProblem(Problem):
     """
 
     kind = "equilibrium"
+    builder = staticmethod(equilibrium_system)
     verified_kinds = ("hopf",)
 
     def __init__(self, F, x0, params: Mapping[str, float], active: str, *, M=None):
