@@ -65,6 +65,7 @@ class _Ordering:
 
     @classmethod
     def of(cls, A: sp.csc_matrix, q: np.ndarray) -> "_Ordering":
+        """The ordering ``q`` of the pattern of ``A``."""
         counts = np.diff(A.indptr)[q]
         indptr = np.concatenate([[0], np.cumsum(counts)]).astype(A.indptr.dtype)
         gather = np.concatenate([np.arange(A.indptr[j], A.indptr[j + 1]) for j in q]) \
