@@ -146,19 +146,32 @@ class VectorField:
     def form(self, name: str, x, p, *vectors) -> np.ndarray:
         """Evaluate a real multilinear form ``F2, F3, M1, M2`` on complex vectors.
 
-        Complex arguments are expanded by multilinearity into real evaluations.
+        Complex arguments are expanded by multilinearity into real evaluations
+        (``f(u_r + i u_i, ...) = Σ i^k f(real or imaginary parts)``), all of them in
+        one mapped call of the form.
         """
-        fun = self._forms[name]
-        return _complex_multilinear(lambda *r: to_numpy(fun(x, p, *r)), vectors)
+        coefs, columns = _real_expansion(vectors)
+        out = self._mapped_form(name, len(coefs))(x, p, *columns)
+        return np.asarray(ca.DM(out).full()) @ coefs
+
+    def _mapped_form(self, name: str, count: int) -> ca.Function:
+        """``self._forms[name].map(count)``, built once per (name, count)."""
+        key = (name, count)
+        cache = self.__dict__.setdefault("_mapped_forms", {})
+        if key not in cache:
+            cache[key] = self._forms[name].map(count)
+        return cache[key]
 
 
-def _complex_multilinear(real_fun, vectors) -> np.ndarray:
-    """``f(z1, ..., zk)`` for a real multilinear ``f`` and complex ``z_i``."""
-    if not vectors:
-        return real_fun().astype(complex)
-    head, rest = np.asarray(vectors[0]), vectors[1:]
-    re = _complex_multilinear(lambda *r: real_fun(head.real, *r), rest)
-    if not np.any(head.imag):
-        return re
-    im = _complex_multilinear(lambda *r: real_fun(head.imag, *r), rest)
-    return re + 1j * im
+def _real_expansion(vectors) -> tuple[np.ndarray, list]:
+    """Coefficients ``c_j`` and real argument columns with ``f(z_1..z_k) = Σ_j c_j
+    f(columns[:, j])`` for a real multilinear ``f`` (imaginary parts only where nonzero)."""
+    terms = [(1.0 + 0j, [])]
+    for z in vectors:
+        z = np.asarray(z)
+        parts = [(1.0, z.real)] + ([(1j, z.imag)] if np.any(z.imag) else [])
+        terms = [(c * a, args + [part]) for c, args in terms for a, part in parts]
+    coefs = np.array([c for c, _ in terms])
+    columns = [np.column_stack([args[i] for _, args in terms]).astype(float)
+               for i in range(len(vectors))]
+    return coefs, columns
