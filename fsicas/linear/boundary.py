@@ -89,17 +89,20 @@ class BoundaryPoint(Mapping):
 
 @dataclass(frozen=True)
 class HopfCurve:
-    """A traced Hopf curve: arrays along the curve (ordered by arclength)."""
+    """A traced Hopf curve: arrays along the curve (ordered by arclength). ``status``:
+    "bound" when both halves ran to the window's bounds, else the library's status of
+    the half that stopped first (``message`` says why)."""
 
     index: int
     mstar: np.ndarray
     ustar: np.ndarray
     omega: np.ndarray
     dominant_mode: np.ndarray
-    status: str
+    status: C.Status
     first_piece: int = 0
     states: np.ndarray = field(default=None, repr=False)   # steady states along the curve
     params: np.ndarray = field(default=None, repr=False)   # adapter parameters along it
+    message: str = ""
 
     def guess(self, log_m: float, piece: int) -> tuple[np.ndarray, np.ndarray, float]:
         """Interpolated (state, params, omega) on ``piece`` at log10 M* = log_m."""
@@ -234,7 +237,7 @@ def _trace(scene, model, h: HopfPoint, index: int, window, ustar_max, first_piec
     """Continue the Hopf curve through h both ways inside the (log10 M*, U*) window."""
     problem = flutter_problem(scene.replace(mstar=h.mstar), model, ustar_start=0.2)
     pi_max = _pi_max(h, ustar_max)
-    halves, status = [], "bound"
+    halves, status, message = [], "bound", ""
     for direction in (-1, 1):
         settings = C.ContinuationSettings(
             ds=0.05, ds_min=1e-8, ds_max=0.3, max_steps=300, direction=direction,
@@ -242,8 +245,8 @@ def _trace(scene, model, h: HopfPoint, index: int, window, ustar_max, first_piec
             newton=C.NewtonSettings(tol=1e-8))   # curve points only guide; points are refined
         branch = C.continuation(C.HopfCurveProblem.from_point(problem, h.point, LOG_M),
                                 settings=settings, record=_mode_recorder(model))
-        if branch.status != "bound":
-            status = f"{branch.status}: {branch.message}"
+        if branch.status != "bound" and status == "bound":
+            status, message = branch.status, branch.message
         halves.append(branch)
     lower, upper = halves
     join = lambda a, b: np.concatenate([a[::-1], b[1:]])
@@ -255,7 +258,7 @@ def _trace(scene, model, h: HopfPoint, index: int, window, ustar_max, first_piec
     modes = join(lower.columns["mode"], upper.columns["mode"])[keep].astype(int)
     lm = params[:, names.index(LOG_M)]
     return HopfCurve(index, 10 ** lm, x[:, -2:].sum(axis=1) / scene.hstar, omega * TIME_SCALE,
-                     modes, status, int(first_piece), x, params)
+                     modes, status, int(first_piece), x, params, message)
 
 
 def _mode_recorder(model):
