@@ -17,7 +17,7 @@ import casadi as ca
 import numpy as np
 import scipy.sparse as sp
 
-from ._symbolic import as_sx_function, symbol_class, to_csc, to_numpy
+from ._symbolic import BufferedFunction, as_sx_function, symbol_class, to_csc
 
 
 def _check_function(fun, label: str, n_out_rows: int | None, n_out_cols: int):
@@ -99,30 +99,31 @@ class VectorField:
         m = self.M_expr(x, p)
         m = self.sym(ca.sparsify(m)) if self.sym is ca.SX else m
         pat = lambda a: ((a.size1(), a.size2()), *map(np.asarray, a.sparsity().get_ccs()))
+        buffered = lambda name, out: BufferedFunction(ca.Function(name, [x, p], [out]))
         return {
-            "F": ca.Function("F_num", [x, p], [f]),
-            "Jx": ca.Function("Jx", [x, p], [jx.nz[:]]), "Jx_pat": pat(jx),
-            "Jp": ca.Function("Jp", [x, p], [ca.densify(jp)]),
-            "M": ca.Function("M_num", [x, p], [m.nz[:]]), "M_pat": pat(m),
+            "F": buffered("F_num", f),
+            "Jx": buffered("Jx", jx.nz[:]), "Jx_pat": pat(jx),
+            "Jp": buffered("Jp", ca.densify(jp)),
+            "M": buffered("M_num", m.nz[:]), "M_pat": pat(m),
         }
 
     def rhs(self, x, p) -> np.ndarray:
         """``F(x, p)``."""
-        return to_numpy(self._funs["F"](x, p))
+        return self._funs["F"](x, p)[0]
 
     def jac_x(self, x, p) -> sp.csc_matrix:
         """Exact sparse ``J = dF/dx``."""
-        return to_csc(to_numpy(self._funs["Jx"](x, p)), self._funs["Jx_pat"])
+        return to_csc(self._funs["Jx"](x, p)[0], self._funs["Jx_pat"])
 
     def jac_p(self, x, p) -> np.ndarray:
         """Exact dense ``dF/dp`` of shape ``(n, k)``."""
-        return np.asarray(self._funs["Jp"](x, p).full(), dtype=float)
+        return self._funs["Jp"](x, p)[0].reshape(self.n, len(self.par_names), order="F")
 
     def mass(self, x, p) -> sp.csc_matrix:
         """Sparse ``M(x, p)`` (identity if none was given)."""
         if self.M is None:
             return sp.identity(self.n, format="csc")
-        return to_csc(to_numpy(self._funs["M"](x, p)), self._funs["M_pat"])
+        return to_csc(self._funs["M"](x, p)[0], self._funs["M_pat"])
 
     # ---- multilinear forms for normal forms --------------------------------
     @cached_property
