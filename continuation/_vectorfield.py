@@ -152,15 +152,20 @@ class VectorField:
         one mapped call of the form.
         """
         coefs, columns = _real_expansion(vectors)
-        out = self._mapped_form(name, len(coefs))(x, p, *columns)
-        return np.asarray(ca.DM(out).full()) @ coefs
+        flat = [c.ravel(order="F") for c in columns]                # CasADi: column-major
+        out = self._mapped_form(name, len(coefs))(x, p, *flat)[0]
+        return out.reshape(self.n, len(coefs), order="F") @ coefs
 
-    def _mapped_form(self, name: str, count: int) -> ca.Function:
-        """``self._forms[name].map(count)``, built once per (name, count)."""
+    def _mapped_form(self, name: str, count: int) -> BufferedFunction:
+        """``self._forms[name].map(count)`` (dense output), built once per (name, count)."""
         key = (name, count)
         cache = self.__dict__.setdefault("_mapped_forms", {})
         if key not in cache:
-            cache[key] = self._forms[name].map(count)
+            form = self._forms[name]
+            x, p = ca.MX.sym("x", self.n), ca.MX.sym("p", len(self.par_names))
+            columns = [ca.MX.sym(f"v{i}", self.n, count) for i in range(form.n_in() - 2)]
+            out = ca.densify(form.map(count)(x, p, *columns))      # x, p broadcast
+            cache[key] = BufferedFunction(ca.Function(f"{name}_{count}", [x, p, *columns], [out]))
         return cache[key]
 
 
