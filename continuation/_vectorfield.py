@@ -32,6 +32,17 @@ def _check_function(fun, label: str, n_out_rows: int | None, n_out_cols: int):
                          f"({n_out_rows if n_out_rows is not None else 'n'}, {n_out_cols})")
 
 
+def _checked_mass_action(fun, M, n: int) -> ca.Function:
+    """``fun`` if it maps ``(x[n], p, v[n])`` to a column ``M v`` of size n (with ``M``)."""
+    if M is None:
+        raise ValueError("mass_action needs a mass matrix M (it is M(x, p) v)")
+    if not isinstance(fun, ca.Function) or fun.n_in() != 3 or fun.n_out() != 1:
+        raise ValueError("mass_action must be a casadi.Function (x, p, v) -> M(x, p) v")
+    if fun.size_in(0) != (n, 1) or fun.size_in(2) != (n, 1) or fun.size_out(0) != (n, 1):
+        raise ValueError(f"mass_action must map x[{n}], p, v[{n}] to a column of size {n}")
+    return fun
+
+
 class VectorField:
     """``M(x, p) xdot = F(x, p)`` with named parameters, compiled once.
 
@@ -44,9 +55,14 @@ class VectorField:
         problems; keep MX (``expand=False``) for functions built from dense matrix
         blocks, whose SX expansion multiplies every product out (for a 42-state modal
         model, the Hopf-system Jacobian builds in 0.1 s as MX and 4 s as SX).
+    mass_action : optional casadi.Function ``(x, p, v) -> M(x, p) v`` computed without
+        forming ``M`` (it must equal ``M v``). Collocation kernels and normal forms then
+        differentiate it instead of ``M(x, p) v``: for a modal model whose ``M`` is a sum
+        of dense ``N x K x N`` products the matrix-free product is O(N K).
     """
 
-    def __init__(self, F: ca.Function, M: ca.Function | None, par_names, expand: bool = True):
+    def __init__(self, F: ca.Function, M: ca.Function | None, par_names, expand: bool = True,
+                 mass_action: ca.Function | None = None):
         par_names = tuple(str(s) for s in par_names)
         _check_function(F, "F", None, 1)
         n = F.size1_in(0)
@@ -63,6 +79,8 @@ class VectorField:
         keep = (lambda f: f) if not expand else as_sx_function
         self.F = keep(F)
         self.M = None if M is None else keep(M)
+        self.mass_action = None if mass_action is None else \
+            keep(_checked_mass_action(mass_action, M, n))
         self.n = n
         self.par_names = par_names
         funs = (self.F,) if self.M is None else (self.F, self.M)
@@ -78,6 +96,13 @@ class VectorField:
     def M_expr(self, x, p):
         """Symbolic ``M(x, p)`` (identity when no mass matrix is given)."""
         return self.sym.eye(self.n) if self.M is None else self.M(x, p)
+
+    def Mv_expr(self, x, p, v):
+        """Symbolic ``M(x, p) v``: the ``mass_action`` when given (cheaper to
+        differentiate), else the product with :meth:`M_expr`."""
+        if self.mass_action is not None:
+            return self.mass_action(x, p, v)
+        return ca.mtimes(self.M_expr(x, p), v)
 
     @cached_property
     def mass_depends_on_state(self) -> bool:
@@ -134,7 +159,7 @@ class VectorField:
         f = self.F(x, p)
         f2 = ca.jtimes(ca.jtimes(f, x, u), x, v)
         f3 = ca.jtimes(f2, x, w)
-        my = ca.mtimes(self.M_expr(x, p), y)
+        my = self.Mv_expr(x, p, y)
         m1 = ca.jtimes(my, x, u)
         m2 = ca.jtimes(m1, x, v)
         return {

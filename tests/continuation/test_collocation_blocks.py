@@ -29,6 +29,15 @@ def _vdp_mass():
     return F, M
 
 
+def _vdp_mass_action():
+    """The state-dependent mass model with its matrix-free product ``M v`` given to the
+    field: blocks then differentiate ``mass_action``, the graph route ``M(x) v``."""
+    F, M = _vdp_mass()
+    x, p, v = ca.SX.sym("x", 2), ca.SX.sym("p", 2), ca.SX.sym("v", 2)
+    Mv = ca.Function("Mv", [x, p, v], [ca.vertcat((1 + x[0] ** 2) * v[0], v[1])])
+    return C.VectorField(F, M, ("mu", "k"), mass_action=Mv)
+
+
 def _mx_field(models):
     """The two-parameter mass model as an MX VectorField kept MX (``expand=False``)."""
     F, M = models.mass_model(with_q=True)
@@ -52,6 +61,8 @@ def _cases(models):
                         7.0),
         "mass_model": (F_m, M_m, {"p": 0.6, "q": 1.0}, "q", ring, 12.0),
         "vdp_mass": (F_v, M_v, {"mu": 0.8, "k": 1.0}, "mu", models.van_der_pol_guess, 8.0),
+        "vdp_mass_action": (_vdp_mass_action(), None, {"mu": 0.8, "k": 1.0}, "mu",
+                            models.van_der_pol_guess, 8.0),
         "mass_model_mx": (_mx_field(models), None, {"p": 0.6, "q": 1.0}, "p", ring, 12.0),
     }
 
@@ -75,7 +86,7 @@ def _perturbed(prob, seed=0):
 
 
 @pytest.mark.parametrize("name", ["van_der_pol", "brusselator", "mass_model", "vdp_mass",
-                                  "mass_model_mx"])
+                                  "vdp_mass_action", "mass_model_mx"])
 def test_residual_and_jacobian_equal_the_graph_ones(models, name):
     mesh = np.r_[0.0, np.cumsum(np.linspace(1.0, 2.0, 7))] / np.sum(np.linspace(1.0, 2.0, 7))
     graph, blocks = _pair(_cases(models)[name], mesh=mesh)
@@ -90,7 +101,7 @@ def test_residual_and_jacobian_equal_the_graph_ones(models, name):
     assert _rel(Jg[:, -1], Jb[:, -1]) < RTOL          # d/dp of the active parameter
 
 
-@pytest.mark.parametrize("name", ["brusselator", "mass_model", "vdp_mass"])
+@pytest.mark.parametrize("name", ["brusselator", "mass_model", "vdp_mass", "vdp_mass_action"])
 def test_several_parameter_columns_in_any_order(models, name):
     graph, blocks = _pair(_cases(models)[name], ntst=5, ncol=4)
     X, _ = _perturbed(graph, seed=1)
@@ -123,7 +134,7 @@ def test_kernel_is_built_once_per_field_and_number_of_points(models):
     assert c.system.compiled is a.system.compiled
 
 
-@pytest.mark.parametrize("name", ["van_der_pol", "vdp_mass"])
+@pytest.mark.parametrize("name", ["van_der_pol", "vdp_mass", "vdp_mass_action"])
 def test_floquet_multipliers_equal(models, name):
     graph, blocks = _pair(_cases(models)[name], ntst=12, ncol=4)
     X = models.corrected(graph)
@@ -156,3 +167,12 @@ def test_bad_backend_raises_naming_the_field():
     with pytest.raises(ValueError, match="jacobian.*'blocks'.*'graph'"):
         C.CollocationSettings(jacobian="fd")
     assert C.CollocationSettings().jacobian == "blocks"
+
+
+def test_mass_action_is_validated():
+    F, M = _vdp_mass()
+    x, p = ca.SX.sym("x", 2), ca.SX.sym("p", 2)
+    with pytest.raises(ValueError, match="mass_action needs a mass matrix"):
+        C.VectorField(F, None, ("mu", "k"), mass_action=M)
+    with pytest.raises(ValueError, match="mass_action must be a casadi.Function"):
+        C.VectorField(F, M, ("mu", "k"), mass_action=M)
