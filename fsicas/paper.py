@@ -26,7 +26,7 @@ from .linear.steady import steady_state, straight_pressure_drop
 from .model.assembly import build_model
 from .model.beam import clamped_free_betas
 from .plots.linear import plot_boundary, plot_boundary_variants, plot_mode_shapes
-from .plots.timedomain import plot_cycle, plot_map
+from .plots.timedomain import plot_cycle, plot_map, return_period
 from .scene import Scene
 from .timedomain.impact_map import impact_map
 from .timedomain.impacting_run import HOLDING_CONTACT, PAPER_CONTACT, impacting_run
@@ -84,10 +84,12 @@ def impacting_cycle(ustar: float, modes: int = 10, contact: dict = HOLDING_CONTA
                     t_end: float = 4.0, plot=None, tol: float = 2e-2) -> dict:
     """One of the paper's impacting points (1a-c), run by
     :func:`fsicas.timedomain.impacting_run.impacting_run`; returns the run's JSON (plus U*,
-    N, the contact law). ``plot``: the Figs. 6-9 panels of the last cycle, if one settled."""
+    N, the contact law). ``plot``: the Figs. 6-9 panels of the last settled cycle, or of
+    the last tip return of a run that hit the wall without settling."""
     run = impacting_run(ustar, modes, contact, t_end, tol)
-    if plot is not None and run.outcome.period is not None:
-        plot_cycle(run, plot)
+    shown = run.outcome.period is not None or return_period(run) is not None
+    if plot is not None and shown and not run.trajectory.failed:
+        plot_cycle(run, plot)     # a perturbed periodic run: its last tip return
     return {**run.to_json(), "ustar": ustar, "modes": modes, **contact}
 
 

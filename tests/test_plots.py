@@ -53,3 +53,22 @@ def test_cli_selects_the_file_backend_when_it_writes_a_figure(user_backend, tmp_
     assert matplotlib.get_backend().lower() == "agg"
     assert (tmp_path / "e.png").stat().st_size > 0
 
+
+
+def test_return_period_of_an_unsettled_run_is_its_last_tip_return():
+    """The period shown for a run without a settled cycle: the last interval between
+    upward tip crossings, here of a signal whose period drifts from 0.10 to 0.11."""
+    from types import SimpleNamespace
+
+    import numpy as np
+
+    from fsicas.plots.timedomain import return_period
+    t = np.linspace(0.0, 2.0, 200001)
+    period = 0.10 + 0.005 * t                          # instantaneous period
+    phase = np.cumsum(np.r_[0.0, np.diff(t) / period[1:]])
+    run = SimpleNamespace(trajectory=SimpleNamespace(t=t, tip=np.sin(2 * np.pi * phase)))
+    k = np.flatnonzero(np.diff(np.floor(phase)) > 0)  # completed cycles
+    expected = t[k[-1]] - t[k[-2]]
+    assert abs(return_period(run) - expected) < 1e-4
+    flat = SimpleNamespace(trajectory=SimpleNamespace(t=t, tip=np.zeros_like(t)))
+    assert return_period(flat) is None

@@ -13,8 +13,9 @@ import numpy as np
 from .backend import pyplot
 from ..model.assembly import modal_basis
 from ..model.contact import contact_load, reference_force
+from ..timedomain.outcome import poincare_returns
 
-__all__ = ["plot_run", "plot_map", "plot_cycle", "cycle_window"]
+__all__ = ["plot_run", "plot_map", "plot_cycle", "cycle_window", "return_period"]
 
 _COLORS = {"decay": "tab:green", "lco": "tab:orange", "contact": "tab:blue",
            "impacting_lco": "tab:purple", "unsettled": "tab:gray", "error": "k"}
@@ -66,20 +67,32 @@ def plot_map(result, path) -> None:
     plt.close(fig)
 
 
-def cycle_window(run, cycles: int = 1) -> slice:
-    """Samples of the last ``cycles`` settled periods of a run (needs a period)."""
-    T = run.outcome.period
+def cycle_window(run, cycles: int = 1, period: float | None = None) -> slice:
+    """Samples of the last ``cycles`` periods of a run (the settled period, or ``period``)."""
+    T = run.outcome.period if period is None else period
     if T is None:
         raise ValueError(f"the run has no settled cycle (outcome {run.outcome.outcome})")
     t = run.trajectory.t
     return slice(int(np.searchsorted(t, t[-1] - cycles * T)), len(t))
 
 
+def return_period(run) -> float | None:
+    """The last interval between upward tip crossings (``poincare_returns``): the period
+    to show of a run that hit the wall without settling (perturbed periodic motion)."""
+    times, _ = poincare_returns(run.trajectory.t, run.trajectory.tip)
+    return float(times[-1] - times[-2]) if len(times) >= 2 else None
+
+
 def plot_cycle(run, path, snapshots: int = 24) -> None:
-    """Figs. 6–9 of one run's last settled cycle in one figure (2 x 4 panels)."""
+    """Figs. 6–9 of one run's last settled cycle in one figure (2 x 4 panels); a run
+    without a settled cycle shows its last tip-return interval, titled as unsettled."""
     plt = pyplot()
     scene, T = run.scene, run.outcome.period
-    w = cycle_window(run)
+    label = f"{run.outcome.outcome}, T0 = {{:.4g}}"
+    if T is None:
+        T = return_period(run)
+        label = f"{run.outcome.outcome}, not settled: last tip return, T = {{:.4g}}"
+    w = cycle_window(run, period=T)
     t, X = run.trajectory.t[w], run.trajectory.x[w]
     tau = (t - t[0]) / T
     fig, ax = plt.subplots(2, 4, figsize=(17, 7))
@@ -89,7 +102,7 @@ def plot_cycle(run, path, snapshots: int = 24) -> None:
     _spectrum(ax[1, 1], run.trajectory, T)
     _rms_and_force_panels(ax[1, 2], ax[1, 3], run.model, tau, X)
     fig.suptitle(f"U* = {scene.ustar:g}, M* = {scene.mstar:g}, N = {scene.modes}: "
-                 f"{run.outcome.outcome}, T0 = {T:.4g}")
+                 + label.format(T))
     fig.tight_layout()
     fig.savefig(path, dpi=110)
     plt.close(fig)
