@@ -71,13 +71,6 @@ class Pointwise:
                             dp(self.f), dp(self.mv)])
 
 
-def pointwise_functions(vf, k=None):
-    """``(values, jacobians, pattern)``: single-point CasADi functions of ``(x, v, p)``
-    (``jacobians`` also of ``E``, ``k`` parameter directions, default all)."""
-    pw = Pointwise(vf)
-    return pw.values(), pw.jacobians(pw.n_par if k is None else k), pw.pattern
-
-
 class PointKernel:
     """``(x[n x K], v[n x K], p) ->`` pointwise values at ``K`` points.
 

@@ -30,11 +30,6 @@ def symbol_class(*funs: ca.Function) -> type:
     return ca.SX if all(f.is_a("SXFunction") for f in funs) else ca.MX
 
 
-def to_numpy(value) -> np.ndarray:
-    """Dense float vector of a CasADi DM (column) value."""
-    return np.asarray(ca.DM(value).full(), dtype=float).ravel()
-
-
 class BufferedFunction:
     """Call a CasADi Function through its zero-copy buffer: the arguments are copied
     into fixed NumPy arrays and the outputs' nonzeros written into NumPy arrays, with

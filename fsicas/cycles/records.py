@@ -6,10 +6,11 @@
 from __future__ import annotations
 
 import json
-import math
 from dataclasses import asdict, dataclass, fields
 
 import numpy as np
+
+from ..checks import finite_number, require
 
 __all__ = ["CycleRecord", "CycleMeasures", "BranchRecord", "plain_value", "check_settings"]
 
@@ -96,11 +97,10 @@ def check_settings(settings, integers: tuple = (), positives: tuple = (),
     kind = type(settings).__name__
     for name in integers + nonnegative_integers:
         v, low = getattr(settings, name), 0 if name in nonnegative_integers else 1
-        if not (isinstance(v, int) and not isinstance(v, bool) and v >= low):
-            what = "a non-negative" if low == 0 else "a positive"
-            raise ValueError(f"{kind}.{name} must be {what} integer, got {v!r}")
+        what = "a non-negative" if low == 0 else "a positive"
+        require(isinstance(v, int) and not isinstance(v, bool) and v >= low,
+                f"{kind}.{name} must be {what} integer, got {v!r}")
     for name in positives:
         v = getattr(settings, name)
-        if not (isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v)
-                and v > 0):
-            raise ValueError(f"{kind}.{name} must be a positive number, got {v!r}")
+        require(finite_number(f"{kind}.{name}", v) > 0,
+                f"{kind}.{name} must be a positive number, got {v!r}")
