@@ -1,0 +1,221 @@
+"""Impacting limit cycles versus U* by adaptive collocation: a second route beside shooting.
+
+The cycle is continued in Π by orthogonal collocation (``continuation.CycleProblem``,
+block-assembled sparse Jacobian) of the model *with* the smoothed contact law
+(``Scene.contact_smoothing`` > 0: the softplus of width σ eps is C-infinity, so the
+collocation polynomial converges at its order once the mesh resolves the contact layer).
+The mesh is re-equidistributed at every accepted point (``adapt_every``), so that its
+intervals concentrate at the impacts, where the solution's higher derivatives are
+large; NTST is fixed during a run (a few hundred intervals).
+
+Start: a cycle's state at phase 0, its period and pressure drop, as for
+:func:`fsicas.cycles.impacting.impacting_branch` (a contact-free collocation cycle shortly
+before contact, :func:`~fsicas.cycles.impacting.pre_contact_start`; a shooting point; or
+the settled cycle of a time integration, :func:`~fsicas.cycles.impacting.cycle_from_trajectory`).
+One period is integrated from the state (CVODES) and sampled densely; the start mesh is
+equidistributed on that guess (``mesh_passes`` passes, each on the guess itself, not on
+the previous polynomial), so a start with impacts is resolved before the first Newton
+step.
+
+Per point the same measures as the shooting route (:class:`ImpactPoint`: U*, Δp,
+period, tip half-amplitude, min gap and its ratio to eps, contact intervals per period,
+Floquet multipliers and stability, wall time), plus NTST and the library's a-posteriori
+error indicator. Extrema are taken on the collocation polynomial (``samples`` per mesh
+interval, i.e. dense at the impacts) and refined by bounded Brent in t.
+"""
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.interpolate
+import scipy.optimize
+
+import continuation as C
+
+from ..linear.adapter import LOG_M, PI, PI_SCALE, TIME_SCALE, flutter_field, pi_of
+from ..linear.steady import steady_state
+from ..model.assembly import Model, build_model
+from ..scene import Scene
+from .gauge import Gauge
+from .impacting import ImpactBranch, ImpactPoint, shooting_points
+from .records import check_settings
+
+__all__ = ["CollocationImpactSettings", "CollocatedImpactPoint", "CollocatedImpactBranch",
+           "impacting_collocation_branch", "impacting_collocation_problem", "field_parameters"]
+
+
+@dataclass(frozen=True)
+class CollocationImpactSettings:
+    """``ntst``/``ncol``: collocation mesh (NTST fixed during the run); ``adapt_every``:
+    re-equidistribute every so many accepted points (0 = never); ``mesh_passes``:
+    equidistribution passes of the start mesh on the integrated guess; ``tol``: Newton
+    tolerance (inf-norm of the collocation residual); ``ds``/``ds_max``: arclength steps
+    (Euclidean norm of all node values, 100 T and Π: scale by about √(NTST/20));
+    ``max_points``: branch points; ``samples``: samples per mesh interval for the
+    measurements; ``guess_samples``/``guess_tol``: outputs and CVODES tolerance of the
+    integrated start period."""
+
+    ntst: int = 200
+    ncol: int = 4
+    adapt_every: int = 1
+    mesh_passes: int = 3
+    tol: float = 1e-9
+    ds: float = 0.05
+    ds_max: float = 1.0
+    max_points: int = 20
+    samples: int = 16
+    guess_samples: int = 20000
+    guess_tol: float = 1e-10
+
+    def __post_init__(self):
+        check_settings(self, integers=("ntst", "ncol", "max_points", "samples", "guess_samples"),
+                       positives=("tol", "ds", "ds_max", "guess_tol"),
+                       nonnegative_integers=("adapt_every", "mesh_passes"))
+
+
+@dataclass(frozen=True)
+class CollocatedImpactPoint(ImpactPoint):
+    """An impacting cycle by collocation: the shooting route's measures, plus ``ntst``
+    and ``error_estimate`` (the library's indicator max_i h_i^(NCOL+1) |u^(NCOL+1)|_i)."""
+
+    ntst: int = 0
+    error_estimate: float = 0.0
+
+
+@dataclass(frozen=True)
+class CollocatedImpactBranch(ImpactBranch):
+    """Collocation branch in U* from a start cycle; ``status`` as for the shooting route."""
+
+    @classmethod
+    def from_json(cls, d: dict) -> "CollocatedImpactBranch":
+        return cls(Scene.from_dict(d["scene"]), d["eps"],
+                   [CollocatedImpactPoint.from_json(p) for p in d["points"]], d["status"],
+                   d["message"], d["wall_time"])
+
+
+def impacting_collocation_problem(scene: Scene, state, period: float, pressure_drop: float,
+                                  *, model: Model | None = None,
+                                  settings: CollocationImpactSettings = CollocationImpactSettings()
+                                  ) -> C.CycleProblem:
+    """The collocation problem of the cycle through ``state`` (phase 0) with ``period``
+    (units of T) at ``pressure_drop`` on ``scene`` (contact on), with the start mesh
+    equidistributed on one integrated period. Raises RuntimeError if that integration
+    fails (e.g. the gap closes)."""
+    model = model or build_model(scene)
+    vf = flutter_field(model)
+    params = field_parameters(vf, model, scene, pressure_drop)
+    orbit = _integrated_orbit(vf, np.asarray(state, float), period * TIME_SCALE, params, settings)
+    cs = C.CollocationSettings(ntst=settings.ntst, ncol=settings.ncol, floquet="product",
+                               adapt_every=settings.adapt_every)
+    problem = C.CycleProblem(vf, orbit, period * TIME_SCALE, params, PI, settings=cs)
+    for _ in range(settings.mesh_passes):
+        mesh = problem.remesh(problem.X0)[0].mesh
+        problem = C.CycleProblem(vf, orbit, period * TIME_SCALE, params, PI, settings=cs,
+                                 mesh=mesh)
+    return problem
+
+
+def impacting_collocation_branch(scene: Scene, state, period: float, pressure_drop: float, *,
+                                 model: Model | None = None, ustar_min: float = 0.0,
+                                 ustar_max: float = 12.0, direction: int = 1,
+                                 settings: CollocationImpactSettings = CollocationImpactSettings()
+                                 ) -> CollocatedImpactBranch:
+    """Continue the cycle through ``state`` (phase 0) with ``period`` (units of T) at
+    ``pressure_drop`` by adaptive collocation in U* on ``scene`` (contact on, smoothed:
+    ``contact_smoothing`` > 0). ``direction`` = +1 continues towards larger Δp (U*).
+    The arguments are those of :func:`fsicas.cycles.impacting.impacting_branch`."""
+    start = time.perf_counter()
+    if not (scene.contact and scene.contact_smoothing > 0):
+        raise ValueError("impacting_collocation_branch needs scene.contact = True and "
+                         "scene.contact_smoothing > 0 (a smooth contact law)")
+    model = model or build_model(scene)
+    eps = model.scene.contact_gap
+    try:
+        problem = impacting_collocation_problem(scene, state, period, pressure_drop,
+                                                model=model, settings=settings)
+    except RuntimeError as err:                  # CVODES failure, e.g. a gap closing
+        return CollocatedImpactBranch(scene, eps, [], "failed", "the start cycle could not "
+                                      f"be integrated over one period: {err}",
+                                      time.perf_counter() - start)
+    gauge = _PolynomialGauge(model, steady_state(scene, model).x, settings.samples)
+    branch = C.continuation(problem, record=gauge.record, settings=_steps(
+        scene, model, ustar_min, ustar_max, direction, settings))
+    return _result(scene, eps, branch, settings, time.perf_counter() - start)
+
+
+def field_parameters(vf, model: Model, scene: Scene, pressure_drop: float) -> dict:
+    """The adapter's parameters (Π, log10 M*, the rest) at ``pressure_drop``."""
+    values = dict(zip(model.parameter_names, steady_state(scene, model).p))
+    params = {PI: pressure_drop / (scene.mstar * PI_SCALE), LOG_M: float(np.log10(scene.mstar))}
+    params.update({k: values[k] for k in vf.par_names[2:]})
+    return params
+
+
+def _integrated_orbit(vf, x0, period, params, settings):
+    """``t -> x`` on [0, 1): one integrated period (``guess_samples`` outputs), a periodic
+    cubic spline through them (the end point replaced by the start: the guess closes)."""
+    shoot = C.ShootingSettings(abstol=settings.guess_tol, reltol=settings.guess_tol)
+    x = shooting_points(vf, x0, period, params, settings.guess_samples, shoot)
+    t = np.linspace(0.0, 1.0, settings.guess_samples + 1)
+    spline = scipy.interpolate.CubicSpline(t, np.vstack([x, x[:1]]), bc_type="periodic")
+    return lambda s: spline(np.asarray(s, float) % 1.0)
+
+
+def _steps(scene, model, ustar_min, ustar_max, direction, settings) -> C.ContinuationSettings:
+    """Arclength steps in Π between the steady Π of ``ustar_min`` and ``ustar_max``."""
+    pi_lo = pi_of(scene, model, ustar_min) if ustar_min > 0 else 0.0
+    return C.ContinuationSettings(
+        ds=settings.ds, ds_min=1e-8, ds_max=settings.ds_max, direction=direction,
+        max_steps=max(settings.max_points - 1, 1),
+        bounds={PI: (pi_lo, pi_of(scene, model, ustar_max))},
+        newton=C.NewtonSettings(tol=settings.tol), compute_eigenvalues=False, detect=False)
+
+
+def _result(scene, eps, branch, settings, wall_time) -> CollocatedImpactBranch:
+    """The branch's points as :class:`CollocatedImpactPoint` records, with the status."""
+    points = [CollocatedImpactPoint.from_columns(branch.columns, k) for k in range(len(branch.s))]
+    points = points[:settings.max_points]
+    status = "max_points" if len(points) == settings.max_points else \
+        {"bound": "bound", "max_steps": "max_points"}.get(branch.status, "failed")
+    return CollocatedImpactBranch(scene, eps, points, status, branch.message, wall_time)
+
+
+class _PolynomialGauge(Gauge):
+    """Measures of collocation unknowns X = (nodes, 100 T, Π) on the polynomial:
+    ``samples`` per mesh interval (dense where the mesh is, at the impacts), extrema
+    refined by bounded Brent in t."""
+
+    def __init__(self, model: Model, x_eq, samples: int):
+        super().__init__(model, x_eq)
+        self.samples, self.t_last = samples, time.perf_counter()
+
+    def record(self, problem, X) -> dict:
+        """The columns of one branch point (the fields of :class:`CollocatedImpactPoint`)."""
+        mesh = problem.mesh
+        t = (mesh[:-1, None] + np.diff(mesh)[:, None] * np.arange(self.samples)
+             / self.samples).ravel()
+        x = problem.evaluate(X, t)
+        y, gap = self.tip(x), self.min_gap(x)
+        inside = gap < self.eps
+        impacts = int(np.sum(inside & ~np.roll(inside, 1))) if not inside.all() else 1
+        lowest = self._refined(problem, X, t, gap, self.min_gap)
+        top = -self._refined(problem, X, t, -y, lambda x: -self.tip(x))
+        now = time.perf_counter()
+        wall, self.t_last = now - self.t_last, now
+        return {**self.common(problem, X), "tip_amplitude": (top - self._refined(
+                    problem, X, t, y, self.tip)) / 2, "min_gap": lowest,
+                "gap_ratio": lowest / self.eps, "impacts": impacts, "ntst": problem.ntst,
+                "wall_time": wall}
+
+    @staticmethod
+    def _refined(problem, X, t, values, f) -> float:
+        """min_t f(x(t)): the best of the samples ``values`` at ``t``, refined by bounded
+        Brent between its neighbours."""
+        k = int(np.argmin(values))
+        lo, hi = t[k - 1] if k else t[-1] - 1.0, t[k + 1] if k + 1 < t.size else 1.0
+        g = lambda s: float(f(problem.evaluate(X, np.atleast_1d(s) % 1.0))[0])
+        res = scipy.optimize.minimize_scalar(g, method="bounded", bounds=(lo, hi),
+                                             options={"xatol": 1e-13})
+        return float(min(res.fun, values[k]))
