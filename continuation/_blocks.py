@@ -52,7 +52,7 @@ class Pointwise:
         self.x, self.v, self.p = S.sym("x", n), S.sym("v", n), S.sym("p", self.n_par)
         self.f, m = vf.F_expr(self.x, self.p), vf.M_expr(self.x, self.p)
         self.mv = vf.Mv_expr(self.x, self.p, self.v)
-        self.fx, self.mvx = ca.jacobian(self.f, self.x), ca.jacobian(self.mv, self.x)
+        self.fx, self.mvx = vf.Fx_expr(self.x, self.p), vf.Mvx_expr(self.x, self.p, self.v)
         self.m = ca.sparsify(m) if S is ca.SX else m
         self.pattern = self.fx.sparsity().unite(self.mvx.sparsity()).unite(self.m.sparsity())
 

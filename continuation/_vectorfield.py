@@ -32,6 +32,16 @@ def _check_function(fun, label: str, n_out_rows: int | None, n_out_cols: int):
                          f"({n_out_rows if n_out_rows is not None else 'n'}, {n_out_cols})")
 
 
+def _checked_jacobian(fun, n: int, n_in: int, label: str) -> ca.Function:
+    """``fun`` if it maps ``n_in`` inputs (x[n], p[, v[n]]) to an ``n x n`` matrix."""
+    if not isinstance(fun, ca.Function) or fun.n_in() != n_in or fun.n_out() != 1:
+        raise ValueError(f"{label} must be a casadi.Function of {n_in} inputs with one output")
+    if fun.size_in(0) != (n, 1) or fun.size_out(0) != (n, n):
+        raise ValueError(f"{label} must map x[{n}] to an {n} x {n} matrix, "
+                         f"got {fun.size_in(0)} -> {fun.size_out(0)}")
+    return fun
+
+
 def _checked_mass_action(fun, M, n: int) -> ca.Function:
     """``fun`` if it maps ``(x[n], p, v[n])`` to a column ``M v`` of size n (with ``M``)."""
     if M is None:
@@ -59,10 +69,18 @@ class VectorField:
         forming ``M`` (it must equal ``M v``). Collocation kernels and normal forms then
         differentiate it instead of ``M(x, p) v``: for a modal model whose ``M`` is a sum
         of dense ``N x K x N`` products the matrix-free product is O(N K).
+    jacobian : optional casadi.Function ``(x, p) -> dF/dx`` (it must equal the
+        derivative of ``F``), used wherever ``dF/dx`` itself is evaluated (``jac_x``, the
+        collocation kernels, the Hopf systems) instead of AD of ``F``: for a model whose
+        state enters its nonlinear terms through a few linear combinations (a Galerkin or
+        modal model) the chain rule through them is several times cheaper.
+    mass_action_jacobian : optional casadi.Function ``(x, p, v) -> d(M v)/dx`` (needs
+        ``mass_action``), likewise.
     """
 
     def __init__(self, F: ca.Function, M: ca.Function | None, par_names, expand: bool = True,
-                 mass_action: ca.Function | None = None):
+                 mass_action: ca.Function | None = None, jacobian: ca.Function | None = None,
+                 mass_action_jacobian: ca.Function | None = None):
         par_names = tuple(str(s) for s in par_names)
         _check_function(F, "F", None, 1)
         n = F.size1_in(0)
@@ -81,6 +99,11 @@ class VectorField:
         self.M = None if M is None else keep(M)
         self.mass_action = None if mass_action is None else \
             keep(_checked_mass_action(mass_action, M, n))
+        self.jacobian = None if jacobian is None else keep(_checked_jacobian(jacobian, n, 2, "jacobian"))
+        if mass_action_jacobian is not None and mass_action is None:
+            raise ValueError("mass_action_jacobian needs mass_action")
+        self.mass_action_jacobian = None if mass_action_jacobian is None else \
+            keep(_checked_jacobian(mass_action_jacobian, n, 3, "mass_action_jacobian"))
         self.n = n
         self.par_names = par_names
         funs = (self.F,) if self.M is None else (self.F, self.M)
@@ -104,6 +127,18 @@ class VectorField:
             return self.mass_action(x, p, v)
         return ca.mtimes(self.M_expr(x, p), v)
 
+    def Fx_expr(self, x, p):
+        """Symbolic ``dF/dx``: the given ``jacobian``, else AD of ``F``."""
+        if self.jacobian is not None:
+            return self.jacobian(x, p)
+        return ca.jacobian(self.F_expr(x, p), x)
+
+    def Mvx_expr(self, x, p, v):
+        """Symbolic ``d(M v)/dx``: the given ``mass_action_jacobian``, else AD of ``M v``."""
+        if self.mass_action_jacobian is not None:
+            return self.mass_action_jacobian(x, p, v)
+        return ca.jacobian(self.Mv_expr(x, p, v), x)
+
     @cached_property
     def mass_depends_on_state(self) -> bool:
         """True when ``M`` depends on ``x`` (its derivatives enter normal forms)."""
@@ -120,7 +155,7 @@ class VectorField:
     def _funs(self):
         x, p = self._x, self._p
         f = self.F(x, p)
-        jx, jp = ca.jacobian(f, x), ca.jacobian(f, p)
+        jx, jp = self.Fx_expr(x, p), ca.jacobian(f, p)
         m = self.M_expr(x, p)
         m = self.sym(ca.sparsify(m)) if self.sym is ca.SX else m
         pat = lambda a: ((a.size1(), a.size2()), *map(np.asarray, a.sparsity().get_ccs()))

@@ -7,7 +7,7 @@ from scipy.integrate import simpson
 
 from fsicas import (Profile, Scene, build_model, clamped_free_modes, flow_fields, steady_state,
                     straight_pressure_drop)
-from fsicas.model import modal_basis
+from fsicas.model import contact, modal_basis
 
 TAPERED = dict(channel1=Profile.linear(0.05, 0.035),
                channel2=Profile.table([0.0, 0.5, 1.0], [0.05, 0.06, 0.045]))
@@ -148,6 +148,51 @@ def test_matrix_free_mass_action_equals_the_assembled_mass_matrix(scene):
         x, v = random_state(scene, seed), rng.normal(size=model.n_state)
         dense = np.array(model.mass(x, p)) @ v
         assert np.max(np.abs(np.array(model.mass_action(x, p, v)).ravel() - dense)) < 1e-12 * np.max(np.abs(dense))
+
+
+LIFTED_SCENES = [SCENE, SCENE.replace(contact=True, modes=6),
+                 SCENE.replace(contact=True, contact_smoothing=0.2, modes=5),
+                 Scene(mstar=0.3, ustar=6.0, modes=5, thickness=Profile.linear(1.0, 0.6))]
+
+
+def _pressed_into_contact(model, x):
+    """``x`` with its displacements scaled so that the smallest gap at a node is eps/2."""
+    n, s = model.n_modes, model.scene
+    y = model.basis.phi.T @ x[n:2 * n]
+    H = [wall(model.basis.x) for wall in s.walls]
+    room = np.where(y > 0, H[0], H[1]) - s.contact_gap / 2     # distance to the wall ahead
+    scale = np.min(room / np.abs(y))
+    x = x.copy()
+    x[n:2 * n] *= scale
+    assert contact.gaps(model, x, model.basis.x).min() < s.contact_gap
+    return x
+
+
+def _ad_jacobian(fun, *args):
+    """``d fun / d x`` by CasADi AD of the whole expression (the reference route)."""
+    sym = [ca.MX.sym(f"a{i}", *np.shape(np.atleast_1d(a))) for i, a in enumerate(args)]
+    out = fun.call(sym, True, False)[0]
+    return np.array(ca.Function("ad", sym, [ca.jacobian(out, sym[0])])(*args))
+
+
+@pytest.mark.parametrize("scene", LIFTED_SCENES)
+def test_lifted_jacobians_equal_ad_of_the_whole_equations(scene):
+    """``jac_rhs`` and ``jac_mass_action`` (chain rule through the nodal values) equal AD of
+    ``F`` and of ``M v`` to rounding, also with contact (in and out of it) and FE modes."""
+    model = build_model(scene)
+    p = model.parameters(pressure_drop=10.0)
+    rng = np.random.default_rng(5)
+    for seed in range(3):
+        x, v = random_state(scene, seed), rng.normal(size=model.n_state)
+        if scene.contact:                                   # into contact: min gap eps / 2
+            x = _pressed_into_contact(model, x)
+        J, J_ad = np.array(model.jac_rhs(x, p)), _ad_jacobian(model.rhs, x, p)
+        assert np.max(np.abs(J - J_ad)) < 1e-12 * np.max(np.abs(J_ad))
+        Mvx = np.array(model.jac_mass_action(x, p, v))
+        Mvx_ad = _ad_jacobian(model.mass, x, p)             # dM/dx (vec) -> contract with v
+        Mvx_ref = np.einsum("ijk,j->ik", Mvx_ad.reshape(model.n_state, model.n_state, -1,
+                                                        order="F"), v)
+        assert np.max(np.abs(Mvx - Mvx_ref)) < 1e-12 * np.max(np.abs(Mvx_ref))
 
 
 # -- symmetry and the sign of the static deflection ---------------------------------------

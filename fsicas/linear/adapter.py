@@ -29,31 +29,26 @@ PI, LOG_M = "kinematic_pressure_drop", "log10_mstar"
 PI_SCALE, TIME_SCALE = 100.0, 100.0
 
 
-def reparametrized_field(model: Model) -> tuple[ca.Function, ca.Function, list[str]]:
-    """F and M with parameters (Δp/(M* PI_SCALE), log10 M*, the rest, in order); M is
-    multiplied by TIME_SCALE (time in units of T/TIME_SCALE)."""
+def reparametrized_field(model: Model) -> dict[str, ca.Function]:
+    """The model's functions in the parameters ``q = (Δp/(M* PI_SCALE), log10 M*, the
+    rest, in order)`` with M multiplied by TIME_SCALE (time in units of T/TIME_SCALE):
+    ``F, dFdx`` of ``(x, q)``, ``M`` of ``(x, q)``, ``Mv, dMvdx`` of ``(x, q, v)``, and
+    the names of ``q`` under ``"names"``."""
     rest = [name for name in model.parameter_names if name not in ("pressure_drop", "mstar")]
     names = [PI, LOG_M, *rest]
-    x = ca.MX.sym("x", model.n_state)
+    x, v = ca.MX.sym("x", model.n_state), ca.MX.sym("v", model.n_state)
     q = ca.MX.sym("p", len(names))
     value = {name: q[i] for i, name in enumerate(names)}
     mstar = 10 ** value[LOG_M]
     value.update(pressure_drop=value[PI] * PI_SCALE * mstar, mstar=mstar)
     p = ca.vertcat(*[value[name] for name in model.parameter_names])
-    F = ca.Function("F", [x, q], [_inline(model.rhs, x, p)], ["x", "p"], ["F"])
-    M = ca.Function("M", [x, q], [TIME_SCALE * _inline(model.mass, x, p)], ["x", "p"], ["M"])
-    return F, M, names
-
-
-def mass_action_field(model: Model, names) -> ca.Function:
-    """``(x, q, v) -> TIME_SCALE M v`` by the model's matrix-free product (O(N K)), in
-    the parameters ``names`` of :func:`reparametrized_field`."""
-    x, q, v = ca.MX.sym("x", model.n_state), ca.MX.sym("p", len(names)), ca.MX.sym("v", model.n_state)
-    value = {name: q[i] for i, name in enumerate(names)}
-    mstar = 10 ** value[LOG_M]
-    value.update(pressure_drop=value[PI] * PI_SCALE * mstar, mstar=mstar)
-    p = ca.vertcat(*[value[name] for name in model.parameter_names])
-    return ca.Function("Mv", [x, q, v], [TIME_SCALE * _inline(model.mass_action, x, p, v)])
+    fun = lambda name, args, out: ca.Function(name, args, [out])
+    return {"names": names,
+            "F": fun("F", [x, q], _inline(model.rhs, x, p)),
+            "dFdx": fun("dFdx", [x, q], _inline(model.jac_rhs, x, p)),
+            "M": fun("M", [x, q], TIME_SCALE * _inline(model.mass, x, p)),
+            "Mv": fun("Mv", [x, q, v], TIME_SCALE * _inline(model.mass_action, x, p, v)),
+            "dMvdx": fun("dMvdx", [x, q, v], TIME_SCALE * _inline(model.jac_mass_action, x, p, v))}
 
 
 def _inline(fun: ca.Function, *args):
@@ -67,10 +62,11 @@ def _inline(fun: ca.Function, *args):
 def flutter_field(model: Model) -> C.VectorField:
     """The reparametrized VectorField of ``model``, built once per model (the library
     caches its compiled augmented systems on it). Kept as MX: the dense modal blocks
-    would be multiplied out by an SX expansion (40x slower to build at N = 10)."""
-    F, M, names = reparametrized_field(model)
-    return C.VectorField(F, M, tuple(names), expand=False,
-                         mass_action=mass_action_field(model, names))
+    would be multiplied out by an SX expansion (40x slower to build at N = 10). Its
+    ``dF/dx`` and ``d(M v)/dx`` are the model's lifted Jacobians, not AD of ``F``."""
+    f = reparametrized_field(model)
+    return C.VectorField(f["F"], f["M"], tuple(f["names"]), expand=False, mass_action=f["Mv"],
+                         jacobian=f["dFdx"], mass_action_jacobian=f["dMvdx"])
 
 
 def dense(a) -> np.ndarray:

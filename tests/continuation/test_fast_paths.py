@@ -117,3 +117,50 @@ def test_multipliers_from_the_kept_jacobian_equal_fresh_ones():
     fresh = cyc.multipliers(X)
     assert np.array_equal(kept, fresh)
     assert abs(kept[np.argmin(np.abs(kept - 1))] - 1) < 1e-8
+
+
+def _mass_spring_field(with_jacobians: bool, scale: float = 1.0):
+    """``M(x) xdot = F(x)``: two coupled Duffing-Van der Pol oscillators, M depending on x."""
+    import continuation as C
+    x, p, v = ca.MX.sym("x", 4), ca.MX.sym("p", 2), ca.MX.sym("v", 4)
+    F = ca.vertcat(x[1], p[0] * (1 - x[0] ** 2) * x[1] - x[0] - p[1] * (x[0] - x[2]),
+                   x[3], p[0] * (1 - x[2] ** 2) * x[3] - x[2] + p[1] * (x[0] - x[2]) - x[2] ** 3)
+    M = ca.diag(ca.vertcat(1, 1 + 0.1 * x[0] ** 2, 1, 1 + 0.2 * ca.sin(x[2])))
+    Mv = ca.mtimes(M, v)
+    fun = lambda name, args, out: ca.Function(name, args, [out])
+    extra = dict(jacobian=fun("J", [x, p], scale * ca.jacobian(F, x)),
+                 mass_action_jacobian=fun("Mvx", [x, p, v], scale * ca.jacobian(Mv, x))) \
+        if with_jacobians else {}
+    return C.VectorField(fun("F", [x, p], F), fun("M", [x, p], M), ("mu", "k"), expand=False,
+                         mass_action=fun("Mv", [x, p, v], Mv), **extra)
+
+
+def test_supplied_jacobians_are_what_the_collocation_kernel_and_jac_x_use():
+    """A VectorField given ``jacobian`` and ``mass_action_jacobian`` evaluates them (here a
+    deliberately wrong pair changes the result) and, when they are right, give the same
+    dF/dx and collocation Jacobian as AD of F and M v."""
+    from continuation._blocks import BlockCollocationSystem, point_kernel
+    plain, given, wrong = _mass_spring_field(False), _mass_spring_field(True), \
+        _mass_spring_field(True, scale=2.0)
+    rng = np.random.default_rng(2)
+    x, p = rng.normal(size=4), np.array([0.7, 0.3])
+    assert np.allclose(given.jac_x(x, p).toarray(), plain.jac_x(x, p).toarray(), rtol=0, atol=1e-15)
+    ntst, ncol = 5, 3
+    U = rng.normal(size=4 * ntst * ncol + 1)
+    D = np.concatenate([np.full(ntst, 1 / ntst), rng.normal(size=4 * ntst * ncol)])
+    J = [BlockCollocationSystem(point_kernel(vf, ntst * ncol), ntst, ncol).jacobian(U, p, D, [0])
+         for vf in (plain, given, wrong)]
+    assert abs(J[0] - J[1]).max() <= 1e-14 * abs(J[0]).max()
+    assert abs(J[0] - J[2]).max() > 0.1 * abs(J[0]).max()
+    assert np.allclose(wrong.jac_x(x, p).toarray(), 2 * plain.jac_x(x, p).toarray())
+
+
+def test_supplied_jacobians_of_the_wrong_shape_are_refused():
+    import continuation as C
+    x, p, v = ca.MX.sym("x", 2), ca.MX.sym("p", 1), ca.MX.sym("v", 2)
+    F = ca.Function("F", [x, p], [ca.vertcat(x[1], -p * x[0])])
+    with pytest.raises(ValueError, match="jacobian must map x"):
+        C.VectorField(F, None, ("k",), jacobian=ca.Function("J", [x, p], [x]))
+    with pytest.raises(ValueError, match="needs mass_action"):
+        C.VectorField(F, None, ("k",),
+                      mass_action_jacobian=ca.Function("J", [x, p, v], [ca.MX(2, 2)]))
