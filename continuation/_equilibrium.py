@@ -263,14 +263,26 @@ def _flat_field(vf, x, p):
     return f, m
 
 
+def _flat_mass_action(vf, x, p, y, m):
+    """``M(x, p) y`` to differentiate: the field's matrix-free ``mass_action`` (inlined
+    for MX) when it has one, else ``m y``. For the modal model of 40 modes the
+    x-derivative of ``M w, M v`` costs 0.7 ms this way and 11 ms through ``m``."""
+    if vf.mass_action is None:
+        return ca.mtimes(m, y)
+    if vf.sym is ca.MX:
+        return vf.mass_action.call([x, p, y], True, False)[0]
+    return vf.mass_action(x, p, y)
+
+
 def _hopf_jacobians(vf, x, v, w, kappa, p, c, f, m):
     """``(G_Y, G_p)`` of the Hopf system, ``Y = (x, v, w, kappa)`` (:func:`hopf_system`)."""
     n, S = vf.n, vf.sym
     J, Fp = ca.jacobian(f, x), ca.jacobian(f, p)
-    mv, mw = ca.mtimes(m, v), ca.mtimes(m, w)
+    mv = ca.mtimes(m, v)
     # both directions / both rows in one derivative (shared sweeps: 20 % cheaper)
     Jv, Jw = ca.horzsplit(ca.jtimes(J, x, ca.horzcat(v, w)), [0, n, 2 * n])
-    Mw_x, Mv_x = ca.vertsplit(ca.jacobian(ca.vertcat(mw, mv), x), [0, n, 2 * n])
+    mwv = ca.vertcat(_flat_mass_action(vf, x, p, w, m), _flat_mass_action(vf, x, p, v, m))
+    Mw_x, Mv_x = ca.vertsplit(ca.jacobian(mwv, x), [0, n, 2 * n])
     O, z, row = S(n, n), S(n, 1), S(1, n)
     jy = ca.blockcat([
         [J, O, O, z],
@@ -280,7 +292,7 @@ def _hopf_jacobians(vf, x, v, w, kappa, p, c, f, m):
         [row, row, c.T, S(1, 1)]])
     k = Fp.size2()
     Fpv, Fpw = ca.horzsplit(ca.jtimes(Fp, x, ca.horzcat(v, w)), [0, k, 2 * k])
-    Mw_p, Mv_p = ca.vertsplit(ca.jacobian(ca.vertcat(mw, mv), p), [0, n, 2 * n])
+    Mw_p, Mv_p = ca.vertsplit(ca.jacobian(mwv, p), [0, n, 2 * n])
     jp = ca.vertcat(Fp, Fpv - Mw_p, Fpw + kappa * Mv_p, S(2, k))
     return jy, jp
 
