@@ -68,9 +68,12 @@ def state_vector(vf: VectorField, x0, label: str = "x0") -> np.ndarray:
 
 def equilibrium_system(vf: VectorField) -> CompiledSystem:
     """The equilibrium system ``F(x, p) = 0`` of ``_systems`` with the field's function
-    inlined (:func:`_flat_field`): its Jacobian evaluates 2x faster for a modal model."""
+    inlined (:func:`_flat_field`): its Jacobian evaluates 2x faster for a modal model.
+    Its x-Jacobian is the field's own ``jacobian`` when it has one (:func:`_state_jacobian`)."""
     x, p = vf.sym.sym("x", vf.n), vf.sym.sym("p", len(vf.par_names))
-    return CompiledSystem(x, p, vf.sym.sym("D", 0), _flat_field(vf, x, p)[0], "equilibrium")
+    f = _flat_field(vf, x, p)[0]
+    jacobians = None if vf.jacobian is None else (_state_jacobian(vf, x, p, f), ca.jacobian(f, p))
+    return CompiledSystem(x, p, vf.sym.sym("D", 0), f, "equilibrium", jacobians=jacobians)
 
 
 class EquilibriumProblem(Problem):
@@ -263,26 +266,41 @@ def _flat_field(vf, x, p):
     return f, m
 
 
+def _inlined(vf, fun, *args):
+    """``fun(*args)``, inlined (no call node) for an MX field."""
+    return fun.call(list(args), True, False)[0] if vf.sym is ca.MX else fun(*args)
+
+
+def _state_jacobian(vf, x, p, f):
+    """``dF/dx``: the field's ``jacobian`` when given (cheaper, also to differentiate
+    again), else AD of ``f``."""
+    return ca.jacobian(f, x) if vf.jacobian is None else _inlined(vf, vf.jacobian, x, p)
+
+
 def _flat_mass_action(vf, x, p, y, m):
-    """``M(x, p) y`` to differentiate: the field's matrix-free ``mass_action`` (inlined
-    for MX) when it has one, else ``m y``. For the modal model of 40 modes the
-    x-derivative of ``M w, M v`` costs 0.7 ms this way and 11 ms through ``m``."""
-    if vf.mass_action is None:
-        return ca.mtimes(m, y)
-    if vf.sym is ca.MX:
-        return vf.mass_action.call([x, p, y], True, False)[0]
-    return vf.mass_action(x, p, y)
+    """``M(x, p) y`` to differentiate: the field's matrix-free ``mass_action`` when it
+    has one, else ``m y``. For the modal model of 40 modes the x-derivative of ``M w,
+    M v`` costs 0.7 ms this way and 11 ms through ``m``."""
+    return ca.mtimes(m, y) if vf.mass_action is None else _inlined(vf, vf.mass_action, x, p, y)
+
+
+def _mass_action_x(vf, x, p, ys, m):
+    """``[d(M y)/dx for y in ys]`` stacked: the field's ``mass_action_jacobian`` when
+    given, else one AD Jacobian of the stacked products."""
+    if vf.mass_action_jacobian is not None:
+        return ca.vertcat(*[_inlined(vf, vf.mass_action_jacobian, x, p, y) for y in ys])
+    return ca.jacobian(ca.vertcat(*[_flat_mass_action(vf, x, p, y, m) for y in ys]), x)
 
 
 def _hopf_jacobians(vf, x, v, w, kappa, p, c, f, m):
     """``(G_Y, G_p)`` of the Hopf system, ``Y = (x, v, w, kappa)`` (:func:`hopf_system`)."""
     n, S = vf.n, vf.sym
-    J, Fp = ca.jacobian(f, x), ca.jacobian(f, p)
+    J, Fp = _state_jacobian(vf, x, p, f), ca.jacobian(f, p)
     mv = ca.mtimes(m, v)
     # both directions / both rows in one derivative (shared sweeps: 20 % cheaper)
     Jv, Jw = ca.horzsplit(ca.jtimes(J, x, ca.horzcat(v, w)), [0, n, 2 * n])
     mwv = ca.vertcat(_flat_mass_action(vf, x, p, w, m), _flat_mass_action(vf, x, p, v, m))
-    Mw_x, Mv_x = ca.vertsplit(ca.jacobian(mwv, x), [0, n, 2 * n])
+    Mw_x, Mv_x = ca.vertsplit(_mass_action_x(vf, x, p, (w, v), m), [0, n, 2 * n])
     O, z, row = S(n, n), S(n, 1), S(1, n)
     jy = ca.blockcat([
         [J, O, O, z],
