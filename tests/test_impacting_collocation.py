@@ -1,0 +1,142 @@
+"""Impacting limit cycles by adaptive collocation (fsicas.cycles.impacting_collocation),
+against independent routes: collocation of the contact-free model before contact, time
+integration (SciPy Radau, IDAS) and multiple shooting (CVODES) after it."""
+
+import numpy as np
+import pytest
+
+from fsicas import Scene
+from fsicas.cycles import (CollocatedImpactBranch, CollocationImpactSettings, ImpactSettings,
+                           cycle_branch, cycle_from_trajectory, impacting_branch,
+                           impacting_collocation_branch, pre_contact_start)
+from fsicas.linear.steady import steady_state
+from fsicas.model import build_model
+from fsicas.model.contact import gaps
+from fsicas.timedomain.integrators import Settings, simulate
+
+IMPACT = dict(contact=True, contact_stiffness=1e8, contact_eps=1e-2, contact_smoothing=0.1)
+
+
+def _one_period(model, scene, point, method="radau", rtol=1e-11):
+    """Independent integration of one period from the point's state: the relative miss
+    of the return, the tip half-amplitude and the min gap over the period (samples)."""
+    T = point.period
+    traj = simulate(model, steady_state(scene.replace(ustar=point.ustar), model), T,
+                    x0=point.state, settings=Settings(method=method, rtol=rtol, atol=1e-13,
+                                                      dt_out=T / 40000))
+    assert traj.status == "success"
+    x = traj.x
+    miss = np.max(np.abs(x[-1] - point.state)) / np.max(np.abs(point.state))
+    y = model.tip_deflection(x)
+    return miss, (y.max() - y.min()) / 2, gaps(model, x).min()
+
+
+@pytest.fixture(scope="module")
+def n3_branch():
+    """M* = 1, N = 3, k* = 1e8, eps/H = 1e-2, smoothing 0.1: from the contact-free
+    collocation cycle at gap >= 3 eps, five points through the first contact."""
+    base = Scene(mstar=1.0, zeta=0.01, modes=3, contact_eps=1e-2)
+    start = pre_contact_start(cycle_branch(base, ustar_max=10.0))
+    scene = base.replace(ustar=start.ustar, **IMPACT)
+    model = build_model(scene)
+    br = impacting_collocation_branch(scene, start.state, start.period, start.pressure_drop,
+                                      model=model, settings=CollocationImpactSettings(
+                                          ntst=100, max_points=5, ds=0.1, ds_max=1.0))
+    return start, scene, model, br
+
+
+def test_collocation_passes_first_contact_and_matches_time_integration(n3_branch):
+    """The first point is the contact-free collocation cycle (the smoothed force is
+    negligible at 3 eps); the branch passes the first contact onto cycles with one
+    contact per wall and period, and an independent Radau integration (rtol 1e-11) of one
+    period from the last cycle's state returns to it, with the same amplitude and min gap."""
+    start, scene, model, br = n3_branch
+    assert br.status == "max_points" and len(br.points) == 5
+    first, last = br.points[0], br.points[-1]
+    assert abs(first.ustar - start.ustar) < 1e-8
+    assert abs(first.period / start.period - 1) < 1e-6
+    assert abs(first.tip_amplitude / start.tip_amplitude - 1) < 1e-5
+    assert first.impacts == 0 and first.gap_ratio > 3
+    assert np.all(np.diff(br.column("ustar")) > 0)
+    assert last.gap_ratio < 1 and last.impacts == 2
+    miss, amplitude, min_gap = _one_period(model, scene, last)
+    assert miss < 1e-6
+    assert abs(amplitude / last.tip_amplitude - 1) < 1e-6
+    assert abs(min_gap / last.min_gap - 1) < 1e-4
+    assert all(p.ntst == 100 and p.error_estimate > 0 for p in br.points)
+
+
+def test_save_load_and_validation(n3_branch, tmp_path):
+    _, scene, _, br = n3_branch
+    br.save(tmp_path / "b.json")
+    back = CollocatedImpactBranch.load(tmp_path / "b.json")
+    assert back.column("period").tolist() == br.column("period").tolist()
+    assert back.points[-1].ntst == 100 and back.points[-1].impacts == br.points[-1].impacts
+    assert np.array_equal(back.points[-1].multipliers, br.points[-1].multipliers)
+    with pytest.raises(ValueError, match="ntst"):
+        CollocationImpactSettings(ntst=0)
+    with pytest.raises(ValueError, match="mesh_passes"):
+        CollocationImpactSettings(mesh_passes=-1)
+    with pytest.raises(ValueError, match="contact_smoothing"):
+        impacting_collocation_branch(scene.replace(contact_smoothing=0.0), np.zeros(8), 0.1, 1.0)
+
+
+@pytest.mark.slow
+def test_collocation_equals_shooting_at_the_same_ustar():
+    """M* = 1, N = 4, U* = 6.8 (unstable period-1 impacting cycle, two contacts): the
+    collocation cycle (NTST = 300) and the shooting cycle (12 segments, CVODES 1e-11) at
+    the same pressure drop agree in period, amplitude, min gap and multipliers."""
+    base = Scene(mstar=1.0, zeta=0.01, modes=4, contact_eps=1e-2)
+    start = pre_contact_start(cycle_branch(base, ustar_max=10.0))
+    scene = base.replace(ustar=start.ustar, **IMPACT)
+    model = build_model(scene)
+    br = impacting_collocation_branch(scene, start.state, start.period, start.pressure_drop,
+                                      model=model, ustar_max=6.9, settings=CollocationImpactSettings(
+                                          ntst=200, max_points=40, ds=0.2, ds_max=1.0))
+    near = min(br.points, key=lambda p: abs(p.ustar - 6.8))
+    target = scene.replace(ustar=6.8)
+    dp = steady_state(target, model).pressure_drop
+    co = impacting_collocation_branch(target, near.state, near.period, dp, model=model,
+                                      settings=CollocationImpactSettings(ntst=300, max_points=1))
+    sh = impacting_branch(target, near.state, near.period, dp, model=model,
+                          settings=ImpactSettings(segments=12, tol=1e-11, newton_tol=1e-9,
+                                                  max_points=1))
+    c, s = co.points[0], sh.points[0]
+    assert abs(c.ustar - 6.8) < 1e-8 and abs(s.ustar - 6.8) < 1e-8
+    assert abs(c.period / s.period - 1) < 1e-8
+    assert abs(c.tip_amplitude / s.tip_amplitude - 1) < 1e-7
+    assert abs(c.gap_ratio / s.gap_ratio - 1) < 1e-5       # shooting: on samples
+    assert c.impacts == s.impacts == 2 and not c.stable and not s.stable
+    mc, ms = c.nontrivial_multipliers, s.nontrivial_multipliers
+    big = np.abs(ms) > 1e-3
+    assert np.sum(np.abs(mc) > 1e-3) == np.sum(big)
+    assert np.max(np.abs(np.sort_complex(mc[np.abs(mc) > 1e-3]) - np.sort_complex(ms[big]))
+                  ) < 1e-5 * np.max(np.abs(ms))
+
+
+@pytest.mark.slow
+def test_subharmonic_cycle_from_time_integration():
+    """M* = 1, U* = 7, N = 4: IDAS integration settles on a stable cycle of three tip
+    swings with contacts; collocation started from it (the start mesh equidistributed on
+    the integrated guess) converges to that cycle: period and amplitude as integrated,
+    stable, and the next branch point too."""
+    from fsicas.timedomain.run import run_case
+    scene = Scene(mstar=1.0, ustar=7.0, zeta=0.01, modes=4, **IMPACT)
+    model = build_model(scene)
+    run = run_case(scene, t_end=6.0, model=model, perturbation=0.3,
+                   settings=Settings(method="idas", rtol=1e-8, atol=1e-10, dt_out=2e-5))
+    t, x = run.trajectory.t, run.trajectory.x
+    state, period, k = cycle_from_trajectory(model, t, x)
+    assert k == 3
+    y = model.tip_deflection(x[t > t[-1] - period])
+    br = impacting_collocation_branch(scene, state, period, run.steady.pressure_drop,
+                                      model=model, settings=CollocationImpactSettings(
+                                          ntst=300, max_points=2, ds=0.1, ds_max=1.0))
+    p = br.points[0]
+    assert len(br.points) == 2 and abs(p.ustar - 7.0) < 1e-8
+    assert abs(p.period / period - 1) < 1e-5
+    assert abs(p.tip_amplitude / ((y.max() - y.min()) / 2) - 1) < 1e-4
+    assert p.gap_ratio < 1 and p.impacts >= 1
+    assert all(q.stable for q in br.points)
+    miss, amplitude, _ = _one_period(model, scene, p, method="idas", rtol=1e-10)
+    assert miss < 1e-5 and abs(amplitude / p.tip_amplitude - 1) < 1e-6
