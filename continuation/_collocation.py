@@ -102,6 +102,40 @@ def evaluate(U, mesh: np.ndarray, ncol: int, n: int, t) -> np.ndarray:
     return np.einsum("jl,jlk->jk", L, nodes[i])
 
 
+def extrema(U, mesh: np.ndarray, ncol: int, n: int, A: np.ndarray,
+            samples: int = 8) -> tuple[np.ndarray, np.ndarray]:
+    """``min_t`` and ``max_t`` over the cycle of each row of ``A u(t)`` (``A``: m x n).
+
+    On each interval ``A u`` is a polynomial of degree ``NCOL`` in the local time ``s``:
+    it is sampled at ``samples`` points per interval, and on every interval the best
+    sample is polished by Newton on ``d/ds (A u) = 0`` (the extremum of a polynomial, to
+    rounding); a polished value is kept only where it improves the sample.
+    """
+    ntst = len(mesh) - 1
+    nodes = interval_nodes(U, n, ntst, ncol) @ np.asarray(A, dtype=float).T  # (ntst, l, m)
+    coef = np.linalg.solve(np.vander(np.linspace(0.0, 1.0, ncol + 1), increasing=True),
+                           nodes.transpose(1, 0, 2).reshape(ncol + 1, -1))
+    coef = coef.reshape(ncol + 1, ntst, -1)                  # (degree, interval, row)
+    s = np.arange(samples) / samples
+    values = np.einsum("jd,dim->jim", np.vander(s, ncol + 1, increasing=True), coef)
+    return tuple(_polished(coef, s, values, sign) for sign in (1.0, -1.0))
+
+
+def _polished(coef, s, values, sign) -> np.ndarray:
+    """``sign * min_t (sign * p)`` per row of the polynomials ``coef`` (see :func:`extrema`):
+    Newton from the best sample of every interval, the smallest result over intervals."""
+    v = sign * values                                       # (sample, interval, row)
+    t = s[np.argmin(v, axis=0)]                             # (interval, row)
+    d = np.arange(1, coef.shape[0])[:, None, None] * coef[1:]   # derivative coefficients
+    dd = np.arange(1, d.shape[0])[:, None, None] * d[1:]
+    horner = lambda a, t: np.polynomial.polynomial.polyval(t, a, tensor=False)
+    for _ in range(8):
+        curvature = horner(dd, t)
+        step = np.divide(horner(d, t), curvature, out=np.zeros_like(t), where=curvature != 0)
+        t = np.clip(t - step, 0.0, 1.0)
+    return sign * np.minimum(v.min(axis=0), sign * horner(coef, t)).min(axis=0)
+
+
 def phase_coefficients(U_ref: np.ndarray, n: int, ntst: int, ncol: int) -> np.ndarray:
     """``c`` with ``c . U = int_0^1 <u, v'> dt`` for the reference ``v = U_ref``.
 

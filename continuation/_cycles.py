@@ -224,6 +224,12 @@ class CycleProblem(PeriodicProblem):
         return colloc.evaluate(X[: self.n_nodes * self.vf.n], self.mesh, self.ncol,
                                self.vf.n, t)
 
+    def extrema(self, X, A) -> tuple[np.ndarray, np.ndarray]:
+        """``(min_t, max_t)`` over the cycle of each row of ``A u(t)``, exact for the
+        collocation polynomial (``A``: m x n; see ``_collocation.extrema``)."""
+        return colloc.extrema(X[: self.n_nodes * self.vf.n], self.mesh, self.ncol,
+                              self.vf.n, np.atleast_2d(A))
+
     def multipliers(self, X) -> np.ndarray:
         """Floquet multipliers sorted by decreasing modulus."""
         s = self.settings

@@ -15,9 +15,10 @@ guess), which is continued by pseudo-arclength collocation in the adapter's para
 - the minimal gap min_{x,t} h_c(x, t) over the cycle and its ratio to the contact
   distance eps = ``scene.contact_gap``.
 
-Extrema over the cycle are taken on the collocation polynomial (16 samples per mesh
-interval, ``fsicas.model.contact.GAP_POINTS`` along the beam) and refined in t by
-Brent's method (:mod:`fsicas.cycles.gauge` holds the rest of the measures). The branch
+Extrema over the cycle are those of the collocation polynomial, exact in t (Newton on
+its derivative on every mesh interval, ``continuation.CycleProblem.extrema``), at
+``fsicas.model.contact.GAP_POINTS`` along the beam (:mod:`fsicas.cycles.gauge` holds
+the rest of the measures). The branch
 is one call of ``continuation.continuation``: the library locates cycle folds (the
 parameter's tangent component changes sign) and the first contact, a user event
 ``gap_ratio - 1``, on the arclength with its corrector; its ``record`` hook measures every
@@ -33,12 +34,12 @@ from dataclasses import dataclass, field
 from typing import Literal
 
 import numpy as np
-import scipy.optimize
 
 import continuation as C
 
 from ..linear.adapter import PI, pi_of
 from ..linear.hopf import CriticalVelocityError, HopfPoint, critical_velocity, flutter_problem
+from ..model import contact
 from ..model.assembly import Model, build_model
 from ..scene import Scene
 from .gauge import Gauge
@@ -200,16 +201,24 @@ def _status(branch, contact, settings) -> tuple[CycleStatus, str]:
 
 
 class _ProfileGauge(Gauge):
-    """Extrema over the cycle from the collocation polynomial of X = (nodes, 100 T, Π)."""
+    """Extrema over the cycle from the collocation polynomial of X = (nodes, 100 T, Π),
+    exact for the polynomial (``continuation.CycleProblem.extrema``): the tip
+    ``y(1, t)`` and the gaps ``h_c(x_j, t) = H_c(x_j) + s_c y(x_j, t)`` at GAP_POINTS."""
 
     def __init__(self, model: Model, x_eq):
         super().__init__(model, x_eq)
+        n = model.n_modes
+        rows = lambda phi: np.hstack([np.zeros((phi.shape[1], n)), phi.T,
+                                      np.zeros((phi.shape[1], 2))])
+        self._tip_row = rows(model.tip.phi[:, 1:])
+        phi = model.basis_at(contact.GAP_POINTS).phi
+        self._gap_rows = np.vstack([s * rows(phi) for s in contact.WALL_SIGNS])
+        self._walls = np.concatenate([wall(contact.GAP_POINTS) for wall in model.scene.walls])
         self._last_gap = (None, None)
 
     def record(self, problem, X) -> dict:
         """The fields of :class:`CyclePoint` at X (branch columns)."""
-        y_max = -self._extremum(problem, X, lambda x: -self.tip(x))
-        y_min = self._extremum(problem, X, self.tip)
+        y_min, y_max = (float(e[0]) for e in problem.extrema(X, self._tip_row))
         gap = self.gap(problem, X)
         return {**self.common(problem, X), "tip_amplitude": (y_max - y_min) / 2,
                 "min_gap": gap, "gap_ratio": gap / self.eps}
@@ -222,18 +231,6 @@ class _ProfileGauge(Gauge):
         """min over the cycle of the gap (kept for the last X: event and record share it)."""
         key = (id(problem), np.asarray(X).tobytes())
         if self._last_gap[0] != key:
-            self._last_gap = (key, self._extremum(problem, X, self.min_gap))
+            lowest = problem.extrema(X, self._gap_rows)[0]
+            self._last_gap = (key, float(np.min(self._walls + lowest)))
         return self._last_gap[1]
-
-    def _extremum(self, problem, X, f) -> float:
-        """min_t f(x(t)) over the cycle: on 16 samples per mesh interval, refined by
-        bounded Brent between the neighbours of the best sample."""
-        q = lambda t: problem.evaluate(X, np.atleast_1d(t) % 1.0)
-        mesh = problem.mesh
-        t = (mesh[:-1, None] + np.diff(mesh)[:, None] * np.arange(16) / 16).ravel()
-        values = f(q(t))
-        k = int(np.argmin(values))
-        t_lo, t_hi = t[k - 1] if k else t[-1] - 1, t[k + 1] if k + 1 < t.size else 1.0
-        res = scipy.optimize.minimize_scalar(lambda t: float(f(q(t))[0]), method="bounded",
-                                             bounds=(t_lo, t_hi), options={"xatol": 1e-12})
-        return float(min(res.fun, values[k]))

@@ -240,3 +240,23 @@ def test_dense_and_sparse_condensation_agree(monkeypatch):
     monkeypatch.setattr(_floquet, "DENSE_MAX", 0)
     sparse = prob.transfer_matrices(X, full=True)
     assert np.max(np.abs(dense - sparse)) < 1e-12 * np.max(np.abs(dense))
+
+
+def test_extrema_of_the_collocation_polynomial_match_dense_sampling():
+    """``extrema`` (Newton on each interval's polynomial) equals the extremes of the same
+    piecewise polynomial sampled at 400 001 times, to the sampling's resolution, also
+    where the extremum sits on a mesh point (cos at t = 0) or inside an interval."""
+    from continuation._collocation import evaluate, extrema
+    ntst, ncol, n = 20, 4, 3
+    t = np.linspace(0, 1, ntst * ncol, endpoint=False)
+    U = np.column_stack([np.cos(2 * np.pi * t), np.cos(4 * np.pi * t + 0.2) ** 3,
+                         np.sin(2 * np.pi * t) ** 5]).ravel()
+    mesh = np.sort(np.concatenate([[0.0, 1.0], np.random.default_rng(1).uniform(0, 1, ntst - 1)]))
+    A = np.vstack([np.eye(n), np.random.default_rng(0).normal(size=(4, n))])
+    lo, hi = extrema(U, mesh, ncol, n, A)
+    dense = evaluate(U, mesh, ncol, n, np.linspace(0, 1, 400001)) @ A.T
+    scale = np.abs(dense).max()
+    # never beyond the polynomial's true extremes, and no sample beyond them
+    assert np.all(lo <= dense.min(axis=0) + 1e-14) and np.all(hi >= dense.max(axis=0) - 1e-14)
+    assert np.max(np.abs(lo - dense.min(axis=0))) < 1e-9 * scale
+    assert np.max(np.abs(hi - dense.max(axis=0))) < 1e-9 * scale
