@@ -20,6 +20,7 @@ from ._locate import Located, locate
 from ._palc import ContinuationIterator, Step, tangent
 from ._problem import Problem
 from ._settings import PALC, ContinuationSettings
+from ._threads import single_threaded
 
 
 def continuation(problem: Problem, algorithm: PALC | None = None,
@@ -38,15 +39,15 @@ def continuation(problem: Problem, algorithm: PALC | None = None,
 
     Never raises for numerical non-convergence: the returned branch carries
     ``status`` (a :data:`Status`: 'max_steps', 'bound', 'failed', 'event' or
-    'stopped') and a ``message``.
+    'stopped') and a ``message``. Runs with one BLAS thread (``_threads``).
     """
     algorithm = PALC() if algorithm is None else algorithm
     settings = ContinuationSettings() if settings is None else settings
     _check(problem, algorithm, settings)
     hooks = check_hooks(events, record, stop)
     t0 = time.perf_counter()
-    with tqdm(total=settings.max_steps + 1, disable=not settings.progress,
-              desc=f"{problem.kind} continuation", leave=False) as bar:
+    with single_threaded(), tqdm(total=settings.max_steps + 1, disable=not settings.progress,
+                                 desc=f"{problem.kind} continuation", leave=False) as bar:
         run = _Run(_Recorder(problem), hooks, settings, bar)
         it = _run_segments(problem, algorithm, settings, run)
     stats = {**run.rec.stats, "time_total": time.perf_counter() - t0}

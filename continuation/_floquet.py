@@ -26,11 +26,13 @@ import scipy.linalg as sla
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
+from ._threads import single_threaded
 
-#: interval systems up to this size are solved densely (batched LAPACK), larger ones
-#: by SuperLU (sparse blocks; LAPACK on many mid-size systems was pathologically slow
-#: with a multithreaded OpenBLAS on a loaded machine)
-DENSE_MAX = 96
+#: interval systems up to this size are solved densely (one batched LAPACK solve, with
+#: one BLAS thread), larger ones by SuperLU: the blocks ``[B_L, B_R]`` are nearly dense
+#: (every collocation point couples all n components), so dense LAPACK is the faster
+#: solver up to sizes whose ``NTST`` blocks no longer fit in memory comfortably
+DENSE_MAX = 1024
 
 
 def transfer_matrices(J, n: int, ntst: int, ncol: int, full: bool = False) -> np.ndarray:
@@ -38,13 +40,14 @@ def transfer_matrices(J, n: int, ntst: int, ncol: int, full: bool = False) -> np
     sparse collocation Jacobian ``J`` (rows of interval ``i`` are
     ``i n NCOL .. (i+1) n NCOL``); with ``full`` the ``(ntst, n NCOL, n)`` maps to all
     nodes ``v_{i,1..NCOL}``. Blocks of size ``n NCOL <= DENSE_MAX`` are solved by
-    one batched dense solve, larger ones by one SuperLU per interval (with a
-    multithreaded OpenBLAS on a loaded machine, 50 dense systems of size 160 took 4 s
-    instead of 9 ms single-threaded)."""
+    one batched dense solve with one BLAS thread (``_threads``; at n = 82, NCOL = 4,
+    NTST = 20: 0.13 s, against 2.5 s by SuperLU per interval), larger ones by one
+    SuperLU per interval."""
     m = n * ncol
-    if m <= DENSE_MAX:   # small blocks: scatter into dense arrays, one batched solve
+    if m <= DENSE_MAX:   # scatter into dense arrays, one batched solve
         B = _dense_blocks(J, n, ntst, ncol)
-        out = np.linalg.solve(B[:, :, n:], -B[:, :, :n])
+        with single_threaded():
+            out = np.linalg.solve(B[:, :, n:], -B[:, :, :n])
     else:
         out = np.array([-spla.splu(sp.csc_matrix(r)).solve(l.toarray())
                         for r, l in _sparse_blocks(J, n, ntst, ncol)])
@@ -79,13 +82,14 @@ def _sparse_blocks(J, n, ntst, ncol):
 
 def multipliers(A: np.ndarray, method: str = "pencil") -> np.ndarray:
     """Eigenvalues of ``A_{N-1} ... A_0``, sorted by decreasing modulus."""
-    if method == "product":
-        mono = np.eye(A.shape[1])
-        for Ai in A:
-            mono = Ai @ mono
-        mu = np.linalg.eigvals(mono)
-    else:
-        mu = _pencil_multipliers(A)
+    with single_threaded():
+        if method == "product":
+            mono = np.eye(A.shape[1])
+            for Ai in A:
+                mono = Ai @ mono
+            mu = np.linalg.eigvals(mono)
+        else:
+            mu = _pencil_multipliers(A)
     return mu[np.argsort(-np.abs(mu), kind="stable")]
 
 

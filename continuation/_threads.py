@@ -1,0 +1,28 @@
+"""One BLAS thread for the many small and mid-size dense problems of a continuation run.
+
+A continuation step solves many dense systems of size 10-1000 (the Floquet condensation
+of every mesh interval, bordered solves, small eigenproblems). Multithreaded OpenBLAS is
+slower on them than one thread, and pathologically so on a shared machine: 20 dense
+solves of size 328 with 82 right-hand sides took 4.3 s with two threads on a loaded
+2-core machine and 0.13 s with one. The driver and the Floquet routines therefore run in
+:func:`single_threaded`, which limits the BLAS and OpenMP pools to one thread through
+``threadpoolctl`` and restores them on exit, so the caller's session is left as it was.
+"""
+
+from __future__ import annotations
+
+from functools import lru_cache
+
+from threadpoolctl import ThreadpoolController
+
+
+@lru_cache(maxsize=1)
+def _controller() -> ThreadpoolController:
+    """The thread pools of the loaded libraries (found once, at first use: NumPy and
+    SciPy are imported by then)."""
+    return ThreadpoolController()
+
+
+def single_threaded():
+    """Context manager: BLAS/OpenMP pools limited to one thread inside, restored after."""
+    return _controller().limit(limits=1)
