@@ -164,3 +164,22 @@ def test_supplied_jacobians_of_the_wrong_shape_are_refused():
     with pytest.raises(ValueError, match="needs mass_action"):
         C.VectorField(F, None, ("k",),
                       mass_action_jacobian=ca.Function("J", [x, p, v], [ca.MX(2, 2)]))
+
+
+def test_a_run_uses_one_blas_thread_and_restores_the_callers_pools():
+    """Inside ``continuation`` the BLAS pools have one thread; afterwards they are as the
+    caller left them (no lasting effect on the session)."""
+    import continuation as C
+    from threadpoolctl import threadpool_info, threadpool_limits
+    x, p = ca.SX.sym("x"), ca.SX.sym("p")
+    F = ca.Function("F", [x, p], [p * ca.exp(x) - x])
+    inside = []
+    record = lambda problem, X: inside.append(
+        [pool["num_threads"] for pool in threadpool_info()]) or {}
+    with threadpool_limits(2):
+        before = [pool["num_threads"] for pool in threadpool_info()]
+        C.continuation(C.EquilibriumProblem(F, [0.0], {"mu": 0.0}, "mu"),
+                       settings=C.ContinuationSettings(max_steps=3), record=record)
+        after = [pool["num_threads"] for pool in threadpool_info()]
+    assert inside and all(all(n == 1 for n in counts) for counts in inside)
+    assert after == before
