@@ -84,8 +84,10 @@ def test_save_load_and_validation(n3_branch, tmp_path):
 @pytest.mark.slow
 def test_collocation_equals_shooting_at_the_same_ustar():
     """M* = 1, N = 4, U* = 6.8 (unstable period-1 impacting cycle, two contacts): the
-    collocation cycle (NTST = 300) and the shooting cycle (12 segments, CVODES 1e-11) at
-    the same pressure drop agree in period, amplitude, min gap and multipliers."""
+    collocation cycle (NTST = 400) and the shooting cycle (12 segments, CVODES 1e-11) at
+    the same pressure drop agree in period, amplitude, min gap and multipliers (those of
+    collocation converge at the stage order only: measured 1.3e-5 relative at NTST = 300,
+    2e-6 at 400; the period to 1e-11)."""
     base = Scene(mstar=1.0, zeta=0.01, modes=4, contact_eps=1e-2)
     start = pre_contact_start(cycle_branch(base, ustar_max=10.0))
     scene = base.replace(ustar=start.ustar, **IMPACT)
@@ -97,7 +99,7 @@ def test_collocation_equals_shooting_at_the_same_ustar():
     target = scene.replace(ustar=6.8)
     dp = steady_state(target, model).pressure_drop
     co = impacting_collocation_branch(target, near.state, near.period, dp, model=model,
-                                      settings=CollocationImpactSettings(ntst=300, max_points=1))
+                                      settings=CollocationImpactSettings(ntst=400, max_points=1))
     sh = impacting_branch(target, near.state, near.period, dp, model=model,
                           settings=ImpactSettings(segments=12, tol=1e-11, newton_tol=1e-9,
                                                   max_points=1))
