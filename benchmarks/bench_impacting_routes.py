@@ -4,7 +4,7 @@ multiple shooting, at the same U*, interleaved in one run.
     python benchmarks/bench_impacting_routes.py --modes 10 --ustar 6.8 \
         --ntst 100 200 400 --shoot 12:1e-8 12:1e-10 --ref-ntst 800 --points 4
 
-M* = 1, zeta = 0.01, H* = 1/10, f = 0.14, contact k* = 1e8, eps/H = 1e-2, smoothing 0.1.
+Single-threaded BLAS (``OPENBLAS_NUM_THREADS=1`` unless set). M* = 1, zeta = 0.01, H* = 1/10, f = 0.14, contact k* = 1e8, eps/H = 1e-2, smoothing 0.1.
 Start: the contact-free collocation branch (``cycle_branch``) up to its last cycle with
 gap >= 3 eps, then a collocation branch past contact up to the target U*; the cycle
 nearest the target is the common start guess (state, period) of every run at the
@@ -25,15 +25,16 @@ import os
 import sys
 import time
 
-import numpy as np
+os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")   # before NumPy: see docs/continuation.md
+import numpy as np  # noqa: E402
 
-from fsicas import Scene
-from fsicas.cycles import (CollocationImpactSettings, CycleSettings, ImpactSettings,
+from fsicas import Scene  # noqa: E402
+from fsicas.cycles import (CollocationImpactSettings, CycleSettings, ImpactSettings,  # noqa: E402
                            cycle_branch, impacting_branch, impacting_collocation_branch,
                            pre_contact_start)
-from fsicas.linear.steady import steady_state
-from fsicas.model import build_model
-from fsicas.timedomain.integrators import Settings, simulate
+from fsicas.linear.steady import steady_state  # noqa: E402
+from fsicas.model import build_model  # noqa: E402
+from fsicas.timedomain.integrators import Settings, simulate  # noqa: E402
 
 IMPACT = dict(contact=True, contact_stiffness=1e8, contact_eps=1e-2, contact_smoothing=0.1)
 
