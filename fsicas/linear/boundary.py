@@ -189,16 +189,9 @@ def stability_boundary(scene: Scene, mstars, model: Model | None = None,
     lo, hi = math.log10(mstars[0]), math.log10(mstars[-1])
     seeds = _default_seeds(lo, hi) if seeds is None else np.asarray(seeds, float)
     window = (lo - 0.05, hi + 0.05)
-    firsts = [points[0].ustar for points in
-              (hopf_points(scene.replace(mstar=float(m)), model, ustar_max, first_only=True)
-               for m in seeds) if points]
-    if not firsts:
-        raise CriticalVelocityError(f"no flutter below U* = {ustar_max} at any seed M* {seeds}")
-    ceiling = min(ustar_max, headroom * max(firsts))   # curves above this cannot be lowest
-    # the Hopf points up to the ceiling (with margin: none is in the step that ends a run)
+    ceiling, found = _seed_points(scene, model, seeds, ustar_max, headroom)
     search = lambda m: hopf_points(scene.replace(mstar=float(m)), model, ustar_max,
                                    ustar_stop=1.05 * ceiling)
-    found = [search(m) for m in seeds]
     curves: list[HopfCurve] = []
     _add_curves(scene, model, curves, found, window, ceiling)
     points = [_boundary_point(scene, model, curves, m, refine) for m in mstars]
@@ -211,6 +204,41 @@ def stability_boundary(scene: Scene, mstars, model: Model | None = None,
         points = [_boundary_point(scene, model, curves, m, refine) for m in mstars]
     switches = _switches(curves, lo, hi)
     return StabilityBoundary(scene, points, curves, switches, time.perf_counter() - start)
+
+
+def _seed_points(scene, model, seeds, ustar_max, headroom):
+    """The ceiling ``min(ustar_max, headroom * highest first onset)`` over the seeds
+    (curves above it cannot be lowest) and each seed's Hopf points up to 1.05 times it
+    (the margin: none is in the step that ends a run).
+
+    A search up to ``ustar_stop`` takes the steps of one up to ``ustar_max`` (only its
+    end differs), so a seed's first onset is the first point of its search whenever that
+    search found one: only the highest seed (usually the highest onset) gets a separate
+    first-onset search, and a search is repeated only when a later seed raises the
+    ceiling above where it stopped."""
+    search = lambda i, top, **kw: hopf_points(scene.replace(mstar=float(seeds[i])), model,
+                                              ustar_max, ustar_stop=top, **kw)
+    onsets, found, last = {}, {}, len(seeds) - 1
+    _note_onset(onsets, last, search(last, ustar_max, first_only=True))
+    while True:
+        ceiling = min(ustar_max, headroom * max(onsets.values(), default=ustar_max))
+        todo = [i for i in range(len(seeds)) if i not in found or found[i][0] < 1.05 * ceiling]
+        if not todo:
+            break
+        for i in todo:
+            found[i] = (1.05 * ceiling, search(i, 1.05 * ceiling))
+            if found[i][1]:
+                onsets.setdefault(i, found[i][1][0].ustar)
+            elif i not in onsets and 1.05 * ceiling < ustar_max:   # its onset is higher
+                _note_onset(onsets, i, search(i, ustar_max, first_only=True))
+    if not onsets:
+        raise CriticalVelocityError(f"no flutter below U* = {ustar_max} at any seed M* {seeds}")
+    return ceiling, [found[i][1] for i in range(len(seeds))]
+
+
+def _note_onset(onsets: dict, i: int, points) -> None:
+    if points:
+        onsets[i] = points[0].ustar
 
 
 def _add_curves(scene, model, curves, found, window, ceiling) -> None:
