@@ -9,7 +9,9 @@ Public API (everything else is private)::
     EquilibriumProblem(F, x0, params, active, *, M=None)
     HopfCurveProblem(vf, x, params, omega, free) / .from_point(problem, point, second)
     FoldCurveProblem(vf, x, params, free) / .from_point(problem, point, second)
-    VectorField(F, M, par_names), first_lyapunov(vf, x, p, omega)
+    VectorField(F, M, par_names, *, mass_action, jacobian, mass_action_jacobian)
+    Lifted(D, P, L, A)                        # a matrix A(p) + P D(x, p) L (Galerkin structure)
+    first_lyapunov(vf, x, p, omega)
     CycleProblem(F, orbit, period, params, active, *, M=None, settings=CollocationSettings())
     cycle_from_hopf(problem, hopf_point, *, dp=1e-3, settings=None) -> CycleProblem
     cycle_from_pd(cycle_problem, pd_point, *, amplitude=1e-2, settings=None) -> CycleProblem
@@ -25,6 +27,7 @@ from ._curves import FoldCurveProblem, HopfCurveProblem
 from ._cycles import CycleProblem
 from ._driver import continuation
 from ._hooks import Event
+from ._lifted import Lifted
 from ._equilibrium import EquilibriumProblem, hopf_point
 from ._lyapunov import first_lyapunov
 from ._palc import ContinuationIterator, Step, correct
@@ -39,7 +42,7 @@ __all__ = [
     "Branch", "Event", "Status", "CollocationSettings", "ContinuationIterator", "ContinuationSettings",
     "CycleProblem", "EigenSettings", "ShootingProblem", "ShootingSettings", "cycle_from_hopf",
     "cycle_from_pd",
-    "EquilibriumProblem", "FoldCurveProblem", "HopfCurveProblem", "NewtonSettings",
+    "EquilibriumProblem", "FoldCurveProblem", "HopfCurveProblem", "Lifted", "NewtonSettings",
     "PALC", "Problem", "SpecialPoint", "Step", "VectorField", "continuation", "correct",
     "first_lyapunov", "hopf_point",
 ]

@@ -33,6 +33,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from ._collocation import collocation, interval_nodes
+from ._lifted import LiftedBatch
 from .compilation import compiled_or_none, has_compiler
 from ._symbolic import BufferedFunction, as_sx_function
 from ._systems import system
@@ -60,15 +61,17 @@ class Pointwise:
         """``(x, v, p) -> (F, M v)``."""
         return ca.Function("colloc_point_values", [self.x, self.v, self.p], [self.f, self.mv])
 
-    def jacobians(self, k: int) -> ca.Function:
+    def jacobians(self, k: int, skip=()) -> ca.Function:
         """``(x, v, p, E) -> KERNEL_OUTPUTS`` with the parameter derivatives in the ``k``
-        directions ``E`` (``n_par x k``; forward AD, ``vec`` of ``n x k`` each)."""
+        directions ``E`` (``n_par x k``; forward AD, ``vec`` of ``n x k`` each), without
+        the matrices named in ``skip`` (evaluated elsewhere)."""
         nz = lambda a: ca.project(a, self.pattern).nz[:]
         E = type(self.x).sym("E", self.n_par, k)
         dp = lambda e: ca.vec(ca.densify(ca.jtimes(e, self.p, E))) if k else ca.DM(0, 1)
+        outputs = dict(F=self.f, Mv=self.mv, Fx=nz(self.fx), Mvx=nz(self.mvx), M=nz(self.m),
+                       Fp=dp(self.f), Mvp=dp(self.mv))
         return ca.Function(f"colloc_point_jacobians_{k}", [self.x, self.v, self.p, E],
-                           [self.f, self.mv, nz(self.fx), nz(self.mvx), nz(self.m),
-                            dp(self.f), dp(self.mv)])
+                           [outputs[name] for name in KERNEL_OUTPUTS if name not in skip])
 
 
 class PointKernel:
@@ -94,6 +97,7 @@ class PointKernel:
         self.n, self.n_par, self.K = self.pointwise.n, self.pointwise.n_par, K
         rows, cols = self.pointwise.pattern.get_triplet()
         self.rows, self.cols = np.asarray(rows), np.asarray(cols)
+        self.lifted = {name: LiftedBatch(lifted, K) for name, lifted in vf.lifted.items()}
         self.expand, self.cache_dir = vf.sym is ca.SX, cache_dir
         self.backend = backend if backend == "mx" or has_compiler() else "mx"
         self.values = self._mapped(self.pointwise.values(), compile=False)
@@ -104,9 +108,16 @@ class PointKernel:
         function per number of directions, the directions are an input)."""
         cols = tuple(int(c) for c in par_columns)
         if len(cols) not in self._jacobians:
-            self._jacobians[len(cols)] = self._mapped(self.pointwise.jacobians(len(cols)))
+            fun = self.pointwise.jacobians(len(cols), skip=tuple(self.lifted))
+            self._jacobians[len(cols)] = self._mapped(fun)
         seed = np.eye(self.n_par)[:, list(cols)].ravel(order="F")
-        return SeededKernel(self._jacobians[len(cols)], seed)
+        return SeededKernel(self._jacobians[len(cols)], seed, self._lifted_outputs)
+
+    def _lifted_outputs(self, x, v, p) -> dict:
+        """The lifted matrices at the points, on the pattern ``rows, cols`` (``K x s``)."""
+        args = {"Fx": (x, p), "M": (x, p), "Mvx": (x, p, v)}
+        return {name: batch(*args[name])[:, self.rows, self.cols]
+                for name, batch in self.lifted.items()}
 
     def _mapped(self, fun: ca.Function, compile: bool = True) -> BufferedFunction:
         """``fun`` (SX when ``expand``) compiled if ``compile`` and the backend say so,
@@ -131,13 +142,16 @@ class PointKernel:
 
 
 class SeededKernel:
-    """A mapped Jacobian kernel called as ``(x, v, p)`` with its seed ``E`` bound."""
+    """A mapped Jacobian kernel called as ``(x, v, p)`` with its seed ``E`` bound; the
+    matrices that ``lifted(x, v, p)`` returns (by name) are merged into its outputs."""
 
-    def __init__(self, fun: BufferedFunction, seed: np.ndarray):
-        self.fun, self.seed = fun, seed
+    def __init__(self, fun: BufferedFunction, seed: np.ndarray, lifted=None):
+        self.fun, self.seed, self.lifted = fun, seed, lifted
 
     def __call__(self, x, v, p) -> list:
-        return self.fun(x, v, p, self.seed)
+        out = iter(self.fun(x, v, p, self.seed))
+        extra = self.lifted(x, v, p) if self.lifted is not None else {}
+        return [extra[name] if name in extra else next(out) for name in KERNEL_OUTPUTS]
 
 
 def point_kernel(vf, K: int, backend: str = "mx") -> PointKernel:

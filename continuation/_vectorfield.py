@@ -17,6 +17,7 @@ import casadi as ca
 import numpy as np
 import scipy.sparse as sp
 
+from ._lifted import Lifted
 from ._symbolic import BufferedFunction, as_sx_function, symbol_class, to_csc
 
 
@@ -76,12 +77,22 @@ class VectorField:
         modal model) the chain rule through them is several times cheaper.
     mass_action_jacobian : optional casadi.Function ``(x, p, v) -> d(M v)/dx`` (needs
         ``mass_action``), likewise.
+
+    ``M``, ``jacobian`` and ``mass_action_jacobian`` may also be given as
+    :class:`Lifted` (``A(p) + P D L``): they are then used as their CasADi functions, and
+    the collocation kernel evaluates them at all collocation points at once by dense
+    products (``_lifted.LiftedBatch``). ``lifted`` holds them by kernel output name
+    (``"M"``, ``"Fx"``, ``"Mvx"``).
     """
 
     def __init__(self, F: ca.Function, M: ca.Function | None, par_names, expand: bool = True,
                  mass_action: ca.Function | None = None, jacobian: ca.Function | None = None,
                  mass_action_jacobian: ca.Function | None = None):
         par_names = tuple(str(s) for s in par_names)
+        self.lifted = {}
+        M, jacobian, mass_action_jacobian = (
+            self._unlifted(key, obj) for key, obj in
+            (("M", M), ("Fx", jacobian), ("Mvx", mass_action_jacobian)))
         _check_function(F, "F", None, 1)
         n = F.size1_in(0)
         if F.size2_in(0) != 1 or F.size1_out(0) != n:
@@ -110,6 +121,13 @@ class VectorField:
         self.sym = symbol_class(*funs)
         self._x = self.sym.sym("x", n)
         self._p = self.sym.sym("p", len(par_names))
+
+    def _unlifted(self, key: str, obj):
+        """The CasADi function of ``obj``; a :class:`Lifted` is also kept in ``lifted``."""
+        if isinstance(obj, Lifted):
+            self.lifted[key] = obj
+            return obj.function(key)
+        return obj
 
     # ---- symbolic building blocks (used by augmented problems) -------------
     def F_expr(self, x, p):

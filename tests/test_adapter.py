@@ -42,3 +42,27 @@ def test_collocation_jacobian_with_mass_action_equals_the_graph_route():
     Jg, Jb = (p.jacobian(X).toarray() for p in problems)
     assert _rel(problems[0].residual(X), problems[1].residual(X)) < 1e-12
     assert _rel(Jg, Jb) < 1e-10
+
+
+@pytest.mark.parametrize("modes", [4, 10])
+def test_lifted_collocation_jacobian_equals_the_graph_route_in_contact(modes):
+    """The lifted kernel (batched dF/dx, d(M v)/dx, M) equals AD of the discretized
+    residual on a profile pressed into the wall (gap below eps at some nodes), with the
+    smoothed and with the exact contact law."""
+    for smoothing in (0.1, 0.0):
+        scene = Scene(mstar=1.0, ustar=5.0, modes=modes, contact=True, contact_stiffness=1e8,
+                      contact_eps=1e-2, contact_smoothing=smoothing)
+        model = build_model(scene)
+        hopf = critical_velocity(scene, model)
+        problems = [C.cycle_from_hopf(flutter_problem(scene, model, 0.2), hopf.point, dp=1e-3,
+                                      settings=C.CollocationSettings(ntst=6, ncol=3, jacobian=j))
+                    for j in ("graph", "blocks")]
+        X = problems[0].X0.copy()
+        U = X[:-2].reshape(-1, model.n_state)                # node values (r, q, Q)
+        y = U[:, modes:2 * modes] @ model.basis.phi          # deflection at the nodes
+        U[:, modes:2 * modes] *= (scene.hstar / 2 - 0.5 * scene.contact_gap) / np.abs(y).max()
+        assert (scene.hstar / 2 - np.abs(U[:, modes:2 * modes] @ model.basis.phi)).min() \
+            < scene.contact_gap
+        Jg, Jb = (p.jacobian(X).toarray() for p in problems)
+        assert _rel(problems[0].residual(X), problems[1].residual(X)) < 1e-12
+        assert _rel(Jg, Jb) < 1e-10

@@ -29,11 +29,11 @@ PI, LOG_M = "kinematic_pressure_drop", "log10_mstar"
 PI_SCALE, TIME_SCALE = 100.0, 100.0
 
 
-def reparametrized_field(model: Model) -> dict[str, ca.Function]:
+def reparametrized_field(model: Model) -> dict:
     """The model's functions in the parameters ``q = (Δp/(M* PI_SCALE), log10 M*, the
     rest, in order)`` with M multiplied by TIME_SCALE (time in units of T/TIME_SCALE):
-    ``F, dFdx`` of ``(x, q)``, ``M`` of ``(x, q)``, ``Mv, dMvdx`` of ``(x, q, v)``, and
-    the names of ``q`` under ``"names"``."""
+    ``F`` of ``(x, q)``, ``Mv`` of ``(x, q, v)``, the lifted ``M``, ``dFdx`` and
+    ``dMvdx`` (:class:`continuation.Lifted`), and the names of ``q`` under ``"names"``."""
     rest = [name for name in model.parameter_names if name not in ("pressure_drop", "mstar")]
     names = [PI, LOG_M, *rest]
     x, v = ca.MX.sym("x", model.n_state), ca.MX.sym("v", model.n_state)
@@ -42,13 +42,14 @@ def reparametrized_field(model: Model) -> dict[str, ca.Function]:
     mstar = 10 ** value[LOG_M]
     value.update(pressure_drop=value[PI] * PI_SCALE * mstar, mstar=mstar)
     p = ca.vertcat(*[value[name] for name in model.parameter_names])
-    fun = lambda name, args, out: ca.Function(name, args, [out])
+    p_of_q = ca.Function("p_of_q", [q], [p])
+    lifted = model.lifted
     return {"names": names,
-            "F": fun("F", [x, q], _inline(model.rhs, x, p)),
-            "dFdx": fun("dFdx", [x, q], _inline(model.jac_rhs, x, p)),
-            "M": fun("M", [x, q], TIME_SCALE * _inline(model.mass, x, p)),
-            "Mv": fun("Mv", [x, q, v], TIME_SCALE * _inline(model.mass_action, x, p, v)),
-            "dMvdx": fun("dMvdx", [x, q, v], TIME_SCALE * _inline(model.jac_mass_action, x, p, v))}
+            "F": ca.Function("F", [x, q], [_inline(model.rhs, x, p)]),
+            "Mv": ca.Function("Mv", [x, q, v], [TIME_SCALE * _inline(model.mass_action, x, p, v)]),
+            "M": lifted["mass"].reparametrized(p_of_q, TIME_SCALE),
+            "dFdx": lifted["jac_rhs"].reparametrized(p_of_q),
+            "dMvdx": lifted["jac_mass_action"].reparametrized(p_of_q, TIME_SCALE)}
 
 
 def _inline(fun: ca.Function, *args):

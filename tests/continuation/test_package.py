@@ -25,7 +25,7 @@ def test_public_names():
         "PALC", "Problem", "SpecialPoint", "Step", "VectorField", "continuation",
         "first_lyapunov", "hopf_point", "CollocationSettings", "CycleProblem",
         "cycle_from_hopf", "ShootingProblem", "ShootingSettings",
-        "cycle_from_pd", "correct", "Event", "Status"}
+        "cycle_from_pd", "correct", "Event", "Lifted", "Status"}
 
 
 def test_new_problem_kind_plugs_into_palc():
