@@ -19,15 +19,14 @@ import math
 import time
 from collections.abc import Mapping
 from dataclasses import dataclass, field, replace
-from functools import cached_property
 
 import numpy as np
 
 import continuation as C
 
-from .adapter import LOG_M, PI, PI_SCALE, TIME_SCALE, flutter_field
-from .hopf import (Criticality, CriticalVelocityError, HopfPoint, dominant_mode, flutter_problem,
-                   hopf_point_from, hopf_points)
+from .adapter import LOG_M, PI, TIME_SCALE, flutter_field
+from .hopf import (Criticality, CriticalVelocityError, HopfCurve, HopfPoint, hopf_point_from,
+                   hopf_points, trace_hopf_curve)
 from .stability import eigenvalues
 from .steady import steady_state
 from ..model.assembly import Model, build_model
@@ -85,62 +84,6 @@ class BoundaryPoint(Mapping):
 
     def __len__(self) -> int:
         return len(self.to_json())
-
-
-@dataclass(frozen=True)
-class HopfCurve:
-    """A traced Hopf curve: arrays along the curve (ordered by arclength). ``status``:
-    "bound" when both halves ran to the window's bounds, else the library's status of
-    the half that stopped first (``message`` says why)."""
-
-    index: int
-    mstar: np.ndarray
-    ustar: np.ndarray
-    omega: np.ndarray
-    dominant_mode: np.ndarray
-    status: C.Status
-    first_piece: int = 0
-    states: np.ndarray = field(default=None, repr=False)   # steady states along the curve
-    params: np.ndarray = field(default=None, repr=False)   # adapter parameters along it
-    message: str = ""
-
-    def guess(self, log_m: float, piece: int) -> tuple[np.ndarray, np.ndarray, float]:
-        """Interpolated (state, params, omega) on ``piece`` at log10 M* = log_m."""
-        lm = np.log10(self.mstar)
-        for i in np.flatnonzero(self.pieces == piece):   # pieces are per segment
-            a, b = lm[i], lm[i + 1]
-            if (a - log_m) * (b - log_m) <= 0 and a != b:
-                t = (log_m - a) / (b - a)
-                mix = lambda arr: arr[i] + t * (arr[i + 1] - arr[i])
-                return mix(self.states), mix(self.params), float(mix(self.omega))
-        raise ValueError(f"piece {piece} does not reach log10 M* = {log_m}")
-
-    @property
-    def pieces(self) -> np.ndarray:
-        """Branch id of each segment (length = points - 1): a new id after every fold in M*
-        (the lower envelope jumps between pieces, even of one curve)."""
-        return self._pieces.copy()
-
-    @cached_property
-    def _pieces(self) -> np.ndarray:
-        step = np.sign(np.diff(np.log10(self.mstar)))
-        turns = np.concatenate([[0], np.cumsum(step[1:] * step[:-1] < 0)])
-        return self.first_piece + turns
-
-    @cached_property
-    def _segments(self) -> tuple:
-        """Ends of the segments in log10 M*, U* and omega (arrays of length points - 1)."""
-        lm = np.log10(self.mstar)
-        ends = lambda arr: (arr[:-1], arr[1:])
-        return ends(lm), ends(self.ustar), ends(self.omega)
-
-    def crossings(self, log_m: float) -> list[tuple[float, float, int]]:
-        """(U*, omega, piece) where the curve passes log10 M* = log_m (linear interpolation)."""
-        (a, b), (ua, ub), (wa, wb) = self._segments
-        i = np.flatnonzero(((a - log_m) * (b - log_m) <= 0) & (a != b))
-        t = (log_m - a[i]) / (b[i] - a[i])
-        u, w = ua[i] + t * (ub[i] - ua[i]), wa[i] + t * (wb[i] - wa[i])
-        return [(float(uk), float(wk), int(pk)) for uk, wk, pk in zip(u, w, self._pieces[i])]
 
 
 @dataclass(frozen=True)
@@ -247,7 +190,7 @@ def _add_curves(scene, model, curves, found, window, ceiling) -> None:
         for h in points:
             if h.ustar <= ceiling and not any(_on_curve(c, h) for c in curves):
                 first = curves[-1].pieces[-1] + 1 if curves else 0
-                curves.append(_trace(scene, model, h, len(curves), window, ceiling, first))
+                curves.append(trace_hopf_curve(scene, model, h, len(curves), window, ceiling, first))
 
 
 def _default_seeds(lo: float, hi: float) -> np.ndarray:
@@ -259,56 +202,6 @@ def _on_curve(curve: HopfCurve, h: HopfPoint, rtol: float = 2e-2) -> bool:
     """Does Hopf point h lie on the traced curve (same U* and frequency at its M*)?"""
     return any(abs(u - h.ustar) <= rtol * h.ustar and abs(w - h.omega) <= rtol * h.omega
                for u, w, _ in curve.crossings(math.log10(h.mstar)))
-
-
-def _trace(scene, model, h: HopfPoint, index: int, window, ustar_max, first_piece) -> HopfCurve:
-    """Continue the Hopf curve through h both ways inside the (log10 M*, U*) window."""
-    problem = flutter_problem(scene.replace(mstar=h.mstar), model, ustar_start=0.2)
-    pi_max = _pi_max(h, ustar_max)
-    halves, status, message = [], "bound", ""
-    for direction in (-1, 1):
-        settings = C.ContinuationSettings(
-            ds=0.05, ds_min=1e-8, ds_max=0.3, max_steps=300, direction=direction,
-            bounds={LOG_M: window, PI: (0.0, pi_max)}, detect=False, compute_eigenvalues=False,
-            newton=C.NewtonSettings(tol=1e-8))   # curve points only guide; points are refined
-        branch = C.continuation(C.HopfCurveProblem.from_point(problem, h.point, LOG_M),
-                                settings=settings, record=_mode_recorder(model))
-        if branch.status != "bound" and status == "bound":
-            status, message = branch.status, branch.message
-        halves.append(branch)
-    lower, upper = halves
-    join = lambda a, b: np.concatenate([a[::-1], b[1:]])
-    x, params = join(lower.x, upper.x), join(lower.params, upper.params)
-    kappa = join(lower.columns["kappa"], upper.columns["kappa"])
-    keep = kappa > 0           # neutral-saddle stretches are not Hopf points
-    x, params, omega = x[keep], params[keep], np.sqrt(kappa[keep])
-    names = lower.par_names
-    modes = join(lower.columns["mode"], upper.columns["mode"])[keep].astype(int)
-    lm = params[:, names.index(LOG_M)]
-    return HopfCurve(index, 10 ** lm, x[:, -2:].sum(axis=1) / scene.hstar, omega * TIME_SCALE,
-                     modes, status, int(first_piece), x, params, message)
-
-
-def _mode_recorder(model):
-    """``record`` hook of a Hopf curve: the dominant mode of the eigenvector
-    ``q = v - i w / omega`` of ``i omega`` carried by the unknowns ``X = (x, v, w, kappa,
-    ...)`` (0 where ``kappa <= 0``), instead of an eigen-decomposition per point."""
-    n = model.n_modes
-
-    def record(problem, X):
-        m, kappa = problem.vf.n, X[3 * problem.vf.n]
-        if kappa <= 0:
-            return {"mode": 0.0}
-        q = X[m: 2 * m] - 1j * X[2 * m: 3 * m] / np.sqrt(kappa)
-        return {"mode": float(dominant_mode(model, q[n: 2 * n]))}
-
-    return record
-
-
-def _pi_max(h: HopfPoint, ustar_max: float) -> float:
-    """Π bound equivalent to U* <= ustar_max, scaled from the Hopf point (Π ∝ U*^2)."""
-    pi_h = h.pressure_drop / (h.mstar * PI_SCALE)
-    return pi_h * (ustar_max / h.ustar) ** 2
 
 
 def _lowest(curves, log_m):
