@@ -9,15 +9,28 @@ the unknowns ``X = (x_0, ..., x_{m-1}, T, p)`` satisfy
 
 ``x_ref`` the last accepted ``x_0`` and ``f_ref`` the vector field there. The
 exact Jacobian comes from the integrator's forward sensitivities. By default
-(``ShootingSettings.jacobian = 'blocks'``) each segment is integrated once with
-sensitivities in the ``n + 1 + n_free`` directions ``(x_i, T, p_free)`` only (the
-other parameters enter as a non-differentiated input) and the blocks are
-assembled sparse; ``'graph'`` lets CasADi differentiate the whole mapped
-integrator in the directions of all parameters (the reference; 2x slower at
-n = 20, see docs/continuation.md). The diagonal blocks ``d phi / d x_i`` are the
-transfer matrices whose product is the monodromy matrix, so the Floquet
-multipliers use the same block-cyclic pencil as collocation; they reuse the
-last Jacobian (the tangent's) at the same ``X``.
+(``ShootingSettings.jacobian = 'blocks'``) the segments are integrated once each
+(one mapped call, over ``ShootingSettings.threads`` threads) with sensitivities in
+the ``n + 1 + n_free`` directions ``(x_i, T, p_free)`` only (the other parameters
+enter as a non-differentiated input) and the blocks are assembled sparse;
+``'graph'`` lets CasADi differentiate the whole mapped integrator in the directions
+of all parameters (the reference; 2x slower at n = 20, see docs/continuation.md).
+The diagonal blocks ``d phi / d x_i`` are the transfer matrices whose product is
+the monodromy matrix, so the Floquet multipliers use the same block-cyclic pencil
+as collocation; they reuse the last Jacobian (the tangent's) at the same ``X``.
+
+Where the time goes (flutter model with contact, N = 10, one impacting segment at
+``abstol = reltol = 1e-10``): CVODES takes ~5x more steps with the sensitivities in
+its error test than without; per step, CasADi's augmented Newton evaluates the
+sensitivity right-hand side (AD of ``M^{-1} F`` in all 24 directions, ~20 %) and the
+second-order term of the augmented Newton matrix (AD of that in 24 directions
+again, ~70 %); CVODES itself and Python take the rest. ``sensitivities='fast'``
+removes both: the rate's Jacobian by formula (:func:`rate_function`) times all
+directions, and no second-order term (10x faster, but only equal to 'exact' within
+1e-10 to 1e-8 relative, see :class:`ShootingSettings`). Compiling the integrator's
+functions to C (CasADi's ``jit`` option) keeps 'exact' to the last bit at 3.7x the
+speed (N = 4), but compiled for 260 s at N = 4 in every new process, so it is not
+offered; threads pay only on an otherwise idle machine (1.8x on 2 cores).
 ``M`` must be invertible (it is solved for symbolically: ``ca.solve``).
 """
 
@@ -74,18 +87,73 @@ def segment_ode(vf, settings: ShootingSettings, free_idx: tuple) -> dict:
     return {"x": x, "p": q, "u": u, "ode": q[0] / settings.segments * _rate(vf, x, p)}
 
 
-def segment_jacobian(vf, settings: ShootingSettings, free_idx: tuple) -> ca.Function:
-    """``(x0, (T, p_free), p) -> (xf, d xf/d x0, d xf/d (T, p_free))`` of one
-    segment (forward sensitivities in ``n + 1 + len(free)`` directions), built once
-    per VectorField, settings and free parameters."""
+def fixed_parameters(settings: ShootingSettings, free_idx: tuple, p) -> tuple:
+    """The values of the non-free parameters that the 'fast' route fixes in its
+    segment integrator (empty for 'exact', whose integrator takes them as input)."""
+    if settings.sensitivities == "exact":
+        return ()
+    return tuple(float(v) for i, v in enumerate(p) if i not in free_idx)
+
+
+def rate_function(vf, free_idx: tuple, fixed: tuple) -> ca.Function:
+    """``R(x, p_free) = M^{-1} F`` (the other parameters fixed at ``fixed``) whose
+    derivatives CasADi takes from the custom Jacobian ``[dR/dx, dR/dp_free]`` =
+    ``M^{-1} [F_x - d(M v)/dx, F_p - d(M v)/dp]`` at ``v = R`` (the field's
+    ``Fx_expr``/``Mvx_expr``): one evaluation per right-hand side, multiplied into
+    every sensitivity direction, instead of AD of the solve in each of them."""
+    n, values = vf.n, iter(fixed)
+    x, r, pf = ca.MX.sym("x", n), ca.MX.sym("r", n), ca.MX.sym("pf", len(free_idx))
+    p = ca.vertcat(*[pf[free_idx.index(i)] if i in free_idx else next(values)
+                     for i in range(len(vf.par_names))])
+    F = vf.F(x, p)
+    J = ca.horzcat(vf.Fx_expr(x, p) - (0 if vf.M is None else vf.Mvx_expr(x, p, r)),
+                   ca.jacobian(F - (0 if vf.M is None else vf.Mv_expr(x, p, r)), pf))
+    if vf.M is not None:
+        M = vf.M(x, p)
+        F, J = ca.solve(M, F), ca.solve(M, J)
+    jac = ca.Function("jac_rate", [x, pf, r], [J[:, :n], J[:, n:]],
+                      ["x", "pf", "out_r"], ["jac_r_x", "jac_r_pf"])
+    return ca.Function("rate", [x, pf], [F], ["x", "pf"], ["r"],
+                       {"custom_jacobian": jac, "jac_penalty": 0, "enable_forward": False,
+                        "enable_fd": False, "never_inline": True})
+
+
+def _segment_integrator(vf, settings: ShootingSettings, free_idx: tuple, fixed: tuple):
+    """The integrator of one segment: for 'exact' the ODE of :func:`segment_ode`;
+    for 'fast' ``dx/ds = (T/m) R(x, p_free)`` with :func:`rate_function`, without
+    the second-order term of the augmented Newton matrix (CasADi's
+    ``second_order_correction``: a derivative of the sensitivity equations in all
+    directions at every Newton iteration, 70 % of the time of 'exact')."""
+    opts = options(settings)
+    if settings.sensitivities == "exact":
+        return ca.integrator("segment", settings.integrator,
+                             segment_ode(vf, settings, free_idx), 0.0, 1.0, opts)
+    x, q = ca.MX.sym("x", vf.n), ca.MX.sym("q", 1 + len(free_idx))
+    rate = rate_function(vf, free_idx, fixed)
+    if settings.integrator != "rk":
+        opts = {**opts, "second_order_correction": False}
+    return ca.integrator("segment", settings.integrator,
+                         {"x": x, "p": q, "ode": q[0] / settings.segments * rate(x, q[1:])},
+                         0.0, 1.0, opts)
+
+
+def segment_jacobian(vf, settings: ShootingSettings, free_idx: tuple, p) -> ca.Function:
+    """``(x0 (n, m), (T, p_free), p) -> (xf, [d xf/d x0 of each segment], [d xf/d
+    (T, p_free) of each])``: all ``m`` segments (forward sensitivities in
+    ``n + 1 + len(free)`` directions each), mapped over ``settings.threads``
+    threads; built once per VectorField, settings, free parameters and (for
+    'fast') values of the fixed parameters ``p``."""
     cache = vf.__dict__.setdefault("_shooting_segments", {})
-    key = (settings, tuple(free_idx))
+    fixed = fixed_parameters(settings, tuple(free_idx), p)
+    key = (settings, tuple(free_idx), fixed)
     if key not in cache:
-        integ = ca.integrator("segment", settings.integrator,
-                              segment_ode(vf, settings, tuple(free_idx)), 0.0, 1.0,
-                              options(settings))
-        cache[key] = integ.factory("segment_jac", ["x0", "p", "u"],
-                                   ["xf", "jac:xf:x0", "jac:xf:p"])
+        integ = _segment_integrator(vf, settings, tuple(free_idx), fixed)
+        exact = settings.sensitivities == "exact"
+        one = integ.factory("segment_jac", ["x0", "p", "u"] if exact else ["x0", "p"],
+                            ["xf", "jac:xf:x0", "jac:xf:p"])
+        m = settings.segments
+        mapped = one.map(m, "thread", settings.threads) if settings.threads > 1 else one.map(m)
+        cache[key] = mapped if exact else (lambda x0, q, u, f=mapped: f(x0, q))
     return cache[key]
 
 
@@ -128,8 +196,7 @@ class ShootingProblem(PeriodicProblem):
                f"{settings.reltol:g}")
         self.system = bound(vf, key, p0, self._reference(xs[: vf.n], p0), self.free,
                             builder(settings))
-        self._segment = segment_jacobian(vf, settings, self.free_idx) \
-            if settings.jacobian == "blocks" else None
+        self._segment = settings.jacobian == "blocks"
         self._samplers, self._last = {}, (None, None)
 
     def residual(self, X) -> np.ndarray:
@@ -142,7 +209,7 @@ class ShootingProblem(PeriodicProblem):
     def jacobian(self, X):
         """Exact ``G_X`` from the integrator sensitivities (zero, hence singular for
         the corrector, if the integrator fails)."""
-        if self._segment is None:
+        if not self._segment:
             return self._graph_jacobian(X)
         blocks = self.blocks(X)
         if blocks is None:
@@ -165,9 +232,12 @@ class ShootingProblem(PeriodicProblem):
         if self._last[0] is not None and np.array_equal(self._last[0], X):
             return self._last[1]
         q, u = self._segment_args(X)
+        segment = segment_jacobian(self.vf, self.settings, self.free_idx, u)
+        n, m = self.vf.n, self.segments
         try:
-            out = [self._segment(x, q, u) for x in self.points(X)]
-            blocks = (np.array([o[1].full() for o in out]), np.array([o[2].full() for o in out]))
+            _, A, B = segment(self.points(X).T, q, u)
+            blocks = (A.full().reshape(n, m, n).transpose(1, 0, 2),
+                      B.full().reshape(n, m, -1).transpose(1, 0, 2))
         except RuntimeError:
             blocks = None
         self._last = (np.array(X), blocks)
@@ -240,7 +310,7 @@ class ShootingProblem(PeriodicProblem):
         """``d phi / d x_i`` of every segment (their product is the monodromy
         matrix), from the last Jacobian when it was taken at ``X``."""
         n, m = self.vf.n, self.segments
-        if self._segment is not None:
+        if self._segment:
             blocks = self.blocks(X)
             return np.zeros((m, n, n)) if blocks is None else blocks[0]
         last = self._last
