@@ -139,5 +139,9 @@ def test_impact_settings_validation():
         ImpactSettings(segments=0)
     with pytest.raises(ValueError, match="tol"):
         ImpactSettings(tol=-1.0)
+    with pytest.raises(ValueError, match="sensitivities"):
+        ImpactSettings(sensitivities="approximate")
+    with pytest.raises(ValueError, match="threads"):
+        ImpactSettings(threads=0)
     with pytest.raises(ValueError, match="contact"):
         impacting_branch(Scene(modes=2), np.zeros(6), 0.1, 1.0)

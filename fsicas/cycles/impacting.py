@@ -10,13 +10,18 @@ the exact Jacobian), on the same reparametrised field as the Hopf and collocatio
 analyses (``fsicas.linear.adapter.flutter_field``: parameter Π = Δp/(100 M*), time in units of
 T/100), with the contact law on.
 
-The library's shooting Jacobian differentiates the mapped integrator as one CasADi
-graph, in the directions of all parameters: 7.8 s per Jacobian on the period-3 impacting
-cycle at U* = 7, N = 4, 12 segments (8.6 s with 24). :class:`_BlockShooting` evaluates it
-segment by segment in the n + 2 directions (x_i, T, Π) only (3.8 s; 4.0 s with 24
-segments; equal to the library's to 1e-6 relative, test) and keeps the last one, so the
-Floquet multipliers reuse the tangent's Jacobian. The cost is the CVODES forward
-sensitivities through the impacts (tolerance 1e-10).
+The Jacobian is the library's block route (``ShootingSettings(jacobian="blocks")``):
+all segments integrated in one mapped call with CVODES forward sensitivities in the
+n + 2 directions (x_i, T, Π) only, over ``ImpactSettings.threads`` threads, and kept
+for the last point, so the Floquet multipliers reuse the tangent's Jacobian. Its
+cost is the sensitivities through the impacts (tolerance 1e-10): at N = 10 CasADi's
+AD of M^{-1} F in the 24 directions and the second-order term of CVODES' augmented
+Newton matrix take ~90 % of it. ``ImpactSettings(sensitivities="fast")`` forms the
+sensitivity equations from the model's Jacobians instead and drops that term
+(about 10x faster at N = 10), but moves the Jacobian and multipliers by 1e-10 to
+1e-8 relative (most through impacts, within the integration error of either route),
+so the default is "exact"; ``benchmarks/bench_shooting.py`` measures both against
+the first version of this module.
 
 Start points: a contact-free collocation cycle shortly before contact
 (:func:`pre_contact_start` of a :func:`fsicas.cycles.cycle_branch`) or the settled cycle
@@ -47,7 +52,8 @@ from .gauge import Gauge
 from .records import BranchRecord, CycleMeasures, check_settings
 
 __all__ = ["ImpactSettings", "ImpactPoint", "ImpactBranch", "impacting_branch",
-           "cycle_from_trajectory", "pre_contact_start", "shooting_points", "ImpactStatus"]
+           "cycle_from_trajectory", "pre_contact_start", "shooting_points", "shooting_settings",
+           "ImpactStatus"]
 
 ImpactStatus = Literal["bound", "max_points", "failed"]
 """Why a shooting branch ended: U* left [ustar_min, ustar_max], the point budget, or a
@@ -60,7 +66,9 @@ class ImpactSettings:
     its sensitivities); ``newton_tol``: corrector tolerance (inf-norm of the matching
     conditions); ``ds``/``ds_max``: arclength steps (Euclidean norm of the shooting
     points, 100 T and Π); ``max_points``: branch points; ``samples``: output points per
-    segment for the measurements (min gap, amplitude, impacts)."""
+    segment for the measurements (min gap, amplitude, impacts); ``sensitivities``:
+    ``"exact"`` or ``"fast"`` (``continuation.ShootingSettings``, module docstring);
+    ``threads``: segments integrated in parallel (the same numbers on any count)."""
 
     segments: int = 12
     tol: float = 1e-10
@@ -69,10 +77,15 @@ class ImpactSettings:
     ds_max: float = 0.2
     max_points: int = 20
     samples: int = 2000
+    sensitivities: str = "exact"
+    threads: int = 2
 
     def __post_init__(self):
-        check_settings(self, integers=("segments", "max_points", "samples"),
+        check_settings(self, integers=("segments", "max_points", "samples", "threads"),
                        positives=("tol", "newton_tol", "ds", "ds_max"))
+        if self.sensitivities not in ("exact", "fast"):
+            raise ValueError("ImpactSettings.sensitivities must be 'exact' or 'fast', got "
+                             f"{self.sensitivities!r}")
 
 
 @dataclass(frozen=True)
@@ -127,8 +140,7 @@ def impacting_branch(scene: Scene, state, period: float, pressure_drop: float, *
     model = model or build_model(scene)
     vf, st = flutter_field(model), steady_state(scene, model)
     params = _field_parameters(vf, model, st, scene, pressure_drop)
-    shoot = C.ShootingSettings(segments=settings.segments, abstol=settings.tol,
-                               reltol=settings.tol, floquet="product", jacobian="blocks")
+    shoot = shooting_settings(settings)
     try:
         orbit = shooting_points(vf, np.asarray(state, float), period * TIME_SCALE, params,
                                 settings.segments, shoot)
@@ -141,6 +153,13 @@ def impacting_branch(scene: Scene, state, period: float, pressure_drop: float, *
     branch = C.continuation(problem, record=gauge.record, settings=_steps(
         scene, model, ustar_min, ustar_max, direction, settings))
     return _result(scene, model, branch, settings, time.perf_counter() - start)
+
+
+def shooting_settings(settings: ImpactSettings) -> C.ShootingSettings:
+    """The library's shooting settings of an impacting branch."""
+    return C.ShootingSettings(segments=settings.segments, abstol=settings.tol,
+                              reltol=settings.tol, floquet="product", jacobian="blocks",
+                              sensitivities=settings.sensitivities, threads=settings.threads)
 
 
 def _field_parameters(vf, model, steady, scene, pressure_drop) -> dict:
