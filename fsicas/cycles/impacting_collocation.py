@@ -140,7 +140,8 @@ def impacting_collocation_branch(scene: Scene, state, period: float, pressure_dr
                                       f"be integrated over one period: {err}",
                                       time.perf_counter() - start)
     gauge = _PolynomialGauge(model, steady_state(scene, model).x, settings.samples)
-    branch = C.continuation(problem, record=gauge.record, settings=_steps(
+    once = (lambda problem, X: "reached max_points = 1") if settings.max_points == 1 else None
+    branch = C.continuation(problem, record=gauge.record, stop=once, settings=_steps(
         scene, model, ustar_min, ustar_max, direction, settings))
     return _result(scene, eps, branch, settings, time.perf_counter() - start)
 
