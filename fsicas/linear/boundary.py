@@ -119,11 +119,14 @@ class StabilityBoundary:
 
 def stability_boundary(scene: Scene, mstars, model: Model | None = None,
                        ustar_max: float = 40.0, seeds=None, refine: bool = True,
-                       headroom: float = 1.3) -> StabilityBoundary:
+                       headroom: float = 1.3, full_curves: bool = False) -> StabilityBoundary:
     """The flutter boundary U*_c(M*) at ``mstars`` with its curves and mode switches.
 
     Curves are traced below ``headroom`` times the highest onset found at the seeds; a
-    Hopf curve that stays above that everywhere cannot be the lowest one."""
+    Hopf curve that stays above that everywhere cannot be the lowest one. Each half of a
+    curve also ends where it rises above ``headroom`` times the lowest curve traced
+    before it (or runs onto one), unless ``full_curves`` (every curve up to the ceiling,
+    e.g. to draw the whole family: the same points and switches, slower)."""
     mstars = np.sort(np.asarray(mstars, dtype=float))
     if mstars.size == 0 or np.any(~np.isfinite(mstars)) or np.any(mstars <= 0):
         raise ValueError(f"mstars must be finite and > 0, got {mstars}")
@@ -136,14 +139,15 @@ def stability_boundary(scene: Scene, mstars, model: Model | None = None,
     search = lambda m: hopf_points(scene.replace(mstar=float(m)), model, ustar_max,
                                    ustar_stop=1.05 * ceiling)
     curves: list[HopfCurve] = []
-    _add_curves(scene, model, curves, found, window, ceiling)
+    cut = None if full_curves else headroom
+    _add_curves(scene, model, curves, found, window, ceiling, cut)
     points = [_boundary_point(scene, model, curves, m, refine) for m in mstars]
     for _ in range(3):   # a refinement that starts unstable reveals a curve the seeds missed
         missed = [p.mstar for p in points if p.missed]
         if not missed:
             break
         found = [search(m) for m in missed]
-        _add_curves(scene, model, curves, found, window, ceiling)
+        _add_curves(scene, model, curves, found, window, ceiling, cut)
         points = [_boundary_point(scene, model, curves, m, refine) for m in mstars]
     switches = _switches(curves, lo, hi)
     return StabilityBoundary(scene, points, curves, switches, time.perf_counter() - start)
@@ -184,13 +188,60 @@ def _note_onset(onsets: dict, i: int, points) -> None:
         onsets[i] = points[0].ustar
 
 
-def _add_curves(scene, model, curves, found, window, ceiling) -> None:
-    """Trace the Hopf curve of every found point below ``ceiling`` not yet on a curve."""
+def _add_curves(scene, model, curves, found, window, ceiling, cut) -> None:
+    """Trace the Hopf curve of every found point below ``ceiling`` not yet on a curve;
+    with ``cut`` each half ends where it is no longer needed (:func:`_envelope_stop`)."""
+    envelope = _Envelope(curves)
+    make_stop = None if cut is None else lambda: _envelope_stop(envelope, scene.hstar, cut)
     for points in found:
         for h in points:
             if h.ustar <= ceiling and not any(_on_curve(c, h) for c in curves):
                 first = curves[-1].pieces[-1] + 1 if curves else 0
-                curves.append(trace_hopf_curve(scene, model, h, len(curves), window, ceiling, first))
+                curves.append(trace_hopf_curve(scene, model, h, len(curves), window, ceiling,
+                                               first, make_stop))
+
+
+class _Envelope:
+    """The segments of all traced curves stacked, for their crossings at one log10 M*."""
+
+    def __init__(self, curves: list):
+        self.curves, self._count, self._ends = curves, -1, None
+
+    def crossings(self, log_m: float) -> tuple[np.ndarray, np.ndarray]:
+        """U* and omega of every traced curve at log10 M* = log_m (linear interpolation)."""
+        if not self.curves:
+            return np.zeros(0), np.zeros(0)
+        if self._count != len(self.curves):
+            parts = [c.segments for c in self.curves]
+            self._ends = [np.concatenate([p[k][j] for p in parts]) for k in range(3) for j in (0, 1)]
+            self._count = len(self.curves)
+        a, b, ua, ub, wa, wb = self._ends
+        i = np.flatnonzero(((a - log_m) * (b - log_m) <= 0) & (a != b))
+        t = (log_m - a[i]) / (b[i] - a[i])
+        return ua[i] + t * (ub[i] - ua[i]), wa[i] + t * (wb[i] - wa[i])
+
+
+def _envelope_stop(envelope: _Envelope, hstar: float, headroom: float, rtol: float = 2e-2):
+    """``continuation`` stop predicate of one half of a Hopf curve: it ends when the half
+    rises (U* increasing) above ``headroom`` times the lowest traced curve at its M* -- a
+    stretch that high cannot be the lowest curve, like one above the ceiling -- or runs
+    onto a traced curve (same U* and frequency within ``rtol``: the rest is traced)."""
+    last = []
+
+    def stop(problem, X):
+        n = problem.vf.n
+        u, log_m = float(X[n - 2: n].sum() / hstar), float(X[len(X) - 1])
+        rising, last[:] = bool(last) and u > last[0], [u]
+        us, ws = envelope.crossings(log_m)
+        if not us.size:
+            return False
+        if rising and u > headroom * us.min():
+            return f"rose above {headroom:g} x the lowest traced curve"
+        w = math.sqrt(max(X[3 * n], 0.0)) * TIME_SCALE
+        on = (np.abs(us - u) <= rtol * u) & (np.abs(ws - w) <= rtol * w)
+        return "ran onto a traced curve" if np.any(on) else False
+
+    return stop
 
 
 def _default_seeds(lo: float, hi: float) -> np.ndarray:

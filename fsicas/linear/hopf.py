@@ -197,7 +197,7 @@ class HopfCurve:
         return self.first_piece + turns
 
     @cached_property
-    def _segments(self) -> tuple:
+    def segments(self) -> tuple:
         """Ends of the segments in log10 M*, U* and omega (arrays of length points - 1)."""
         lm = np.log10(self.mstar)
         ends = lambda arr: (arr[:-1], arr[1:])
@@ -205,7 +205,7 @@ class HopfCurve:
 
     def crossings(self, log_m: float) -> list[tuple[float, float, int]]:
         """(U*, omega, piece) where the curve passes log10 M* = log_m (linear interpolation)."""
-        (a, b), (ua, ub), (wa, wb) = self._segments
+        (a, b), (ua, ub), (wa, wb) = self.segments
         i = np.flatnonzero(((a - log_m) * (b - log_m) <= 0) & (a != b))
         t = (log_m - a[i]) / (b[i] - a[i])
         u, w = ua[i] + t * (ub[i] - ua[i]), wa[i] + t * (wb[i] - wa[i])
@@ -213,10 +213,11 @@ class HopfCurve:
 
 
 def trace_hopf_curve(scene: Scene, model: Model, h: HopfPoint, index: int, window, ustar_max: float,
-                     first_piece: int = 0, stop=None) -> HopfCurve:
+                     first_piece: int = 0, make_stop=None) -> HopfCurve:
     """Continue the Hopf curve through h both ways inside the (log10 M*, U*) window
-    (log10 M* in ``window``, U* up to ``ustar_max``), in (Π, log10 M*). ``stop(problem, X)``
-    (optional, a ``continuation`` stop predicate) may end a half earlier."""
+    (log10 M* in ``window``, U* up to ``ustar_max``), in (Π, log10 M*). ``make_stop()``
+    (optional) returns for each half a ``continuation`` stop predicate that may end it
+    earlier."""
     problem = flutter_problem(scene.replace(mstar=h.mstar), model, ustar_start=0.2)
     pi_max = _pi_max(h, ustar_max)
     halves, status, message = [], "bound", ""
@@ -226,7 +227,8 @@ def trace_hopf_curve(scene: Scene, model: Model, h: HopfPoint, index: int, windo
             bounds={LOG_M: window, PI: (0.0, pi_max)}, detect=False, compute_eigenvalues=False,
             newton=C.NewtonSettings(tol=1e-8))   # curve points only guide; points are refined
         branch = C.continuation(C.HopfCurveProblem.from_point(problem, h.point, LOG_M),
-                                settings=settings, record=_mode_recorder(model), stop=stop)
+                                settings=settings, record=_mode_recorder(model),
+                                stop=make_stop() if make_stop else None)
         if branch.status not in ("bound", "stopped") and status == "bound":
             status, message = branch.status, branch.message
         halves.append(branch)
