@@ -4,15 +4,13 @@ Test functions along the branch, for ``X = (x, p)`` and tangent ``tau``:
 
 * fold (limit point): ``tau_p`` changes sign;
 * simple branch point: ``sign det [G_X; tau^T]`` changes;
-* Hopf: the number of eigenvalues of ``J v = lambda M v`` with ``Re > 0``
-  changes by a nonzero even number (a complex pair crossed; a complex pair
-  turning into two real ones keeps the count); it is located on
-  ``Re lambda(s) = 0`` of the crossing eigenvalue, and rejected if the refined
-  point is a neutral saddle (``kappa <= 0``).
+* Hopf: the number of eigenvalues of ``J v = lambda M v`` with ``Re > 0`` changes by a
+  nonzero even number (a complex pair crossed; a complex pair turning into two real ones
+  keeps the count); it is located on ``Re lambda(s) = 0`` of the crossing eigenvalue, and
+  rejected if the refined point is a neutral saddle (``kappa <= 0``).
 
-Folds and Hopf points are then refined by Newton on the square fold/Hopf
-systems of ``_systems`` (one free parameter), and the first Lyapunov
-coefficient is computed at each Hopf point.
+Folds and Hopf points are then refined by Newton on the square fold/Hopf systems of
+``_systems`` (one free parameter), with the first Lyapunov coefficient at Hopf points.
 """
 
 from __future__ import annotations
@@ -68,10 +66,9 @@ def state_vector(vf: VectorField, x0, label: str = "x0") -> np.ndarray:
 
 
 def equilibrium_system(vf: VectorField) -> CompiledSystem:
-    """The equilibrium system ``F(x, p) = 0`` of ``_systems`` with the field's function
-    inlined (:func:`_flat_field`): its Jacobian evaluates 2x faster for a modal model.
-    Its x-Jacobian is the field's own ``jacobian`` when it has one (:func:`_state_jacobian`),
-    its p-Jacobian is taken in the free directions only (:class:`FreeDirectionSystem`)."""
+    """The equilibrium system ``F(x, p) = 0`` of ``_systems``, the field's function inlined
+    (:func:`_flat_field`: 2x faster Jacobians for a modal model), ``F_x`` the field's own
+    ``jacobian`` when given, ``F_p`` along the free parameters only."""
     x, p = vf.sym.sym("x", vf.n), vf.sym.sym("p", len(vf.par_names))
     f = _flat_field(vf, x, p)[0]
     return FreeDirectionSystem(x, p, vf.sym.sym("D", 0), f, "equilibrium",
@@ -79,11 +76,9 @@ def equilibrium_system(vf: VectorField) -> CompiledSystem:
 
 
 class FreeDirectionSystem(CompiledSystem):
-    """A :class:`CompiledSystem` whose ``G_p`` is evaluated only along the free
-    parameters: ``along(E)`` is the expression of ``G_p E`` for a symbolic ``(k_p, k)``
-    matrix ``E``, compiled once per number ``k`` of free parameters. (A modal model has
-    tens of parameters and a curve two free ones: ``G_p`` of the Hopf system at N = 40
-    0.4 -> 0.1 ms.)"""
+    """A :class:`CompiledSystem` with ``G_p`` only along the free parameters: ``along(E)``
+    is ``G_p E`` for a symbolic ``(k_p, k)`` ``E``, compiled once per count ``k`` (a modal
+    model has 45 parameters, a curve 2 free ones)."""
 
     def __init__(self, Y, P, D, G, name: str, jy, along):
         rows = ca.vertcat(*G).numel() if isinstance(G, (list, tuple)) else G.numel()
@@ -105,8 +100,9 @@ class FreeDirectionSystem(CompiledSystem):
         cols = list(par_columns)
         E = np.zeros((self._n_par, len(cols)))
         E[cols, np.arange(len(cols))] = 1.0
-        jp = self._along_free(len(cols))(Y, P, D, E.ravel(order="F"))[0].reshape(self.n_equations, -1, order="F")
-        return columns_appended(self._jy(Y, P, D)[0], self.pattern, jp)
+        jp = self._along_free(len(cols))(Y, P, D, E.ravel(order="F"))[0]
+        return columns_appended(self._jy(Y, P, D)[0], self.pattern,
+                                 jp.reshape(self.n_equations, -1, order="F"))
 
 
 class EquilibriumProblem(Problem):
@@ -129,9 +125,20 @@ class EquilibriumProblem(Problem):
         vf = make_field(F, M, params)
         p0 = param_vector(vf, params)
         x = state_vector(vf, x0)
-        ia = vf.par_index(active)
-        super().__init__(vf, (active,), np.append(x, p0[ia]), p0)
-        self.active = active
+        super().__init__(vf, (active,), np.append(x, p0[vf.par_index(active)]), p0)
+        self.active, self._last = active, None
+
+    def jacobian(self, X):
+        """``G_X``, kept for :meth:`matrices` at the same ``X`` (first n columns: ``J``)."""
+        A = super().jacobian(X)
+        self._last = (np.array(X), A)
+        return A
+
+    def matrices(self, X):
+        """``J, M`` at ``X``; ``J`` from the last Jacobian if taken at ``X`` (the tangent's)."""
+        if self._last is not None and np.array_equal(self._last[0], X):
+            return self._last[1][:, : self.vf.n], self.vf.mass(self.state(X), self.params(X))
+        return super().matrices(X)
 
     def monitor(self, X, tau, lu, settings) -> PointInfo:
         base = super().monitor(X, tau, lu, settings)
@@ -231,11 +238,10 @@ def _refine_fold(problem, X, settings) -> Description:
 def _fold_coefficient(vf, x, p, v) -> dict:
     """Fold normal-form coefficient ``a = psi^T F2(v, v) / (2 psi^T M v)``.
 
-    ``J v = 0`` with ``|v| = 1``, ``psi^T J = 0``: on the centre manifold
-    ``x = x0 + y v`` of ``M xdot = F`` the reduced equation is
-    ``ydot = a y^2 + O(y^3, dp)``; ``M1`` terms vanish since ``A v = 0``. The
-    sign of ``a`` refers to ``v`` oriented with its largest entry positive.
-    """
+    ``J v = 0`` with ``|v| = 1``, ``psi^T J = 0``: on the centre manifold ``x = x0 + y v``
+    of ``M xdot = F`` the reduced equation is ``ydot = a y^2 + O(y^3, dp)``; ``M1`` terms
+    vanish since ``A v = 0``. The sign of ``a`` refers to ``v`` oriented with its largest
+    entry positive."""
     J, M = vf.jac_x(x, p), vf.mass(x, p)
     v = v / np.linalg.norm(v)
     psi = _eigen.left_eigenvector(J, M, 0.0)
@@ -269,16 +275,15 @@ def hopf_vectors(q, omega):
 
 
 def hopf_system(vf: VectorField) -> CompiledSystem:
-    """The Hopf system of ``_systems`` (same residual) with its Jacobian written from
-    its structure instead of by AD of the whole residual.
+    """The Hopf system of ``_systems`` (``M v``, ``M w`` by the field's mass action when it
+    has one) with its Jacobian written from its structure instead of by AD of the residual.
 
     With ``J = F_x`` the rows ``J v - M w`` and ``J w + kappa M v`` have the x-blocks
     ``D_x(J v) = D_v J`` (symmetry of second derivatives: one directional derivative
     of ``J`` instead of ``n``) minus ``D_x(M w)``, and the linear blocks ``J, -M,
     kappa M, M v``; likewise ``D_p(J v) = D_v F_p``. Equal to the AD Jacobian to
     rounding; for the 22-state modal model of 10 modes 13x cheaper to evaluate (4.5 ->
-    0.35 ms, with the field's functions inlined).
-    """
+    0.35 ms, with the field's functions inlined)."""
     x, v, w, c = (vf.sym.sym(name, vf.n) for name in "xvwc")
     kappa, p = vf.sym.sym("kappa"), vf.sym.sym("p", len(vf.par_names))
     f, m = _flat_field(vf, x, p)
@@ -300,11 +305,8 @@ def hopf_system(vf: VectorField) -> CompiledSystem:
 def _flat_field(vf, x, p):
     """``F(x, p)`` and ``M(x, p)`` with MX functions inlined: derivatives of the flat
     graph evaluate 2-3x faster than derivatives through call nodes (same values)."""
-    if vf.sym is not ca.MX:
-        return vf.F_expr(x, p), vf.M_expr(x, p)
-    f = vf.F.call([x, p], True, False)[0]
-    m = vf.M_expr(x, p) if vf.M is None else vf.M.call([x, p], True, False)[0]
-    return f, m
+    return _inlined(vf, vf.F, x, p), \
+        vf.M_expr(x, p) if vf.M is None else _inlined(vf, vf.M, x, p)
 
 
 def _inlined(vf, fun, *args):
