@@ -202,23 +202,39 @@ def _add_curves(scene, model, curves, found, window, ceiling, cut) -> None:
 
 
 class _Envelope:
-    """The segments of all traced curves stacked, for their crossings at one log10 M*."""
+    """The segments of all traced curves stacked (in curve order), for their crossings
+    at one log10 M*; restacked when curves are added."""
 
     def __init__(self, curves: list):
         self.curves, self._count, self._ends = curves, -1, None
+
+    def _at(self, log_m: float):
+        """Indices of the segments that cross log_m, and the interpolation weights."""
+        if self._count != len(self.curves):
+            parts = [c.segments for c in self.curves]
+            self._ends = [np.concatenate([p[k][j] for p in parts]) for k in range(3) for j in (0, 1)]
+            self._pieces = np.concatenate([c.pieces for c in self.curves])
+            self._count = len(self.curves)
+        a, b = self._ends[:2]
+        i = np.flatnonzero(((a - log_m) * (b - log_m) <= 0) & (a != b))
+        return i, (log_m - a[i]) / (b[i] - a[i])
 
     def crossings(self, log_m: float) -> tuple[np.ndarray, np.ndarray]:
         """U* and omega of every traced curve at log10 M* = log_m (linear interpolation)."""
         if not self.curves:
             return np.zeros(0), np.zeros(0)
-        if self._count != len(self.curves):
-            parts = [c.segments for c in self.curves]
-            self._ends = [np.concatenate([p[k][j] for p in parts]) for k in range(3) for j in (0, 1)]
-            self._count = len(self.curves)
-        a, b, ua, ub, wa, wb = self._ends
-        i = np.flatnonzero(((a - log_m) * (b - log_m) <= 0) & (a != b))
-        t = (log_m - a[i]) / (b[i] - a[i])
+        i, t = self._at(log_m)
+        _, _, ua, ub, wa, wb = self._ends
         return ua[i] + t * (ub[i] - ua[i]), wa[i] + t * (wb[i] - wa[i])
+
+    def lowest(self, log_m: float):
+        """(U*, omega, piece) of the lowest crossing at log_m (the first of equal ones),
+        or None."""
+        u, w = self.crossings(log_m)
+        if not u.size:
+            return None
+        k = int(np.argmin(u))
+        return float(u[k]), float(w[k]), int(self._pieces[self._at(log_m)[0][k]])
 
 
 def _envelope_stop(envelope: _Envelope, hstar: float, headroom: float, rtol: float = 2e-2):
@@ -255,18 +271,9 @@ def _on_curve(curve: HopfCurve, h: HopfPoint, rtol: float = 2e-2) -> bool:
                for u, w, _ in curve.crossings(math.log10(h.mstar)))
 
 
-def _lowest(curves, log_m):
-    best = None
-    for c in curves:
-        for u, w, piece in c.crossings(log_m):
-            if best is None or u < best[0]:
-                best = (u, w, piece)
-    return best
-
-
 def _boundary_point(scene, model, curves, mstar, refine) -> BoundaryPoint:
     log_m = math.log10(mstar)
-    lowest = _lowest(curves, log_m)
+    lowest = _Envelope(curves).lowest(log_m)
     if lowest is None:
         return BoundaryPoint(float(mstar))
     u, w, piece = lowest
@@ -304,16 +311,16 @@ def _refine(scene, model, mstar, x, params, omega):
 def _switches(curves, lo: float, hi: float) -> list[ModeSwitch]:
     """Every change of the lowest piece on [lo, hi] (log10 M*), scanned on a fine grid of
     the traced curves (no new solves) and bisected to round-off in log10 M*."""
-    out = []
+    out, envelope = [], _Envelope(curves)
     grid = np.linspace(lo, hi, 801)
-    lowest = [_lowest(curves, lm) for lm in grid]
+    lowest = [envelope.lowest(lm) for lm in grid]
     for k in range(len(grid) - 1):
         a, b = lowest[k], lowest[k + 1]
         if a is None or b is None or a[2] == b[2]:
             continue
-        lo, hi = _switch_bracket(curves, a[2], grid[k], grid[k + 1])
-        ua, wa, _ = _lowest(curves, lo)
-        ub, wb, _ = _lowest(curves, hi)
+        lo, hi = _switch_bracket(envelope, a[2], grid[k], grid[k + 1])
+        ua, wa, _ = envelope.lowest(lo)
+        ub, wb, _ = envelope.lowest(hi)
         if abs(ua - ub) < 1e-2 * ub and abs(wa - wb) < 1e-2 * wb:
             continue     # the same branch traced twice (two pieces overlapping): no switch
         out.append(ModeSwitch(float(10 ** (0.5 * (lo + hi))), float(ua), float(ub),
@@ -321,12 +328,12 @@ def _switches(curves, lo: float, hi: float) -> list[ModeSwitch]:
     return out
 
 
-def _switch_bracket(curves, piece: int, lo: float, hi: float) -> tuple[float, float]:
+def _switch_bracket(envelope, piece: int, lo: float, hi: float) -> tuple[float, float]:
     """Bisect [lo, hi] (``piece`` lowest at lo, not at hi) to where the lowest piece
     changes: a crossing of two Hopf curves, or the fold in M* that ends ``piece``."""
     for _ in range(50):
         mid = 0.5 * (lo + hi)
-        lowest = _lowest(curves, mid)
+        lowest = envelope.lowest(mid)
         if lowest is not None and lowest[2] == piece:
             lo = mid
         else:
