@@ -97,9 +97,10 @@ class PointKernel:
         self.n, self.n_par, self.K = self.pointwise.n, self.pointwise.n_par, K
         rows, cols = self.pointwise.pattern.get_triplet()
         self.rows, self.cols = np.asarray(rows), np.asarray(cols)
-        self.lifted = {name: LiftedBatch(lifted, K) for name, lifted in vf.lifted.items()}
         self.expand, self.cache_dir = vf.sym is ca.SX, cache_dir
-        self.backend = backend if backend == "mx" or has_compiler() else "mx"
+        self.backend = _backend(backend, vf)
+        self.lifted = {name: LiftedBatch(lifted, K, self._compiled(lifted.D))
+                       for name, lifted in vf.lifted.items()}
         self.values = self._mapped(self.pointwise.values(), compile=False)
         self._jacobians: dict = {}
 
@@ -119,17 +120,23 @@ class PointKernel:
         return {name: batch(*args[name])[:, self.rows, self.cols]
                 for name, batch in self.lifted.items()}
 
+    def _compiled(self, fun: ca.Function) -> ca.Function | None:
+        """``fun`` as compiled C when the backend is 'compiled' (else, or if compiling
+        fails, None and the backend falls back to 'mx')."""
+        if self.backend != "compiled":
+            return None
+        fast = compiled_or_none(fun, self.cache_dir)
+        if fast is None:
+            self.backend = "mx"
+        return fast
+
     def _mapped(self, fun: ca.Function, compile: bool = True) -> BufferedFunction:
         """``fun`` (SX when ``expand``) compiled if ``compile`` and the backend say so,
         mapped over ``K`` columns of ``x, v`` (the other inputs shared)."""
         fun = as_sx_function(fun) if self.expand else fun
-        compiled = False
-        if compile and self.backend == "compiled":
-            fast = compiled_or_none(fun, self.cache_dir)
-            if fast is None:
-                self.backend = "mx"
-            else:
-                fun, compiled = fast, True
+        fast = self._compiled(fun) if compile else None
+        compiled = fast is not None
+        fun = fast if compiled else fun
         shared = list(range(2, fun.n_in()))
         mapped = fun.map(fun.name() + f"_{self.K}", "serial", self.K, shared, [])
         expand = self.expand and not compiled
@@ -152,6 +159,14 @@ class SeededKernel:
         out = iter(self.fun(x, v, p, self.seed))
         extra = self.lifted(x, v, p) if self.lifted is not None else {}
         return [extra[name] if name in extra else next(out) for name in KERNEL_OUTPUTS]
+
+
+def _backend(backend: str, vf) -> str:
+    """The kernel backend for ``vf``: 'auto' is 'compiled' for MX fields (dense modal
+    blocks, where C pays) and 'mx' for SX fields; 'compiled' needs a C compiler."""
+    if backend == "auto":
+        backend = "mx" if vf.sym is ca.SX else "compiled"
+    return backend if backend == "mx" or has_compiler() else "mx"
 
 
 def point_kernel(vf, K: int, backend: str = "mx") -> PointKernel:

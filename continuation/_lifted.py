@@ -91,9 +91,10 @@ class LiftedBatch:
     """``J`` of a :class:`Lifted` at ``K`` points: ``batch(x, p[, v]) -> (K, n, n)`` with
     ``x``, ``v`` of shape ``(K, n)`` (module docstring)."""
 
-    def __init__(self, lifted: Lifted, K: int):
+    def __init__(self, lifted: Lifted, K: int, D: ca.Function | None = None):
+        """``D``: an equivalent function to evaluate instead of ``lifted.D`` (compiled)."""
         self.lifted, self.K, self.n = lifted, K, lifted.n
-        D = lifted.D
+        D = lifted.D if D is None else D
         shared = [1]                                     # p is common to all points
         self._D = BufferedFunction(D.map(f"{D.name()}_{K}", "serial", K, shared, []))
         A = lifted.A

@@ -165,16 +165,16 @@ def _check_bounds(bounds) -> dict:
 
 
 #: kernel backends of CollocationSettings.backend; the first is the default
-BACKENDS = ("mx", "compiled")
+BACKENDS = ("auto", "mx", "compiled")
 
 
 def kernel_backend(backend: str | None) -> str:
-    """``backend``, or when None ``$CONTINUATION_BACKEND`` (validated), else 'mx'."""
+    """``backend``, or when None ``$CONTINUATION_BACKEND`` (validated), else 'auto'."""
     if backend is not None:
         return backend
     env = os.environ.get("CONTINUATION_BACKEND", "").strip()
     if env and env not in BACKENDS:
-        raise ValueError(f"CONTINUATION_BACKEND must be 'mx' or 'compiled', got {env!r}")
+        raise ValueError(f"CONTINUATION_BACKEND must be 'auto', 'mx' or 'compiled', got {env!r}")
     return env or BACKENDS[0]
 
 
@@ -193,10 +193,11 @@ class CollocationSettings:
     'blocks' (default; one mapped CasADi call for ``F``, ``F_x``, ``M``, ... at all
     collocation points, the matrix assembled by NumPy) or 'graph' (CasADi AD of the
     whole discretised residual; the reference path).
-    backend : how the 'blocks' kernel is evaluated: 'mx' (CasADi's virtual machine) or
+    backend : how the 'blocks' kernel is evaluated: 'mx' (CasADi's virtual machine),
     'compiled' (C compiled once per vector field and cached on disk, see
-    ``docs/performance.md``; falls back to 'mx' without a C compiler); None (default):
-    ``$CONTINUATION_BACKEND`` if set, else 'mx'.
+    ``docs/performance.md``; falls back to 'mx' without a C compiler) or 'auto'
+    ('compiled' for MX vector fields, 'mx' for SX ones); None (default):
+    ``$CONTINUATION_BACKEND`` if set, else 'auto'.
     """
 
     ntst: int = 20
@@ -211,8 +212,8 @@ class CollocationSettings:
     def __post_init__(self):
         _positive_int(self, "ntst", "ncol", "pencil_max")
         if self.backend is not None and self.backend not in BACKENDS:
-            raise ValueError("CollocationSettings.backend must be None, 'mx' or 'compiled', "
-                             f"got {self.backend!r}")
+            raise ValueError("CollocationSettings.backend must be None, 'auto', 'mx' or "
+                             f"'compiled', got {self.backend!r}")
         if self.jacobian not in ("blocks", "graph"):
             raise ValueError("CollocationSettings.jacobian must be 'blocks' or 'graph', "
                              f"got {self.jacobian!r}")

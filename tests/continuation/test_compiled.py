@@ -142,7 +142,7 @@ def test_backend_setting_and_environment_are_validated(monkeypatch):
         C.CollocationSettings(backend="jit")
     from continuation._settings import kernel_backend
     monkeypatch.delenv("CONTINUATION_BACKEND", raising=False)
-    assert kernel_backend(None) == "mx"
+    assert kernel_backend(None) == "auto"
     monkeypatch.setenv("CONTINUATION_BACKEND", "compiled")
     assert kernel_backend(None) == "compiled" and kernel_backend("mx") == "mx"
     monkeypatch.setenv("CONTINUATION_BACKEND", "fast")
@@ -156,3 +156,16 @@ def test_cache_dir_follows_the_environment(tmp_path, monkeypatch):
     monkeypatch.delenv("CONTINUATION_CACHE")
     monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path / "xdg"))
     assert compilation.default_cache_dir() == tmp_path / "xdg" / "continuation"
+
+
+def test_auto_backend_compiles_mx_fields_only(cache):
+    """'auto' (the default) compiles the kernel of an MX field and keeps an SX field's
+    kernel in the virtual machine."""
+    from continuation._blocks import point_kernel
+    x, p = ca.MX.sym("x", 2), ca.MX.sym("p", 1)
+    F = ca.Function("F", [x, p], [ca.vertcat(x[1], p * (1 - x[0] ** 2) * x[1] - x[0])])
+    kinds = {expand: point_kernel(C.VectorField(F, None, ("mu",), expand=expand), 6, "auto")
+             for expand in (False, True)}
+    kinds[False].jacobians([0])
+    assert kinds[False].backend == ("compiled" if compilation.has_compiler() else "mx")
+    assert kinds[True].backend == "mx"
