@@ -11,9 +11,10 @@ pairwise ratios old/new and the largest difference between the two trees' result
   M* = 1.1 (value: U*_c and omega);
 - ``boundary``: the Fig. 2 boundary over ``--points`` log-spaced M* in [0.01, 100]
   (value: U*_c at every M*);
-- ``cycle``: cost per point of a collocation branch of 8 cycles from the Hopf point at
-  M* = 1 (NTST = 20, NCOL = 4), after a warm-up branch of 2 points that builds the
-  systems (value: period and Π of the last cycle).
+- ``cycle``: cost per point of a collocation branch of ``--cycle-points`` (default 8)
+  cycles from the Hopf point at M* = 1 (NTST = 20, NCOL = 4), after a warm-up branch of
+  2 points that builds the systems (and compiles the kernel into the on-disk cache if
+  it is not there yet); value: period and Δp of the last cycle.
 
     python benchmarks/bench_speedup.py [--baseline 1ba3c13] [--modes 10] [--tasks eig ucrit]
 """
@@ -64,7 +65,8 @@ from fsicas.cycles import CycleSettings, cycle_branch
 hopf = fsicas.critical_velocity(scene, model)
 cycle_branch(scene, model, settings=CycleSettings(max_points=2), hopf=hopf)
 t0 = time.perf_counter()
-br = cycle_branch(scene, model, settings=CycleSettings(max_points=8, adapt_every=0), hopf=hopf)
+points = int(sys.argv[3])
+br = cycle_branch(scene, model, settings=CycleSettings(max_points=points, adapt_every=0), hopf=hopf)
 t = (time.perf_counter() - t0) / len(br.points)
 last = br.points[-1]
 done(t, [last.period, last.pressure_drop])
@@ -78,6 +80,7 @@ def main() -> None:
     parser.add_argument("--modes", type=int, nargs="+", default=[10])
     parser.add_argument("--tasks", nargs="+", choices=sorted(TASKS), default=sorted(TASKS))
     parser.add_argument("--points", type=int, default=41, help="M* values of 'boundary'")
+    parser.add_argument("--cycle-points", type=int, default=8, help="points of 'cycle'")
     parser.add_argument("--repeats", type=int, default=3)
     args = parser.parse_args()
     print(f"machine: {platform.machine()}, {os.cpu_count()} cores, load "
@@ -88,7 +91,8 @@ def main() -> None:
     with Baseline(args.baseline) as base:
         for task in args.tasks:
             for n in args.modes:
-                c = compare(base.path, PRELUDE + TASKS[task], [n, args.points], args.repeats)
+                c = compare(base.path, PRELUDE + TASKS[task], [n, args.points, args.cycle_points],
+                            args.repeats)
                 print(f"| {task} | {n} | {c.old:.4g} | {c.new:.4g} | {c.speedup:.1f}x | "
                       f"{c.difference:.1e} |", flush=True)
 
