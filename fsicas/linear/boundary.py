@@ -125,8 +125,8 @@ def stability_boundary(scene: Scene, mstars, model: Model | None = None,
     Curves are traced below ``headroom`` times the highest onset found at the seeds; a
     Hopf curve that stays above that everywhere cannot be the lowest one. Each half of a
     curve also ends where it rises above ``headroom`` times the lowest curve traced
-    before it (or runs onto one), unless ``full_curves`` (every curve up to the ceiling,
-    e.g. to draw the whole family: the same points and switches, slower)."""
+    before it, unless ``full_curves`` (every curve up to the ceiling, e.g. to draw the
+    whole family; slower)."""
     mstars = np.sort(np.asarray(mstars, dtype=float))
     if mstars.size == 0 or np.any(~np.isfinite(mstars)) or np.any(mstars <= 0):
         raise ValueError(f"mstars must be finite and > 0, got {mstars}")
@@ -190,7 +190,7 @@ def _note_onset(onsets: dict, i: int, points) -> None:
 
 def _add_curves(scene, model, curves, found, window, ceiling, cut) -> None:
     """Trace the Hopf curve of every found point below ``ceiling`` not yet on a curve;
-    with ``cut`` each half ends where it is no longer needed (:func:`_envelope_stop`)."""
+    with ``cut`` each half ends where it can no longer be lowest (:func:`_envelope_stop`)."""
     envelope = _Envelope(curves)
     make_stop = None if cut is None else lambda: _envelope_stop(envelope, scene.hstar, cut)
     for points in found:
@@ -237,25 +237,21 @@ class _Envelope:
         return float(u[k]), float(w[k]), int(self._pieces[self._at(log_m)[0][k]])
 
 
-def _envelope_stop(envelope: _Envelope, hstar: float, headroom: float, rtol: float = 2e-2):
+def _envelope_stop(envelope: _Envelope, hstar: float, headroom: float):
     """``continuation`` stop predicate of one half of a Hopf curve: it ends when the half
-    rises (U* increasing) above ``headroom`` times the lowest traced curve at its M* -- a
-    stretch that high cannot be the lowest curve, like one above the ceiling -- or runs
-    onto a traced curve (same U* and frequency within ``rtol``: the rest is traced)."""
+    rises (U* increasing) above ``headroom`` times the lowest curve traced before at its
+    M*. A stretch that high cannot be the lowest curve, like one above the ceiling."""
     last = []
 
     def stop(problem, X):
         n = problem.vf.n
         u, log_m = float(X[n - 2: n].sum() / hstar), float(X[len(X) - 1])
         rising, last[:] = bool(last) and u > last[0], [u]
-        us, ws = envelope.crossings(log_m)
-        if not us.size:
+        if not rising:
             return False
-        if rising and u > headroom * us.min():
-            return f"rose above {headroom:g} x the lowest traced curve"
-        w = math.sqrt(max(X[3 * n], 0.0)) * TIME_SCALE
-        on = (np.abs(us - u) <= rtol * u) & (np.abs(ws - w) <= rtol * w)
-        return "ran onto a traced curve" if np.any(on) else False
+        us, _ = envelope.crossings(log_m)
+        return bool(us.size) and u > headroom * us.min() and \
+            f"rose above {headroom:g} x the lowest traced curve"
 
     return stop
 

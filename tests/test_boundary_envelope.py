@@ -1,0 +1,85 @@
+"""The stability boundary (Hopf curves traced only where they can be lowest) against a
+brute-force route: the leading real part of the generalized eigenvalues of an AD
+Jacobian of the model's F (CasADi, dense SciPy QZ) scanned along U* at fixed M*, with
+no continuation at all."""
+import casadi as ca
+import numpy as np
+import pytest
+import scipy.linalg
+import scipy.optimize
+
+from fsicas import Scene, build_model, steady_state
+from fsicas.linear.boundary import stability_boundary
+
+
+@pytest.fixture(scope="module")
+def paper_n6():
+    scene = Scene(mstar=1.0, ustar=5.0, modes=6)
+    return scene, build_model(scene)
+
+
+@pytest.fixture(scope="module")
+def leading(paper_n6):
+    """``leading(mstar, ustar) -> (max Re lambda, Im of that lambda)`` of the steady state."""
+    scene, model = paper_n6
+    x, p = ca.MX.sym("x", model.n_state), ca.MX.sym("p", model.rhs.size1_in(1))
+    jac = ca.Function("J", [x, p], [ca.jacobian(model.rhs(x, p), x)])
+
+    def at(mstar, ustar):
+        st = steady_state(scene.replace(mstar=mstar, ustar=ustar), model)
+        lam = scipy.linalg.eigvals(np.array(jac(st.x, st.p)), np.array(model.mass(st.x, st.p)))
+        lam = lam[np.isfinite(lam)]
+        k = int(np.argmax(lam.real))
+        return float(lam[k].real), abs(float(lam[k].imag))
+
+    return at
+
+
+def brute_onset(leading, mstar, top, count=80):
+    """First U* in (0.2, top) where the leading real part turns positive: a scan on
+    ``count`` points, then Brent on the bracketing interval; with the frequency there."""
+    grid = np.linspace(0.2, top, count)
+    re = [leading(mstar, u)[0] for u in grid]
+    k = next(i for i in range(count - 1) if re[i] < 0 <= re[i + 1])
+    u = scipy.optimize.brentq(lambda s: leading(mstar, s)[0], grid[k], grid[k + 1],
+                              xtol=1e-13, rtol=1e-13)
+    return u, leading(mstar, u * (1 + 1e-9))[1]
+
+
+@pytest.fixture(scope="module")
+def boundary(paper_n6):
+    scene, model = paper_n6
+    return stability_boundary(scene, np.logspace(-1.5, 1.5, 7), model)
+
+
+def test_every_boundary_point_is_the_brute_force_onset(boundary, leading):
+    for p in boundary.points:
+        u, omega = brute_onset(leading, p.mstar, 1.5 * p.ustar_crit)
+        assert abs(p.ustar_crit - u) <= 1e-9 * u
+        assert abs(p.omega - omega) <= 1e-7 * omega
+
+
+def test_switches_separate_the_brute_force_branches(boundary, leading):
+    """5 % on each side of every switch the brute-force onset has the frequency of the
+    branch the switch names (the nearer of omega_below and omega_above: frequencies jump
+    at every switch by far more than they drift along a branch over 5 % in M*)."""
+    assert len(boundary.switches) >= 2
+    nearer = lambda w, s: "below" if abs(w - s.omega_below) < abs(w - s.omega_above) else "above"
+    for s in boundary.switches:
+        _, left = brute_onset(leading, s.mstar / 1.05, 2.0 * s.ustar_above)
+        _, right = brute_onset(leading, s.mstar * 1.05, 2.0 * s.ustar_above)
+        assert nearer(left, s) == "below" and nearer(right, s) == "above"
+
+
+def test_traced_curve_points_are_hopf_points(boundary, paper_n6):
+    """Sampled points of every traced curve: at their (M*, U*) the AD Jacobian has an
+    eigenvalue i omega (real part ~0 against omega) at the curve's frequency."""
+    scene, model = paper_n6
+    x, p = ca.MX.sym("x", model.n_state), ca.MX.sym("p", model.rhs.size1_in(1))
+    jac = ca.Function("J", [x, p], [ca.jacobian(model.rhs(x, p), x)])
+    for c in boundary.curves:
+        for k in np.linspace(0, len(c.mstar) - 1, 4).astype(int):
+            st = steady_state(scene.replace(mstar=float(c.mstar[k]), ustar=float(c.ustar[k])), model)
+            lam = scipy.linalg.eigvals(np.array(jac(st.x, st.p)), np.array(model.mass(st.x, st.p)))
+            near = lam[np.argmin(np.abs(lam - 1j * c.omega[k]))]
+            assert abs(near.real) < 1e-5 * c.omega[k] and abs(near.imag - c.omega[k]) < 1e-5 * c.omega[k]
