@@ -1,26 +1,10 @@
-"""The nonlinear beam–bulk-flow model in mass-matrix form ``M(x, p) xdot = F(x, p)``.
+"""The model of one scene structure: the CasADi functions of ``M(x, p) xdot = F(x, p)``.
 
 State ``x = (r_1..r_N, q_1..q_N, Q_1, Q_2)``: modal velocities, modal displacements and
-the inlet flow rates of channel 1 (above, s_1 = -1) and 2 (below, s_2 = +1). With
-``h_c = H_c + s_c y`` and ``G_c = ∫_0^x dh_c/dt = s_c Σ Phi_n r_n`` the formal solutions
-(paper Eqs. 7–12, corrected per ERRATA, derived in ``docs/model.md``) read
-
-    u_c = (Q_c - G_c) / h_c
-    p_c(x) = P0 - M*/2 K0 u_c0|u_c0| - M* [ ∫_0^x g_c + u_c(x)^2 / 2 ]
-    g_c = (dQ_c/dt - s_c Σ Phi_m dr_m/dt) / h_c + gt_c,   gt_c = u_c (f |u_c| - dh_c/dt) / h_c
-
-and give, per channel c and mode n,
-
-    Q row:   dQ_c/dt ∫1/h_c - s_c Σ_m dr_m/dt ∫Phi_m/h_c
-                 = Δp/M* - (K0 u_c0|u_c0| + KL u_c1|u_c1|)/2 - ∫ gt_c
-    beam:    dr_n/dt + M* Σ_c s_c [dQ_c/dt ∫Psi_n/h_c - s_c Σ_m dr_m/dt ∫Psi_n Phi_m/h_c]
-                 = -2 zeta_n w_n r_n - w_n^2 q_n
-                   - M* Σ_c s_c [K0/2 u_c0|u_c0| Phi_n(1) + ∫ gt_c Psi_n + ∫ u_c^2 phi_n / 2]
-                   + ∫ f_contact phi_n
-    kinematics: dq_n/dt = r_n
-
-All integrals are Gauss–Legendre sums over the scene's nodes. u|u| is C^1, so F is
-smooth except for the contact kink ``max(0, eps - h_c)``.
+the inlet flow rates of channel 1 (above) and 2 (below). The equations (paper Eqs. 7–16,
+corrected per ERRATA, derived in ``docs/model.md``) and their lifted Jacobians are
+written in :mod:`.equations`; here they become a :class:`Model` with the modes, the
+quadrature rule and the parameter vector of one scene structure.
 """
 from __future__ import annotations
 
