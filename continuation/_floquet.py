@@ -28,29 +28,32 @@ import scipy.sparse.linalg as spla
 
 from ._threads import single_threaded
 
-#: interval systems up to this size are solved densely (one batched LAPACK solve, with
-#: one BLAS thread), larger ones by SuperLU: the blocks ``[B_L, B_R]`` are nearly dense
-#: (every collocation point couples all n components), so dense LAPACK is the faster
-#: solver up to sizes whose ``NTST`` blocks no longer fit in memory comfortably
-DENSE_MAX = 1024
+#: interval systems up to this size are always solved densely (one batched LAPACK
+#: solve with one BLAS thread); up to ``DENSE_MAX`` when their blocks are at least
+#: ``DENSE_FILL`` full (a modal model couples all n components at every point: dense
+#: LAPACK is 20x faster than SuperLU there), larger or sparser ones (a discretized
+#: PDE with a banded ``F_x``) by SuperLU per interval
+DENSE_ALWAYS, DENSE_MAX, DENSE_FILL = 96, 1024, 0.25
 
 
 def transfer_matrices(J, n: int, ntst: int, ncol: int, full: bool = False) -> np.ndarray:
     """``A_i`` (shape ``(ntst, n, n)``) with ``v_{i+1,0} = A_i v_{i,0}``, from the
     sparse collocation Jacobian ``J`` (rows of interval ``i`` are
     ``i n NCOL .. (i+1) n NCOL``); with ``full`` the ``(ntst, n NCOL, n)`` maps to all
-    nodes ``v_{i,1..NCOL}``. Blocks of size ``n NCOL <= DENSE_MAX`` are solved by
-    one batched dense solve with one BLAS thread (``_threads``; at n = 82, NCOL = 4,
-    NTST = 20: 0.13 s, against 2.5 s by SuperLU per interval), larger ones by one
-    SuperLU per interval."""
+    nodes ``v_{i,1..NCOL}``. Small or well-filled blocks (``DENSE_ALWAYS``,
+    ``DENSE_MAX``, ``DENSE_FILL``) are solved by one batched dense solve with one BLAS
+    thread (``_threads``; at n = 82, NCOL = 4, NTST = 20: 0.13 s, against 2.5 s by
+    SuperLU per interval), the others by one SuperLU per interval."""
     m = n * ncol
-    if m <= DENSE_MAX:   # scatter into dense arrays, one batched solve
-        B = _dense_blocks(J, n, ntst, ncol)
-        with single_threaded():
+    J = sp.csc_matrix(J)
+    fill = np.count_nonzero(J.indices < m * ntst) / (m * ntst * (m + n))
+    with single_threaded():
+        if m <= DENSE_ALWAYS or (m <= DENSE_MAX and fill >= DENSE_FILL):   # batched
+            B = _dense_blocks(J, n, ntst, ncol)
             out = np.linalg.solve(B[:, :, n:], -B[:, :, :n])
-    else:
-        out = np.array([-spla.splu(sp.csc_matrix(r)).solve(l.toarray())
-                        for r, l in _sparse_blocks(J, n, ntst, ncol)])
+        else:
+            out = np.array([-spla.splu(sp.csc_matrix(r)).solve(l.toarray())
+                            for r, l in _sparse_blocks(J, n, ntst, ncol)])
     return out if full else out[:, -n:, :]
 
 
