@@ -231,14 +231,20 @@ def test_sampled_orbit_guess_and_compile_cache():
 
 
 def test_dense_and_sparse_condensation_agree(monkeypatch):
-    """Both condensation paths (batched dense for small blocks, SuperLU per interval
-    for large ones) give the same transfer matrices."""
+    """Both condensation paths (batched dense for small or well-filled blocks, SuperLU
+    per interval for the others) give the same transfer matrices."""
     from continuation import _floquet
     F, e = _ring(), 0.5
     prob, X = _solve(F, e, 12, 3, 2 * np.pi / np.sqrt(1 - e ** 2))
+    calls = []
+    monkeypatch.setattr(_floquet, "_sparse_blocks",
+                        lambda *a, f=_floquet._sparse_blocks: calls.append(1) or f(*a))
     dense = prob.transfer_matrices(X, full=True)
+    assert not calls
+    monkeypatch.setattr(_floquet, "DENSE_ALWAYS", 0)
     monkeypatch.setattr(_floquet, "DENSE_MAX", 0)
     sparse = prob.transfer_matrices(X, full=True)
+    assert calls
     assert np.max(np.abs(dense - sparse)) < 1e-12 * np.max(np.abs(dense))
 
 
