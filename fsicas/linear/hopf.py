@@ -5,7 +5,8 @@ The model is handed to the library through the adapter of :mod:`fsicas.linear.ad
 steady branch is continued in Π from a small U*; each Hopf point found is located by the
 library (Newton on the Hopf system), with its first Lyapunov coefficient l1 (< 0:
 supercritical, a small stable cycle is born; > 0: subcritical, a jump to large amplitude
-with hysteresis).
+with hysteresis). A located Hopf point is continued in (Π, log10 M*) as a Hopf curve
+(:func:`trace_hopf_curve`, the curves of :mod:`fsicas.linear.boundary`).
 """
 from __future__ import annotations
 
@@ -14,7 +15,6 @@ from dataclasses import dataclass, field
 from functools import cached_property
 from typing import Literal
 
-import casadi as ca
 import numpy as np
 
 import continuation as C
