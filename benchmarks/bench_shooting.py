@@ -32,6 +32,7 @@ import argparse
 import json
 import os
 import platform
+import sys
 import tempfile
 from pathlib import Path
 
@@ -171,9 +172,11 @@ def main() -> None:
                   f"{known[str(n)]['gap_ratio']:.3f}; {load()} -->", flush=True)
             runs = {v: [] for v in ["old", *args.variants]}
             for _ in range(args.repeats):
-                runs["old"].append(run_child(base.path, CHILD, [n, start, "old"]))
-                for v in args.variants:
-                    runs[v].append(run_child(ROOT, CHILD, [n, start, v]))
+                for v in runs:
+                    runs[v].append(run_child(base.path if v == "old" else ROOT, CHILD,
+                                             [n, start, v]))
+                    print(f"<!-- N = {n} {v}: {runs[v][-1]['time']:.2f} s -->", file=sys.stderr,
+                          flush=True)
             for v in args.variants:
                 print(row(n, runs["old"], runs[v], v), flush=True)
             print(f"<!-- after N = {n}: {load()} -->", flush=True)
