@@ -111,7 +111,7 @@ def main(argv=None) -> int:
     ap.add_argument("--ustar", type=float, default=6.8)
     ap.add_argument("--ntst", type=int, nargs="+", default=[100, 200, 400])
     ap.add_argument("--shoot", nargs="+", default=["12:1e-8", "12:1e-10"],
-                    help="segments:tol of each shooting run")
+                    help="segments:tol of each shooting run, or 'none'")
     ap.add_argument("--ref-ntst", type=int, default=800)
     ap.add_argument("--ref-shoot", default="24:1e-12", help="segments:tol, or 'none'")
     ap.add_argument("--points", type=int, default=4)
@@ -139,7 +139,7 @@ def main(argv=None) -> int:
     print("# time integration from the reference state", json.dumps(
         time_integration(case, ref_c.points[0], args.ti_periods)), flush=True)
     jobs = [("collocation", n) for n in args.ntst]
-    shots = [("shooting", s) for s in args.shoot]
+    shots = [("shooting", s) for s in args.shoot if s != "none"]
     for k in range(max(len(jobs), len(shots))):          # interleaved
         for route, size in (jobs[k:k + 1] + shots[k:k + 1]):
             if route == "collocation":
