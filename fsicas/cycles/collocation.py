@@ -39,10 +39,9 @@ import continuation as C
 
 from ..linear.adapter import PI, pi_of
 from ..linear.hopf import CriticalVelocityError, HopfPoint, critical_velocity, flutter_problem
-from ..model import contact
 from ..model.assembly import Model, build_model
 from ..scene import Scene
-from .gauge import Gauge
+from .gauge import Gauge, PolynomialExtrema
 from .records import BranchRecord, CycleMeasures, check_settings
 
 __all__ = ["CycleSettings", "CyclePoint", "CycleBranch", "CycleKind", "CycleStatus",
@@ -201,24 +200,17 @@ def _status(branch, contact, settings) -> tuple[CycleStatus, str]:
 
 
 class _ProfileGauge(Gauge):
-    """Extrema over the cycle from the collocation polynomial of X = (nodes, 100 T, Π),
-    exact for the polynomial (``continuation.CycleProblem.extrema``): the tip
-    ``y(1, t)`` and the gaps ``h_c(x_j, t) = H_c(x_j) + s_c y(x_j, t)`` at GAP_POINTS."""
+    """Measures of X = (nodes, 100 T, Π) on the collocation polynomial, the extrema exact
+    (:class:`fsicas.cycles.gauge.PolynomialExtrema`)."""
 
     def __init__(self, model: Model, x_eq):
         super().__init__(model, x_eq)
-        n = model.n_modes
-        rows = lambda phi: np.hstack([np.zeros((phi.shape[1], n)), phi.T,
-                                      np.zeros((phi.shape[1], 2))])
-        self._tip_row = rows(model.tip.phi[:, 1:])
-        phi = model.basis_at(contact.GAP_POINTS).phi
-        self._gap_rows = np.vstack([s * rows(phi) for s in contact.WALL_SIGNS])
-        self._walls = np.concatenate([wall(contact.GAP_POINTS) for wall in model.scene.walls])
+        self._extrema = PolynomialExtrema(model)
         self._last_gap = (None, None)
 
     def record(self, problem, X) -> dict:
         """The fields of :class:`CyclePoint` at X (branch columns)."""
-        y_min, y_max = (float(e[0]) for e in problem.extrema(X, self._tip_row))
+        y_min, y_max = self._extrema.tip(problem, X)
         gap = self.gap(problem, X)
         return {**self.common(problem, X), "tip_amplitude": (y_max - y_min) / 2,
                 "min_gap": gap, "gap_ratio": gap / self.eps}
@@ -231,6 +223,5 @@ class _ProfileGauge(Gauge):
         """min over the cycle of the gap (kept for the last X: event and record share it)."""
         key = (id(problem), np.asarray(X).tobytes())
         if self._last_gap[0] != key:
-            lowest = problem.extrema(X, self._gap_rows)[0]
-            self._last_gap = (key, float(np.min(self._walls + lowest)))
+            self._last_gap = (key, self._extrema.min_gap(problem, X))
         return self._last_gap[1]

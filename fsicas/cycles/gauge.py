@@ -18,7 +18,7 @@ import numpy as np
 from ..linear.adapter import LOG_M, PI_SCALE, TIME_SCALE, steady_ustar
 from ..model import contact
 
-__all__ = ["Gauge", "PERIOD_COLUMN"]
+__all__ = ["Gauge", "PolynomialExtrema", "PERIOD_COLUMN"]
 
 PERIOD_COLUMN = "cycle_period"
 """Branch column of the period in units of T (the library's ``period`` is in T/100)."""
@@ -50,3 +50,27 @@ class Gauge:
     def min_gap(self, x) -> np.ndarray:
         """``min_{x, c} h_c(x)`` of each state (row): :func:`fsicas.model.contact.gaps`."""
         return contact.gaps(self.model, x).min(axis=(1, 2))
+
+
+class PolynomialExtrema:
+    """Tip extremes and the minimal gap of a collocated cycle, exact for its polynomial
+    (``continuation.CycleProblem.extrema``): the tip ``y(1, t)`` and the gaps
+    ``h_c(x_j, t) = H_c(x_j) + s_c y(x_j, t)`` at ``GAP_POINTS``, both walls."""
+
+    def __init__(self, model):
+        n = model.n_modes
+        rows = lambda phi: np.hstack([np.zeros((phi.shape[1], n)), phi.T,
+                                      np.zeros((phi.shape[1], 2))])
+        self._tip_row = rows(model.tip.phi[:, 1:])
+        phi = model.basis_at(contact.GAP_POINTS).phi
+        self._gap_rows = np.vstack([s * rows(phi) for s in contact.WALL_SIGNS])
+        self._walls = np.concatenate([wall(contact.GAP_POINTS) for wall in model.scene.walls])
+
+    def tip(self, problem, X) -> tuple[float, float]:
+        """``(min_t y(1, t), max_t y(1, t))``."""
+        low, high = problem.extrema(X, self._tip_row)
+        return float(low[0]), float(high[0])
+
+    def min_gap(self, problem, X) -> float:
+        """``min_{t, x_j, c} h_c(x_j, t)``."""
+        return float(np.min(self._walls + problem.extrema(X, self._gap_rows)[0]))

@@ -20,8 +20,9 @@ step.
 Per point the same measures as the shooting route (:class:`ImpactPoint`: U*, Δp,
 period, tip half-amplitude, min gap and its ratio to eps, contact intervals per period,
 Floquet multipliers and stability, wall time), plus NTST and the library's a-posteriori
-error indicator. Extrema are taken on the collocation polynomial (``samples`` per mesh
-interval, i.e. dense at the impacts) and refined by bounded Brent in t.
+error indicator. Extrema are those of the collocation polynomial, exact in t
+(:class:`fsicas.cycles.gauge.PolynomialExtrema`); the contact intervals are counted on
+``samples`` points per mesh interval (dense at the impacts).
 """
 from __future__ import annotations
 
@@ -30,7 +31,6 @@ from dataclasses import dataclass
 
 import numpy as np
 import scipy.interpolate
-import scipy.optimize
 
 import continuation as C
 
@@ -38,7 +38,7 @@ from ..linear.adapter import LOG_M, PI, PI_SCALE, TIME_SCALE, flutter_field, pi_
 from ..linear.steady import steady_state
 from ..model.assembly import Model, build_model
 from ..scene import Scene
-from .gauge import Gauge
+from .gauge import Gauge, PolynomialExtrema
 from .impacting import ImpactBranch, ImpactPoint, shooting_points
 from .records import check_settings
 
@@ -184,39 +184,26 @@ def _result(scene, eps, branch, settings, wall_time) -> CollocatedImpactBranch:
 
 
 class _PolynomialGauge(Gauge):
-    """Measures of collocation unknowns X = (nodes, 100 T, Π) on the polynomial:
-    ``samples`` per mesh interval (dense where the mesh is, at the impacts), extrema
-    refined by bounded Brent in t."""
+    """Measures of collocation unknowns X = (nodes, 100 T, Π) on the polynomial: the
+    extrema exact (:class:`fsicas.cycles.gauge.PolynomialExtrema`), the contact
+    intervals counted on ``samples`` points per mesh interval (dense at the impacts)."""
 
     def __init__(self, model: Model, x_eq, samples: int):
         super().__init__(model, x_eq)
         self.samples, self.t_last = samples, time.perf_counter()
+        self._extrema = PolynomialExtrema(model)
 
     def record(self, problem, X) -> dict:
         """The columns of one branch point (the fields of :class:`CollocatedImpactPoint`)."""
         mesh = problem.mesh
         t = (mesh[:-1, None] + np.diff(mesh)[:, None] * np.arange(self.samples)
              / self.samples).ravel()
-        x = problem.evaluate(X, t)
-        y, gap = self.tip(x), self.min_gap(x)
-        inside = gap < self.eps
+        inside = self.min_gap(problem.evaluate(X, t)) < self.eps
         impacts = int(np.sum(inside & ~np.roll(inside, 1))) if not inside.all() else 1
-        lowest = self._refined(problem, X, t, gap, self.min_gap)
-        top = -self._refined(problem, X, t, -y, lambda x: -self.tip(x))
+        y_min, y_max = self._extrema.tip(problem, X)
+        lowest = self._extrema.min_gap(problem, X)
         now = time.perf_counter()
         wall, self.t_last = now - self.t_last, now
-        return {**self.common(problem, X), "tip_amplitude": (top - self._refined(
-                    problem, X, t, y, self.tip)) / 2, "min_gap": lowest,
-                "gap_ratio": lowest / self.eps, "impacts": impacts, "ntst": problem.ntst,
-                "wall_time": wall}
-
-    @staticmethod
-    def _refined(problem, X, t, values, f) -> float:
-        """min_t f(x(t)): the best of the samples ``values`` at ``t``, refined by bounded
-        Brent between its neighbours."""
-        k = int(np.argmin(values))
-        lo, hi = t[k - 1] if k else t[-1] - 1.0, t[k + 1] if k + 1 < t.size else 1.0
-        g = lambda s: float(f(problem.evaluate(X, np.atleast_1d(s) % 1.0))[0])
-        res = scipy.optimize.minimize_scalar(g, method="bounded", bounds=(lo, hi),
-                                             options={"xatol": 1e-13})
-        return float(min(res.fun, values[k]))
+        return {**self.common(problem, X), "tip_amplitude": (y_max - y_min) / 2,
+                "min_gap": lowest, "gap_ratio": lowest / self.eps, "impacts": impacts,
+                "ntst": problem.ntst, "wall_time": wall}
