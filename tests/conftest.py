@@ -42,3 +42,25 @@ def impact_settings() -> Settings:
     """Integrator settings that resolve impacts: rtol 1e-7, atol 1e-9, samples every
     1e-4, chunks of 0.5."""
     return Settings(rtol=1e-7, atol=1e-9, dt_out=1e-4, chunk=0.5)
+
+
+@pytest.fixture(scope="session")
+def period3_impacting_run():
+    """M* = 1, U* = 7, N = 4, k* = 1e8, eps/H = 1e-2, smoothing 0.1: an IDAS run of 6 time
+    units that settles on an impacting cycle of three tip swings, and that cycle as
+    ``cycle_from_trajectory`` finds it (shared by the shooting and collocation tests)."""
+    from types import SimpleNamespace
+
+    from fsicas.cycles.impacting import cycle_from_trajectory
+    from fsicas.model import build_model
+    from fsicas.timedomain.run import run_case
+    scene = Scene(mstar=1.0, ustar=7.0, zeta=0.01, modes=4, contact=True,
+                  contact_stiffness=1e8, contact_eps=1e-2, contact_smoothing=0.1)
+    model = build_model(scene)
+    run = run_case(scene, t_end=6.0, model=model, perturbation=0.3,
+                   settings=Settings(method="idas", rtol=1e-8, atol=1e-10, dt_out=2e-5))
+    t, x = run.trajectory.t, run.trajectory.x
+    state, period, swings = cycle_from_trajectory(model, t, x)
+    y = model.tip_deflection(x[t > t[-1] - period])
+    return SimpleNamespace(scene=scene, model=model, run=run, state=state, period=period,
+                           swings=swings, amplitude=(y.max() - y.min()) / 2)

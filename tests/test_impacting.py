@@ -108,27 +108,20 @@ def test_shooting_passes_first_contact_onto_unstable_impacting_cycles():
 
 
 @pytest.mark.slow
-def test_period3_impacting_cycle_matches_time_integration():
+def test_period3_impacting_cycle_matches_time_integration(period3_impacting_run):
     """M* = 1, U* = 7, N = 4, k* = 1e8: time integration settles on an impacting cycle of
     three tip swings; shooting from its last three swings converges to that cycle (period
     and tip amplitude as integrated), stable, and the continuation keeps it stable."""
-    from fsicas.timedomain.run import run_case
-    scene = Scene(mstar=1.0, ustar=7.0, zeta=0.01, modes=4, **IMPACT)
-    model = build_model(scene)
-    run = run_case(scene, t_end=6.0, model=model, perturbation=0.3,
-                   settings=Settings(method="idas", rtol=1e-8, atol=1e-10, dt_out=2e-5))
-    t, x = run.trajectory.t, run.trajectory.x
-    state, period, k = cycle_from_trajectory(model, t, x)
-    assert k == 3
-    tail = t > t[-1] - period
-    y = x[tail, model.n_modes:2 * model.n_modes] @ model.tip.phi[:, 1]
-    br = impacting_branch(scene, state, period, run.steady.pressure_drop, model=model,
+    r = period3_impacting_run
+    period = r.period
+    assert r.swings == 3
+    br = impacting_branch(r.scene, r.state, period, r.run.steady.pressure_drop, model=r.model,
                           settings=ImpactSettings(max_points=2, ds=0.05, ds_max=0.5))
     assert len(br.points) == 2
     p = br.points[0]
     assert abs(p.ustar - 7.0) < 1e-8
     assert abs(p.period / period - 1) < 1e-5
-    assert abs(p.tip_amplitude / ((y.max() - y.min()) / 2) - 1) < 1e-4
+    assert abs(p.tip_amplitude / r.amplitude - 1) < 1e-4
     assert p.gap_ratio < 1 and p.impacts >= 1
     assert all(q.stable for q in br.points)
     assert max(np.abs(p.nontrivial_multipliers)) < 0.9

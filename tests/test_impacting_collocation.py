@@ -7,7 +7,7 @@ import pytest
 
 from fsicas import Scene
 from fsicas.cycles import (CollocatedImpactBranch, CollocationImpactSettings, ImpactSettings,
-                           cycle_branch, cycle_from_trajectory, impacting_branch,
+                           cycle_branch, impacting_branch,
                            impacting_collocation_branch, pre_contact_start)
 from fsicas.linear.steady import steady_state
 from fsicas.model import build_model
@@ -117,27 +117,21 @@ def test_collocation_equals_shooting_at_the_same_ustar():
 
 
 @pytest.mark.slow
-def test_subharmonic_cycle_from_time_integration():
+def test_subharmonic_cycle_from_time_integration(period3_impacting_run):
     """M* = 1, U* = 7, N = 4: IDAS integration settles on a stable cycle of three tip
     swings with contacts; collocation started from it (the start mesh equidistributed on
     the integrated guess) converges to that cycle: period and amplitude as integrated,
     stable, and the next branch point too."""
-    from fsicas.timedomain.run import run_case
-    scene = Scene(mstar=1.0, ustar=7.0, zeta=0.01, modes=4, **IMPACT)
-    model = build_model(scene)
-    run = run_case(scene, t_end=6.0, model=model, perturbation=0.3,
-                   settings=Settings(method="idas", rtol=1e-8, atol=1e-10, dt_out=2e-5))
-    t, x = run.trajectory.t, run.trajectory.x
-    state, period, k = cycle_from_trajectory(model, t, x)
-    assert k == 3
-    y = model.tip_deflection(x[t > t[-1] - period])
-    br = impacting_collocation_branch(scene, state, period, run.steady.pressure_drop,
+    r = period3_impacting_run
+    scene, model, period = r.scene, r.model, r.period
+    assert r.swings == 3
+    br = impacting_collocation_branch(scene, r.state, period, r.run.steady.pressure_drop,
                                       model=model, settings=CollocationImpactSettings(
                                           ntst=300, max_points=2, ds=0.1, ds_max=1.0))
     p = br.points[0]
     assert len(br.points) == 2 and abs(p.ustar - 7.0) < 1e-8
     assert abs(p.period / period - 1) < 1e-5
-    assert abs(p.tip_amplitude / ((y.max() - y.min()) / 2) - 1) < 1e-4
+    assert abs(p.tip_amplitude / r.amplitude - 1) < 1e-4
     assert p.gap_ratio < 1 and p.impacts >= 1
     assert all(q.stable for q in br.points)
     miss, amplitude, _ = _one_period(model, scene, p, method="idas", rtol=1e-10)

@@ -171,7 +171,6 @@ def test_bad_backend_raises_naming_the_field():
 
 def test_mass_action_is_validated():
     F, M = _vdp_mass()
-    x, p = ca.SX.sym("x", 2), ca.SX.sym("p", 2)
     with pytest.raises(ValueError, match="mass_action needs a mass matrix"):
         C.VectorField(F, None, ("mu", "k"), mass_action=M)
     with pytest.raises(ValueError, match="mass_action must be a casadi.Function"):
