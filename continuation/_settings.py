@@ -250,10 +250,11 @@ class ShootingSettings:
     (``[dR/dx, dR/dp_free] = M^{-1} [F_x - d(M v)/dx, F_p - d(M v)/dp]`` at
     ``v = R`` from the field's Jacobians, evaluated once per right-hand side and
     multiplied into all directions, the non-free parameters fixed in the
-    integrator, and without that second-order term: about 10x faster on a modal
-    model, but the inexact Newton matrix moves the Jacobian by 1e-10 to 1e-8
-    relative at ``abstol = reltol = 1e-10``, most through wall impacts, within the
-    integration error of either). threads : segments
+    integrator, and without that second-order term: 6-15x faster on a modal
+    model with wall impacts). The two integrate the same residual and their
+    Jacobians differ by integration error only: each is equally far from the limit
+    both reach as the tolerances shrink (the tests check 'fast' against a reference
+    at 1e-13), so at equal tolerance neither is the more accurate. threads : segments
     integrated in parallel by the 'blocks' route (CasADi ``map`` with threads; the
     same numbers as one thread).
     """

@@ -26,8 +26,9 @@ sensitivity right-hand side (AD of ``M^{-1} F`` in all 24 directions, ~20 %) and
 second-order term of the augmented Newton matrix (AD of that in 24 directions
 again, ~70 %); CVODES itself and Python take the rest. ``sensitivities='fast'``
 removes both: the rate's Jacobian by formula (:func:`rate_function`) times all
-directions, and no second-order term (10x faster, but only equal to 'exact' within
-1e-10 to 1e-8 relative, see :class:`ShootingSettings`). Compiling the integrator's
+directions, and no second-order term (15x faster; the two routes differ by
+integration error only, 7e-10 relative at 1e-10 where each is 4e-9 off a reference
+at 1e-13, see :class:`ShootingSettings`). Compiling the integrator's
 functions to C (CasADi's ``jit`` option) keeps 'exact' to the last bit at 3.7x the
 speed (N = 4), but compiled for 260 s at N = 4 in every new process, so it is not
 offered; threads pay only on an otherwise idle machine (1.8x on 2 cores).

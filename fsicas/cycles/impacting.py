@@ -13,15 +13,16 @@ T/100), with the contact law on.
 The Jacobian is the library's block route (``ShootingSettings(jacobian="blocks")``):
 all segments integrated in one mapped call with CVODES forward sensitivities in the
 n + 2 directions (x_i, T, Π) only, over ``ImpactSettings.threads`` threads, and kept
-for the last point, so the Floquet multipliers reuse the tangent's Jacobian. Its
-cost is the sensitivities through the impacts (tolerance 1e-10): at N = 10 CasADi's
-AD of M^{-1} F in the 24 directions and the second-order term of CVODES' augmented
-Newton matrix take ~90 % of it. ``ImpactSettings(sensitivities="fast")`` forms the
-sensitivity equations from the model's Jacobians instead and drops that term
-(about 10x faster at N = 10), but moves the Jacobian and multipliers by 1e-10 to
-1e-8 relative (most through impacts, within the integration error of either route),
-so the default is "exact"; ``benchmarks/bench_shooting.py`` measures both against
-the first version of this module.
+for the last point, so the Floquet multipliers reuse the tangent's Jacobian. By default
+(``sensitivities="fast"``) the sensitivity equations are formed from the model's own
+Jacobians (``continuation._shooting.rate_function``); ``"exact"`` lets CasADi
+differentiate ``M^{-1} F`` in all n + 2 directions and in its Newton matrix, 15x slower
+at N = 10. Both routes integrate the same residual; their Jacobians and multipliers
+differ by integration error only: against a reference at tolerance 1e-13, at N = 10
+and tol = 1e-10 both are off by 3.9e-9 (Jacobian) and 1.3e-8 (multipliers) and differ
+from each other by 7e-10 and 6e-11; tightening ``tol`` to 1e-12 makes "fast" 17-30x
+more accurate and still 8x faster than "exact" at 1e-10
+(``benchmarks/bench_shooting_accuracy.py``, ``docs/performance.md``).
 
 Start points: a contact-free collocation cycle shortly before contact
 (:func:`pre_contact_start` of a :func:`fsicas.cycles.cycle_branch`) or the settled cycle
@@ -67,7 +68,7 @@ class ImpactSettings:
     conditions); ``ds``/``ds_max``: arclength steps (Euclidean norm of the shooting
     points, 100 T and Π); ``max_points``: branch points; ``samples``: output points per
     segment for the measurements (min gap, amplitude, impacts); ``sensitivities``:
-    ``"exact"`` or ``"fast"`` (``continuation.ShootingSettings``, module docstring);
+    ``"fast"`` or ``"exact"`` (``continuation.ShootingSettings``, module docstring);
     ``threads``: segments integrated in parallel (the same numbers on any count)."""
 
     segments: int = 12
@@ -77,7 +78,7 @@ class ImpactSettings:
     ds_max: float = 0.2
     max_points: int = 20
     samples: int = 2000
-    sensitivities: str = "exact"
+    sensitivities: str = "fast"
     threads: int = 2
 
     def __post_init__(self):
