@@ -19,7 +19,6 @@ error, which is what their difference has to be compared with.
 from __future__ import annotations
 
 import argparse
-import json
 import math
 import os
 import platform
