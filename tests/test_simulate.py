@@ -115,14 +115,18 @@ def test_perturbation_array_shape_checked(model, damped_scene_u7):
         initial_state(model, steady, np.zeros(3))
 
 
-def test_closing_gap_is_a_reported_failure_not_nan(damped_scene_u7):
-    """A contact law too soft for the impact: the gap closes; the run says so, no NaN."""
+def test_closing_gap_is_a_reported_failure_not_nan(damped_scene_u7, capfd):
+    """A contact law too soft for the impact: the gap closes; the run says so, no NaN,
+    and nothing of the solver's retries reaches the terminal."""
     scene = damped_scene_u7.replace(ustar=8.0, contact=True, contact_stiffness=1e4, contact_eps=1e-3)
     model = build_model(scene)
     steady = steady_state(scene, model)
+    capfd.readouterr()
     traj = simulate(model, steady, 3.0, settings=Settings(rtol=1e-7, atol=1e-9))
     assert traj.status == "failed" and traj.gap_closed and "gap closed" in traj.message
     assert np.all(np.isfinite(traj.x)) and traj.t[-1] < 3.0
+    printed = capfd.readouterr()
+    assert printed.out == "" and printed.err == ""
 
 
 def test_explicit_jacobian_through_the_mass_action_equals_ad_through_m(damped_scene_u7):

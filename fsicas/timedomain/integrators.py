@@ -18,10 +18,16 @@ Time is an input of the integrator: the pressure drop is ``Δp(t)`` of a
 ``dt_out``; after each chunk the samples are checked (finite, both gaps ``h_c > 0`` at
 101 points along the beam) and handed to a ``monitor`` (outcome classification) that may
 stop the run early. Solver failures (step-size or Newton failures, too much work) are
-returned as ``status="failed"`` with the solver's message, never as NaN.
+returned as ``status="failed"`` with the solver's message, never as NaN. What SUNDIALS
+prints through CasADi during a call (``res failed: ... NaN detected``, ``the residual
+function failed unrecoverably``: a gap closing inside a step, which the solver then
+retries with a smaller step or reports) is kept off the terminal and appended to the
+solver's error when the call fails (:func:`solver_output`).
 """
 from __future__ import annotations
 
+import contextlib
+import io
 import math
 import time
 from dataclasses import dataclass, field
@@ -176,9 +182,11 @@ class Integrator:
     def run(self, x0, pe) -> tuple[np.ndarray, int]:
         """States at the chunk's output grid (n_state, n_out) and the solver steps."""
         if self._idas is not None:
-            return self._run_idas(x0, pe)
+            with solver_output():
+                return self._run_idas(x0, pe)
         if self._fn is not None:
-            out = self._fn(x0=x0, p=pe)
+            with solver_output():
+                out = self._fn(x0=x0, p=pe)
             return np.array(out["xf"]), int(self._fn.stats().get("nsteps", 0))
         return self._run_scipy(x0, pe)
 
@@ -250,6 +258,22 @@ def _checked_x0(model, x0):
            f"x0 must hold {model.n_state} finite values")
     require(float(gaps(model, x0).min()) > 0, "x0 puts the beam through a wall (a gap h_c <= 0)")
     return x0
+
+
+@contextlib.contextmanager
+def solver_output():
+    """Run a CasADi/SUNDIALS call with what it prints to ``sys.stderr`` captured (CasADi
+    writes there through Python): dropped if the call succeeds (retried steps), appended
+    to the ``RuntimeError`` if it fails. ``sys.stderr`` is restored on exit."""
+    buffer = io.StringIO()
+    try:
+        with contextlib.redirect_stderr(buffer):
+            yield
+    except RuntimeError as err:
+        printed = buffer.getvalue().strip()
+        if not printed:
+            raise
+        raise RuntimeError(f"{err}\n{printed}") from err
 
 
 def _loop(model, steady, schedule, integrator, x0, n_chunks, monitor) -> Trajectory:
