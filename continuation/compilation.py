@@ -10,6 +10,13 @@ also in a new process, only loads it (and a second call in the same process retu
 loaded function). Libraries are built in a private temporary directory and moved into
 place with ``os.replace``, so concurrent processes never see a partial file.
 
+Loading a library runs its code, so the cache is trusted only as far as it is private:
+the cache directory is created with mode 0700 and refused (``RuntimeError``) when it or
+a library in it belongs to another user or is writable by group or others; every
+library has the sha256 of its bytes recorded beside it (``<library>.sha256``) when it
+is built, and a library whose bytes do not match its record (planted, truncated or
+altered after the build) is rebuilt instead of loaded.
+
 Default flags: ``-O1`` for SX functions (straight-line code, where -O2/-O3 compile times
 grow superlinearly with the size of one function body for no run-time gain) and ``-O3``
 for MX functions (loops over dense matrix products: measured 1.2x faster than -O2 and
@@ -27,6 +34,7 @@ import os
 import platform
 import shlex
 import shutil
+import stat
 import subprocess
 import tempfile
 import warnings
@@ -35,7 +43,7 @@ from pathlib import Path
 import casadi as ca
 
 __all__ = ["compile_function", "compiled_or_none", "default_cache_dir", "default_flags",
-           "find_compiler", "has_compiler", "library_path"]
+           "find_compiler", "has_compiler", "library_path", "check_private"]
 
 _FLAGS_SX = ("-O1",)
 _FLAGS_OTHER = ("-O3",)
@@ -116,11 +124,56 @@ def cache_key(fn: ca.Function, compiler: str, flags: tuple, derivatives: bool) -
     return h.hexdigest()
 
 
+def check_private(path: Path) -> None:
+    """RuntimeError unless ``path`` belongs to this user and is not writable by group or
+    others (POSIX; nothing is checked where there are no user ids)."""
+    if not hasattr(os, "getuid"):
+        return
+    st = path.stat()
+    problems = []
+    if st.st_uid != os.getuid():
+        problems.append(f"owned by user id {st.st_uid}")
+    if st.st_mode & (stat.S_IWGRP | stat.S_IWOTH):
+        problems.append(f"writable by group or others (mode {oct(st.st_mode & 0o777)})")
+    if problems:
+        raise RuntimeError(
+            f"refusing to load compiled code from {path}: it is {' and '.join(problems)}; "
+            "use a private cache directory (CONTINUATION_CACHE or FSICAS_CACHE, or chmod go-w)")
+
+
+def _digest(path: Path) -> str:
+    return hashlib.sha256(path.read_bytes()).hexdigest()
+
+
+def _record(target: Path) -> Path:
+    """Where the sha256 of the library ``target`` is recorded."""
+    return target.with_name(target.name + ".sha256")
+
+
+def _trusted(target: Path) -> bool:
+    """Whether ``target`` exists, is private and matches its recorded sha256."""
+    if not target.exists():
+        return False
+    check_private(target)
+    record = _record(target)
+    try:
+        return record.read_text().strip() == _digest(target)
+    except OSError:
+        return False
+
+
+def _cache_directory(cache: Path) -> Path:
+    """``cache``, created with mode 0700 if missing, and checked private."""
+    cache.mkdir(mode=0o700, parents=True, exist_ok=True)
+    check_private(cache)
+    return cache
+
+
 def _build(fn: ca.Function, compiler: str, flags: tuple, derivatives: bool,
            target: Path, timeout) -> None:
-    """Generate, compile and atomically move the library of ``fn`` to ``target``."""
+    """Generate, compile and atomically move the library of ``fn`` and its sha256
+    record to ``target``."""
     global compile_count
-    target.parent.mkdir(parents=True, exist_ok=True)
     with tempfile.TemporaryDirectory(dir=target.parent, prefix=".build-") as tmp:
         source = ca.CodeGenerator(f"{fn.name()}.c", {"with_header": False})
         source.add(fn)
@@ -136,6 +189,10 @@ def _build(fn: ca.Function, compiler: str, flags: tuple, derivatives: bool,
         if done.returncode != 0:
             raise RuntimeError(f"compiling {fn.name()} failed ({' '.join(cmd)}):\n"
                                f"{done.stderr[-2000:]}")
+        os.chmod(so_tmp, 0o700)
+        record_tmp = Path(tmp) / "out.sha256"
+        record_tmp.write_text(_digest(Path(so_tmp)) + "\n")
+        os.replace(record_tmp, _record(target))
         os.replace(so_tmp, target)
         compile_count += 1
 
@@ -156,14 +213,16 @@ def compile_function(fn: ca.Function, cache_dir=None, flags=None,
     ``flags``: optimization flags (e.g. ``["-O2"]``); None: :func:`default_flags`.
     ``timeout``: seconds allowed to the compiler. ``derivatives``: also compile
     ``fn.jacobian()`` so the result can be differentiated (first derivatives only).
-    Raises RuntimeError when no C compiler is available or compilation fails.
+    Raises RuntimeError when no C compiler is available, compilation fails or the
+    cache is not private (module docstring).
     """
     target = library_path(fn, cache_dir, flags, derivatives)
-    if not target.exists():
-        opt = default_flags(fn) if flags is None else tuple(flags)
-        _build(fn, find_compiler(), opt, derivatives, target, timeout)
     key = (str(target), fn.name())
     if key not in _LOADED:
+        _cache_directory(target.parent)
+        if not _trusted(target):
+            opt = default_flags(fn) if flags is None else tuple(flags)
+            _build(fn, find_compiler(), opt, derivatives, target, timeout)
         _LOADED[key] = ca.external(fn.name(), str(target))
     return _LOADED[key]
 
