@@ -71,8 +71,14 @@ class Scene:
 
     def __post_init__(self):
         _validate(self)
-        if not np.isscalar(self.zeta):
-            object.__setattr__(self, "zeta", tuple(float(z) for z in self.zeta))
+        for name in _REALS:       # NumPy scalars and ints stored as plain floats
+            object.__setattr__(self, name, float(getattr(self, name)))
+        object.__setattr__(self, "modes", int(self.modes))
+        object.__setattr__(self, "contact", bool(self.contact))
+        if self.quad_nodes is not None:
+            object.__setattr__(self, "quad_nodes", int(self.quad_nodes))
+        object.__setattr__(self, "zeta", float(self.zeta) if _is_scalar(self.zeta)
+                           else tuple(float(z) for z in self.zeta))
 
     # -- derived -------------------------------------------------------------------
     @property
@@ -161,6 +167,27 @@ def load_scene(path, **overrides) -> Scene:
 
 
 # -- validation ------------------------------------------------------------------------
+#: The real-valued scalar fields of a Scene.
+_REALS = ("mstar", "ustar", "hstar", "friction", "k0", "kl", "contact_stiffness", "contact_eps",
+          "contact_smoothing")
+
+
+def _is_scalar(value) -> bool:
+    return np.ndim(value) == 0 and not isinstance(value, (list, tuple))
+
+
+def _validate_zeta(s: Scene) -> None:
+    """A finite number >= 0, or one per mode."""
+    require(_is_scalar(s.zeta) or isinstance(s.zeta, (list, tuple, np.ndarray)),
+            f"zeta must be a number or a list of numbers, got {s.zeta!r}")
+    for z in [s.zeta] if _is_scalar(s.zeta) else list(s.zeta):
+        finite_number("zeta", z)
+    zeta = np.atleast_1d(np.asarray(s.zeta, dtype=float))
+    require(zeta.size in (1, s.modes), f"zeta must be a scalar or have one value per mode "
+             f"({s.modes}), got {zeta.size} values")
+    require(bool(np.all(zeta >= 0)), "zeta must be >= 0")
+
+
 def _validate(s: Scene) -> None:
     require(isinstance(s.modes, (int, np.integer)) and not isinstance(s.modes, bool)
              and s.modes >= 1, f"modes must be an integer >= 1, got {s.modes!r}")
@@ -170,10 +197,7 @@ def _validate(s: Scene) -> None:
     require(finite_number("friction", s.friction) >= 0, f"friction must be >= 0, got {s.friction}")
     require(finite_number("k0", s.k0) >= 0, f"k0 must be >= 0, got {s.k0}")
     require(finite_number("kl", s.kl) >= 0, f"kl must be >= 0, got {s.kl}")
-    zeta = np.atleast_1d(np.asarray(s.zeta, dtype=float))
-    require(zeta.size in (1, s.modes), f"zeta must be a scalar or have one value per mode "
-             f"({s.modes}), got {zeta.size} values")
-    require(bool(np.all(np.isfinite(zeta)) and np.all(zeta >= 0)), "zeta must be finite and >= 0")
+    _validate_zeta(s)
     if s.quad_nodes is not None:
         require(isinstance(s.quad_nodes, (int, np.integer)) and s.quad_nodes >= min_quad_nodes(s.modes),
                  f"quad_nodes must be an integer >= 2*modes = {min_quad_nodes(s.modes)} to resolve "

@@ -297,3 +297,23 @@ def test_thinner_tip_raises_the_static_tip_deflection():
     tapered = uniform.replace(thickness=Profile.linear(1.0, 0.7))
     tip = [build_model(s).deflection(steady_state(s).x, [1.0])[0] for s in (uniform, tapered)]
     assert tip[1] > tip[0] > 0
+
+
+def test_model_of_another_structure_is_refused_before_work():
+    """A prebuilt model must match the scene in every field but U* and the parameters:
+    a contact scene on a contact-free model, or other modes or gap, is a ValueError that
+    says what to do; a contact-free scene may use a model with contact (guarded runs)."""
+    from fsicas.timedomain.run import guarded_model, run_case
+    scene = Scene(mstar=1.0, ustar=7.0, zeta=0.01, modes=4)
+    plain = build_model(scene)
+    contact = scene.replace(contact=True, contact_stiffness=1e8, contact_eps=1e-2)
+    with pytest.raises(ValueError, match="contact = true but the model was built without"):
+        run_case(contact, 1.0, model=plain)
+    for other, field in ((scene.replace(modes=5), "modes"), (scene.replace(hstar=0.2), "hstar"),
+                         (scene.replace(quad_nodes=60), "quad_nodes")):
+        with pytest.raises(ValueError, match=f"fields {field} differ"):
+            steady_state(other, plain)
+    guarded = guarded_model(scene)[0]
+    assert guarded.scene.contact
+    plain.require_structure(scene.replace(ustar=3.0, mstar=9.0, zeta=0.05, friction=0.0))
+    guarded.require_structure(scene)

@@ -20,10 +20,24 @@ EXAMPLE = "examples/asymmetric.toml"
     (dict(channel1=Profile.constant(0.05), channel2=Profile.constant(0.06)), "hstar"),
     (dict(channel2=Profile.table([0, 0.5, 1], [0.05, 0.0, 0.05])), "channel2"),
     (dict(channel1=Profile("parabola", (1.0,))), "channel1.kind"),
+    (dict(zeta="0.01"), "zeta"), (dict(zeta=["0.01"] * 10), "zeta"), (dict(zeta=True), "zeta"),
+    (dict(mstar="2"), "mstar"), (dict(quad_nodes=40.0), "quad_nodes"),
 ])
 def test_bad_values_name_the_field(changes, field):
     with pytest.raises(ValueError, match=field):
         Scene(**changes)
+
+
+def test_numpy_scalars_are_stored_as_plain_numbers():
+    """NumPy scalars and arrays are accepted and stored as Python floats, ints, tuples."""
+    import numpy as np
+    s = Scene(mstar=np.float32(2.5), ustar=np.int64(6), modes=np.int64(4),
+              zeta=np.array([0.01, 0.02, 0.0, 0.0]), quad_nodes=np.int32(40), contact=np.bool_(False))
+    assert type(s.mstar) is float and s.mstar == 2.5 and type(s.ustar) is float
+    assert type(s.modes) is int and type(s.quad_nodes) is int and s.contact is False
+    assert s.zeta == (0.01, 0.02, 0.0, 0.0) and type(s.zeta[0]) is float
+    assert type(Scene(zeta=np.float64(0.02)).zeta) is float
+    assert s == Scene(mstar=2.5, ustar=6.0, modes=4, zeta=(0.01, 0.02, 0.0, 0.0), quad_nodes=40)
 
 
 def test_spline_overshoot_below_zero_is_caught():

@@ -62,8 +62,7 @@ def straight_pressure_drop(scene: Scene) -> float:
 def steady_state(scene: Scene, model: Model | None = None, tol: float = 1e-12) -> SteadyState:
     """Solve for the equilibrium of ``scene`` at its U* (see module docstring)."""
     model = model or build_model(scene)
-    if model.scene.modes != scene.modes or model.scene.walls != scene.walls:
-        raise ValueError("model was built for a different scene structure")
+    model.require_structure(scene)
     start = time.perf_counter()
     residual_fn, jacobian_fn = _system(model)
     p = model.parameters(scene)

@@ -27,6 +27,15 @@ _FLOW_PARAMS = ("pressure_drop", "mstar", "friction", "k0", "kl")
 _CONTACT_PARAMS = ("contact_stiffness", "contact_eps")
 
 
+#: Scene fields that are not symbolic parameters of the model (nor U* or contact).
+_STRUCTURE_FIELDS = ("hstar", "modes", "quad_nodes", "channel1", "channel2", "thickness",
+                     "contact_smoothing")
+
+
+def _structure(scene: Scene) -> tuple:
+    return tuple(getattr(scene, f) for f in _STRUCTURE_FIELDS)
+
+
 def parameter_names(scene: Scene) -> tuple[str, ...]:
     """Names of the symbolic parameters of the model of ``scene``, in order."""
     contact = _CONTACT_PARAMS if scene.contact else ()
@@ -111,6 +120,19 @@ class Model:
             return self.parameter_names.index(name)
         except ValueError:
             raise ValueError(f"unknown parameter {name!r}; the model has {self.parameter_names}")
+
+    def require_structure(self, scene: Scene) -> None:
+        """ValueError unless ``scene`` has this model's structure: every field equal but
+        U* and the symbolic parameters (M*, f, K0, KL, ζ, k*, eps/H); a contact-free scene
+        may use a model with contact (the guarded runs of :mod:`fsicas.timedomain.run`)."""
+        if scene.contact and not self.scene.contact:
+            raise ValueError("the scene has contact = true but the model was built without "
+                             "contact: build the model from this scene (build_model(scene))")
+        if _structure(scene) != _structure(self.scene):
+            differ = [f for f in _STRUCTURE_FIELDS if getattr(scene, f) != getattr(self.scene, f)]
+            raise ValueError(f"the model was built for another scene structure (fields "
+                             f"{', '.join(differ)} differ): build the model from this scene "
+                             "(build_model(scene))")
 
     def parameters(self, scene: Scene | None = None, pressure_drop: float = 0.0, **override) -> np.ndarray:
         """Numeric parameter vector from a scene (same structure) plus overrides by name."""
