@@ -81,6 +81,18 @@ def test_cli_simulate_json_contract(capsys):
     assert out["outcome"] == "decay" and out["steps"] > 0
 
 
+def test_cli_failed_simulation_exits_1_with_its_json(capsys):
+    """A contact law too soft for the impact (the gap closes): the run's JSON is printed,
+    with status "failed" and the message, and the exit status is 1, not 0."""
+    code = main(["simulate", "--modes", "4", "--mstar", "1", "--ustar", "8", "--zeta", "0.01",
+                 "--contact", "--contact-stiffness", "1e4", "--contact-eps", "1e-3",
+                 "--t-end", "3", "--rtol", "1e-7", "--atol", "1e-9", "--json"])
+    captured = capsys.readouterr()
+    out = json.loads(captured.out)
+    assert code == 1 and out["status"] == "failed" and "gap closed" in out["message"]
+    assert captured.err == ""
+
+
 @pytest.mark.parametrize("argv, field", [
     (["--t-end", "0"], "t-end"), (["--t-end", "1", "--rtol", "0.5"], "rtol"),
     (["--t-end", "1", "--perturbation", "40"], "perturbation"),

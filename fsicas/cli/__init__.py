@@ -1,6 +1,11 @@
 """Command line: ``fsicas <command> [scene options] [--scene FILE.toml] [--json]``.
 
 With ``--json`` stdout holds one JSON object and nothing else (a stable contract).
+Exit status: 0 when the command succeeded; 1 when it ran to the end but its result
+reports a failure (``"status": "failed"``: a time integration whose gap closed or whose
+solver failed, a continuation whose corrector failed), the result still printed; 2 for
+bad input or an analysis that could not start (the error on stderr, or as
+``{"error": ...}`` with ``--json``).
 Figures are written with Matplotlib's non-interactive file backend, which the command
 line (not the library) selects before a command that writes figures runs.
 """
@@ -21,7 +26,7 @@ from .linear import add_linear_commands
 from .paper import add_paper_command
 from .timedomain import add_time_commands
 
-__all__ = ["main", "build_parser"]
+__all__ = ["main", "build_parser", "EXIT_OK", "EXIT_FAILED_RESULT", "EXIT_ERROR"]
 
 #: Commands that write figures whether or not ``--plot`` is given.
 _ALWAYS_PLOTTING = frozenset({"paper"})
@@ -49,8 +54,13 @@ def _writes_figures(args: argparse.Namespace) -> bool:
     return args.command in _ALWAYS_PLOTTING or bool(getattr(args, "plot", None))
 
 
+#: Exit statuses (module docstring).
+EXIT_OK, EXIT_FAILED_RESULT, EXIT_ERROR = 0, 1, 2
+
+
 def main(argv=None) -> int:
-    """Run one command; exit code 0, or 2 with the error on stderr (in JSON with --json)."""
+    """Run one command; its exit status (:data:`EXIT_OK`, :data:`EXIT_FAILED_RESULT`,
+    :data:`EXIT_ERROR`; module docstring)."""
     args = build_parser().parse_args(argv)
     if _writes_figures(args):
         select_file_backend()
@@ -62,13 +72,13 @@ def main(argv=None) -> int:
             print(json.dumps({"error": str(err)}))
         else:
             print(f"fsicas {args.command}: error: {err}", file=sys.stderr)
-        return 2
+        return EXIT_ERROR
     if args.json:
         print(json.dumps(result))
     else:
         _print_human(result)
         print(f"{'wall time':>16}: {time.perf_counter() - start:.3f} s")
-    return 0
+    return EXIT_FAILED_RESULT if result.get("status") == "failed" else EXIT_OK
 
 
 if __name__ == "__main__":  # pragma: no cover
