@@ -126,3 +126,31 @@ def test_bad_ranges_name_the_option_and_the_accepted_forms(text, log):
 def test_map_rejects_a_bad_grid_without_a_traceback(capsys):
     code, out = run_json(capsys, ["map", "--ustar", "4:14", "--json"])
     assert code == 2 and out["error"].startswith("--ustar must be")
+
+
+@pytest.mark.parametrize("argv, message", [
+    (["lco", "--modes", "4", "--out", "{missing}/branch.json"], "--out .* does not exist"),
+    (["lco", "--modes", "4", "--out", "{tmp}"], "--out .* is a folder"),
+    (["map", "--modes", "4", "--out", "{missing}/map.jsonl"], "--out .* does not exist"),
+    (["map", "--modes", "4", "--plot", "{tmp}/fig4.foo"], "--plot .* unknown figure format"),
+    (["boundary", "--mstar", "1", "--plot", "{file}/fig2.png"], "--plot .* does not exist"),
+    (["paper", "--out", "{file}/results"], "--out .* is a file, not a folder"),
+    (["paper", "--out", "{file}"], "--out .* not a folder"),
+])
+def test_output_paths_are_checked_before_any_work(capsys, tmp_path, monkeypatch, argv, message):
+    """A bad --out or --plot is exit status 2 with the option named, before the command's
+    computation starts (the analyses are replaced by a tripwire)."""
+    import re
+    from fsicas.cli import cycles, linear, paper, timedomain
+
+    def tripwire(*args, **kwargs):
+        raise AssertionError("the computation started")
+    for module, name in ((cycles, "cycle_branch"), (timedomain, "impact_map"),
+                         (linear, "stability_boundary"), (paper, "run_paper")):
+        if hasattr(module, name):
+            monkeypatch.setattr(module, name, tripwire)
+    (tmp_path / "a_file").write_text("")
+    paths = {"missing": str(tmp_path / "missing"), "tmp": str(tmp_path),
+             "file": str(tmp_path / "a_file")}
+    code, out = run_json(capsys, [a.format(**paths) for a in argv] + ["--json"])
+    assert code == 2 and re.search(message, out["error"]), out

@@ -23,6 +23,7 @@ from ..linear.steady import SteadyStateError
 from ..plots.backend import select_file_backend
 from .cycles import add_cycle_commands
 from .linear import add_linear_commands
+from .outputs import check_outputs
 from .paper import add_paper_command
 from .timedomain import add_time_commands
 
@@ -62,10 +63,11 @@ def main(argv=None) -> int:
     """Run one command; its exit status (:data:`EXIT_OK`, :data:`EXIT_FAILED_RESULT`,
     :data:`EXIT_ERROR`; module docstring)."""
     args = build_parser().parse_args(argv)
-    if _writes_figures(args):
-        select_file_backend()
     start = time.perf_counter()
     try:
+        check_outputs(args)
+        if _writes_figures(args):
+            select_file_backend()
         result = args.run(args)
     except (ValueError, SteadyStateError, CriticalVelocityError) as err:
         if getattr(args, "json", False):

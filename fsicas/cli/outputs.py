@@ -1,0 +1,63 @@
+"""Output paths of the command line, checked before any work starts.
+
+A command that would compute for minutes and then fail to write its file must fail at
+once instead: every ``--out`` and ``--plot`` is checked when the arguments are parsed
+(``ValueError`` naming the option, exit status 2). ``paper --out`` is a folder (created
+if missing); every other ``--out`` and ``--plot`` is a file whose folder must exist.
+"""
+from __future__ import annotations
+
+import argparse
+import os
+from pathlib import Path
+
+__all__ = ["check_outputs"]
+
+#: Commands whose ``--out`` is a folder.
+_FOLDER_OUTPUTS = frozenset({"paper"})
+
+
+def check_outputs(args: argparse.Namespace) -> None:
+    """ValueError naming the option if an output of ``args`` cannot be written."""
+    out, plot = getattr(args, "out", None), getattr(args, "plot", None)
+    if out:
+        if args.command in _FOLDER_OUTPUTS:
+            _check_folder("--out", Path(out))
+        else:
+            _check_file("--out", Path(out))
+    if plot:
+        _check_file("--plot", Path(plot))
+        _check_figure_format(Path(plot))
+
+
+def _check_file(option: str, path: Path) -> None:
+    if path.is_dir():
+        raise ValueError(f"{option} {path}: is a folder, expected a file name")
+    if path.exists() and not os.access(path, os.W_OK):
+        raise ValueError(f"{option} {path}: the file exists and is not writable")
+    folder = path.parent
+    if not folder.is_dir():
+        raise ValueError(f"{option} {path}: the folder {folder} does not exist")
+    if not os.access(folder, os.W_OK | os.X_OK):
+        raise ValueError(f"{option} {path}: the folder {folder} is not writable")
+
+
+def _check_folder(option: str, path: Path) -> None:
+    if path.exists() and not path.is_dir():
+        raise ValueError(f"{option} {path}: exists and is not a folder")
+    existing = next(p for p in (path, *path.parents) if p.exists())
+    if not existing.is_dir():
+        raise ValueError(f"{option} {path}: {existing} is a file, not a folder")
+    if not os.access(existing, os.W_OK | os.X_OK):
+        raise ValueError(f"{option} {path}: the folder {existing} is not writable")
+
+
+def _check_figure_format(path: Path) -> None:
+    """The file name's extension is a format Matplotlib writes (none: its default)."""
+    if not path.suffix:
+        return
+    from matplotlib.backend_bases import FigureCanvasBase
+    formats = FigureCanvasBase.get_supported_filetypes()
+    if path.suffix[1:].lower() not in formats:
+        raise ValueError(f"--plot {path}: unknown figure format {path.suffix!r}; "
+                         f"use one of {', '.join(sorted(formats))}")
