@@ -63,8 +63,8 @@ def test_paper_quick_writes_report(tmp_path, capsys):
     assert len(points) == 7 and all(p["refined"] and p["omega"] > 0 for p in points)
     assert out["boundary"]["switches"]
     # time domain (Fig. 4, Figs. 6-9): below onset decays, above it reaches the wall
-    rows = [json.loads(line) for line in (tmp_path / "fig4_map.jsonl").read_text().splitlines()]
-    outcomes = {p["ustar"]: p["outcome"] for p in rows}
+    from fsicas.timedomain.impact_map import load_points
+    outcomes = {p["ustar"]: p["outcome"] for p in load_points(tmp_path / "fig4_map.jsonl").values()}
     assert outcomes == {4.0: "decay", 9.0: "contact"}
     assert (tmp_path / "fig4_impact_map.png").exists()
     assert [c["contact"] for c in out["impacting_cycles"]] == [True]

@@ -6,26 +6,34 @@ default). Points run in parallel in a :class:`concurrent.futures.ProcessPoolExec
 the local cores, or in any ``concurrent.futures`` executor passed in, e.g. a Dask
 cluster's ``Client.get_executor()`` (the ``parallel`` extra) for a distributed sweep;
 each worker process builds the (guarded) model once per scene structure, since U* and
-M* are parameters. A progress bar (tqdm, on a terminal only) counts the points. Each finished point is appended at once as one JSON line to the
-results file, so an interrupted map resumes where it stopped: points already in the file
-are skipped. The linear stability boundary ``U*_c(M*)`` is the first Hopf point of the steady branch.
+M* are parameters. A progress bar (tqdm, on a terminal only) counts the points. Each
+finished point is appended at once as one JSON line to the results file
+(:class:`fsicas.results_file.ResultsFile`: a header with the scene and settings, a lock
+against a second run on the same file, a torn last line repaired), so an interrupted map
+resumes where it stopped: points already in the file are skipped, and a file written
+with another scene, t_end or settings is refused. Local worker processes end with the
+map's process, also when it is killed. The linear stability boundary ``U*_c(M*)`` is the first Hopf point of the steady branch.
 """
 from __future__ import annotations
 
 import contextlib
+import ctypes
+import dataclasses
 import json
 import os
+import signal
+import threading
 import time
 from concurrent.futures import Executor, ProcessPoolExecutor, as_completed
 from dataclasses import dataclass
 from typing import Literal, Union
-from pathlib import Path
 
 import numpy as np
 from tqdm import tqdm
 
 from ..linear.hopf import critical_velocity
 from ..model.assembly import build_model
+from ..results_file import ResultsFile, read_records
 from .outcome import Criteria, OutcomeKind
 from .run import guarded_model, run_case
 from ..scene import Scene
@@ -69,18 +77,34 @@ def _key(ustar: float, mstar: float) -> tuple[float, float]:
 
 
 def load_points(path) -> dict:
-    """Points already in a results file, keyed by (U*, M*); broken last lines ignored."""
-    done = {}
-    path = Path(path)
-    if not path.exists():
-        return done
-    for line in path.read_text().splitlines():
-        try:
-            row = json.loads(line)
-            done[_key(row["ustar"], row["mstar"])] = row
-        except (json.JSONDecodeError, KeyError):
-            continue
-    return done
+    """Points already in a results file, keyed by (U*, M*); a torn last line ignored."""
+    return {_key(row["ustar"], row["mstar"]): row for row in read_records(path)[1]
+            if "ustar" in row and "mstar" in row}
+
+
+def map_header(scene: Scene, t_end: float, settings: Settings, criteria: Criteria) -> dict:
+    """Everything a map point depends on but its (U*, M*): the results file's header."""
+    fields = {k: v for k, v in scene.replace(contact=False).to_dict().items()
+              if k not in ("ustar", "mstar")}
+    return {"format": "fsicas-map-1", "scene": fields, "t_end": float(t_end),
+            "settings": dataclasses.asdict(settings), "criteria": dataclasses.asdict(criteria)}
+
+
+def _die_with_parent(parent: int) -> None:
+    """Worker initializer: end this worker when the map's process dies (also by kill -9),
+    by the kernel's parent-death signal on Linux and a watchdog thread elsewhere."""
+    try:
+        ctypes.CDLL(None, use_errno=True).prctl(1, signal.SIGKILL)     # PR_SET_PDEATHSIG
+    except (OSError, AttributeError):
+        pass
+    if os.getppid() != parent:
+        os._exit(1)
+
+    def watch():
+        while os.getppid() == parent:
+            time.sleep(1.0)
+        os._exit(1)
+    threading.Thread(target=watch, daemon=True).start()
 
 
 def _model(scene: Scene):
@@ -103,6 +127,18 @@ def _point(scene: Scene, ustar: float, mstar: float, t_end: float, settings: Set
     return row
 
 
+def _grid(ustars, mstars, t_end) -> tuple[np.ndarray, np.ndarray]:
+    """The grid as float arrays; ValueError for an empty or invalid grid or t_end."""
+    ustars, mstars = np.atleast_1d(ustars).astype(float), np.atleast_1d(mstars).astype(float)
+    if ustars.size == 0 or mstars.size == 0:
+        raise ValueError("ustars and mstars must not be empty")
+    if not (np.all(mstars > 0) and np.all(np.isfinite(ustars))):
+        raise ValueError("mstars must be > 0 and ustars finite")
+    if not t_end > 0:
+        raise ValueError(f"t_end must be > 0, got {t_end}")
+    return ustars, mstars
+
+
 def impact_map(ustars, mstars, path, *, scene: Scene = MAP_SCENE, t_end: float = 30.0,
                settings: Settings = Settings(rtol=1e-7, atol=1e-9, dt_out=2e-3, chunk=1.0),
                workers: int | None = None, executor: Executor | None = None,
@@ -114,28 +150,23 @@ def impact_map(ustars, mstars, path, *, scene: Scene = MAP_SCENE, t_end: float =
     is given, which is used as it is and not shut down. ``progress(done, total)`` is
     called after each point.
     """
-    ustars, mstars = np.atleast_1d(ustars).astype(float), np.atleast_1d(mstars).astype(float)
-    if ustars.size == 0 or mstars.size == 0:
-        raise ValueError("ustars and mstars must not be empty")
-    if not (np.all(mstars > 0) and np.all(np.isfinite(ustars))):
-        raise ValueError("mstars must be > 0 and ustars finite")
-    if not t_end > 0:
-        raise ValueError(f"t_end must be > 0, got {t_end}")
+    ustars, mstars = _grid(ustars, mstars, t_end)
     start = time.perf_counter()
     criteria = Criteria(stop_on_contact=True)
-    done = load_points(path)
-    todo = [(u, m) for m in mstars for u in ustars if _key(u, m) not in done]
-    Path(path).parent.mkdir(parents=True, exist_ok=True)
     base = scene.replace(contact=False)
-    with open(path, "a") as out, contextlib.ExitStack() as stack:
-        if executor is None:
-            executor = stack.enter_context(ProcessPoolExecutor(max_workers=workers or os.cpu_count() or 1))
+    with ResultsFile(path, map_header(base, t_end, settings, criteria)) as out, \
+            contextlib.ExitStack() as stack:
+        done = {_key(row["ustar"], row["mstar"]): row for row in out.records}
+        todo = [(u, m) for m in mstars for u in ustars if _key(u, m) not in done]
+        if executor is None and todo:
+            executor = stack.enter_context(ProcessPoolExecutor(
+                max_workers=workers or os.cpu_count() or 1, initializer=_die_with_parent,
+                initargs=(os.getpid(),)))
         futures = [executor.submit(_point, base, u, m, t_end, settings, criteria) for u, m in todo]
         bar = stack.enter_context(tqdm(total=len(todo), desc="impact map", unit="point", disable=None))
         for k, fut in enumerate(as_completed(futures), start=1):
             row = fut.result()
-            out.write(json.dumps(row) + "\n")
-            out.flush()
+            out.append(row)
             done[_key(row["ustar"], row["mstar"])] = row
             bar.update()
             if progress:

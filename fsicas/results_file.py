@@ -1,0 +1,136 @@
+"""An append-only results file (JSON lines) that a long run writes as it goes and resumes.
+
+The first line is a header record ``{"header": {...}}`` with everything the results
+depend on (scene, settings); the other lines are one record each. Opening the file
+(:class:`ResultsFile`, a context manager):
+
+- takes an exclusive lock (``fcntl.flock``, POSIX): a second run on the same file is
+  refused at once instead of computing every point twice;
+- repairs a torn last line (a process killed mid-write): the partial record is cut
+  off before anything is appended;
+- writes the header into a new or empty file, and refuses a file whose header differs
+  (naming the differing keys) or that has records but no header, so results made with
+  other settings are never mixed or reused.
+
+Each record is appended by one ``write`` of the whole line to a file opened with
+``O_APPEND``, so a record is either in the file whole or (after a kill) repaired away.
+"""
+from __future__ import annotations
+
+import json
+import os
+from pathlib import Path
+
+try:
+    import fcntl
+except ImportError:  # pragma: no cover - not POSIX
+    fcntl = None
+
+__all__ = ["ResultsFile", "read_records"]
+
+
+def _normal(value):
+    """``value`` as JSON would give it back (tuples as lists, ...)."""
+    return json.loads(json.dumps(value))
+
+
+def read_records(path) -> tuple[dict | None, list[dict]]:
+    """(header, records) of a results file; unparsable lines (a torn tail) are skipped."""
+    header, records = None, []
+    path = Path(path)
+    if not path.exists():
+        return header, records
+    for line in path.read_text().splitlines():
+        try:
+            row = json.loads(line)
+        except json.JSONDecodeError:
+            continue
+        if isinstance(row, dict) and "header" in row and header is None and not records:
+            header = row["header"]
+        elif isinstance(row, dict):
+            records.append(row)
+    return header, records
+
+
+class ResultsFile:
+    """``with ResultsFile(path, header) as f:`` ... ``f.records`` (the records already
+    there), ``f.append(record)``; ``f.repaired``: bytes of a torn last line cut off."""
+
+    def __init__(self, path, header: dict):
+        self.path, self.header = Path(path), _normal(header)
+        self.records: list[dict] = []
+        self.repaired = 0
+        self._fd = None
+
+    def __enter__(self) -> "ResultsFile":
+        self.path.parent.mkdir(parents=True, exist_ok=True)
+        self._fd = os.open(self.path, os.O_RDWR | os.O_CREAT | os.O_APPEND, 0o644)
+        try:
+            self._lock()
+            self.repaired = self._repair()
+            header, self.records = read_records(self.path)
+            self._check(header)
+            if header is None:
+                self.append({"header": self.header})
+        except BaseException:
+            self.close()
+            raise
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.close()
+
+    def close(self) -> None:
+        if self._fd is not None:
+            os.close(self._fd)        # releases the lock
+            self._fd = None
+
+    def append(self, record: dict) -> None:
+        """Append ``record`` as one line, in one write."""
+        os.write(self._fd, (json.dumps(record) + "\n").encode())
+
+    def _lock(self) -> None:
+        if fcntl is None:
+            return
+        try:
+            fcntl.flock(self._fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except BlockingIOError:
+            raise ValueError(f"{self.path} is being written by another run (it holds the "
+                             "file's lock): wait for it to finish or choose another output "
+                             "file") from None
+
+    def _repair(self) -> int:
+        """Cut a partial last line (no final newline); the number of bytes removed."""
+        size = os.fstat(self._fd).st_size
+        if size == 0:
+            return 0
+        data = self.path.read_bytes()
+        if data.endswith(b"\n"):
+            return 0
+        keep = data.rfind(b"\n") + 1
+        os.ftruncate(self._fd, keep)
+        return size - keep
+
+    def _check(self, header) -> None:
+        if header is None:
+            if self.records:
+                raise ValueError(f"{self.path} holds {len(self.records)} records but no header "
+                                 "saying how they were made, so they cannot be reused: choose "
+                                 "another output file or delete this one")
+            return
+        if header != self.header:
+            keys = sorted(k for k in set(header) | set(self.header)
+                          if header.get(k) != self.header.get(k))
+            detail = "; ".join(f"{k}: file {_differences(header.get(k), self.header.get(k))}"
+                               for k in keys)
+            raise ValueError(f"{self.path} was written with other settings ({detail}): its "
+                             "records cannot be reused; choose another output file or delete "
+                             "this one")
+
+
+def _differences(old, new) -> str:
+    """The differing entries of two header values (dicts compared key by key)."""
+    if isinstance(old, dict) and isinstance(new, dict):
+        keys = sorted(k for k in set(old) | set(new) if old.get(k) != new.get(k))
+        return ", ".join(f"{k} = {old.get(k)!r} here {new.get(k)!r}" for k in keys)
+    return f"{old!r} here {new!r}"
