@@ -154,15 +154,20 @@ def model_table(modes, ntst: int, points: int) -> None:
         print(model_row(model_case(N, ntst, points)), flush=True)
 
 
+SHOOTING = {"graph": dict(jacobian="graph"), "exact": dict(jacobian="blocks"),
+            "fast": dict(jacobian="blocks", sensitivities="fast")}
+
+
 def shooting_row(modes: int, reps: int) -> str:
-    """One corrector iteration of a shooting problem from the flutter Hopf cycle."""
+    """One corrector iteration of a shooting problem from the flutter Hopf cycle, per
+    Jacobian route (:data:`SHOOTING`)."""
     eq, hopf = flutter_start(modes)
     cyc = flutter_cycle(eq, hopf, "blocks", "mx", 20)[0]
     X = C.ContinuationIterator(cyc, C.PALC(), C.ContinuationSettings()).start().X
     nodes, T = cyc.nodes(X), X[-2]
     probs = {j: C.ShootingProblem(cyc.vf, nodes, T, cyc.par_dict(X), cyc.active,
-                                  settings=C.ShootingSettings(jacobian=j))
-             for j in ("graph", "blocks")}
+                                  settings=C.ShootingSettings(**kw))
+             for j, kw in SHOOTING.items()}
     iteration = lambda p, X: factorize(bordered(p.jacobian(X), np.ones(X.size))).solve(
         np.append(p.residual(X), 0.0))
     t = {j: [] for j in probs}
@@ -173,8 +178,9 @@ def shooting_row(modes: int, reps: int) -> str:
         X = probs["graph"].X0 * (1 + 1e-6 * rng.standard_normal(probs["graph"].X0.size))
         for j, p in probs.items():
             t[j].append(once(lambda: iteration(p, X)))
-    g, b = (float(np.median(t[j])) for j in ("graph", "blocks"))
-    return (f"| {modes} | {2 * modes + 2} | {1e3 * g:.0f} / {1e3 * b:.0f} | {g / b:.1f}x |")
+    g, e, f = (float(np.median(t[j])) for j in SHOOTING)
+    return (f"| {modes} | {2 * modes + 2} | {1e3 * g:.0f} / {1e3 * e:.0f} / {1e3 * f:.0f} | "
+            f"{g / e:.1f}x | {g / f:.1f}x |")
 
 
 def shooting_table(modes, reps: int) -> None:
@@ -182,6 +188,7 @@ def shooting_table(modes, reps: int) -> None:
     if not modes:
         return
     print("\n### Flutter model: shooting corrector iteration (4 segments, cvodes)\n")
-    print("| N | n | graph / blocks [ms] | ratio |\n| --- | --- | --- | --- |")
+    print("| N | n | graph / blocks exact / blocks fast [ms] | graph/exact | graph/fast |\n"
+          "| --- | --- | --- | --- | --- |")
     for N in modes:
         print(shooting_row(N, reps), flush=True)
