@@ -28,6 +28,12 @@ def default_quad_nodes(n_modes: int) -> int:
     return 2 * n_modes + 20
 
 
+#: Upper bounds of the sizes and of the values whose excess makes no physical sense here
+#: (the paper works at N = 40 and M* in [0.01, 100]): beyond them a run would take hours
+#: or run out of memory, or fail later with a misleading message.
+MAX_MODES, MAX_QUAD_NODES, MAX_MSTAR, MAX_ABS_USTAR = 200, 2000, 1e6, 1e4
+
+
 def min_quad_nodes(n_modes: int) -> int:
     """Fewest nodes accepted: below 2N the mass matrix of mode N is not resolved."""
     return 2 * n_modes
@@ -159,9 +165,19 @@ class Scene:
 
 
 def load_scene(path, **overrides) -> Scene:
-    """Read a Scene from a TOML file; keyword overrides win over the file."""
-    with open(path, "rb") as fh:
-        data = tomllib.load(fh)
+    """Read a Scene from a TOML file; keyword overrides win over the file. ValueError
+    naming the file when it is missing, a folder, unreadable or not valid TOML."""
+    try:
+        with open(path, "rb") as fh:
+            data = tomllib.load(fh)
+    except FileNotFoundError:
+        raise ValueError(f"scene file {path}: no such file") from None
+    except IsADirectoryError:
+        raise ValueError(f"scene file {path}: is a folder, not a TOML file") from None
+    except OSError as err:
+        raise ValueError(f"scene file {path}: cannot be read ({err.strerror})") from None
+    except (tomllib.TOMLDecodeError, UnicodeDecodeError) as err:
+        raise ValueError(f"scene file {path}: not valid TOML ({err})") from None
     data.update({k: v for k, v in overrides.items() if v is not None})
     return Scene.from_dict(data)
 
@@ -190,18 +206,23 @@ def _validate_zeta(s: Scene) -> None:
 
 def _validate(s: Scene) -> None:
     require(isinstance(s.modes, (int, np.integer)) and not isinstance(s.modes, bool)
-             and s.modes >= 1, f"modes must be an integer >= 1, got {s.modes!r}")
-    require(finite_number("mstar", s.mstar) > 0, f"mstar must be > 0, got {s.mstar}")
-    finite_number("ustar", s.ustar)
+             and 1 <= s.modes <= MAX_MODES,
+             f"modes must be an integer in [1, {MAX_MODES}], got {s.modes!r}")
+    require(0 < finite_number("mstar", s.mstar) <= MAX_MSTAR,
+            f"mstar must lie in (0, {MAX_MSTAR:g}], got {s.mstar}")
+    require(abs(finite_number("ustar", s.ustar)) <= MAX_ABS_USTAR,
+            f"ustar must lie in [-{MAX_ABS_USTAR:g}, {MAX_ABS_USTAR:g}], got {s.ustar}")
     require(finite_number("hstar", s.hstar) > 0, f"hstar must be > 0, got {s.hstar}")
     require(finite_number("friction", s.friction) >= 0, f"friction must be >= 0, got {s.friction}")
     require(finite_number("k0", s.k0) >= 0, f"k0 must be >= 0, got {s.k0}")
     require(finite_number("kl", s.kl) >= 0, f"kl must be >= 0, got {s.kl}")
     _validate_zeta(s)
     if s.quad_nodes is not None:
-        require(isinstance(s.quad_nodes, (int, np.integer)) and s.quad_nodes >= min_quad_nodes(s.modes),
-                 f"quad_nodes must be an integer >= 2*modes = {min_quad_nodes(s.modes)} to resolve "
-                 f"mode {s.modes}, got {s.quad_nodes!r}")
+        require(isinstance(s.quad_nodes, (int, np.integer)) and not isinstance(s.quad_nodes, bool)
+                and min_quad_nodes(s.modes) <= s.quad_nodes <= MAX_QUAD_NODES,
+                f"quad_nodes must be an integer in [2*modes = {min_quad_nodes(s.modes)}, "
+                f"{MAX_QUAD_NODES}] (at least 2 per mode to resolve mode {s.modes}), "
+                f"got {s.quad_nodes!r}")
     for name in ("channel1", "channel2", "thickness"):
         profile = getattr(s, name)
         require(profile is None or isinstance(profile, Profile), f"{name} must be a Profile or None")

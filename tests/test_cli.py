@@ -119,7 +119,7 @@ def test_bad_ranges_name_the_option_and_the_accepted_forms(text, log):
         parse_range(text, "grid", log=log)
     message = str(err.value)
     assert message.startswith("--grid must be a comma list")
-    assert "LO:HI:COUNT" in message and "COUNT >= 1" in message and repr(text) in message
+    assert "LO:HI:COUNT" in message and "1 <= COUNT <= 2000" in message and repr(text) in message
     assert ("log-spaced" in message and "> 0" in message) if log else "evenly spaced" in message
 
 
@@ -154,3 +154,15 @@ def test_output_paths_are_checked_before_any_work(capsys, tmp_path, monkeypatch,
              "file": str(tmp_path / "a_file")}
     code, out = run_json(capsys, [a.format(**paths) for a in argv] + ["--json"])
     assert code == 2 and re.search(message, out["error"]), out
+
+
+def test_negative_values_may_follow_their_option():
+    """``--contact-stiffness -1e6`` and ``--ustar -5:-1:3`` are read as the option's value
+    (argparse alone takes them for options and fails with "expected one argument")."""
+    from fsicas.cli import _negative_values_attached, build_parser
+    argv = ["map", "--ustar", "-5:-1:3", "--mstar", "1", "--t-end", "-1e1"]
+    args = build_parser().parse_args(_negative_values_attached(argv))
+    assert (args.ustar, args.t_end) == ("-5:-1:3", -10.0)
+    args = build_parser().parse_args(_negative_values_attached(
+        ["steady", "--contact-stiffness", "-1e6", "--ustar", "-.5", "--json"]))
+    assert (args.contact_stiffness, args.ustar, args.json) == (-1e6, -0.5, True)

@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import re
 import sys
 import time
 
@@ -55,6 +56,26 @@ def _writes_figures(args: argparse.Namespace) -> bool:
     return args.command in _ALWAYS_PLOTTING or bool(getattr(args, "plot", None))
 
 
+_NEGATIVE = re.compile(r"^-(\d|\.\d)")
+
+
+def _negative_values_attached(argv: list) -> list:
+    """``--opt -1e6`` as ``--opt=-1e6``: argparse reads a value that starts with ``-``
+    and is not a plain decimal (``-1e6``, ``-5:-1:3``) as an option and fails with
+    "expected one argument"; no fsicas option starts with ``-`` and a digit."""
+    out, k = [], 0
+    while k < len(argv):
+        token = argv[k]
+        if (token.startswith("--") and "=" not in token and k + 1 < len(argv)
+                and _NEGATIVE.match(argv[k + 1])):
+            out.append(f"{token}={argv[k + 1]}")
+            k += 2
+        else:
+            out.append(token)
+            k += 1
+    return out
+
+
 #: Exit statuses (module docstring).
 EXIT_OK, EXIT_FAILED_RESULT, EXIT_ERROR = 0, 1, 2
 
@@ -62,7 +83,8 @@ EXIT_OK, EXIT_FAILED_RESULT, EXIT_ERROR = 0, 1, 2
 def main(argv=None) -> int:
     """Run one command; its exit status (:data:`EXIT_OK`, :data:`EXIT_FAILED_RESULT`,
     :data:`EXIT_ERROR`; module docstring)."""
-    args = build_parser().parse_args(argv)
+    args = build_parser().parse_args(_negative_values_attached(sys.argv[1:] if argv is None
+                                                              else list(argv)))
     start = time.perf_counter()
     try:
         check_outputs(args)

@@ -7,6 +7,7 @@ from ..linear.stability import linear_stability
 from ..linear.steady import steady_state
 from ..model.assembly import build_model
 from ..model.beam import clamped_free_betas
+from ..scene import MAX_MODES
 from ..plots.linear import plot_boundary, plot_eigenvalues, plot_mode_shapes
 from .ranges import parse_range
 from .scene_options import add_scene_options, scene_from_args
@@ -43,8 +44,8 @@ def _add_boundary_command(sub) -> None:
 
 
 def _cmd_modes(args) -> dict:
-    if args.modes is None or args.modes < 1:
-        raise ValueError(f"--modes must be an integer >= 1, got {args.modes}")
+    if args.modes is None or not 1 <= args.modes <= MAX_MODES:
+        raise ValueError(f"--modes must be an integer in [1, {MAX_MODES}], got {args.modes}")
     beta = clamped_free_betas(args.modes)
     return {"beta": beta.tolist(), "omega": (beta**2).tolist()}
 

@@ -53,6 +53,9 @@ def _add_map_command(sub) -> None:
 
 
 def _schedule(args, scene):
+    for option, value in (("ramp-time", args.ramp_time), ("breath-period", args.breath_period)):
+        if args.schedule in option and not value > 0:
+            raise ValueError(f"--{option} must be > 0, got {value}")
     if args.schedule == "ramp":
         return PressureSchedule.ramp(args.ustar_start, scene.ustar, args.ramp_time)
     if args.schedule == "breath":

@@ -98,5 +98,15 @@ def steady_ustar(vf, p, x_guess, hstar: float, tol: float = 1e-12,
 
 
 def pi_of(scene: Scene, model: Model, ustar: float) -> float:
-    """Scaled kinematic pressure drop Δp/(M* PI_SCALE) of the steady state at ``ustar``."""
-    return steady_state(scene.replace(ustar=ustar), model).pressure_drop / (scene.mstar * PI_SCALE)
+    """Scaled kinematic pressure drop Δp/(M* PI_SCALE) of the steady state at ``ustar``.
+
+    The analyses continued in Π need Δp to grow with U*; ValueError (before any
+    continuation) when it is zero at ``ustar`` != 0 (no friction and no head losses in
+    straight channels: the flow exerts no steady load to parametrize by)."""
+    pi = steady_state(scene.replace(ustar=ustar), model).pressure_drop / (scene.mstar * PI_SCALE)
+    if ustar != 0 and pi == 0:
+        raise ValueError(f"the steady pressure drop is zero at U* = {ustar:g} (friction = "
+                         f"{scene.friction:g}, k0 = {scene.k0:g}, kl = {scene.kl:g}): the onset, "
+                         "boundary and cycle analyses are continued in the pressure drop and "
+                         "need friction, k0 or kl > 0 (eig works at any U*)")
+    return pi

@@ -134,6 +134,9 @@ def _grid(ustars, mstars, t_end) -> tuple[np.ndarray, np.ndarray]:
         raise ValueError("ustars and mstars must not be empty")
     if not (np.all(mstars > 0) and np.all(np.isfinite(ustars))):
         raise ValueError("mstars must be > 0 and ustars finite")
+    if not np.max(ustars) > 0:
+        raise ValueError("ustars: at least one U* must be > 0 (the map's linear boundary is "
+                         "searched up to 1.5 x the largest U*)")
     if not t_end > 0:
         raise ValueError(f"t_end must be > 0, got {t_end}")
     return ustars, mstars
@@ -151,6 +154,8 @@ def impact_map(ustars, mstars, path, *, scene: Scene = MAP_SCENE, t_end: float =
     called after each point.
     """
     ustars, mstars = _grid(ustars, mstars, t_end)
+    if workers is not None and not (isinstance(workers, int) and workers >= 1):
+        raise ValueError(f"workers must be an integer >= 1 (or None: the local cores), got {workers!r}")
     start = time.perf_counter()
     criteria = Criteria(stop_on_contact=True)
     base = scene.replace(contact=False)

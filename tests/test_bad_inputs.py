@@ -1,0 +1,148 @@
+"""Every bad command-line input gets a clear error before any work: exit status 2, the
+offending option or field named, no traceback, nothing computed.
+
+The inputs are those of ``docs/reliability.md``: each scene option with values out of its
+range, not finite, of the wrong type or absurdly large, on four commands; broken scene
+files; the options of each command. The analyses are replaced by a tripwire, so a case
+that got past validation fails loudly instead of computing.
+"""
+import json
+
+import pytest
+
+from fsicas.cli import main
+
+#: Scene options: bad values and the name the message must contain.
+SCENE_CASES = {
+    "--mstar": ["0", "-1", "nan", "inf", "1e308", "abc"],
+    "--ustar": ["nan", "inf", "-inf", "1e5", "-1e5", "abc"],
+    "--hstar": ["0", "-0.1", "nan", "abc"],
+    "--friction": ["-0.1", "nan", "inf", "abc"],
+    "--k0": ["-1", "nan", "abc"],
+    "--kl": ["-1", "nan", "abc"],
+    "--zeta": ["-0.01", "nan", "inf", "abc"],
+    "--modes": ["0", "-3", "2.5", "1000", "99999999999999999999", "abc"],
+    "--quad-nodes": ["5", "100000", "2.5", "-1", "abc"],
+    "--contact-stiffness": ["0", "-1e6", "nan", "abc"],
+    "--contact-eps": ["0", "1", "1.5", "-1e-3", "nan"],
+}
+#: The commands that take the scene options (with what else they need).
+COMMANDS = {"steady": [], "eig": [], "lco": [], "simulate": ["--t-end", "1"]}
+
+
+def _scene_cases():
+    for command, extra in COMMANDS.items():
+        for option, values in SCENE_CASES.items():
+            for value in values:
+                yield pytest.param([command, *extra, option, value], option.lstrip("-"),
+                                   id=f"{command} {option} {value}")
+
+
+#: Options of the commands: (argv, what the message names).
+COMMAND_CASES = [
+    (["modes", "--modes", "0"], "modes"), (["modes", "--modes", "100000000"], "modes"),
+    (["simulate", "--t-end", "0"], "t-end"), (["simulate", "--t-end", "-1"], "t-end"),
+    (["simulate", "--t-end", "nan"], "t-end"), (["simulate", "--t-end", "1", "--rtol", "0.5"], "rtol"),
+    (["simulate", "--t-end", "1", "--rtol", "0"], "rtol"),
+    (["simulate", "--t-end", "1", "--rtol", "-1e-8"], "rtol"),
+    (["simulate", "--t-end", "1", "--atol", "0"], "atol"),
+    (["simulate", "--t-end", "1", "--atol", "1"], "atol"),
+    (["simulate", "--t-end", "1", "--dt-out", "0"], "dt_out"),
+    (["simulate", "--t-end", "1", "--dt-out", "-1e-3"], "dt_out"),
+    (["simulate", "--t-end", "1", "--perturbation", "40"], "perturbation"),
+    (["simulate", "--t-end", "1", "--schedule", "ramp", "--ramp-time", "0"], "ramp-time"),
+    (["simulate", "--t-end", "1", "--schedule", "breath", "--breath-period", "-1"], "breath-period"),
+    (["boundary", "--mstar", "0:1:5"], "mstar"), (["boundary", "--mstar", "1:10:0"], "mstar"),
+    (["boundary", "--mstar", "1:10:100000"], "mstar"), (["boundary", "--mstar", "a,b"], "mstar"),
+    (["boundary", "--mstar", "-1"], "mstar"), (["boundary", "--mstar", "1:10"], "mstar"),
+    (["boundary", "--mstar", "nan"], "mstar"),
+    (["boundary", "--mstar", "1", "--ustar-max", "0"], "ustar_max"),
+    (["boundary", "--mstar", "1", "--ustar-max", "-5"], "ustar_max"),
+    (["boundary", "--mstar", "1", "--friction", "0", "--k0", "0", "--kl", "0"], "pressure drop"),
+    (["map", "--ustar", "4:14"], "ustar"), (["map", "--ustar", "4:14:0"], "ustar"),
+    (["map", "--ustar", "nan"], "ustar"), (["map", "--ustar", "-5:-1:3"], "U*"),
+    (["map", "--mstar", "0:1:3"], "mstar"), (["map", "--t-end", "0"], "t_end"),
+    (["map", "--workers", "0"], "workers"), (["map", "--modes", "0"], "modes"),
+    (["map", "--modes", "1000"], "modes"),
+    (["lco", "--max-points", "0"], "max_points"), (["lco", "--ntst", "0"], "ntst"),
+    (["lco", "--ncol", "0"], "ncol"), (["lco", "--ustar-max", "-1"], "ustar_max"),
+    (["lco", "--contact"], "contact"),
+]
+
+
+def _file_cases(tmp_path):
+    """(argv, named) for broken scene files under ``tmp_path``."""
+    files = {"invalid": "modes = = 3", "unknown": "heights = [[0.05]]", "string": 'zeta = "abc"',
+             "huge": "modes = 99999999999999999999", "float_modes": "modes = 1e30",
+             "contact": 'contact = "yes"', "nested": "mstar = [1, 2]",
+             "binary": None}
+    out = []
+    for name, text in files.items():
+        path = tmp_path / f"{name}.toml"
+        if text is None:
+            path.write_bytes(b"\xff\xfe\x00bad")
+        else:
+            path.write_text(text)
+        out.append((["steady", "--scene", str(path)], {"invalid": "TOML", "unknown": "heights",
+                    "string": "zeta", "huge": "modes", "float_modes": "modes",
+                    "contact": "contact", "nested": "mstar", "binary": "TOML"}[name]))
+    (tmp_path / "folder.toml").mkdir()
+    out += [(["steady", "--scene", str(tmp_path / "missing.toml")], "no such file"),
+            (["steady", "--scene", str(tmp_path / "folder.toml")], "folder")]
+    return out
+
+
+@pytest.fixture
+def tripwire(monkeypatch):
+    """Every expensive step replaced by a function that fails the test: continuation
+    runs, time integration chunks, map points and the map's linear boundary (validation
+    inside the library functions before these steps is allowed)."""
+    import continuation
+    from fsicas.timedomain import integrators
+    import importlib
+    impact_map = importlib.import_module("fsicas.timedomain.impact_map")
+
+    def tripped(*args, **kwargs):
+        raise AssertionError("the computation started")
+    monkeypatch.setattr(continuation.ContinuationIterator, "start", tripped)
+    monkeypatch.setattr(integrators.Integrator, "run", tripped)
+    monkeypatch.setattr(impact_map, "_point", tripped)
+    monkeypatch.setattr(impact_map, "stability_boundary", tripped)
+
+
+def check_refused(capsys, argv, named):
+    """Exit status 2, one JSON object with an error naming ``named``; nothing else."""
+    try:
+        code = main([*argv, "--json"])
+    except SystemExit as stop:                # argparse's own errors: usage on stderr
+        code, captured = stop.code, capsys.readouterr()
+        assert code == 2 and captured.out == "" and "Traceback" not in captured.err
+        assert named.replace("_", "-") in captured.err or named in captured.err, captured.err
+        return
+    captured = capsys.readouterr()
+    assert code == 2, captured.out
+    error = json.loads(captured.out)["error"]
+    assert named in error or named.replace("_", "-") in error, error
+    assert "Traceback" not in captured.err
+
+
+@pytest.mark.parametrize("argv, named", list(_scene_cases()))
+def test_scene_option_refused_before_work(capsys, tripwire, argv, named):
+    check_refused(capsys, argv, named.replace("-", "_"))
+
+
+@pytest.mark.parametrize("argv, named", COMMAND_CASES, ids=[" ".join(a) for a, _ in COMMAND_CASES])
+def test_command_option_refused_before_work(capsys, tripwire, argv, named):
+    check_refused(capsys, argv, named)
+
+
+def test_broken_scene_files_refused_before_work(capsys, tripwire, tmp_path):
+    cases = _file_cases(tmp_path)
+    for argv, named in cases:
+        check_refused(capsys, argv, named)
+    assert len(cases) == 10
+
+
+def test_at_least_150_inputs_are_tried():
+    scene = sum(len(v) for v in SCENE_CASES.values()) * len(COMMANDS)
+    assert scene + len(COMMAND_CASES) + 10 >= 150
