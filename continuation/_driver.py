@@ -14,6 +14,7 @@ from typing import Callable, Mapping, NamedTuple
 import numpy as np
 from tqdm.auto import tqdm
 
+from . import _eigen
 from ._branch import Branch, SpecialPoint
 from ._hooks import Event, Hooks, check_hooks, crossed, scalars, stopped
 from ._locate import Located, locate
@@ -88,14 +89,29 @@ def _iterate(problem, it, restarted, settings, run):
         if restarted and step.ds == 0.0:  # restart point, already recorded
             run.prev = (step, info, run.prev[2])
             continue
+        before = run.prev[1] if run.prev is not None else None
         run.point(problem, step, info)
         if run.halt is not None:
             return step, None
+        _limit_by_eigenvalues(it, before, info, step, settings)
         done = len(run.rec.X) - 1
         restart = problem.restart(step.X) if done < settings.max_steps else None
         if restart is not None:
             return step, restart
     return step, None
+
+
+def _limit_by_eigenvalues(it, before, info, step, settings) -> None:
+    """Cap the iterator's next step (only that one) by ``settings.eigen_step``
+    (``_eigen.step_limit``), never below ``10 ds_min``."""
+    if not (settings.eigen_step and settings.compute_eigenvalues and before is not None):
+        return
+    ev_a, ev_b = before.eigenvalues, info.eigenvalues
+    if ev_a is None or ev_b is None or not len(ev_a) or not len(ev_b):
+        return
+    limit = _eigen.step_limit(np.asarray(ev_a), np.asarray(ev_b), step.ds, settings.eigen_step,
+                              settings.eigen.imag_tol)
+    it.cap = max(limit, 10 * settings.ds_min)
 
 
 class _Found(NamedTuple):

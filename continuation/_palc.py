@@ -90,6 +90,8 @@ class ContinuationIterator:
         self.stats = {"steps": 0, "newton_iterations": 0, "rejected_steps": 0,
                       "time_steps": 0.0}
         self.ds = settings.ds
+        #: a cap on the next step only (``ds`` itself, the step control's, is kept)
+        self.cap = np.inf
 
     def __iter__(self):
         step = self.start()
@@ -130,17 +132,19 @@ class ContinuationIterator:
     def advance(self, step: Step) -> Step | None:
         """One PALC step with retries at smaller ``ds``; ``None`` when stopping."""
         s = self.settings
+        cap, self.cap = self.cap, np.inf
         while True:
-            res = correct(self.problem, step.X + self.ds * step.tau, step.tau, s.newton)
+            ds = min(self.ds, cap)
+            res = correct(self.problem, step.X + ds * step.tau, step.tau, s.newton)
             self.stats["newton_iterations"] += res.iterations
-            new = self._accept(step, res) if res.converged else None
+            new = self._accept(step, res, ds) if res.converged else None
             if new is not None:
                 break
             self.stats["rejected_steps"] += 1
-            if self.ds * s.step_shrink < s.ds_min:
-                return self._fail(f"corrector failed at ds = {self.ds:.3e} (ds_min = "
-                                  f"{s.ds_min:.1e}): {res.message}", res, self.ds)
-            self.ds *= s.step_shrink
+            if ds * s.step_shrink < s.ds_min:
+                return self._fail(f"corrector failed at ds = {ds:.3e} (ds_min = "
+                                  f"{s.ds_min:.1e}): {res.message}", res, ds)
+            self.ds = cap = ds * s.step_shrink
         if self._out_of_bounds(new.X):
             return None
         self.stats["steps"] += 1
@@ -149,7 +153,7 @@ class ContinuationIterator:
             self.ds = min(self.ds * s.step_grow, s.ds_max)
         return new
 
-    def _accept(self, step: Step, res: NewtonResult) -> Step | None:
+    def _accept(self, step: Step, res: NewtonResult, ds: float) -> Step | None:
         if self.algorithm.tangent == "secant":
             tau = res.X - step.X
             tau = tau / np.linalg.norm(tau)
@@ -161,7 +165,7 @@ class ContinuationIterator:
             tau, lu = tangent(self.problem, res.X, step.tau, reuse)
         if tau is None or lu is None:
             return None
-        return Step(res.X, tau, self.ds, res.iterations, res.residual, lu)
+        return Step(res.X, tau, ds, res.iterations, res.residual, lu)
 
     def _out_of_bounds(self, X) -> bool:
         values = self.problem.par_dict(X)

@@ -105,6 +105,12 @@ class ContinuationSettings:
     stop_at : kinds of special points (e.g. ``("hopf",)``) that end the run at the
         step past the first one found (status 'stopped'): nothing further is computed.
     locate_tol : arclength tolerance of the special-point location.
+    eigen_step : with eigenvalues computed, the next step is also limited so that, by
+        the rate of the last step, no complex eigenvalue moving towards the imaginary
+        axis lands further past it than this fraction of its predicted distance to it
+        (``_eigen.step_limit``): a pair that crosses and crosses back within what would
+        be one step (a narrow window) is met inside the window, not jumped over, while
+        a pair that keeps its course is crossed in one step. 0 turns the limit off.
     progress : show a tqdm progress bar (off by default).
     """
 
@@ -124,6 +130,7 @@ class ContinuationSettings:
     compute_eigenvalues: bool = True
     locate_tol: float = 1e-10
     locate_max_iter: int = 60
+    eigen_step: float = 0.1
     progress: bool = False
 
     def __post_init__(self):
@@ -136,6 +143,9 @@ class ContinuationSettings:
         if self.direction not in (1, -1):
             raise ValueError(f"ContinuationSettings.direction must be +1 or -1, got "
                              f"{self.direction!r}")
+        if not (isinstance(self.eigen_step, (int, float)) and 0 <= self.eigen_step <= 1):
+            raise ValueError("ContinuationSettings.eigen_step must be in [0, 1] (0: off), got "
+                             f"{self.eigen_step!r}")
         if not 0 < self.step_shrink < 1 or self.step_grow < 1:
             raise ValueError("ContinuationSettings.step_shrink must be in (0, 1) and "
                              f"step_grow >= 1, got {self.step_shrink}, {self.step_grow}")

@@ -167,3 +167,29 @@ def test_bad_requests_fail_clearly():
     with pytest.raises(SteadyStateError, match="residual"):
         steady_state(Scene(modes=3, ustar=5.0, channel1=Profile.constant(0.06),
                            channel2=Profile.constant(0.04)), tol=1e-40)
+
+
+def _growth(scene, model, ustar) -> float:
+    """Largest real part of the oscillatory eigenvalues at ``ustar`` (direct eigen-solve
+    of the linearization at the steady state, no continuation)."""
+    from fsicas.linear.stability import linear_stability
+    ev = np.asarray(linear_stability(scene.replace(ustar=float(ustar)), model).eigenvalues)
+    return float(ev[np.abs(ev.imag) > 1e-6].real.max())
+
+
+@pytest.mark.parametrize("mstar", [1.745, 1.75, 1.754])
+def test_onset_is_the_first_crossing_in_a_narrow_window_band(mstar):
+    """In M* in [1.7448, 1.7541] a narrow unstable window opens below the next branch's
+    onset (U*_c ~ 8.7): the onset must be the first sign change of the growth rate on a
+    scan of U* (step 0.02 from 0.5, then brentq on the growth rate), to 1e-6."""
+    from scipy.optimize import brentq
+    from fsicas.linear.hopf import critical_velocity
+    scene = Scene(mstar=mstar, modes=10)
+    model = build_model(scene)
+    us = np.arange(0.5, 9.0, 0.02)
+    g = np.array([_growth(scene, model, u) for u in us])
+    k = int(np.argmax(g > 0))
+    assert g[k] > 0 and np.all(g[:k] < 0)
+    first = brentq(lambda u: _growth(scene, model, u), us[k - 1], us[k], xtol=1e-10)
+    assert first < 7.5                            # below the next branch's onset
+    assert critical_velocity(scene, model).ustar == pytest.approx(first, rel=1e-6)

@@ -202,14 +202,16 @@ def test_scalar_mass_leaves_l1_invariant(models):
 def test_fold_and_hopf_within_one_step():
     """z' = mu - z^2 (fold at z = 0) and an oscillator with growth rate 0.01 - z
     (Hopf at z = 0.01, mu = 1e-4, omega = 1). One step spans both: the unstable
-    count jumps by 3, the complex one by 2; both points must be found."""
+    count jumps by 3, the complex one by 2; both points must be found (the eigenvalue
+    step limit, which would split the step, is off)."""
     x, p = ca.SX.sym("x", 3), ca.SX.sym("p", 1)
     z, u, v = x[0], x[1], x[2]
     a = 0.01 - z
     F = ca.Function("F", [x, p], [ca.vertcat(p[0] - z**2, a * u - v - u * (u**2 + v**2),
                                              u + a * v - v * (u**2 + v**2))])
     br = C.continuation(C.EquilibriumProblem(F, [0.3, 0, 0], {"mu": 0.09}, "mu"),
-                        settings=settings(ds=0.1, ds_max=0.1, direction=-1, max_steps=8))
+                        settings=settings(ds=0.1, ds_max=0.1, direction=-1, max_steps=8,
+                                          eigen_step=0.0))
     z = br.x[:, 0]
     assert any(z[i] > 0.01 and z[i + 1] < 0 for i in range(len(z) - 1))  # one step spans both
     (fold,) = br.special("fold")
@@ -281,3 +283,46 @@ def test_brusselator_lyapunov_against_guckenheimer_holmes(models, A):
     a = _gh_coefficient_in_normal_coordinates(F, h.x, ps, h.data["omega"], q)
     assert h.data["l1"] == pytest.approx(4 * a / h.data["omega"], rel=1e-9)
     assert h.data["l1"] < 0  # the Brusselator Hopf bifurcation is supercritical
+
+
+def _window_oscillator(eps: float):
+    """u' = a u - v - u r^2, v' = u + a v - v r^2 with a = eps - (mu - 1)^2: the origin is
+    unstable only for |mu - 1| < sqrt(eps) (Hopf points at 1 -+ sqrt(eps), omega = 1)."""
+    x, p = ca.SX.sym("x", 2), ca.SX.sym("p", 1)
+    a = eps - (p[0] - 1) ** 2
+    r2 = x[0] ** 2 + x[1] ** 2
+    return ca.Function("F", [x, p], [ca.vertcat(a * x[0] - x[1] - x[0] * r2,
+                                                x[0] + a * x[1] - x[1] * r2)])
+
+
+def test_narrow_unstable_window_is_resolved_by_the_eigenvalue_step_limit():
+    """A window of width 0.02 inside steps of 0.3: without the limit both ends of the
+    step are stable and the window is missed; with it (the default) both Hopf points
+    are found at their known values."""
+    F = _window_oscillator(1e-4)
+    run = lambda **kw: C.continuation(C.EquilibriumProblem(F, [0.0, 0.0], {"mu": 0.0}, "mu"),
+                                      settings=settings(ds=0.3, ds_max=0.3, max_steps=40,
+                                                        bounds={"mu": (0.0, 2.0)}, **kw))
+    assert run(eigen_step=0.0).special("hopf") == []
+    hopf = sorted(h.params["mu"] for h in run().special("hopf"))
+    assert np.allclose(hopf, [0.99, 1.01], atol=1e-10, rtol=0)
+
+
+def test_eigenvalue_step_limit_costs_few_steps_on_a_plain_crossing():
+    """a = mu - 1 (one crossing, no window): the limit lets the step cross at once, so
+    the branch takes at most two more points than without it (no Zeno shrinking)."""
+    x, p = ca.SX.sym("x", 2), ca.SX.sym("p", 1)
+    a = p[0] - 1
+    F = ca.Function("F", [x, p], [ca.vertcat(a * x[0] - x[1], x[0] + a * x[1])])
+    run = lambda **kw: C.continuation(C.EquilibriumProblem(F, [0.0, 0.0], {"mu": 0.0}, "mu"),
+                                      settings=settings(ds=0.05, ds_max=0.3, max_steps=60,
+                                                        bounds={"mu": (0.0, 2.0)}, **kw))
+    plain, limited = run(eigen_step=0.0), run()
+    assert len(limited) <= len(plain) + 2
+    (h,) = limited.special("hopf")
+    assert abs(h.params["mu"] - 1.0) < 1e-10
+
+
+def test_eigen_step_setting_is_validated():
+    with pytest.raises(ValueError, match="eigen_step"):
+        C.ContinuationSettings(eigen_step=1.5)
