@@ -166,3 +166,12 @@ def test_negative_values_may_follow_their_option():
     args = build_parser().parse_args(_negative_values_attached(
         ["steady", "--contact-stiffness", "-1e6", "--ustar", "-.5", "--json"]))
     assert (args.contact_stiffness, args.ustar, args.json) == (-1e6, -0.5, True)
+
+
+def test_analysis_warnings_are_in_the_json(capsys, tmp_path):
+    """A modal truncation that cannot resolve the onset (N = 4 at M* = 50) is reported in
+    the result's "warnings", not lost on stderr."""
+    code, out = run_json(capsys, ["map", "--modes", "4", "--mstar", "50:50:1", "--ustar", "4:4:1",
+                                  "--t-end", "0.5", "--workers", "1",
+                                  "--out", str(tmp_path / "m.jsonl"), "--json"])
+    assert code == 0 and any("no flutter onset below U* = 6" in w for w in out["warnings"])

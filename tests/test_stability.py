@@ -193,3 +193,20 @@ def test_onset_is_the_first_crossing_in_a_narrow_window_band(mstar):
     first = brentq(lambda u: _growth(scene, model, u), us[k - 1], us[k], xtol=1e-10)
     assert first < 7.5                            # below the next branch's onset
     assert critical_velocity(scene, model).ustar == pytest.approx(first, rel=1e-6)
+
+
+def test_modal_truncation_too_short_is_warned():
+    """N = 4 at M* = 50 finds no onset below U* = 40 (N = 20 has U*_c ~ 18.5): a
+    ModalTruncationWarning says so; the flutter mode being the last mode kept is warned
+    too; a resolved onset (N = 10, M* = 1, mode 3) is not."""
+    import warnings
+    from fsicas.linear.hopf import ModalTruncationWarning, warn_if_truncated
+    with pytest.warns(ModalTruncationWarning, match="no flutter onset below U\\* = 40"):
+        assert critical_velocity(Scene(modes=4, mstar=50.0), ustar_max=40.0) is None
+    scene = Scene(modes=10, mstar=1.0)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", ModalTruncationWarning)
+        hopf = critical_velocity(scene)
+    assert hopf.dominant_mode == 3
+    with pytest.warns(ModalTruncationWarning, match="mode 3, the last of the N = 3 kept"):
+        warn_if_truncated(Scene(modes=3, mstar=1.0), hopf, 40.0)

@@ -1,6 +1,8 @@
 """Command line: ``fsicas <command> [scene options] [--scene FILE.toml] [--json]``.
 
 With ``--json`` stdout holds one JSON object and nothing else (a stable contract).
+Warnings of the analyses (e.g. a modal truncation too short to resolve the onset) are
+returned in its ``"warnings"`` list (printed as a line of the summary without ``--json``).
 Exit status: 0 when the command succeeded; 1 when it ran to the end but its result
 reports a failure (``"status": "failed"``: a time integration whose gap closed or whose
 solver failed, a continuation whose corrector failed), the result still printed; 2 for
@@ -16,6 +18,7 @@ import json
 import re
 import sys
 import time
+import warnings
 
 import numpy as np
 
@@ -90,13 +93,19 @@ def main(argv=None) -> int:
         check_outputs(args)
         if _writes_figures(args):
             select_file_backend()
-        result = args.run(args)
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always", UserWarning)
+            result = args.run(args)
     except (ValueError, SteadyStateError, CriticalVelocityError) as err:
         if getattr(args, "json", False):
             print(json.dumps({"error": str(err)}))
         else:
             print(f"fsicas {args.command}: error: {err}", file=sys.stderr)
         return EXIT_ERROR
+    notes = list(dict.fromkeys(str(w.message) for w in caught
+                               if issubclass(w.category, UserWarning)))
+    if notes:
+        result = {**result, "warnings": notes}
     if args.json:
         print(json.dumps(result))
     else:

@@ -11,6 +11,7 @@ with hysteresis). A located Hopf point is continued in (Π, log10 M*) as a Hopf 
 from __future__ import annotations
 
 import math
+import warnings
 from dataclasses import dataclass, field
 from functools import cached_property
 from typing import Literal
@@ -25,7 +26,7 @@ from .adapter import LOG_M, PI, PI_SCALE, TIME_SCALE, dense, flutter_field, pi_o
 from .stability import generalized_eigen
 from .steady import steady_state
 
-__all__ = ["Criticality", "HopfPoint", "CriticalVelocityError", "flutter_problem", "hopf_points",
+__all__ = ["Criticality", "HopfPoint", "CriticalVelocityError", "ModalTruncationWarning", "flutter_problem", "hopf_points",
            "critical_velocity", "dominant_mode", "hopf_point_from", "eigenvector_q", "HopfCurve",
            "trace_hopf_curve"]
 
@@ -36,6 +37,27 @@ Criticality = Literal["supercritical", "subcritical"]
 
 class CriticalVelocityError(RuntimeError):
     """The steady branch could not be followed or was unstable where it starts."""
+
+
+class ModalTruncationWarning(UserWarning):
+    """The onset is not resolved by the modes kept: none was found below the search
+    bound, or the flutter mode is the last mode kept (more modes may move it)."""
+
+
+def warn_if_truncated(scene: Scene, hopf: "HopfPoint | None", ustar_max: float) -> None:
+    """A :class:`ModalTruncationWarning` when ``hopf`` (the onset found with
+    ``scene.modes`` modes below ``ustar_max``) may be an artefact of the truncation."""
+    if hopf is None:
+        warnings.warn(f"no flutter onset below U* = {ustar_max:g} (the search bound) at M* = "
+                      f"{scene.mstar:g} with N = {scene.modes} modes: either it lies higher or "
+                      "the modes kept do not resolve it (the flutter mode rises with M*); "
+                      "check with a higher bound and more modes",
+                      ModalTruncationWarning, stacklevel=3)
+    elif hopf.dominant_mode >= scene.modes:
+        warnings.warn(f"the flutter mode at M* = {scene.mstar:g} is mode {hopf.dominant_mode}, "
+                      f"the last of the N = {scene.modes} kept: the onset U*_c = "
+                      f"{hopf.ustar:.4g} is not resolved by this truncation; raise modes",
+                      ModalTruncationWarning, stacklevel=3)
 
 
 @dataclass(frozen=True)
@@ -150,9 +172,12 @@ def hopf_points(scene: Scene, model: Model | None = None, ustar_max: float = 40.
 
 def critical_velocity(scene: Scene, model: Model | None = None, ustar_max: float = 40.0,
                       ustar_start: float = 0.2) -> HopfPoint | None:
-    """The first Hopf point (flutter onset) of the steady branch, or None below ustar_max."""
+    """The first Hopf point (flutter onset) of the steady branch, or None below ustar_max;
+    a :class:`ModalTruncationWarning` when the modes kept may not resolve it."""
     points = hopf_points(scene, model, ustar_max, ustar_start, first_only=True)
-    return points[0] if points else None
+    hopf = points[0] if points else None
+    warn_if_truncated(scene, hopf, ustar_max)
+    return hopf
 
 
 @dataclass(frozen=True)
