@@ -83,3 +83,55 @@ def test_traced_curve_points_are_hopf_points(boundary, paper_n6):
             lam = scipy.linalg.eigvals(np.array(jac(st.x, st.p)), np.array(model.mass(st.x, st.p)))
             near = lam[np.argmin(np.abs(lam - 1j * c.omega[k]))]
             assert abs(near.real) < 1e-5 * c.omega[k] and abs(near.imag - c.omega[k]) < 1e-5 * c.omega[k]
+
+
+def _window_growth(scene, model, mstar, u_lo, u_hi) -> float:
+    """The largest growth rate of the oscillatory eigenvalues over U* in [u_lo, u_hi] at
+    ``mstar`` (direct eigen-solves; bounded Brent over U*)."""
+    from scipy.optimize import minimize_scalar
+    from fsicas.linear.stability import linear_stability
+
+    def growth(u):
+        ev = np.asarray(linear_stability(scene.replace(mstar=mstar, ustar=float(u)),
+                                         model).eigenvalues)
+        return float(ev[np.abs(ev.imag) > 1e-6].real.max())
+    best = minimize_scalar(lambda u: -growth(u), bounds=(u_lo, u_hi), method="bounded",
+                           options={"xatol": 1e-9})
+    return -best.fun
+
+
+def test_fold_switches_are_where_the_unstable_window_closes():
+    """The two fold switches of Fig. 2 below M* = 2 at N = 10, located on the Hopf curves
+    (extremum of M* along the curve), against an independent route: the M* at which the
+    largest growth rate over U* near the window is zero (direct eigen-solves, Brent in
+    U*, then brentq in M*), to 1e-6 relative."""
+    from scipy.optimize import brentq
+    scene = Scene(modes=10)
+    model = build_model(scene)
+    boundary = stability_boundary(scene, np.geomspace(0.3, 2.2, 5), model)
+    folds = [s for s in boundary.switches if abs(s.ustar_above - s.ustar_below) > 0.1]
+    assert len(folds) == 2 and all(s.located for s in folds)
+    for switch in folds:
+        u = switch.ustar_below
+        closes = lambda m: _window_growth(scene, model, m, 0.95 * u, 1.05 * u)
+        m0 = switch.mstar
+        independent = brentq(closes, 0.99 * m0, 1.01 * m0, xtol=1e-12)
+        assert switch.mstar == pytest.approx(independent, rel=1e-6)
+    assert [round(s.mstar, 5) for s in folds] == [0.39889, 1.75406]
+
+
+def test_crossing_switch_is_a_double_hopf_point():
+    """The crossing of two Hopf curves near M* = 28.4 at N = 10, located by Brent on the
+    difference of their onsets: the steady state there has two imaginary pairs at the two
+    frequencies (direct eigen-solve), to 1e-7 of their size."""
+    from fsicas.linear.stability import linear_stability
+    scene = Scene(modes=10)
+    model = build_model(scene)
+    boundary = stability_boundary(scene, np.geomspace(20.0, 40.0, 4), model)
+    (switch,) = [s for s in boundary.switches if abs(s.ustar_above - s.ustar_below) < 1e-6]
+    assert switch.located
+    ev = np.asarray(linear_stability(scene.replace(mstar=switch.mstar, ustar=switch.ustar_below),
+                                     model).eigenvalues)
+    for omega in (switch.omega_below, switch.omega_above):
+        lam = ev[np.argmin(np.abs(ev - 1j * omega))]
+        assert abs(lam.real) < 1e-7 * abs(lam) and abs(lam.imag - omega) < 1e-6 * omega

@@ -29,6 +29,7 @@ from .hopf import (Criticality, CriticalVelocityError, HopfCurve, HopfPoint, hop
                    hopf_points, trace_hopf_curve)
 from .stability import eigenvalues
 from .steady import steady_state
+from .switches import locate_switch
 from ..model.assembly import Model, build_model
 from ..scene import Scene
 
@@ -99,6 +100,9 @@ class ModeSwitch:
     branch_above: int
     omega_below: float
     omega_above: float
+    #: solved on its defining equation (:mod:`fsicas.linear.switches`), else bracketed
+    #: on the traced curves
+    located: bool = False
 
 
 @dataclass(frozen=True)
@@ -149,7 +153,7 @@ def stability_boundary(scene: Scene, mstars, model: Model | None = None,
         found = [search(m) for m in missed]
         _add_curves(scene, model, curves, found, window, ceiling, cut)
         points = [_boundary_point(scene, model, curves, m, refine) for m in mstars]
-    switches = _switches(curves, lo, hi)
+    switches = [locate_switch(scene, model, curves, sw) for sw in _switches(curves, lo, hi)]
     return StabilityBoundary(scene, points, curves, switches, time.perf_counter() - start)
 
 
