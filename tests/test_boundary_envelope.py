@@ -135,3 +135,32 @@ def test_crossing_switch_is_a_double_hopf_point():
     for omega in (switch.omega_below, switch.omega_above):
         lam = ev[np.argmin(np.abs(ev - 1j * omega))]
         assert abs(lam.real) < 1e-7 * abs(lam) and abs(lam.imag - omega) < 1e-6 * omega
+
+
+def test_onset_is_continuous_in_mstar_except_at_the_switches():
+    """A dense boundary (400 M* in [0.01, 100], N = 10, each point refined): across a
+    fold switch U*_c jumps by at least the switch's jump (the folding branch also rises
+    steeply up to its fold); everywhere else a step between
+    neighbouring M* (0.01 decades apart) is no larger than 5x the median of its six
+    neighbouring steps (+ 1e-3 U*_c): no jump that is not a switch."""
+    scene = Scene(modes=10)
+    model = build_model(scene)
+    mstars = np.geomspace(0.01, 100.0, 400)
+    boundary = stability_boundary(scene, mstars, model)
+    u = np.array([p.ustar_crit for p in boundary.points])
+    assert np.all(np.isfinite(u)) and all(p.refined for p in boundary.points)
+    folds = [s for s in boundary.switches if abs(s.ustar_above - s.ustar_below) > 1e-6]
+    steps = np.diff(u)
+    at_fold = [[s for s in folds if mstars[k] < s.mstar <= mstars[k + 1]]
+               for k in range(len(steps))]
+    assert sum(map(len, at_fold)) == len(folds)
+    for k, inside in enumerate(at_fold):
+        if inside:
+            expected = sum(s.ustar_above - s.ustar_below for s in inside)
+            # plus the steep (square-root) rise of the folding branch up to its fold
+            assert np.sign(steps[k]) == np.sign(expected) and \
+                abs(steps[k]) >= abs(expected), (mstars[k], steps[k])
+            continue
+        near = [abs(steps[j]) for j in range(max(k - 3, 0), min(k + 4, len(steps)))
+                if j != k and not at_fold[j]]
+        assert abs(steps[k]) <= 5 * np.median(near) + 1e-3 * u[k], (mstars[k], steps[k])
