@@ -93,7 +93,7 @@ def _file_cases(tmp_path):
 
 
 @pytest.fixture
-def tripwire(monkeypatch):
+def tripwire(monkeypatch, tmp_path):
     """Every expensive step replaced by a function that fails the test: continuation
     runs, time integration chunks, map points and the map's linear boundary (validation
     inside the library functions before these steps is allowed)."""
@@ -104,6 +104,7 @@ def tripwire(monkeypatch):
 
     def tripped(*args, **kwargs):
         raise AssertionError("the computation started")
+    monkeypatch.chdir(tmp_path)                   # default output files land there
     monkeypatch.setattr(continuation.ContinuationIterator, "start", tripped)
     monkeypatch.setattr(integrators.Integrator, "run", tripped)
     monkeypatch.setattr(impact_map, "_point", tripped)
