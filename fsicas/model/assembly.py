@@ -2,7 +2,7 @@
 
 State ``x = (r_1..r_N, q_1..q_N, Q_1, Q_2)``: modal velocities, modal displacements and
 the inlet flow rates of channel 1 (above) and 2 (below). The equations (paper Eqs. 7–16,
-corrected per ERRATA, derived in ``docs/model.md``) and their lifted Jacobians are
+with the readings of ``docs/model.md``, derived in ``docs/model.md``) and their lifted Jacobians are
 written in :mod:`.equations`; here they become a :class:`Model` with the modes, the
 quadrature rule and the parameter vector of one scene structure.
 """

@@ -3,7 +3,7 @@
 State ``x = (r_1..r_N, q_1..q_N, Q_1, Q_2)``: modal velocities, modal displacements and
 the inlet flow rates of channel 1 (above, s_1 = -1) and 2 (below, s_2 = +1). With
 ``h_c = H_c + s_c y`` and ``G_c = ∫_0^x dh_c/dt = s_c Σ Phi_n r_n`` the formal solutions
-(paper Eqs. 7–12, corrected per ERRATA, derived in ``docs/model.md``) read
+(paper Eqs. 7–12, with the readings of ``docs/model.md``, derived in ``docs/model.md``) read
 
     u_c = (Q_c - G_c) / h_c
     p_c(x) = P0 - M*/2 K0 u_c0|u_c0| - M* [ ∫_0^x g_c + u_c(x)^2 / 2 ]

@@ -13,7 +13,7 @@ from .run import run_case
 
 __all__ = ["PAPER_CONTACT", "HOLDING_CONTACT", "IMPACTING_SETTINGS", "impacting_run"]
 
-#: The paper's contact law (Figs. 6-9), which does not hold the beam under the ERRATA's
+#: The paper's contact law (Figs. 6-9), which does not hold the beam under our
 #: reading, and the stiffest tested law that does (docs/simulate.md, "Decision").
 PAPER_CONTACT = dict(contact_stiffness=1e6, contact_eps=1e-3)
 HOLDING_CONTACT = dict(contact_stiffness=1e8, contact_eps=1e-2)
