@@ -175,3 +175,19 @@ def test_analysis_warnings_are_in_the_json(capsys, tmp_path):
                                   "--t-end", "0.5", "--workers", "1",
                                   "--out", str(tmp_path / "m.jsonl"), "--json"])
     assert code == 0 and any("no flutter onset below U* = 6" in w for w in out["warnings"])
+
+
+def test_version_and_helpful_scene_options(capsys):
+    """--version names fsicas and CasADi; each scene option's help says what it is and its
+    default; no raw reStructuredText markup in the help."""
+    import fsicas
+    with pytest.raises(SystemExit) as stop:
+        main(["--version"])
+    assert stop.value.code == 0 and f"fsicas {fsicas.__version__}" in capsys.readouterr().out
+    with pytest.raises(SystemExit):
+        main(["steady", "--help"])
+    text = capsys.readouterr().out
+    assert "mass ratio M*" in text and "(default 10)" in text and "(default 0.14)" in text
+    with pytest.raises(SystemExit):
+        main(["--help"])
+    assert "``" not in capsys.readouterr().out

@@ -20,8 +20,10 @@ import sys
 import time
 import warnings
 
+import casadi
 import numpy as np
 
+from .. import __version__
 from ..linear.hopf import CriticalVelocityError
 from ..linear.steady import SteadyStateError
 from ..plots.backend import select_file_backend
@@ -39,7 +41,12 @@ _ALWAYS_PLOTTING = frozenset({"paper"})
 
 def build_parser() -> argparse.ArgumentParser:
     """The ``fsicas`` parser: each subcommand's ``run`` maps its parsed args to a dict."""
-    parser = argparse.ArgumentParser(prog="fsicas", description=__doc__.splitlines()[0])
+    parser = argparse.ArgumentParser(
+        prog="fsicas", description="fsicas: a flexible cantilever in confined axial flow "
+        "(flutter onset, limit cycles, wall impacts). fsicas <command> [scene options] "
+        "[--scene FILE.toml] [--json]; fsicas <command> --help for each command.")
+    parser.add_argument("--version", action="version",
+                        version=f"fsicas {__version__} (CasADi {casadi.__version__})")
     sub = parser.add_subparsers(dest="command", required=True)
     add_linear_commands(sub)        # modes, steady, eig, boundary (docs/stability.md)
     add_paper_command(sub)          # paper

@@ -16,15 +16,38 @@ SCENE_OPTIONS = {
 }
 
 
+#: What each scene option means (the defaults are those of :class:`fsicas.Scene`).
+SCENE_HELP = {
+    "mstar": "mass ratio M* = rho_f L / (rho_s e), in (0, 1e6]",
+    "ustar": "mean inlet velocity U* = U0 T / L, |U*| <= 1e4 (negative: reversed flow)",
+    "hstar": "total inlet gap H* = (H1(0) + H2(0)) / L, > 0",
+    "friction": "Fanning friction coefficient f, >= 0",
+    "k0": "singular head loss at the inlet, >= 0",
+    "kl": "singular head loss at the outlet, >= 0",
+    "zeta": "modal damping ratio (every mode), >= 0",
+    "modes": "number of beam modes N, in [1, 200]",
+    "quad_nodes": "Gauss-Legendre nodes of the flow integrals, in [2N, 2000]",
+    "contact_stiffness": "wall-contact stiffness k* (per unit length, relative to the first "
+                         "mode's), > 0",
+    "contact_eps": "contact layer eps/H (H = H*/2), in (0, 1)",
+}
+
+
 def add_scene_options(parser: argparse.ArgumentParser, mstar: bool = True) -> None:
     """Add the scene options (without ``--mstar`` if ``mstar`` is false: the command
     takes its own grid of M*) and ``--json`` to ``parser``."""
     group = parser.add_argument_group("scene (nondimensional; see docs/model.md)")
     group.add_argument("--scene", metavar="FILE.toml", help="read the scene from a TOML file")
+    defaults = Scene()
     for name, kind in SCENE_OPTIONS.items():
         if name != "mstar" or mstar:
-            group.add_argument("--" + name.replace("_", "-"), dest=name, type=kind, default=None)
-    group.add_argument("--contact", dest="contact", action=argparse.BooleanOptionalAction, default=None)
+            default = getattr(defaults, name)
+            shown = "2N + 20" if default is None else f"{default:g}"
+            group.add_argument("--" + name.replace("_", "-"), dest=name, type=kind, default=None,
+                               metavar=name.upper(),
+                               help=f"{SCENE_HELP[name]} (default {shown})")
+    group.add_argument("--contact", dest="contact", action=argparse.BooleanOptionalAction,
+                       default=None, help="regularized wall impact on or off (default off)")
     parser.add_argument("--json", action="store_true", help="print one JSON object on stdout")
 
 
