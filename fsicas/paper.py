@@ -31,13 +31,45 @@ from .scene import Scene
 from .timedomain.impact_map import impact_map
 from .timedomain.impacting_run import HOLDING_CONTACT, PAPER_CONTACT, impacting_run
 
-__all__ = ["PAPER_SCENE", "VARIANTS", "CYCLE_USTARS", "impacting_cycle", "run_paper", "summary"]
+__all__ = ["PAPER_SCENE", "VARIANTS", "CYCLE_USTARS", "REPORT_FIELDS", "impacting_cycle",
+           "run_metadata", "run_paper", "summary"]
 
 PAPER_SCENE = Scene(mstar=1.0, ustar=5.0, hstar=0.1, friction=0.14, k0=0.0, kl=1.0,
                     zeta=0.0, modes=10)
 VARIANTS = {"zeta = 0.01": dict(zeta=0.01), "H* = 1/20": dict(hstar=0.05),
             "H* = 1/5": dict(hstar=0.2)}
 CYCLE_USTARS = (7.0, 8.5, 10.0)
+
+
+#: What the report's quantities are, and their units (nondimensional, docs/model.md).
+REPORT_FIELDS = {
+    "units": "nondimensional: lengths by the beam length L, time by T = L^2 sqrt(rho_s e / D), "
+             "pressure by D / L^3 (D the bending stiffness per unit width)",
+    "omega_invacuo": "in-vacuo clamped-free frequencies w_n = beta_n^2 (rad per unit T)",
+    "steady": "steady state at U*: pressure drop P0 - PL and its closed form, flow rates Q1, Q2",
+    "boundary": "flutter boundary U*_c(M*): per M* the onset U*, frequency omega (rad per unit "
+                "T), omega / w_1, branch, first Lyapunov coefficient l1 and criticality; the mode "
+                "switches (crossings and folds of Hopf curves, located)",
+    "variants": "the boundary for zeta = 0.01 and H* = 1/20, 1/5",
+    "impact_map": "Fig. 4: outcome counts of the (U*, M*) map (decay, lco, contact, unsettled)",
+    "impacting_cycles": "Figs. 6-9: per U* the settled cycle's outcome, period (units of T), "
+                        "tip amplitude (units of L), impacts per cycle, peak impact force, mean "
+                        "flow-rate reduction",
+    "wall_time": "seconds",
+}
+
+
+def run_metadata(quick: bool) -> dict:
+    """When, with what and how the report was made, and what its fields mean."""
+    import platform
+    from datetime import datetime, timezone
+    import casadi
+    import scipy
+    return {"created": datetime.now(timezone.utc).isoformat(timespec="seconds"),
+            "command": "fsicas paper" + (" --quick" if quick else ""),
+            "fsicas": __version__, "casadi": casadi.__version__, "numpy": np.__version__,
+            "scipy": scipy.__version__, "python": platform.python_version(),
+            "fields": REPORT_FIELDS}
 
 
 def run_paper(out="results", quick: bool = False) -> dict:
@@ -54,6 +86,7 @@ def run_paper(out="results", quick: bool = False) -> dict:
     plot_mode_shapes(boundary, model, out / "fig3_modes.png")
     report = {
         "version": __version__,
+        "meta": run_metadata(quick),
         "scene": scene.to_dict(),
         "omega_invacuo": (clamped_free_betas(scene.modes) ** 2).tolist(),
         "steady": {"ustar": scene.ustar, "pressure_drop": steady.pressure_drop,

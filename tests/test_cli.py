@@ -59,6 +59,9 @@ def test_paper_quick_writes_report(tmp_path, capsys):
     assert out["steady"]["pressure_drop"] == pytest.approx(out["steady"]["closed_form"], rel=1e-14)
     for name in ("report.json", "fig2_boundary.png", "fig3_modes.png"):
         assert (tmp_path / name).exists()
+    meta = out["meta"]
+    assert {"created", "fsicas", "casadi", "command", "fields"} <= set(meta)
+    assert set(out) - {"version", "meta", "scene"} <= set(meta["fields"])   # every field explained
     points = out["boundary"]["points"]
     assert len(points) == 7 and all(p["refined"] and p["omega"] > 0 for p in points)
     assert out["boundary"]["switches"]
