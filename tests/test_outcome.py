@@ -109,3 +109,19 @@ def test_full_contact_free_run_still_ends_at_contact(damped_scene_u6_5, outcome_
     assert run.outcome.outcome == "contact" and run.trajectory.t[-1] < 3.0
     lco = run_case(damped_scene_u6_5, 3.0, settings=outcome_settings, stop_early=False)
     assert lco.trajectory.t[-1] == pytest.approx(3.0)          # no early stop otherwise
+
+
+def test_output_step_follows_the_period_so_a_fast_cycle_settles():
+    """M* = 10, U* = 13 (a flutter period of 0.033): with the map's output step 2e-3 a
+    period had 16 samples and the run ended 'unsettled' at t = 30. The step is now refined
+    towards 200 samples per period of the leading oscillation (at most 10x): the cycle
+    settles, with the period of a run sampled twice as finely (to 1e-5)."""
+    from fsicas.timedomain.impact_map import MAP_SCENE
+    scene = MAP_SCENE.replace(ustar=13.0, mstar=10.0)
+    run = run_case(scene, 30.0, settings=Settings(rtol=1e-7, atol=1e-9, dt_out=2e-3, chunk=1.0))
+    assert run.outcome.outcome == "lco"
+    dt = run.trajectory.settings.dt_out
+    assert dt == pytest.approx(2e-4)              # refined 10x, the most it is refined
+    assert run.outcome.period / dt > 160
+    fine = run_case(scene, 30.0, settings=Settings(rtol=1e-7, atol=1e-9, dt_out=dt / 2, chunk=1.0))
+    assert fine.outcome.period == pytest.approx(run.outcome.period, rel=1e-5)

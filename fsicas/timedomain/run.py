@@ -19,6 +19,7 @@ from ..model.assembly import Model, build_model
 from .outcome import Criteria, Monitor, Outcome, classify
 from ..scene import Scene
 from .integrators import Settings, Trajectory, simulate
+from ..linear.stability import eigenvalues
 from ..linear.steady import SteadyState, steady_state
 
 __all__ = ["Run", "run_case", "guarded_model"]
@@ -70,6 +71,7 @@ def run_case(scene: Scene, t_end: float, *, settings: Settings = Settings(),
     if criteria.stop_on_contact is None:
         criteria = _with_stop(criteria, stop_on_contact)
     steady = steady_state(_steady_scene(scene, schedule), model)
+    settings = sampled_settings(model, steady, settings)
     if stop_early:
         monitor = Monitor(model, steady, criteria)
     else:
@@ -83,6 +85,26 @@ def run_case(scene: Scene, t_end: float, *, settings: Settings = Settings(),
             "contact time is located"))
     outcome = classify(traj, steady, criteria)
     return Run(scene, model, steady, traj, outcome, time.perf_counter() - start)
+
+
+#: Output samples per period of the leading oscillation of the steady state at least
+#: (the classification reads periods and amplitudes off the samples), with ``dt_out``
+#: refined at most :data:`MAX_REFINEMENT` times.
+SAMPLES_PER_PERIOD, MAX_REFINEMENT = 200, 10
+
+
+def sampled_settings(model: Model, steady, settings: Settings) -> Settings:
+    """``settings`` with ``dt_out`` at most ``T / SAMPLES_PER_PERIOD``, T = 2π / Im λ of
+    the oscillatory eigenvalue of largest real part at the steady state (not below
+    ``settings.dt_out / MAX_REFINEMENT``). With a fixed output step a period at M* = 10
+    had 16 samples and never settled."""
+    lam = eigenvalues(model, steady)
+    oscillating = lam[np.abs(lam.imag) > 1e-9]
+    if not oscillating.size:
+        return settings
+    lead = oscillating[np.argmax(oscillating.real)]
+    dt = max(2 * np.pi / abs(lead.imag) / SAMPLES_PER_PERIOD, settings.dt_out / MAX_REFINEMENT)
+    return settings if settings.dt_out <= dt else replace(settings, dt_out=float(dt))
 
 
 def _with_stop(criteria: Criteria, stop: bool) -> Criteria:
