@@ -318,22 +318,33 @@ def _loop(model, steady, schedule, integrator, x0, n_chunks, monitor) -> Traject
 def _recover(model, integrator, x, pe, t0, refine=50):
     """Samples of a failed chunk up to the failure.
 
-    The chunk is re-run in (up to) 20 pieces, the failing piece one output step at a
-    time, and the failing step in ``refine`` sub-steps: the last samples before a failure
-    (e.g. a closing gap) are ``dt_out / refine`` apart, close enough to locate the
-    contact (:mod:`fsicas.timedomain.outcome`).
+    The failing chunk is re-run in pieces, the failing piece in smaller pieces, and so on
+    (each level at most 20 runs, :func:`_levels`) down to one output step, and the
+    failing step in ``refine`` sub-steps: the last samples before a failure (e.g. a
+    closing gap) are ``dt_out / refine`` apart, close enough to locate the contact
+    (:mod:`fsicas.timedomain.outcome`), at a cost that grows with the logarithm of the
+    number of output steps, not with it.
     """
-    span, n_out = integrator.span, integrator.n_out
-    pieces = math.gcd(n_out, 20)
-    dt = span / n_out
-    levels = [(span / pieces, n_out // pieces, pieces), (dt, 1, n_out // pieces), (dt / refine, 1, refine)]
     ts, xs = [np.zeros(0)], [np.zeros((0, model.n_state))]
-    for length, samples, count in levels:
+    for length, samples, count in _levels(integrator.span, integrator.n_out, refine):
         t, X = _runs(model, Integrator(model, integrator.settings, length, samples), x, pe, t0, count)
         ts.append(t), xs.append(X)
         if len(t):
             t0, x = t[-1], X[-1]
     return np.concatenate(ts), np.concatenate(xs)
+
+
+def _levels(span: float, n_out: int, refine: int) -> list[tuple[float, int, int]]:
+    """(run length, output samples per run, runs) of each level of :func:`_recover`: the
+    chunk's ``n_out`` output steps split by at most 20 per level (a divisor, so the
+    samples stay on the output grid), then one output step in ``refine`` sub-steps."""
+    levels, length, samples = [], span, n_out
+    while samples > 1:
+        k = max(d for d in range(1, 21) if samples % d == 0)
+        k = samples if k == 1 else k            # a prime count: one step at a time
+        length, samples = length / k, samples // k
+        levels.append((length, samples, k))
+    return levels + [(length / refine, 1, refine)]
 
 
 def _runs(model, integrator, x, pe, t0, count):

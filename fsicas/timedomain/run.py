@@ -9,6 +9,7 @@ sample and the one before, the guard keeps the solver away from the singular flo
 """
 from __future__ import annotations
 
+import math
 import time
 from dataclasses import dataclass, replace
 
@@ -96,15 +97,19 @@ SAMPLES_PER_PERIOD, MAX_REFINEMENT = 200, 10
 def sampled_settings(model: Model, steady, settings: Settings) -> Settings:
     """``settings`` with ``dt_out`` at most ``T / SAMPLES_PER_PERIOD``, T = 2π / Im λ of
     the oscillatory eigenvalue of largest real part at the steady state (not below
-    ``settings.dt_out / MAX_REFINEMENT``). With a fixed output step a period at M* = 10
-    had 16 samples and never settled."""
+    ``settings.dt_out / MAX_REFINEMENT``), dividing a chunk into a multiple of 20 steps
+    (the failure recovery of the integrator splits by 20). With a fixed output step a
+    period at M* = 10 had 16 samples and never settled."""
     lam = eigenvalues(model, steady)
     oscillating = lam[np.abs(lam.imag) > 1e-9]
     if not oscillating.size:
         return settings
     lead = oscillating[np.argmax(oscillating.real)]
     dt = max(2 * np.pi / abs(lead.imag) / SAMPLES_PER_PERIOD, settings.dt_out / MAX_REFINEMENT)
-    return settings if settings.dt_out <= dt else replace(settings, dt_out=float(dt))
+    if settings.dt_out <= dt:
+        return settings
+    steps = 20 * math.ceil(settings.chunk / dt / 20)   # a chunk in a multiple of 20 steps
+    return replace(settings, dt_out=settings.chunk / steps)
 
 
 def _with_stop(criteria: Criteria, stop: bool) -> Criteria:
