@@ -159,3 +159,20 @@ def test_cli_cycles_json_and_files(tmp_path, capsys):
     assert (tmp_path / "b.png").stat().st_size > 0
     with pytest.raises(ValueError, match="contact-free"):
         args.run(parser.parse_args(["cycles", "--contact"]))
+
+
+def test_branch_reports_its_quadrature_error(supercritical):
+    """Every cycle point carries the quadrature error of the equations over the cycle: at
+    round-off far from the wall, and the same as the model-level estimate at the cycle's
+    nodes; it grows towards the first contact, where the wall is near."""
+    from fsicas.model.accuracy import quadrature_error
+    model, branch = supercritical
+    errors = branch.column("quadrature_error")
+    assert np.all(np.isfinite(errors)) and errors[0] < 1e-12
+    far = [p for p in branch.points if p.gap_ratio > 30]
+    near = [p for p in branch.points if p.gap_ratio < 3]
+    assert far and near and max(p.quadrature_error for p in far) < \
+        min(p.quadrature_error for p in near)
+    assert branch.contact.quadrature_error > 1e-6        # N = 4 on 28 nodes at gap = eps
+    st = fsicas.steady_state(SUPER.replace(ustar=branch.points[0].ustar), model)
+    assert quadrature_error(model, branch.points[0].state, st.p) < 1e-12

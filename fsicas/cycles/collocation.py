@@ -95,6 +95,9 @@ class CyclePoint(CycleMeasures):
     kind: CycleKind = "regular"
     state: np.ndarray = field(repr=False, default=None)
     located: bool = True
+    #: relative error of the equations from the flow quadrature over the cycle
+    #: (:mod:`fsicas.model.accuracy`; NaN where not measured)
+    quadrature_error: float = float("nan")
 
     _derived = ("frequency",)
 

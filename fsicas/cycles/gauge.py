@@ -9,14 +9,17 @@ A cycle problem of :mod:`continuation` on ``flutter_field`` has unknowns
 - ``pressure_drop`` Δp = 100 M* Π, the period in units of T, the Floquet multipliers and
   stability (all non-trivial multipliers inside the unit circle), the state at phase 0;
 - from the profile, by the route: the tip half-amplitude (max − min of y(1, t))/2 and
-  the minimal gap min_{x,t} h_c(x, t) with its ratio to eps (:mod:`fsicas.model.contact`).
+  the minimal gap min_{x,t} h_c(x, t) with its ratio to eps (:mod:`fsicas.model.contact`);
+- ``quadrature_error``: the relative error of the equations over the cycle from the flow
+  quadrature, against a rule of twice the nodes (:mod:`fsicas.model.accuracy`).
 """
 from __future__ import annotations
 
 import numpy as np
 
-from ..linear.adapter import LOG_M, PI_SCALE, TIME_SCALE, steady_ustar
+from ..linear.adapter import LOG_M, PI_SCALE, TIME_SCALE, flutter_field, steady_ustar
 from ..model import contact
+from ..model.accuracy import finer_model, relative_error
 
 __all__ = ["Gauge", "PolynomialExtrema", "PERIOD_COLUMN"]
 
@@ -41,7 +44,16 @@ class Gauge:
         ustar, self.x_eq = steady_ustar(problem.vf, p, self.x_eq, self.model.scene.hstar)
         return {"ustar": ustar, "pressure_drop": float(X[-1] * PI_SCALE * mstar),
                 PERIOD_COLUMN: problem.period(X) / TIME_SCALE, "multipliers": mu,
-                "stable": bool(np.all(np.abs(rest) < 1.0)), "state": problem.state(X).copy()}
+                "stable": bool(np.all(np.abs(rest) < 1.0)), "state": problem.state(X).copy(),
+                "quadrature_error": self.quadrature_error(problem, X)}
+
+    def quadrature_error(self, problem, X) -> float:
+        """:func:`fsicas.model.accuracy.quadrature_error` over the cycle: at the nodes of
+        a collocation problem, at the segment starts of a shooting problem."""
+        states = problem.nodes(X) if hasattr(problem, "nodes") else problem.points(X)
+        p = problem.params(X)
+        fine = flutter_field(finer_model(self.model)).F.map(len(states))(states.T, p)
+        return relative_error(fine, problem.vf.F.map(len(states))(states.T, p))
 
     def tip(self, x) -> np.ndarray:
         """Tip deflection y(1) of states x (rows)."""

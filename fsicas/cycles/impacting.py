@@ -98,6 +98,9 @@ class ImpactPoint(CycleMeasures):
     stable: bool = True
     state: np.ndarray = field(repr=False, default=None)
     wall_time: float = 0.0
+    #: relative error of the equations from the flow quadrature over the cycle
+    #: (:mod:`fsicas.model.accuracy`; NaN where not measured)
+    quadrature_error: float = float("nan")
 
 
 @dataclass(frozen=True)
