@@ -46,7 +46,7 @@ def plot_run(run, path) -> None:
 def plot_map(result, path) -> None:
     """Fig. 4: outcome of each (U*, M*) point and the linear stability boundary."""
     plt = pyplot()
-    fig, ax = plt.subplots(figsize=(7, 5))
+    fig, ax = plt.subplots(figsize=(8.5, 5))
     for kind, color in _COLORS.items():
         pts = [(p["ustar"], p["mstar"]) for p in result.points if p["outcome"] == kind]
         if pts:
@@ -56,12 +56,16 @@ def plot_map(result, path) -> None:
     ok = [(u, m) for u, m in zip(b["ustar_crit"], b["mstar"]) if u is not None]
     if ok:
         u, m = np.array(ok).T
-        ax.plot(u, m, "k-", lw=1.5, label="linear stability boundary")
+        ax.plot(u, m, "k.-", lw=1.5, label="linear stability boundary")
     ax.set_yscale("log")
     ax.set_xlabel("U*")
     ax.set_ylabel("M*")
-    ax.set_title("H* = 1/10, f = 0.14, zeta = 0.01, N = 10")
-    ax.legend(fontsize=8)
+    scene = result.scene
+    if scene is not None:
+        zeta = scene.zeta if np.isscalar(scene.zeta) else "per mode"
+        ax.set_title(f"H* = {scene.hstar:g}, f = {scene.friction:g}, zeta = {zeta}, "
+                     f"N = {scene.modes}")
+    ax.legend(fontsize=8, loc="upper left", bbox_to_anchor=(1.01, 1.0))   # off the points
     fig.tight_layout()
     fig.savefig(path, dpi=120)
     plt.close(fig)

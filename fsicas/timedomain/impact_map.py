@@ -60,6 +60,8 @@ class MapResult:
     boundary: dict
     wall_time: float
     computed: int
+    #: the map's scene (its U* and M* are those of the grid)
+    scene: Scene | None = None
 
     def counts(self) -> dict[MapOutcome, int]:
         out = {}
@@ -178,7 +180,7 @@ def impact_map(ustars, mstars, path, *, scene: Scene = MAP_SCENE, t_end: float =
                 progress(k, len(todo))
     points = [done[_key(u, m)] for m in mstars for u in ustars]
     boundary = stability_boundary(scene, mstars, ustars)
-    return MapResult(points, boundary, time.perf_counter() - start, len(todo))
+    return MapResult(points, boundary, time.perf_counter() - start, len(todo), base)
 
 
 def stability_boundary(scene: Scene, mstars, ustars) -> dict:
