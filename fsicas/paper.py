@@ -72,15 +72,18 @@ def run_metadata(quick: bool) -> dict:
             "fields": REPORT_FIELDS}
 
 
-def run_paper(out="results", quick: bool = False) -> dict:
-    """Compute the report and the figures and write them to ``out``."""
+def run_paper(out="results", quick: bool = False, progress=None) -> dict:
+    """Compute the report and the figures and write them to ``out``. ``progress(text)``
+    (optional) is told when each stage starts."""
     start = time.perf_counter()
+    say = progress or (lambda text: None)
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     scene = PAPER_SCENE
     model = build_model(scene)
     steady = steady_state(scene, model)
     mstars = np.logspace(-1, 1, 7) if quick else np.logspace(-2, 2, 33)
+    say(f"Fig. 2 and 3: the flutter boundary at {len(mstars)} M* (N = {scene.modes})")
     boundary = stability_boundary(scene, mstars, model)
     plot_boundary(boundary, out / "fig2_boundary.png")
     plot_mode_shapes(boundary, model, out / "fig3_modes.png")
@@ -94,8 +97,9 @@ def run_paper(out="results", quick: bool = False) -> dict:
         "boundary": {k: v for k, v in boundary.to_json().items() if k != "curves"},
     }
     if not quick:
+        say("the boundary variants (zeta = 0.01, H* = 1/20, 1/5)")
         report["variants"] = _variants(scene, mstars[::2], boundary, out / "boundary_variants.png")
-    report.update(_time_domain(out, quick))
+    report.update(_time_domain(out, quick, say))
     report["wall_time"] = time.perf_counter() - start
     (out / "report.json").write_text(json.dumps(report, indent=2))
     return report
@@ -130,7 +134,7 @@ def _cycle_job(args) -> dict:
     return impacting_cycle(*args)
 
 
-def _time_domain(out: Path, quick: bool) -> dict:
+def _time_domain(out: Path, quick: bool, say) -> dict:
     """Fig. 4 (the impact map, N = 10) and Figs. 6-9 (impacting cycles, N = 10)."""
     if quick:
         ustars, mstars, t_map = np.array([4.0, 9.0]), np.array([1.0]), 5.0
@@ -141,8 +145,10 @@ def _time_domain(out: Path, quick: bool) -> dict:
         # periodic" 1c; its Poincaré points vary by 8 % of the state's range), reported as such
         jobs = [(u, 10, HOLDING_CONTACT, 4.0, out / f"fig6_9_U{u:g}.png", 0.1) for u in CYCLE_USTARS]
         jobs.append((8.5, 10, PAPER_CONTACT, 1.0, None))
+    say(f"Fig. 4: the impact map, {ustars.size * mstars.size} time integrations")
     result = impact_map(ustars, mstars, out / "fig4_map.jsonl", t_end=t_map, workers=2)
     plot_map(result, out / "fig4_impact_map.png")
+    say(f"Figs. 6-9: {len(jobs)} impacting cycles (N = 10)")
     with ProcessPoolExecutor(max_workers=2) as pool:
         cycles = list(pool.map(_cycle_job, jobs))
     return {"impact_map": result.to_json(), "impacting_cycles": cycles}

@@ -54,8 +54,13 @@ def test_console_script_prints_only_json():
 
 
 def test_paper_quick_writes_report(tmp_path, capsys):
-    code, out = run_json(capsys, ["paper", "--quick", "--out", str(tmp_path), "--json"])
+    code = main(["paper", "--quick", "--out", str(tmp_path), "--json"])
+    captured = capsys.readouterr()
+    out = json.loads(captured.out)
     assert code == 0
+    stages = [line for line in captured.err.splitlines() if line.startswith("fsicas paper [")]
+    assert [s.split("] ", 1)[1].split(":")[0] for s in stages] == \
+        ["Fig. 2 and 3", "Fig. 4", "Figs. 6-9"]          # each stage announced on stderr
     assert out["steady"]["pressure_drop"] == pytest.approx(out["steady"]["closed_form"], rel=1e-14)
     for name in ("report.json", "fig2_boundary.png", "fig3_modes.png"):
         assert (tmp_path / name).exists()

@@ -1,6 +1,9 @@
 """CLI command ``fsicas paper``: the main job (:func:`fsicas.paper.run_paper`)."""
 from __future__ import annotations
 
+import sys
+import time
+
 from ..paper import run_paper, summary
 
 __all__ = ["add_paper_command"]
@@ -17,5 +20,10 @@ def add_paper_command(sub) -> None:
 
 def _cmd_paper(args) -> dict:
     """The main job: the paper's core numbers on its embedded default configuration."""
-    report = run_paper(out=args.out, quick=args.quick)
+    start = time.perf_counter()
+
+    def progress(text: str) -> None:     # on stderr: stdout holds the result (or JSON)
+        print(f"fsicas paper [{time.perf_counter() - start:6.1f} s] {text}", file=sys.stderr,
+              flush=True)
+    report = run_paper(out=args.out, quick=args.quick, progress=progress)
     return report if args.json else {**summary(report), "written to": args.out}
