@@ -68,7 +68,7 @@ def _crossing(scene, model, curves, switch):
     onset = lambda piece, lm: _onset(scene, model, curves, piece, lm)
     gap = lambda lm: onset(a, lm)[0] - onset(b, lm)[0]
     lm0 = math.log10(switch.mstar)
-    lm = brentq(gap, *_sign_change(gap, lm0), xtol=1e-13, rtol=1e-14)
+    lm = brentq(gap, *_sign_change(gap, lm0), xtol=1e-11, rtol=1e-12)
     (ua, wa), (ub, wb) = onset(a, lm), onset(b, lm)
     return replace(switch, mstar=10 ** lm, ustar_below=ua, ustar_above=ub, omega_below=wa,
                    omega_above=wb, located=True)
@@ -97,7 +97,7 @@ def _fold(scene, model, curves, switch):
     order = np.argsort(pi_s[j - 1:j + 2])
     at = lambda pi: _hopf_at_pressure(model, curve, j, pi, pi_s[j - 1:j + 2][order], order)
     best = minimize_scalar(lambda pi: -sign * at(pi)[0], bounds=(lo, hi), method="bounded",
-                           options={"xatol": 1e-12 * max(abs(hi), 1.0)})
+                           options={"xatol": 1e-8 * max(abs(hi), 1.0)})
     lm, point = at(best.x)
     u_above, w_above = _onset(scene, model, curves, switch.branch_above, lm)
     return replace(switch, mstar=10 ** lm, ustar_below=float(point.x[-2:].sum() / scene.hstar),
