@@ -77,7 +77,7 @@ def test_cli_simulate_json_contract(capsys):
     assert code == 0
     assert {"outcome", "period", "frequency", "tip_amplitude", "contact", "first_contact_time",
             "contact_positions", "max_impact_force", "mean_flow_reduction", "steps",
-            "wall_time"} <= set(out)
+            "wall_time", "quadrature_error"} <= set(out)
     assert out["outcome"] == "decay" and out["steps"] > 0
 
 
@@ -125,3 +125,16 @@ def test_output_step_follows_the_period_so_a_fast_cycle_settles():
     assert run.outcome.period / dt > 160
     fine = run_case(scene, 30.0, settings=Settings(rtol=1e-7, atol=1e-9, dt_out=dt / 2, chunk=1.0))
     assert fine.outcome.period == pytest.approx(run.outcome.period, rel=1e-5)
+
+
+def test_run_reports_its_quadrature_error(damped_scene_u6_5, outcome_settings):
+    """A decaying run stays far from the wall (quadrature error at round-off); a cycle that
+    swings towards it carries a larger one, the model-level estimate at its last sample
+    bounding it from below."""
+    from fsicas.model.accuracy import quadrature_error
+    decay = run_case(damped_scene_u6_5.replace(ustar=4.0), 10.0, settings=outcome_settings)
+    cycle = run_case(damped_scene_u6_5, 10.0, settings=outcome_settings)
+    assert decay.outcome.outcome == "decay" and decay.quadrature_error < 1e-12
+    assert cycle.outcome.outcome == "lco" and cycle.quadrature_error > 1e3 * decay.quadrature_error
+    last = quadrature_error(cycle.model, cycle.trajectory.x[-1], cycle.steady.p)
+    assert last <= cycle.quadrature_error

@@ -9,6 +9,7 @@ sample and the one before, the guard keeps the solver away from the singular flo
 """
 from __future__ import annotations
 
+import functools
 import math
 import time
 from dataclasses import dataclass, replace
@@ -16,6 +17,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from .breathing import PressureSchedule
+from ..model.accuracy import quadrature_error
 from ..model.assembly import Model, build_model
 from .outcome import Criteria, Monitor, Outcome, classify
 from ..scene import Scene
@@ -24,6 +26,10 @@ from ..linear.stability import eigenvalues
 from ..linear.steady import SteadyState, steady_state
 
 __all__ = ["Run", "run_case", "guarded_model"]
+
+
+#: Samples of a trajectory at which its quadrature error is estimated, at most.
+QUADRATURE_SAMPLES = 400
 
 
 @dataclass(frozen=True)
@@ -35,6 +41,15 @@ class Run:
     outcome: Outcome
     wall_time: float
 
+    @functools.cached_property
+    def quadrature_error(self) -> float:
+        """:func:`fsicas.model.accuracy.quadrature_error` over the run: at up to
+        :data:`QUADRATURE_SAMPLES` samples spread over it, the last (nearest a contact or
+        on the settled cycle) among them, at the steady state's parameters."""
+        x = self.trajectory.x
+        pick = np.unique(np.linspace(0, len(x) - 1, min(len(x), QUADRATURE_SAMPLES)).astype(int))
+        return quadrature_error(self.model, x[pick], self.steady.p)
+
     def to_json(self) -> dict:
         """The ``fsicas simulate --json`` object (keys in docs/simulate.md)."""
         o, tr = self.outcome, self.trajectory
@@ -44,7 +59,8 @@ class Run:
         out.update(steps=tr.steps, wall_time=self.wall_time, status=tr.status, message=tr.message,
                    t_end_reached=float(tr.t[-1]), convergence=o.convergence,
                    impacts_per_cycle=o.impacts_per_cycle,
-                   first_contact_position=o.first_contact_position)
+                   first_contact_position=o.first_contact_position,
+                   quadrature_error=self.quadrature_error)
         return out
 
 
