@@ -45,6 +45,7 @@ class PeriodicProblem(Problem):
     kind = "cycle"
     verified_kinds = ("pd", "ns")
     monitor_uses_lu = False
+    steps_by_eigenvalues = False
 
     #: unit row fixing the start amplitude along a critical direction (branch
     #: switching); None keeps the parameter fixed at the start

@@ -93,7 +93,8 @@ def _iterate(problem, it, restarted, settings, run):
         run.point(problem, step, info)
         if run.halt is not None:
             return step, None
-        _limit_by_eigenvalues(it, before, info, step, settings)
+        if problem.steps_by_eigenvalues:
+            _limit_by_eigenvalues(it, before, info, step, settings)
         done = len(run.rec.X) - 1
         restart = problem.restart(step.X) if done < settings.max_steps else None
         if restart is not None:

@@ -57,6 +57,10 @@ class Problem:
     #: ``[G_X(X); tau^T]`` (branch-point test); when False, ``Step.lu`` may be the
     #: factors of a nearby matrix (the corrector's last one)
     monitor_uses_lu = True
+    #: whether ``PointInfo.eigenvalues`` are eigenvalues of ``J v = lambda M v``, whose
+    #: approach to the imaginary axis caps the next step (``ContinuationSettings.eigen_step``);
+    #: False for cycles, whose monitor reports Floquet multipliers there
+    steps_by_eigenvalues = True
 
     def __init__(self, vf: VectorField, free: tuple, X0, p0, D=()):
         self.vf = vf

@@ -326,3 +326,28 @@ def test_eigenvalue_step_limit_costs_few_steps_on_a_plain_crossing():
 def test_eigen_step_setting_is_validated():
     with pytest.raises(ValueError, match="eigen_step"):
         C.ContinuationSettings(eigen_step=1.5)
+
+
+def test_eigenvalue_step_limit_leaves_cycle_branches_alone(monkeypatch):
+    """A cycle problem's monitor reports Floquet multipliers, not eigenvalues: the limit
+    is never consulted for it (Problem.steps_by_eigenvalues), while an equilibrium
+    branch consults it at every point after the first."""
+    from continuation import _eigen
+    calls = []
+    real = _eigen.step_limit
+    monkeypatch.setattr(_eigen, "step_limit", lambda *a: calls.append(1) or real(*a))
+    x, p = ca.SX.sym("x", 4), ca.SX.sym("p", 1)
+    a = 0.5 * p[0]            # a damped oscillator beside Van der Pol: complex multipliers
+    F = ca.Function("F", [x, p], [ca.vertcat(x[1], p[0] * (1 - x[0] ** 2) * x[1] - x[0],
+                                             -a * x[2] - 1.3 * x[3], 1.3 * x[2] - a * x[3])])
+    orbit = lambda t: np.c_[2 * np.cos(2 * np.pi * np.atleast_1d(t)),
+                            -2 * np.sin(2 * np.pi * np.atleast_1d(t)),
+                            np.zeros((np.size(t), 2))]
+    cycles = C.continuation(
+        C.CycleProblem(F, orbit, 6.6, {"mu": 1.0}, "mu", settings=C.CollocationSettings(ntst=20)),
+        settings=settings(ds=0.2, ds_max=0.5, max_steps=6))
+    assert len(cycles.s) == 7 and calls == []
+    equilibria = C.continuation(C.EquilibriumProblem(_window_oscillator(1e-4), [0.0, 0.0],
+                                                     {"mu": 0.0}, "mu"),
+                                settings=settings(ds=0.3, ds_max=0.3, max_steps=5))
+    assert len(calls) == len(equilibria.s) - 1
