@@ -94,8 +94,8 @@ def _fold(scene, model, curves, switch):
         raise ValueError("the fold is at an end of the traced curve")
     sign = 1.0 if lm_s[j] >= max(lm_s[j - 1], lm_s[j + 1]) else -1.0
     lo, hi = sorted((pi_s[j - 1], pi_s[j + 1]))
-    order = np.argsort(pi_s[j - 1:j + 2])
-    at = lambda pi: _hopf_at_pressure(model, curve, j, pi, pi_s[j - 1:j + 2][order], order)
+    rows = j - 1 + np.argsort(pi_s[j - 1:j + 2])          # the three samples, by Π
+    at = lambda pi: _hopf_at_pressure(model, curve, rows, pi)
     best = minimize_scalar(lambda pi: -sign * at(pi)[0], bounds=(lo, hi), method="bounded",
                            options={"xatol": 1e-8 * max(abs(hi), 1.0)})
     lm, point = at(best.x)
@@ -108,15 +108,16 @@ def _fold(scene, model, curves, switch):
 def _turning_sample(curve, piece, log_m) -> int:
     """The sample of ``curve`` where ``piece`` ends nearest to log10 M* = log_m."""
     lm = np.log10(curve.mstar)
-    ends = [i for i in np.flatnonzero(curve.pieces == piece) for i in (i, i + 1)]
+    segments = np.flatnonzero(curve.pieces == piece)
+    ends = np.concatenate([segments, segments + 1])
     return int(min(ends, key=lambda i: abs(lm[i] - log_m)))
 
 
-def _hopf_at_pressure(model, curve, j, pi, pis, order):
+def _hopf_at_pressure(model, curve, rows, pi):
     """(log10 M*, point) of the Hopf point at fixed Π = ``pi`` with log10 M* free, from
-    the curve samples j-1..j+1 (their Π sorted as ``pis``) interpolated at ``pi``."""
+    the curve samples ``rows`` (sorted by Π) interpolated at ``pi``."""
     vf = flutter_field(model)
-    rows = np.arange(j - 1, j + 2)[order]
+    pis = curve.params[rows, vf.par_names.index(PI)]
     w = lambda a: np.array([np.interp(pi, pis, a[rows, k]) for k in range(a.shape[1])])
     x, params = w(curve.states), w(curve.params)
     omega = float(np.interp(pi, pis, curve.omega[rows])) / TIME_SCALE
