@@ -4,7 +4,7 @@
 
 M* = 1, U* in {7, 8.5, 10}, zeta = 0.01, H* = 1/10, f = 0.14. The paper's contact
 parameters (k* = 1e6, eps/H = 1e-3) do not hold the beam under this project's contact
-convention (ERRATA item 6: k per unit length = k* w1²; docs/simulate.md): the gap closes
+convention (k per unit length = k* w1²; docs/model.md, "Readings of the paper"): the gap closes
 and the run stops with a reported failure. The script therefore first tries the paper's
 values, reports the outcome, and then computes the cycles with the stiffest law that
 holds (k* = 1e8, eps/H = 1e-2). One figure per U* (``cycle_U*.png``) and a markdown table.
