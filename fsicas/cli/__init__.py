@@ -86,6 +86,20 @@ def _negative_values_attached(argv: list) -> list:
     return out
 
 
+def _notes(caught) -> list:
+    """The messages of the analyses' warnings (user warnings, and any warning raised from
+    fsicas or continuation, e.g. a compiled-kernel fallback), once each; other warnings
+    are shown on stderr as Python would have."""
+    notes = []
+    for w in caught:
+        ours = any(part in w.filename for part in ("/fsicas/", "/continuation/"))
+        if issubclass(w.category, UserWarning) or ours:
+            notes.append(str(w.message))
+        else:
+            warnings.showwarning(w.message, w.category, w.filename, w.lineno)
+    return list(dict.fromkeys(notes))
+
+
 #: Exit statuses (module docstring).
 EXIT_OK, EXIT_FAILED_RESULT, EXIT_ERROR = 0, 1, 2
 
@@ -109,8 +123,7 @@ def main(argv=None) -> int:
         else:
             print(f"fsicas {args.command}: error: {err}", file=sys.stderr)
         return EXIT_ERROR
-    notes = list(dict.fromkeys(str(w.message) for w in caught
-                               if issubclass(w.category, UserWarning)))
+    notes = _notes(caught)
     if notes:
         result = {**result, "warnings": notes}
     if args.json:
