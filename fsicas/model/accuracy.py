@@ -11,15 +11,31 @@ same scene on twice the nodes, at given states:
 the relative error of the equations themselves (the finer rule is far more accurate than
 the difference, Gauss-Legendre converging fast for smooth integrands), a number to report
 with a result and to compare with the tolerances it was computed to.
+
+Control: :func:`adequate_model` doubles the nodes until the estimate is at most a
+tolerance, by default :data:`QUADRATURE_TOL`.
 """
 from __future__ import annotations
+
+import warnings
 
 import numpy as np
 
 from ..scene import MAX_QUAD_NODES
 from .assembly import Model, build_model, per_model
 
-__all__ = ["quadrature_error", "finer_model", "relative_error"]
+__all__ = ["QUADRATURE_TOL", "quadrature_error", "finer_model", "adequate_model",
+           "relative_error"]
+
+QUADRATURE_TOL = 1e-8
+"""Default bound on :func:`quadrature_error` for :func:`adequate_model`: the relative
+accuracy the solvers deliver on the equations, so the quadrature is not the largest error
+of a result. Time integration runs at rtol = 1e-8 (``IntegratorSettings``); collocation
+solves its residual to 1e-10 absolute (``CycleSettings.tol``) on F of size ~1-100 and
+discretizes the cycle to ~1e-7-1e-8 at NTST = 20 (docs/cycles.md). A relative error
+delta of F shifts a well-conditioned solution by about delta: near the wall the default
+rule gave ~1e-5 (amplitude 7e-5 off), while a tighter bound would only double the nodes
+for errors already below the integrators' and the mesh's."""
 
 
 @per_model
@@ -34,6 +50,33 @@ def quadrature_error(model: Model, x, p) -> float:
     ``p`` of ``model`` (module docstring)."""
     x = np.atleast_2d(np.asarray(x, dtype=float))
     return relative_error(finer_model(model).rhs.map(len(x))(x.T, p), model.rhs.map(len(x))(x.T, p))
+
+
+def adequate_model(model: Model, x, p, tol: float = QUADRATURE_TOL) -> tuple[Model, float]:
+    """The model of ``model``'s scene on enough quadrature nodes for the states ``x``
+    (rows) at parameters ``p``: the nodes doubled (:func:`finer_model`, so each model is
+    built once per input model) until :func:`quadrature_error` is at most ``tol``.
+    Returns that model (``model`` itself when already adequate) and its estimate. At the
+    cap :data:`fsicas.scene.MAX_QUAD_NODES` it warns and returns the model on the cap,
+    with the estimate of the rule before it (an upper bound: the cap's own estimate would
+    compare the cap with itself)."""
+    error = quadrature_error(model, x, p)
+    while error > tol:
+        if 2 * model.scene.n_quad >= MAX_QUAD_NODES:
+            return _capped(model, error, tol)
+        model = finer_model(model)
+        error = quadrature_error(model, x, p)
+    return model, error
+
+
+def _capped(model: Model, error: float, tol: float) -> tuple[Model, float]:
+    """The model on MAX_QUAD_NODES nodes, with a warning that ``tol`` was not reached."""
+    finest = finer_model(model)
+    warnings.warn(f"quadrature error {error:.3g} on {model.scene.n_quad} nodes exceeds tol = "
+                  f"{tol:g} and the nodes reached MAX_QUAD_NODES = {MAX_QUAD_NODES}: the model "
+                  f"on {finest.scene.n_quad} nodes is used, its error estimated by {error:.3g}",
+                  RuntimeWarning, stacklevel=3)
+    return finest, error
 
 
 def relative_error(fine, coarse) -> float:
