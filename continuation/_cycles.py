@@ -34,6 +34,7 @@ from ._equilibrium import make_field, param_vector
 from ._problem import Description, PointInfo, Problem
 from ._settings import CollocationSettings, kernel_backend
 from ._systems import bound
+from ._vectorfield import VectorField
 
 
 class PeriodicProblem(Problem):
@@ -126,6 +127,13 @@ class CycleProblem(PeriodicProblem):
     mesh : ``NTST + 1`` increasing times from 0 to 1 (default uniform).
     """
 
+    #: ``refine(problem, X) -> VectorField | None``, asked at every accepted point X
+    #: before the re-mesh: a field returned (the same equations with the same unknowns
+    #: and parameters, e.g. on a finer discretization of their integrals) continues the
+    #: branch from X on it (:meth:`on_field`, a restart). Kept by the restarted problems;
+    #: None (default): never asked.
+    refine = None
+
     def __init__(self, F, orbit, period: float, params: Mapping[str, float], active: str,
                  *, M=None, settings: CollocationSettings | None = None, mesh=None):
         settings = CollocationSettings() if settings is None else settings
@@ -188,13 +196,30 @@ class CycleProblem(PeriodicProblem):
         ntst = self.ntst if ntst is None else int(ntst)
         mesh = _mesh.equidistribute(X[: self.n_nodes * self.vf.n], self.mesh, self.ncol,
                                     self.vf.n, ntst)
-        settings = replace(self.settings, ntst=ntst)
-        new = CycleProblem(self.vf, lambda t: self.evaluate(X, t), self.period(X),
-                           self.par_dict(X), self.active, settings=settings, mesh=mesh)
+        return self._rebuilt(X, self.vf, replace(self.settings, ntst=ntst), mesh)
+
+    def on_field(self, vf: VectorField, X):
+        """``(problem, X_new)``: the cycle ``X`` on the field ``vf`` (same state size and
+        parameter names), same mesh and node values."""
+        if not isinstance(vf, VectorField) or vf.n != self.vf.n or vf.par_names != self.vf.par_names:
+            raise ValueError(f"the field must be a VectorField of {self.vf.n} states and "
+                             f"parameters {self.vf.par_names}")
+        return self._rebuilt(X, vf, self.settings, self.mesh)
+
+    def _rebuilt(self, X, vf, settings, mesh):
+        """The cycle ``X`` (its polynomial at the new nodes) as a problem on ``vf``,
+        ``settings`` and ``mesh``, keeping ``refine``; and its unknowns."""
+        new = CycleProblem(vf, lambda t: self.evaluate(X, t), self.period(X), self.par_dict(X),
+                           self.active, settings=settings, mesh=mesh)
+        new.refine = self.refine
         return new, new.X0.copy()
 
     def restart(self, X):
-        """Re-mesh every ``settings.adapt_every`` accepted points (0: never)."""
+        """On the field ``refine`` returns at X, if any; else re-mesh every
+        ``settings.adapt_every`` accepted points (0: never)."""
+        vf = None if self.refine is None else self.refine(self, X)
+        if vf is not None:
+            return self.on_field(vf, X)
         every = self.settings.adapt_every
         if every and self._accepted >= every:
             return self.remesh(X)
