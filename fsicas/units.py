@@ -16,7 +16,11 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-__all__ = ["Scales", "friction_from_reynolds"]
+__all__ = ["Scales", "friction_from_reynolds", "thick_beam_message", "THIN_BEAM_RATIO"]
+
+#: Largest thickness-to-length ratio e/L of the Euler–Bernoulli (thin) beam: beyond it
+#: shear and rotary inertia (Timoshenko) change the modes by more than a few per cent.
+THIN_BEAM_RATIO = 0.1
 
 
 @dataclass(frozen=True)
@@ -29,10 +33,29 @@ class Scales:
     width: float = 1.0  # b [m]
     fluid_density: float = 1.0
     beam_mass_per_area: float = 1.0  # rho_s e [kg/m^2]
+    gap: float | None = None  # H1 + H2 at the inlet [m]
 
     @property
     def velocity(self) -> float:
         return self.length / self.time
+
+    def m_per_s(self, ustar: float) -> float:
+        """Mean inlet velocity ``U0 = U* L / T`` in m/s."""
+        return ustar * self.velocity
+
+    def m3_per_s(self, ustar: float) -> float:
+        """Volume flow ``Q = U0 b (H1 + H2)`` in m^3/s (both channels)."""
+        if self.gap is None:
+            raise ValueError("the volume flow needs the channel heights (gap) of the scales")
+        return self.m_per_s(ustar) * self.width * self.gap
+
+    def l_per_min(self, ustar: float) -> float:
+        """Volume flow in L/min."""
+        return self.m3_per_s(ustar) * 60e3
+
+    def ustar(self, velocity: float) -> float:
+        """U* of a mean inlet velocity in m/s."""
+        return velocity / self.velocity
 
     def hz(self, omega: float) -> float:
         """Frequency in Hz of a nondimensional circular frequency."""
@@ -57,14 +80,24 @@ class Scales:
             raise ValueError(f"U0 must be a finite number (m/s), got {U0!r}")
         if not -1.0 < nu < 0.5:
             raise ValueError(f"nu (Poisson ratio) must lie in (-1, 0.5), got {nu!r}")
-        if e >= 0.1 * L:
-            raise ValueError(f"e = {e} m is not thin against L = {L} m (need e < L/10 for "
-                             "Euler–Bernoulli theory)")
+        if e >= THIN_BEAM_RATIO * L:
+            raise ValueError(thick_beam_message(e, L))
         if b < e:
             raise ValueError(f"b = {b} m is narrower than the thickness e = {e} m: not a plate")
         D = E * e**3 / (12.0 * (1.0 - nu**2))
         return cls(length=L, time=L**2 * math.sqrt(rho_s * e / D), pressure=D / L**3,
-                   width=b, fluid_density=rho_f, beam_mass_per_area=rho_s * e)
+                   width=b, fluid_density=rho_f, beam_mass_per_area=rho_s * e, gap=H1 + H2)
+
+
+def thick_beam_message(e: float, L: float) -> str:
+    """Why a beam with e/L >= THIN_BEAM_RATIO is refused, and what to do instead."""
+    limit = THIN_BEAM_RATIO * L
+    return (f"e = {e:g} m is not thin against L = {L:g} m (e/L = {e / L:.3g}): the 1D "
+            f"Euler–Bernoulli beam of fsicas needs e/L < {THIN_BEAM_RATIO:g}, i.e. e < "
+            f"{limit * 1e3:.3g} mm here. Give a thinner effective thickness e (for a "
+            "soft palate, one whose bending stiffness E e^3 matches the tissue's measured "
+            "first frequency or deflection), or a longer L; thick-beam (Timoshenko) modes are "
+            "not available in fsicas yet")
 
 
 def friction_from_reynolds(re: float, re_transition: float = 2500.0) -> float:

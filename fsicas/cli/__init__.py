@@ -29,6 +29,7 @@ from ..linear.steady import SteadyStateError
 from ..plots.backend import select_file_backend
 from .cycles import add_cycle_commands
 from .linear import add_linear_commands
+from .onset import add_onset_command
 from .outputs import check_outputs
 from .paper import add_paper_command
 from .timedomain import add_time_commands
@@ -52,14 +53,18 @@ def build_parser() -> argparse.ArgumentParser:
     add_paper_command(sub)          # paper
     add_time_commands(sub)          # simulate, map (docs/simulate.md)
     add_cycle_commands(sub)         # lco, alias cycles (docs/cycles.md)
+    add_onset_command(sub)          # onset, in physical units (docs/units.md)
     return parser
 
 
-def _print_human(result: dict) -> None:
+def _print_human(result: dict, prefix: str = "") -> None:
     for key, value in result.items():
+        if isinstance(value, dict) and (prefix or key == "physical"):
+            _print_human(value, f"{prefix}{key}.")   # physical units: one line a field
+            continue
         if isinstance(value, list) and value and isinstance(value[0], float):
             value = np.array2string(np.array(value), precision=6, max_line_width=100)
-        print(f"{key:>16}: {value}")
+        print(f"{prefix + key:>16}: {value}")
 
 
 def _writes_figures(args: argparse.Namespace) -> bool:
@@ -129,7 +134,7 @@ def main(argv=None) -> int:
     if args.json:
         print(json.dumps(result))
     else:
-        _print_human(result)
+        (getattr(args, "human", None) or _print_human)(result)
         print(f"{'wall time':>16}: {time.perf_counter() - start:.3f} s")
     return EXIT_FAILED_RESULT if result.get("status") == "failed" else EXIT_OK
 

@@ -7,6 +7,7 @@ time integration commands of :mod:`fsicas.cli.timedomain`.
 from __future__ import annotations
 
 from ..cycles.collocation import CycleSettings, cycle_branch
+from ..physical_report import add_physical
 from ..plots.cycles import plot_branch
 from .scene_options import add_scene_options, scene_from_args
 
@@ -39,10 +40,11 @@ def _cmd_cycles(args) -> dict:
         branch.save(args.out)
     if args.plot:
         plot_branch(branch, args.plot)
-    return {"hopf": branch.hopf, "status": branch.status, "message": branch.message,
-            "eps": branch.eps, "folds": [_point_summary(p) for p in branch.folds],
-            "contact": None if branch.contact is None else _point_summary(branch.contact),
-            "points": [_point_summary(p) for p in branch.points], "wall_time": branch.wall_time}
+    out = {"hopf": branch.hopf, "status": branch.status, "message": branch.message,
+           "eps": branch.eps, "folds": [_point_summary(p) for p in branch.folds],
+           "contact": None if branch.contact is None else _point_summary(branch.contact),
+           "points": [_point_summary(p) for p in branch.points], "wall_time": branch.wall_time}
+    return add_physical(out, scene, "lco")
 
 
 def _point_summary(point) -> dict:

@@ -7,6 +7,7 @@ from ..linear.stability import linear_stability
 from ..linear.steady import steady_state
 from ..model.assembly import build_model
 from ..model.beam import clamped_free_betas
+from ..physical_report import add_physical
 from ..scene import MAX_MODES
 from ..plots.linear import plot_boundary, plot_eigenvalues, plot_mode_shapes
 from .ranges import parse_range
@@ -34,8 +35,9 @@ def add_linear_commands(sub) -> None:
 def _add_boundary_command(sub) -> None:
     p = sub.add_parser("boundary", help="flutter boundary U*_c(M*) from Hopf-curve continuation")
     add_scene_options(p, mstar=False)
-    p.add_argument("--mstar", dest="mstar_values", required=True, metavar="LIST_OR_RANGE",
-                   help="0.1,1,10 or lo:hi:count (log-spaced)")
+    p.add_argument("--mstar", dest="mstar_values", metavar="LIST_OR_RANGE",
+                   help="0.1,1,10 or lo:hi:count (log-spaced); required unless --physical "
+                   "(default there: the M* of the physical input)")
     p.add_argument("--ustar-max", type=float, default=40.0, help="search Hopf points below this U*")
     p.add_argument("--no-refine", action="store_true",
                    help="interpolate along the Hopf curves instead of locating each point")
@@ -51,22 +53,25 @@ def _cmd_modes(args) -> dict:
 
 
 def _cmd_steady(args) -> dict:
-    scene = scene_from_args(args)
+    scene = scene_from_args(args, need_flow=True)
     model = build_model(scene)
-    return steady_state(scene, model).to_json(model)
+    return add_physical(steady_state(scene, model).to_json(model), scene, "steady")
 
 
 def _cmd_eig(args) -> dict:
-    scene = scene_from_args(args)
+    scene = scene_from_args(args, need_flow=True)
     result = linear_stability(scene, build_model(scene))
     if args.plot:
         plot_eigenvalues(result, scene, args.plot)
-    return result.to_json()
+    return add_physical(result.to_json(), scene, "eig")
 
 
 def _cmd_boundary(args) -> dict:
-    mstars = parse_range(args.mstar_values, "mstar", log=True)
+    if args.mstar_values is None and args.physical is None:
+        raise ValueError("--mstar is required (a list or lo:hi:count), unless --physical")
     scene = scene_from_args(args)
+    mstars = ([scene.mstar] if args.mstar_values is None
+              else parse_range(args.mstar_values, "mstar", log=True))
     model = build_model(scene)
     boundary = stability_boundary(scene, mstars, model, ustar_max=args.ustar_max,
                                   refine=not args.no_refine)
@@ -76,4 +81,4 @@ def _cmd_boundary(args) -> dict:
         plot_mode_shapes(boundary, model, f"{stem[0]}_modes.{stem[1] if len(stem) > 1 else 'png'}")
     out = boundary.to_json()
     out.pop("curves")
-    return out
+    return add_physical(out, scene, "boundary")

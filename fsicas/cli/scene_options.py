@@ -1,12 +1,14 @@
 """The scene options shared by the commands: ``--scene FILE.toml`` and one option per
-Scene field (options override the file), and the Scene they describe."""
+Scene field (options override the file), or ``--physical PRESET|FILE.toml`` and
+``--flow`` (physical units, docs/units.md), and the Scene they describe."""
 from __future__ import annotations
 
 import argparse
 
+from ..physical import Flow, Physical, load_physical, parse_flow, preset_names
 from ..scene import Scene, load_scene
 
-__all__ = ["SCENE_OPTIONS", "add_scene_options", "scene_from_args"]
+__all__ = ["SCENE_OPTIONS", "add_scene_options", "scene_from_args", "physical_from_args"]
 
 #: CLI option (``--quad-nodes`` for ``quad_nodes``) -> type, one per Scene field.
 SCENE_OPTIONS = {
@@ -48,13 +50,56 @@ def add_scene_options(parser: argparse.ArgumentParser, mstar: bool = True) -> No
                                help=f"{SCENE_HELP[name]} (default {shown})")
     group.add_argument("--contact", dest="contact", action=argparse.BooleanOptionalAction,
                        default=None, help="regularized wall impact on or off (default off)")
+    _add_physical_options(parser)
     parser.add_argument("--json", action="store_true", help="print one JSON object on stdout")
 
 
-def scene_from_args(args: argparse.Namespace) -> Scene:
-    """Scene from --scene FILE and/or the options (options override the file)."""
+def _add_physical_options(parser: argparse.ArgumentParser) -> None:
+    group = parser.add_argument_group("physical input (SI units; see docs/units.md)")
+    group.add_argument("--physical", metavar="PRESET|FILE.toml",
+                       help="a [physical] table of material, geometry and fluid (M*, H*, U* "
+                       "derived from it; the JSON gains a 'physical' object in Hz, Pa, mm, "
+                       f"m/s, L/min); presets: {', '.join(preset_names())}")
+    group.add_argument("--flow", metavar="FLOW", help="airflow with its unit: a volume flow "
+                       "through both channels (20L/min, 3.3e-4m^3/s) or a mean inlet velocity "
+                       "(1.2m/s); default: the flow of the physical input")
+
+
+def _values(args: argparse.Namespace) -> dict:
     values = {k: getattr(args, k, None) for k in (*SCENE_OPTIONS, "contact")}
-    values = {k: v for k, v in values.items() if v is not None}
+    return {k: v for k, v in values.items() if v is not None}
+
+
+def physical_from_args(args: argparse.Namespace) -> tuple[Physical, Flow | None] | None:
+    """The physical input of ``--physical`` and the airflow (``--flow`` or the input's
+    default), or None without ``--physical``; ValueError for options that conflict."""
+    if getattr(args, "physical", None) is None:
+        if getattr(args, "flow", None) is not None:
+            raise ValueError("--flow needs --physical PRESET|FILE.toml (the cross-section "
+                             "converts it); in nondimensional units give --ustar")
+        return None
+    if args.scene:
+        raise ValueError("give --scene (nondimensional) or --physical, not both")
+    for name in ("mstar", "ustar", "hstar"):
+        if getattr(args, name, None) is not None:
+            raise ValueError(f"--{name} is derived from --physical (give the physical values "
+                             "or --flow instead)")
+    physical = load_physical(args.physical)
+    flow = parse_flow(args.flow) if args.flow is not None else physical.flow
+    return physical, flow
+
+
+def scene_from_args(args: argparse.Namespace, need_flow: bool = False) -> Scene:
+    """Scene from --scene FILE and/or the options (options override the file), or from
+    --physical and --flow (``need_flow``: the command needs an airflow)."""
+    physical = physical_from_args(args)
+    if physical is not None:
+        physical, flow = physical
+        if need_flow and flow is None:
+            raise ValueError(f"{physical.source} gives no airflow: give --flow (e.g. --flow "
+                             "20L/min or --flow 1.2m/s) or flow = ... in its [physical] table")
+        return physical.scene(flow, **_values(args))
+    values = _values(args)
     if args.scene:
         return load_scene(args.scene, **values)
     return Scene(**values)

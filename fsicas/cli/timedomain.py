@@ -5,6 +5,7 @@ contract (keys) is in ``docs/simulate.md``.
 """
 from __future__ import annotations
 
+from ..physical_report import add_physical
 from ..plots.timedomain import plot_cycle, plot_map, plot_run
 from ..timedomain.breathing import PressureSchedule
 from ..timedomain.impact_map import MAP_SCENE, impact_map
@@ -67,7 +68,7 @@ def _cmd_simulate(args) -> dict:
     if not args.t_end > 0:
         raise ValueError(f"--t-end must be > 0, got {args.t_end}")
     settings = Settings(method=args.method, rtol=args.rtol, atol=args.atol, dt_out=args.dt_out)
-    scene = scene_from_args(args)
+    scene = scene_from_args(args, need_flow=True)
     run = run_case(scene, args.t_end, settings=settings, schedule=_schedule(args, scene),
                    perturbation=args.perturbation, stop_early=not args.full)
     if args.plot:
@@ -75,7 +76,7 @@ def _cmd_simulate(args) -> dict:
         if run.outcome.period is not None:
             stem, dot, ext = args.plot.rpartition(".")
             plot_cycle(run, f"{stem}_cycle.{ext}" if dot else args.plot + "_cycle")
-    return run.to_json()
+    return add_physical(run.to_json(), scene, "simulate")
 
 
 def _cmd_map(args) -> dict:

@@ -1,0 +1,123 @@
+"""CLI command ``fsicas onset``: the flutter onset (the snoring threshold of a soft
+palate) on the linear analysis of :func:`fsicas.linear.hopf.critical_velocity`, in
+physical units with ``--physical`` (docs/units.md): onset airflow (m/s, L/min),
+frequency (Hz), pressure drop (Pa), sub- or supercritical, and the margin to the given
+(or the input's default) airflow.
+"""
+from __future__ import annotations
+
+from ..linear.hopf import critical_velocity
+from ..model.assembly import build_model
+from ..physical import Flow
+from ..physical_report import onset_json, scales_json
+from ..scene import MAX_ABS_USTAR
+from .scene_options import add_scene_options, physical_from_args, scene_from_args
+
+__all__ = ["add_onset_command"]
+
+#: Default search bound in U*, raised to 1.5 times the reference flow's U* above it.
+USTAR_MAX = 40.0
+#: Fixed-point steps of the friction taken from the viscosity at the onset's own flow.
+FRICTION_STEPS, FRICTION_RTOL = 12, 1e-6
+_HOPF_KEYS = ("mstar", "ustar_crit", "pressure_drop", "omega", "freq_ratio", "l1",
+              "criticality", "dominant_mode")
+
+
+def add_onset_command(sub) -> None:
+    """Add the ``onset`` subcommand."""
+    p = sub.add_parser("onset", help="flutter onset (snoring threshold): airflow, frequency, "
+                       "pressure drop, criticality; in physical units with --physical")
+    add_scene_options(p)
+    p.add_argument("--ustar-max", type=float, default=None,
+                   help=f"search the onset below this U* (default {USTAR_MAX:g}, or 1.5 times "
+                   "the U* of the airflow when higher)")
+    p.set_defaults(run=_cmd_onset, human=_print_onset)
+
+
+def _search_bound(args, reference: float | None) -> float:
+    if args.ustar_max is not None:
+        if not 0.2 < args.ustar_max <= MAX_ABS_USTAR:
+            raise ValueError(f"--ustar-max must lie in (0.2, {MAX_ABS_USTAR:g}], got "
+                             f"{args.ustar_max}")
+        return args.ustar_max
+    return min(max(USTAR_MAX, 1.5 * (reference or 0.0)), MAX_ABS_USTAR)
+
+
+def _onset(scene, physical, ustar_max):
+    """The first Hopf point; with ``physical`` (whose friction comes from a viscosity)
+    the friction is taken at the onset's own flow, by fixed-point steps from the
+    reference flow's, and the Reynolds number of the last step is returned."""
+    model = build_model(scene)
+    hopf = critical_velocity(scene, model, ustar_max)
+    reynolds = None
+    for _ in range(FRICTION_STEPS if physical is not None else 0):
+        if hopf is None:
+            break
+        flow = Flow("onset", "velocity", scene.scales.m_per_s(hopf.ustar))
+        friction, reynolds = physical.friction(flow)
+        if abs(friction - scene.friction) <= FRICTION_RTOL * scene.friction:
+            break
+        scene = scene.replace(friction=friction)
+        hopf = critical_velocity(scene, model, ustar_max)
+    return scene, hopf, reynolds
+
+
+def _cmd_onset(args) -> dict:
+    given = physical_from_args(args)
+    scene = scene_from_args(args)
+    has_flow = args.ustar is not None if given is None else given[1] is not None
+    reference = scene.ustar if has_flow else None
+    ustar_max = _search_bound(args, reference)
+    by_viscosity = given is not None and "viscosity" in given[0].values and \
+        args.friction is None and "friction" not in given[0].scene_fields
+    scene, hopf, reynolds = _onset(scene, given[0] if by_viscosity else None, ustar_max)
+    found = {k: v for k, v in hopf.to_json().items() if k in _HOPF_KEYS} if hopf else \
+        {k: (scene.mstar if k == "mstar" else None) for k in _HOPF_KEYS}
+    out = {"found": hopf is not None, **found, "ustar_reference": reference,
+           "ustar_max": ustar_max, "friction": scene.friction, "hstar": scene.hstar,
+           "modes": scene.modes}
+    if given is not None:
+        physical, _ = given
+        out["physical"] = {"source": physical.source, "description": physical.description,
+                           **onset_json(scene.scales, found if hopf else None, reference, ustar_max),
+                           "friction": scene.friction, "reynolds": reynolds,
+                           "inputs": physical.to_json(), "scales": scales_json(scene.scales)}
+    return out
+
+
+def _print_onset(result: dict) -> None:
+    """The onset in sentences (``fsicas onset`` without ``--json``)."""
+    ph = result.get("physical")
+    if ph is not None:
+        print(f"{ph['source']}: {ph['description']}" if ph["description"] else ph["source"])
+    if not result["found"]:
+        print(f"no flutter onset below U* = {result['ustar_max']:g} (M* = {result['mstar']:.4g})")
+    elif ph is None:
+        print(f"flutter onset at U*_c = {result['ustar_crit']:.6g} (M* = {result['mstar']:.4g}), "
+              f"omega = {result['omega']:.6g} ({result['freq_ratio']:.4g} x omega_1), "
+              f"pressure drop {result['pressure_drop']:.6g}, {result['criticality']}")
+    else:
+        _print_physical_onset(result, ph)
+    for note in result.get("warnings", []):
+        print(f"warning: {note}")
+
+
+def _print_physical_onset(result: dict, ph: dict) -> None:
+    print(f"  flutter onset at {ph['onset_flow_l_min']:.4g} L/min "
+          f"({ph['onset_velocity_m_s']:.4g} m/s mean inlet velocity; U*_c = "
+          f"{result['ustar_crit']:.5g} at M* = {result['mstar']:.4g}, H* = {result['hstar']:.4g})")
+    print(f"  frequency {ph['frequency_hz']:.4g} Hz ({result['freq_ratio']:.3g} x the first "
+          f"in-vacuo mode, {ph['scales']['first_mode_hz']:.4g} Hz; dominant mode "
+          f"{result['dominant_mode']})")
+    print(f"  pressure drop at the onset {ph['pressure_drop_pa']:.4g} Pa; friction "
+          f"f = {ph['friction']:.4g}" + ("" if ph["reynolds"] is None
+                                         else f" (Re = {ph['reynolds']:.4g} at the onset)"))
+    what = ("a jump to a large-amplitude oscillation at the onset, kept down to a lower "
+            "flow (hysteresis)" if result["criticality"] == "subcritical"
+            else "a small oscillation that grows with the flow past the onset")
+    print(f"  {result['criticality']} (l1 = {result['l1']:.3g}): {what}")
+    if ph["reference_flow_l_min"] is not None:
+        verdict = "flutters" if ph["flutters_at_reference"] else "stable"
+        print(f"  at {ph['reference_flow_l_min']:.4g} L/min ({ph['reference_velocity_m_s']:.4g} "
+              f"m/s): {verdict}; margin {ph['margin_flow_l_min']:+.4g} L/min (onset / flow = "
+              f"{ph['margin_ratio']:.3g})")
