@@ -76,14 +76,14 @@ def _registry():
     return pint.UnitRegistry()
 
 
-def _quantity(text: str, what: str):
+def _quantity(text: str, what: str, hint: str = "a number with a unit, e.g. 3 kPa"):
     """Pint quantity of ``text``; ValueError naming ``what`` if it does not parse."""
     import pint
     try:
         q = _registry().Quantity(text.strip())
     except (pint.errors.PintError, ValueError, TypeError, AttributeError, SyntaxError,
             AssertionError, KeyError) as err:
-        raise ValueError(f"{what}: cannot read {text!r} as a number with a unit ({err})") from None
+        raise ValueError(f"{what}: cannot read {text!r} ({err}); give {hint}") from None
     if not math.isfinite(float(q.magnitude)):
         raise ValueError(f"{what}: {text!r} is not a finite value")
     return q
@@ -124,14 +124,15 @@ def parse_flow(text, option: str = "--flow") -> Flow:
     hint = "a velocity (e.g. 1.2m/s) or a volume flow (e.g. 20L/min, 3.3e-4m^3/s)"
     if not isinstance(text, str) or not text.strip():
         raise ValueError(f"{option} must be {hint}, got {text!r}")
-    q = _quantity(text, option)
+    q = _quantity(text, option, hint)
     for kind, unit in (("velocity", "m/s"), ("volume", "m^3/s")):
         if q.check(unit):
             value = float(q.to(unit).magnitude)
             if not value > 0:
                 raise ValueError(f"{option} must be > 0, got {text!r}")
             return Flow(text.strip(), kind, value)
-    raise ValueError(f"{option} {text!r} has units of {q.dimensionality}: give {hint}")
+    unit = "no unit" if q.dimensionless else f"units of {q.dimensionality}"
+    raise ValueError(f"{option} {text!r} has {unit}: give {hint}")
 
 
 # -- presets and files -------------------------------------------------------------------
@@ -299,7 +300,7 @@ def _explain(err: Exception, flow: Flow | None) -> str:
     """A Scene error on a derived value, said in the terms of the physical input."""
     text = str(err)
     if text.startswith("ustar") and flow is not None:
-        return f"the airflow {flow.text} gives {text}: give a smaller --flow"
+        return f"the airflow {flow.text} gives a U* out of range ({text}): give a smaller --flow"
     if text.startswith("mstar"):
         return f"the mass ratio M* = rho_f L / (rho_s e) derived from the input: {text}"
     return text
