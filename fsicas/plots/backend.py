@@ -1,16 +1,69 @@
-"""The one way fsicas plotting code gets Matplotlib's pyplot.
+"""The one way fsicas plotting code gets Matplotlib's pyplot, and the figures' style.
 
-Library code never selects a backend (``matplotlib.use``): in a notebook or an
-interactive session the user's backend stays in charge, so figures keep displaying.
-Only the command line (:mod:`fsicas.cli`) picks a non-interactive backend, itself,
-before it writes a figure file.
+Library code never selects a backend (``matplotlib.use``) and never changes the global
+``rcParams``: in a notebook or an interactive session the user's backend and settings
+stay in charge, so figures keep displaying as the user set them up. Every figure function
+draws inside :func:`styled` (a ``matplotlib.rc_context``: the publication style holds
+while the figure is drawn and saved, and the user's settings come back afterwards). Only
+the command line (:mod:`fsicas.cli`) picks a non-interactive backend, itself, before it
+writes a figure file.
+
+The style: serif text with STIX mathtext (the fonts of the journals' TeX look, shipped
+with Matplotlib), 9-pt labels, the Okabe–Ito colour-blind-safe palette, constrained
+layout (labels are never cut), fonts embedded in PDF output as TrueType. A figure is
+written in the format its file name says (``.png``, ``.pdf``, ``.svg``, ...).
 """
 from __future__ import annotations
 
-__all__ = ["FILE_BACKEND", "pyplot", "select_file_backend"]
+import functools
+from pathlib import Path
+
+__all__ = ["FILE_BACKEND", "PALETTE", "OUTCOME_WORDS", "NONDIM", "pyplot", "select_file_backend",
+           "styled", "subplots", "finish", "outcome_words"]
 
 #: The backend the command line uses to write figure files (no display needed).
 FILE_BACKEND = "Agg"
+
+#: Okabe & Ito's colour-blind-safe palette (black first is left out: it marks the
+#: reference lines; the yellow comes last, it is faint on white).
+PALETTE = ("#0072B2", "#D55E00", "#009E73", "#CC79A7", "#E69F00", "#56B4E9", "#000000",
+           "#F0E442")
+
+#: What each time-integration outcome means, in words for titles and legends.
+OUTCOME_WORDS = {"decay": "decays to the steady state", "lco": "limit cycle, no contact",
+                 "contact": "reaches the wall", "impacting_lco": "impacting limit cycle",
+                 "unsettled": "not settled", "error": "solver failure"}
+
+#: The unit suffix of a nondimensional quantity's axis label.
+NONDIM = "(nondim.)"
+
+#: Raster resolution of saved figures (vector formats ignore it).
+DPI = 200
+
+_STYLE = {
+    "font.family": "serif",
+    "font.serif": ["STIXGeneral", "DejaVu Serif"],
+    "mathtext.fontset": "stix",
+    "font.size": 9,
+    "axes.titlesize": 9,
+    "axes.labelsize": 9,
+    "legend.fontsize": 8,
+    "xtick.labelsize": 8,
+    "ytick.labelsize": 8,
+    "figure.titlesize": 10,
+    "axes.linewidth": 0.7,
+    "lines.linewidth": 1.2,
+    "lines.markersize": 4,
+    "xtick.direction": "in",
+    "ytick.direction": "in",
+    "xtick.top": True,
+    "ytick.right": True,
+    "legend.frameon": False,
+    "axes.prop_cycle": None,      # filled on first use (needs matplotlib's cycler)
+    "pdf.fonttype": 42,
+    "ps.fonttype": 42,
+    "savefig.dpi": DPI,
+}
 
 
 def pyplot():
@@ -26,3 +79,41 @@ def select_file_backend() -> None:
     functions never call this."""
     import matplotlib
     matplotlib.use(FILE_BACKEND)
+
+
+def _style() -> dict:
+    from cycler import cycler
+    return {**_STYLE, "axes.prop_cycle": cycler(color=PALETTE)}
+
+
+def styled(draw):
+    """Decorator: run a figure function inside ``rc_context`` with the fsicas style, so
+    the figure gets it and the user's rcParams are untouched."""
+    @functools.wraps(draw)
+    def wrapper(*args, **kwargs):
+        plt = pyplot()
+        with plt.rc_context(_style()):
+            return draw(*args, **kwargs)
+    return wrapper
+
+
+def subplots(nrows: int = 1, ncols: int = 1, **kwargs):
+    """``plt.subplots`` with constrained layout (call inside :func:`styled`)."""
+    kwargs.setdefault("layout", "constrained")
+    kwargs.setdefault("squeeze", False)
+    return pyplot().subplots(nrows, ncols, **kwargs)
+
+
+def finish(fig, path=None):
+    """Write ``fig`` to ``path`` (format from the file name; PNG if it has none) and
+    release it from pyplot; without a path leave it open. Returns the figure, which stays
+    usable (inspect it, save it again)."""
+    if path is not None:
+        fig.savefig(Path(path))
+        pyplot().close(fig)
+    return fig
+
+
+def outcome_words(kind: str) -> str:
+    """A time-integration outcome (e.g. ``impacting_lco``) in words."""
+    return OUTCOME_WORDS.get(kind, str(kind).replace("_", " "))

@@ -3,35 +3,42 @@ from __future__ import annotations
 
 import numpy as np
 
-from .backend import pyplot
+from .backend import NONDIM, PALETTE, finish, styled, subplots
 
 __all__ = ["plot_branch"]
 
-_PANELS = (("tip_amplitude", "tip half-amplitude / L"), ("period", "period / T"))
+_PANELS = (("tip_amplitude", f"tip half-amplitude $A/L$ {NONDIM}"),
+           ("period", "period (units of $T$)"))
 
 
-def plot_branch(branch, path) -> None:
+@styled
+def plot_branch(branch, path=None):
     """Tip half-amplitude and period against U*: stable solid, unstable dashed; folds
-    (triangles) and the first contact (star)."""
-    plt = pyplot()
-    fig, axes = plt.subplots(1, 2, figsize=(9, 3.6))
-    for ax, (name, label) in zip(axes, _PANELS):
+    (triangles), the first contact (star) and the Hopf point (grey line). Returns the
+    Figure."""
+    fig, axes = subplots(1, 2, figsize=(6.8, 2.8))
+    for ax, (name, label) in zip(axes[0], _PANELS):
         _branch_panel(ax, branch, name)
-        ax.set(xlabel="U*", ylabel=label)
+        ax.set(xlabel=f"flow velocity $U^*$ {NONDIM}", ylabel=label)
     s = branch.scene
-    fig.suptitle(f"M* = {s.mstar:g}, N = {s.modes}, zeta = {s.zeta}: {branch.status}")
-    fig.tight_layout()
-    fig.savefig(path, dpi=120)
-    plt.close(fig)
+    zeta = f"{s.zeta:g}" if np.isscalar(s.zeta) else "per mode"
+    fig.suptitle(fr"limit cycles at $M^*$ = {s.mstar:g}, $N$ = {s.modes}, $\zeta$ = {zeta}: "
+                 f"branch {branch.status}")
+    handles, labels = axes[0][0].get_legend_handles_labels()
+    if handles:
+        fig.legend(handles, labels, loc="outside right upper")
+    return finish(fig, path)
 
 
 def _branch_panel(ax, branch, name: str) -> None:
     """One column of the branch against U*, with its folds, first contact and onset."""
     u, stable, y = branch.column("ustar"), branch.column("stable"), branch.column(name)
-    for flag, style in ((True, "-"), (False, "--")):
-        ax.plot(u, np.where(stable == flag, y, np.nan), "k" + style, lw=1.2)
-    for p in branch.folds:
-        ax.plot(p.ustar, getattr(p, name), "v", color="tab:blue")
+    for flag, style, label in ((True, "-", "stable"), (False, "--", "unstable")):
+        ax.plot(u, np.where(stable == flag, y, np.nan), "k" + style, lw=1.2, label=label)
+    for k, p in enumerate(branch.folds):
+        ax.plot(p.ustar, getattr(p, name), "v", color=PALETTE[0],
+                label="fold" if k == 0 else None)
     if branch.contact is not None:
-        ax.plot(branch.contact.ustar, getattr(branch.contact, name), "*", ms=10, color="tab:red")
-    ax.axvline(branch.hopf["ustar_crit"], color="0.6", lw=0.8)
+        ax.plot(branch.contact.ustar, getattr(branch.contact, name), "*", ms=9, color=PALETTE[1],
+                label="first wall contact")
+    ax.axvline(branch.hopf["ustar_crit"], color="0.6", lw=0.8, label="Hopf point")
