@@ -7,7 +7,8 @@ criticality, the impact map's counts and the impacting cycles), ``fig2_boundary.
 ``fig3_modes.png``, ``fig4_impact_map.png`` (with its resumable ``fig4_map.jsonl``),
 ``fig6_9_U7.png``, ``fig6_9_U8.5.png``, ``fig6_9_U10.png`` (impacting cycles at N = 10,
 zeta = 0.01, with the contact law that holds, k* = 1e8, eps/H = 1e-2; the paper's
-k* = 1e6, eps/H = 1e-3 is run too and reported: its gap closes, docs/simulate.md) and,
+k* = 1e6, eps/H = 1e-3 is run too and reported: its gap closes, docs/simulate.md),
+``fig6_9_cycles.png`` (the three cycles side by side, as the paper shows them) and,
 unless ``quick``, ``boundary_variants.png`` (zeta = 0.01 and H* in {1/20, 1/5}).
 ``quick`` shrinks every grid and run to a smoke test.
 """
@@ -26,7 +27,7 @@ from .linear.steady import steady_state, straight_pressure_drop
 from .model.assembly import build_model
 from .model.beam import clamped_free_betas
 from .plots.linear import plot_boundary, plot_boundary_variants, plot_mode_shapes
-from .plots.timedomain import plot_cycle, plot_map, return_period
+from .plots.timedomain import cycle_view, plot_cycle, plot_cycles, plot_map, return_period
 from .scene import Scene
 from .timedomain.impact_map import impact_map
 from .timedomain.impacting_run import HOLDING_CONTACT, PAPER_CONTACT, impacting_run
@@ -96,25 +97,28 @@ def run_paper(out="results", quick: bool = False, progress=None) -> dict:
                    "closed_form": straight_pressure_drop(scene), "Q": steady.Q.tolist()},
         "boundary": {k: v for k, v in boundary.to_json().items() if k != "curves"},
     }
+    damped = None        # the zeta = 0.01 boundary: Fig. 4's linear boundary, drawn dense
     if not quick:
         say("the boundary variants (zeta = 0.01, H* = 1/20, 1/5)")
-        report["variants"] = _variants(scene, mstars[::2], boundary, out / "boundary_variants.png")
-    report.update(_time_domain(out, quick, say))
+        report["variants"], damped = _variants(scene, mstars[::2], boundary,
+                                               out / "boundary_variants.png")
+    report.update(_time_domain(out, quick, say, damped))
     report["wall_time"] = time.perf_counter() - start
     (out / "report.json").write_text(json.dumps(report, indent=2))
     return report
 
 
-def _variants(scene, mstars, reference, path) -> dict:
-    """Boundaries with structural damping and other confinements, drawn together."""
+def _variants(scene, mstars, reference, path):
+    """Boundaries with structural damping and other confinements, drawn together; returns
+    their report and the zeta = 0.01 boundary."""
     curves = {"paper (zeta = 0, H* = 1/10)": reference}
     for label, change in VARIANTS.items():
         variant = scene.replace(**change)
         curves[label] = stability_boundary(variant, mstars, build_model(variant), refine=False)
     plot_boundary_variants(curves, path)
-    return {label: [{"mstar": p["mstar"], "ustar_crit": p["ustar_crit"], "freq_ratio": p["freq_ratio"]}
-                    for p in b.points if p["ustar_crit"] is not None]
-            for label, b in curves.items()}
+    return ({label: [{"mstar": p["mstar"], "ustar_crit": p["ustar_crit"], "freq_ratio": p["freq_ratio"]}
+                     for p in b.points if p["ustar_crit"] is not None]
+             for label, b in curves.items()}, curves["zeta = 0.01"])
 
 
 def impacting_cycle(ustar: float, modes: int = 10, contact: dict = HOLDING_CONTACT,
@@ -123,19 +127,27 @@ def impacting_cycle(ustar: float, modes: int = 10, contact: dict = HOLDING_CONTA
     :func:`fsicas.timedomain.impacting_run.impacting_run`; returns the run's JSON (plus U*,
     N, the contact law). ``plot``: the Figs. 6-9 panels of the last settled cycle, or of
     the last tip return of a run that hit the wall without settling."""
+    return _impacting_cycle(ustar, modes, contact, t_end, plot, tol)[0]
+
+
+def _impacting_cycle(ustar, modes, contact, t_end, plot=None, tol=2e-2):
+    """:func:`impacting_cycle`'s JSON and the figures' view of its cycle (None if the run
+    shows none)."""
     run = impacting_run(ustar, modes, contact, t_end, tol)
     shown = run.outcome.period is not None or return_period(run) is not None
-    if plot is not None and shown and not run.trajectory.failed:
-        plot_cycle(run, plot)     # a perturbed periodic run: its last tip return
-    return {**run.to_json(), "ustar": ustar, "modes": modes, **contact}
+    view = cycle_view(run) if shown and not run.trajectory.failed else None
+    if plot is not None and view is not None:
+        plot_cycle(view, plot)     # a perturbed periodic run: its last tip return
+    return {**run.to_json(), "ustar": ustar, "modes": modes, **contact}, view
 
 
-def _cycle_job(args) -> dict:
-    return impacting_cycle(*args)
+def _cycle_job(args):
+    return _impacting_cycle(*args)
 
 
-def _time_domain(out: Path, quick: bool, say) -> dict:
-    """Fig. 4 (the impact map, N = 10) and Figs. 6-9 (impacting cycles, N = 10)."""
+def _time_domain(out: Path, quick: bool, say, linear=None) -> dict:
+    """Fig. 4 (the impact map, N = 10, over ``linear``, a dense boundary of its scene if
+    given) and Figs. 6-9 (impacting cycles, N = 10, each and side by side)."""
     if quick:
         ustars, mstars, t_map = np.array([4.0, 9.0]), np.array([1.0]), 5.0
         jobs = [(8.5, 6, HOLDING_CONTACT, 0.6, out / "fig6_9_U8.5.png")]
@@ -147,11 +159,14 @@ def _time_domain(out: Path, quick: bool, say) -> dict:
         jobs.append((8.5, 10, PAPER_CONTACT, 1.0, None))
     say(f"Fig. 4: the impact map, {ustars.size * mstars.size} time integrations")
     result = impact_map(ustars, mstars, out / "fig4_map.jsonl", t_end=t_map, workers=2)
-    plot_map(result, out / "fig4_impact_map.png")
+    plot_map(result, out / "fig4_impact_map.png", linear=linear)
     say(f"Figs. 6-9: {len(jobs)} impacting cycles (N = 10)")
     with ProcessPoolExecutor(max_workers=2) as pool:
-        cycles = list(pool.map(_cycle_job, jobs))
-    return {"impact_map": result.to_json(), "impacting_cycles": cycles}
+        done = list(pool.map(_cycle_job, jobs))
+    views = [view for (_, view), job in zip(done, jobs) if job[4] is not None and view is not None]
+    if views:
+        plot_cycles(views, out / "fig6_9_cycles.png")
+    return {"impact_map": result.to_json(), "impacting_cycles": [c for c, _ in done]}
 
 
 def summary(report: dict) -> dict:

@@ -72,3 +72,212 @@ def test_return_period_of_an_unsettled_run_is_its_last_tip_return():
     assert abs(return_period(run) - expected) < 1e-4
     flat = SimpleNamespace(trajectory=SimpleNamespace(t=t, tip=np.zeros_like(t)))
     assert return_period(flat) is None
+
+
+# --- the figures' content -------------------------------------------------------------
+
+import numpy as np  # noqa: E402
+
+
+@pytest.fixture(scope="module")
+def boundary6():
+    """Fig. 2's boundary at N = 6 on 9 M* in [0.03, 30] (refined; about 1.5 s): four mode
+    switches (crossings and folds), the stretches of modes 2-5."""
+    from fsicas.linear.boundary import stability_boundary
+    scene = Scene(mstar=1.0, ustar=5.0, hstar=0.1, friction=0.14, modes=6)
+    model = build_model(scene)
+    return stability_boundary(scene, np.logspace(-1.5, 1.5, 9), model), model
+
+
+@pytest.fixture(scope="module")
+def lco_view():
+    """The last cycle of a contact-free limit cycle (M* = 1, U* = 6.5, zeta = 0.01, N = 4;
+    a run of about 0.6 s that settles), as the figures see it."""
+    from fsicas.plots import cycle_view
+    from fsicas.timedomain.run import run_case
+    run = run_case(Scene(mstar=1.0, ustar=6.5, zeta=0.01, modes=4), t_end=20.0)
+    assert run.outcome.outcome == "lco"
+    return cycle_view(run)
+
+
+def _panels(fig):
+    """The figure's visible data axes (no colour bars)."""
+    return [ax for ax in fig.axes if ax.get_visible() and ax.get_label() != "<colorbar>"]
+
+
+def _branch_lines(ax):
+    return [line for line in ax.lines if (line.get_gid() or "").startswith("branch")]
+
+
+def test_fig2_draws_each_branch_up_to_its_located_switch(boundary6):
+    from fsicas.plots import plot_boundary
+    boundary, _ = boundary6
+    fig = plot_boundary(boundary)
+    left, mid, crit = _panels(fig)
+    switches = boundary.switches
+    assert len(switches) >= 3 and all(s.located for s in switches)
+    lines = _branch_lines(left)
+    assert len(lines) == len(switches) + 1         # one line per stretch, none across a switch
+    for line, (before, after) in zip(lines, zip([None, *switches], [*switches, None])):
+        m, u = line.get_data()
+        if before is not None:                     # starts at the switch, on its upper branch
+            assert m[0] == pytest.approx(before.mstar) and u[0] == pytest.approx(before.ustar_above)
+        if after is not None:                      # ends at the switch, on its lower branch
+            assert m[-1] == pytest.approx(after.mstar) and u[-1] == pytest.approx(after.ustar_below)
+        assert not any(m[0] < s.mstar < m[-1] for s in switches)
+        assert len(m) > 8                          # through the traced curve, not only samples
+    assert "$M^*$" in left.get_xlabel() and "$U^*_c$" in left.get_ylabel()
+    assert r"$\omega/\omega_1$" in mid.get_ylabel() and r"$\ell_1$" in crit.get_ylabel()
+    assert all("nondim" in ax.get_ylabel() for ax in (left, mid, crit))
+    legend = [t.get_text() for t in fig.legends[0].get_texts()]
+    assert {"mode 2", "mode 3", "mode 4", "mode 5"} <= set(legend)
+    marks = [t.get_text() for t in left.texts]
+    assert marks == [f"({c})" for c in "abcde"[:len(lines)]]
+
+
+def test_fig3_shows_the_marked_points_on_a_labelled_grid(boundary6):
+    from fsicas.plots import plot_mode_shapes
+    from fsicas.plots.linear import marked_points
+    boundary, model = boundary6
+    fig = plot_mode_shapes(boundary, model)
+    panels, marks = _panels(fig), marked_points(boundary)
+    assert len(panels) == len(marks) == 5
+    rows = {ax.get_subplotspec().rowspan.start for ax in panels}
+    cols = {ax.get_subplotspec().colspan.start for ax in panels}
+    assert len(rows) == 2 and len(cols) == 4
+    for ax, (letter, _, p) in zip(panels, marks):
+        assert ax.get_title().startswith(f"({letter}) $M^*$ = {p['mstar']:.3g}")
+        if ax.get_subplotspec().colspan.start == 0:
+            assert "$y/" in ax.get_ylabel()
+    assert sum("$x/L$" in ax.get_xlabel() for ax in panels) == 4   # bottom of each column
+    assert {"real part", "imaginary part", "motion"} <= {t.get_text() for t in fig.legends[0].get_texts()}
+    size = fig.get_size_inches()
+    assert size[0] / size[1] < 3                   # a grid, not one long row
+
+
+def test_boundary_variants_break_their_lines_at_switches(boundary6):
+    from fsicas.plots import plot_boundary_variants
+    boundary, _ = boundary6
+    fig = plot_boundary_variants({"reference": boundary})
+    left = _panels(fig)[0]
+    lines = [line for line in left.lines if "branch" in (line.get_gid() or "")]
+    assert len(lines) == len(boundary.switches) + 1
+    for line in lines:
+        m = line.get_xdata()
+        assert not any(m[0] < s.mstar < m[-1] for s in boundary.switches)
+    assert "$U^*_c$" in left.get_ylabel() and fig.legends
+
+
+def _map_result(points, boundary):
+    from types import SimpleNamespace
+    return SimpleNamespace(points=points, boundary=boundary, scene=Scene(zeta=0.01, modes=6))
+
+
+def test_fig4_draws_the_dense_boundary_and_keeps_the_legend_off_the_points(boundary6):
+    from fsicas.plots import plot_map
+    boundary, _ = boundary6
+    points = [{"ustar": u, "mstar": m, "outcome": "decay" if u < 6 else "contact"}
+              for m in (0.1, 1.0, 10.0) for u in np.linspace(2, 16, 8)]
+    fig = plot_map(_map_result(points, {"mstar": [1.0], "ustar_crit": [5.5], "omega": [45.0]}),
+                   linear=boundary)
+    ax = _panels(fig)[0]
+    lines = _branch_lines(ax)
+    assert len(lines) == len(boundary.switches) + 1
+    assert sum(len(line.get_xdata()) for line in lines) > 50          # dense, not 7 samples
+    fig.canvas.draw()
+    legend_box, axes_box = fig.legends[0].get_window_extent(), ax.get_window_extent()
+    assert legend_box.x0 >= axes_box.x1                               # beside the axes
+    assert {"decays to the steady state", "reaches the wall", "linear stability boundary"} <= \
+        {t.get_text() for t in fig.legends[0].get_texts()}
+    assert "$U^*$" in ax.get_xlabel() and "$M^*$" in ax.get_ylabel()
+
+
+def test_fig4_without_a_dense_boundary_breaks_the_samples_at_frequency_jumps():
+    from fsicas.plots import plot_map
+    samples = {"mstar": [0.1, 0.3, 1.0, 3.0, 10.0], "ustar_crit": [3.9, 3.4, 5.5, 7.2, 9.8],
+               "omega": [18.0, 18.5, 45.0, 88.0, 99.0]}    # jumps between 0.3, 1 and 3
+    fig = plot_map(_map_result([{"ustar": 4.0, "mstar": 1.0, "outcome": "lco"}], samples))
+    drawn = [line for line in _panels(fig)[0].lines if line.get_label() != "_nolegend_"
+             and line.get_color() == "k"]
+    assert [list(line.get_ydata()) for line in drawn] == [[0.1, 0.3], [1.0], [3.0, 10.0]]
+
+
+def test_tip_spectrum_puts_the_harmonics_on_their_bins():
+    """A periodic signal of odd harmonics over a span that is no whole number of periods,
+    plus noise 1e-6: every peak above 1e-4 of the largest is a harmonic k f0, and the floor
+    between harmonics stays 4 decades down."""
+    from fsicas.plots import tip_spectrum
+    T, rng = 0.13, np.random.default_rng(0)
+    t = np.arange(0.0, 3.37, 2e-5)
+    v = sum(np.sin(2 * np.pi * k * t / T + k) / k ** 2 for k in (1, 3, 5, 7, 9))
+    f, a = tip_spectrum(t, v + 1e-6 * rng.standard_normal(t.size), T)
+    peaks = [k for k in range(1, len(a) - 1) if a[k] > a[k - 1] and a[k] > a[k + 1] and a[k] > 1e-4]
+    assert np.allclose(f[peaks], np.round(f[peaks]), atol=1e-9)
+    assert set(np.round(f[peaks]).astype(int)) == {1, 3, 5, 7, 9}
+    between = (np.abs(f - np.round(f)) >= 0.5) & (f < 12)
+    assert a[between].max() < 1e-4
+
+
+def test_cycle_figure_labels_every_panel_and_shows_every_mode(lco_view, tmp_path):
+    from fsicas.plots import plot_cycle
+    fig = plot_cycle(lco_view, tmp_path / "cycle.pdf")
+    assert (tmp_path / "cycle.pdf").read_bytes()[:5] == b"%PDF-"
+    panels = _panels(fig)
+    assert len(panels) == 8
+    for ax in panels:
+        assert ax.get_xlabel() and ax.get_ylabel(), ax.get_title()
+        assert "(units of" in ax.get_ylabel() or "nondim" in ax.get_ylabel(), ax.get_ylabel()
+    velocities = next(ax for ax in panels if "$r_n$" in ax.get_ylabel())
+    assert len(velocities.lines) == lco_view.modes
+    title = fig.get_suptitle()
+    assert "limit cycle" in title and "_" not in title.replace("$T_0$", "")
+    spectrum = next(ax for ax in panels if "spectrum" in ax.get_title())
+    f, a = spectrum.lines[0].get_data()
+    top = np.argsort([a[k] if a[k] >= max(a[k - 1], a[k + 1]) else 0 for k in range(1, len(a) - 1)])
+    strongest = f[1:-1][top[-3:]]
+    assert np.allclose(strongest, np.round(strongest), atol=1e-9)     # harmonics of 1/T0
+    assert set(np.round(strongest).astype(int)) == {1, 3, 5}           # symmetric cycle: odd
+
+
+def test_cycles_side_by_side_one_column_per_case(lco_view):
+    from dataclasses import replace
+
+    from fsicas.plots import plot_cycles
+    other = replace(lco_view, ustar=7.0, outcome="impacting_lco")
+    fig = plot_cycles([lco_view, other])
+    panels = _panels(fig)
+    assert len(panels) == 16
+    cols = {ax.get_subplotspec().colspan.start for ax in panels}
+    assert cols == {0, 1}
+    tops = [ax for ax in panels if ax.get_subplotspec().rowspan.start == 0]
+    titles = [ax.get_title() for ax in tops]
+    assert titles[0].startswith("(1a) $U^*$ = 6.5") and titles[1].startswith("(1b) $U^*$ = 7")
+    assert "impacting limit cycle" in titles[1] and "impacting_lco" not in titles[1]
+    assert all(ax.get_ylabel() for ax in panels if ax.get_subplotspec().colspan.start == 0)
+
+
+def test_vector_output_and_labels_inside_the_figure(tmp_path):
+    from fsicas.plots import plot_eigenvalues
+    scene = Scene(modes=3, ustar=6.0)
+    result = linear_stability(scene, build_model(scene))
+    plot_eigenvalues(result, scene, tmp_path / "eig.pdf")
+    plot_eigenvalues(result, scene, tmp_path / "eig.svg")
+    assert (tmp_path / "eig.pdf").read_bytes()[:5] == b"%PDF-"
+    assert b"<svg" in (tmp_path / "eig.svg").read_bytes()[:2000]
+    fig = plot_eigenvalues(result, scene)
+    fig.canvas.draw()
+    ax = fig.axes[0]
+    box = ax.yaxis.label.get_window_extent()
+    assert box.x0 >= 0 and ax.xaxis.label.get_window_extent().y0 >= 0     # not cut
+    assert "\\lambda" in ax.get_xlabel() and "\\lambda" in ax.get_ylabel()
+
+
+def test_drawing_leaves_the_users_rcparams_alone(boundary6, lco_view):
+    from fsicas.plots import plot_boundary, plot_cycle
+    before = {k: v for k, v in matplotlib.rcParams.items() if k != "backend"}
+    fig = plot_boundary(boundary6[0])
+    plot_cycle(lco_view)
+    after = {k: v for k, v in matplotlib.rcParams.items() if k != "backend"}
+    assert after == before
+    assert fig.axes[0].yaxis.label.get_fontsize() == 9                 # the figure's own style
+    assert fig.axes[0].yaxis.label.get_fontfamily()[0] == "serif"
