@@ -237,7 +237,7 @@ class Physical:
         suffix = {"Pa": "_pa", "kg/m^3": "_kg_m3", "m": "_m", "Pa*s": "_pa_s", "": ""}
         out = {k + suffix[KEYS[k]]: v for k, v in self.values.items() if k != "gap"}
         out.update(H1_m=self.H1, H2_m=self.H2,
-                   flow=None if self.flow is None else self.flow.text)
+                   default_flow=None if self.flow is None else self.flow.text)
         return out
 
     @property
