@@ -26,6 +26,7 @@ inlet cross-section: ``Q = U0 b (H1 + H2)``. Units are read by Pint.
 from __future__ import annotations
 
 import math
+import re
 import warnings
 from dataclasses import dataclass, field
 from functools import lru_cache
@@ -76,14 +77,19 @@ def _registry():
     return pint.UnitRegistry()
 
 
+_NUMBER_FIRST = re.compile(r"^\s*[-+]?(\d|\.\d)")
+
+
 def _quantity(text: str, what: str, hint: str = "a number with a unit, e.g. 3 kPa"):
-    """Pint quantity of ``text``; ValueError naming ``what`` if it does not parse."""
-    import pint
+    """Pint quantity of ``text`` (a number, then its unit); ValueError naming ``what``
+    if it does not parse."""
+    if not _NUMBER_FIRST.match(text):
+        raise ValueError(f"{what}: cannot read {text!r}: give {hint}")
     try:
         q = _registry().Quantity(text.strip())
-    except (pint.errors.PintError, ValueError, TypeError, AttributeError, SyntaxError,
-            AssertionError, KeyError) as err:
-        raise ValueError(f"{what}: cannot read {text!r} ({err}); give {hint}") from None
+    except Exception as err:    # pint raises many kinds (tokenize, syntax, undefined unit)
+        reason = f" ({err})" if str(err) else ""
+        raise ValueError(f"{what}: cannot read {text!r}{reason}; give {hint}") from None
     if not math.isfinite(float(q.magnitude)):
         raise ValueError(f"{what}: {text!r} is not a finite value")
     return q
