@@ -1,57 +1,76 @@
 """Outcome of a run: decay, limit cycle, contact, impacting limit cycle, or unsettled.
 
-**Poincaré section.** Returns are the upward crossings of the tip displacement through
-the reference ``y_ref`` (the mean tip displacement over the last quarter of the samples),
-located by linear interpolation between output samples; a crossing counts only after
-the tip has been below ``y_ref − a/2`` since the previous one (a = current half
-amplitude), so impacts and chattering do not create spurious returns. Cycle k runs
-between returns k and k+1: its period ``T_k``, its tip half-amplitude
-``A_k = (max − min)/2`` and its Poincaré point ``x_k`` (state interpolated at the return).
+**Poincaré section and dense output**: :mod:`fsicas.timedomain.returns`.
 
 **Criteria** (:class:`Criteria`, defaults in brackets):
 
 - *contact*: a gap falls to the contact distance ``eps = (eps/H) H*/2`` (the onset of the
-  regularized impact force) at one of the 101 check points, at an output sample. With
-  contact off the run stops there (paper, Fig. 4); with contact on it goes on.
-- *limit cycle*: the last ``cycles`` [4] cycles agree: relative changes of period and of
-  amplitude between successive cycles, and the distance between successive Poincaré
-  points relative to the cycle's size, all below ``tol`` [1e-3] (impacting cycles:
-  ``tol_impacting`` [2e-2], since chattering cycles are only nearly periodic). The
-  largest of these changes is reported as ``convergence``.
+  regularized impact force) at one of the 101 check points, at an output sample; the time
+  is then located between the samples. With contact off the run stops there (paper,
+  Fig. 4); with contact on it goes on.
+- *limit cycle*: over the last ``cycles`` [4] cycles, the **remaining change** of the
+  period, of the amplitude and of the Poincaré point (relative to the cycle's size) is
+  below ``tol``. The remaining change extrapolates the cycle-to-cycle differences ``d_k``:
+  a monotone approach with ``|d_k|`` decreasing by at most the ratio μ per cycle has
+  ``|d_last| μ/(1 − μ)`` still to go (Aitken), an alternating or noisy one at most
+  ``max |d_k|``, and a monotone one that does not slow down is not settled. ``tol``
+  [None] defaults to ``SETTLING_PER_RTOL = 1000`` times the integrator's rtol (1e-5 at
+  rtol 1e-8), within [1e-8, 1e-2]: what the samples can resolve, not a fixed 1e-3 that
+  declared growing cycles settled with amplitudes low by up to 2 %. Impacting cycles:
+  the largest plain change below ``tol_impacting`` [2e-2] (chattering cycles are only
+  nearly periodic). The remaining change is reported as ``convergence``.
 - *decay*: the last ``cycles`` cycle amplitudes decrease monotonically and the last one
   is below ``decay_ratio`` [0.1] times the first cycle's amplitude; or the deviation from
-  the steady state is below ``floor`` [1e-9 of the gap] over the whole last chunk.
-- otherwise *unsettled* (or *contact* if contact happened but no impacting cycle settled).
+  the steady state is below ``floor`` [1e-9 of the gap] over the last eighth of the samples.
+- at the end of a run: a contact-free cycle whose remaining change is below ``tol_end``
+  [1e-2] is a limit cycle with ``settled = False`` (its ``convergence`` says how far it
+  has still to go); otherwise *unsettled* (or *contact* if contact happened but no
+  impacting cycle settled).
+
+**Incremental monitoring.** :class:`Monitor` keeps what it has found (the contact scan
+up to the last sample, the first cycle's amplitude, the latest period) and looks at the
+last ``1.5 (cycles + 4)`` periods only, so a run costs O(samples), not O(samples²).
 """
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
-from typing import Literal
+from typing import Callable, Literal
 
 import numpy as np
 import scipy.interpolate
 import scipy.optimize
 
+from ..model.assembly import Model
 from ..model.contact import GAP_POINTS, contact_load, gaps, reference_force
 from .integrators import Trajectory
-from ..model.assembly import Model
+from .returns import Cycles, cycles, poincare_returns, xdot_function
 
-__all__ = ["Criteria", "Outcome", "OutcomeKind", "classify", "Monitor", "poincare_returns"]
+__all__ = ["Criteria", "Outcome", "OutcomeKind", "classify", "Monitor", "poincare_returns",
+           "SETTLING_PER_RTOL"]
 
-#: What a run did (module docstring): "decay" back to the steady state; "lco" a settled
-#: limit cycle without contact; "impacting_lco" a settled cycle with wall contact;
-#: "contact" a gap reached the contact distance but no impacting cycle settled (or the
-#: contact-free run stopped there); "unsettled" none of these by the end of the run.
+#: What a run did (module docstring): "decay" back to the steady state; "lco" a limit
+#: cycle without contact; "impacting_lco" a settled cycle with wall contact; "contact" a
+#: gap reached the contact distance but no impacting cycle settled (or the contact-free
+#: run stopped there); "unsettled" none of these by the end of the run.
 OutcomeKind = Literal["decay", "lco", "impacting_lco", "contact", "unsettled"]
+
+#: The default settling tolerance per unit of the integrator's rtol (module docstring).
+SETTLING_PER_RTOL = 1e3
+_TOL_RANGE = (1e-8, 1e-2)
+#: Relative differences between cycles below ``NOISE × tol`` are noise, not a trend.
+NOISE = 1e-3
 
 
 @dataclass(frozen=True)
 class Criteria:
-    """Thresholds of the classification (module docstring)."""
+    """Thresholds of the classification (module docstring). ``tol = None``: the default
+    :meth:`settling_tol` of the run's rtol."""
 
     cycles: int = 4
-    tol: float = 1e-3
+    tol: float | None = None
     tol_impacting: float = 2e-2
+    tol_end: float = 1e-2
     decay_ratio: float = 0.1
     floor: float = 1e-9
     stop_on_contact: bool | None = None   # None: stop on contact iff the scene has no contact
@@ -59,9 +78,17 @@ class Criteria:
     def __post_init__(self):
         if not (isinstance(self.cycles, int) and self.cycles >= 2):
             raise ValueError(f"cycles must be an integer >= 2, got {self.cycles!r}")
-        for name in ("tol", "tol_impacting", "decay_ratio", "floor"):
-            if not 0 < getattr(self, name) < 1:
-                raise ValueError(f"{name} must lie in (0, 1), got {getattr(self, name)}")
+        for name in ("tol", "tol_impacting", "tol_end", "decay_ratio", "floor"):
+            value = getattr(self, name)
+            if not (value is None and name == "tol") and not 0 < value < 1:
+                raise ValueError(f"{name} must lie in (0, 1){' or be None' * (name == 'tol')}, "
+                                 f"got {value}")
+
+    def settling_tol(self, rtol: float) -> float:
+        """``tol``, or ``SETTLING_PER_RTOL · rtol`` clipped to [1e-8, 1e-2]."""
+        if self.tol is not None:
+            return self.tol
+        return float(min(max(SETTLING_PER_RTOL * rtol, _TOL_RANGE[0]), _TOL_RANGE[1]))
 
 
 @dataclass(frozen=True)
@@ -71,7 +98,9 @@ class Outcome:
     Forces are totals over the beam ``∫ F_i dx`` normalized by ``F0 = m f1² H`` (m = 1
     the beam mass, f1 = w1/2π, H = H*/2). ``impacts_per_cycle``: separate contact
     intervals per settled cycle (chattering). ``mean_flow_reduction``:
-    ``1 − mean(Q1+Q2)/(Q1+Q2)_steady`` over the settled cycles.
+    ``1 − mean(Q1+Q2)/(Q1+Q2)_steady`` over the measured cycles. ``convergence``: the
+    remaining relative change (module docstring); ``settled``: below the settling
+    tolerance (False for a cycle still approaching at the end of the run).
     """
 
     outcome: OutcomeKind
@@ -88,93 +117,80 @@ class Outcome:
     impacts_per_cycle: float | None = None
     mean_flow_reduction: float | None = None
     t_settled: float | None = None
+    settled: bool = False
 
     def to_json(self) -> dict:
         return {k: (float(v) if isinstance(v, np.floating) else v) for k, v in self.__dict__.items()}
 
 
-def poincare_returns(t, y, y_ref=None):
-    """Return times (interpolated) and sample indices of upward crossings (module doc)."""
-    t, y = np.asarray(t), np.asarray(y)
-    tail = y[3 * len(y) // 4:]
-    y_ref = float(np.mean(tail)) if y_ref is None else y_ref
-    half = 0.5 * (tail.max() - tail.min()) / 2 if tail.size else 0.0
-    armed, times, index = False, [], []
-    below = y < y_ref - half
-    for k in range(1, len(y)):
-        if below[k - 1]:
-            armed = True
-        if armed and y[k - 1] < y_ref <= y[k]:
-            s = (y_ref - y[k - 1]) / (y[k] - y[k - 1])
-            times.append(t[k - 1] + s * (t[k] - t[k - 1]))
-            index.append(k)
-            armed = False
-    return np.array(times), np.array(index, dtype=int)
+# -- criteria ---------------------------------------------------------------------------
+def _remaining(d: np.ndarray, noise: float) -> float:
+    """What a sequence with (relative) differences ``d`` has still to change (module
+    docstring); once the last difference is below ``noise`` the sequence is at its
+    noise level, ``noise``."""
+    a = np.abs(d)
+    if a[-1] < noise:
+        return noise
+    if np.all(d > 0) or np.all(d < 0):
+        return _geometric_tail(a)
+    return float(a.max())
 
 
-def _cycles(t, X, model):
-    """Periods, amplitudes, Poincaré points and return indices of the complete cycles."""
-    y = model.tip_deflection(X)
-    times, idx = poincare_returns(t, y)
-    if times.size < 2:
+def _geometric_tail(a: np.ndarray) -> float:
+    """``a_last μ/(1 − μ)`` for strictly shrinking ``a`` (μ the largest ratio), else inf."""
+    if not np.all(a[1:] < a[:-1]):
+        return math.inf
+    mu = float(np.max(a[1:] / a[:-1]))
+    return float(a[-1] * mu / (1 - mu))
+
+
+def _convergence(cyc: Cycles, m: int, tol: float | None) -> float | None:
+    """Remaining relative change of period, amplitude and Poincaré point over the last m
+    cycles (``tol``: the settling tolerance; below ``NOISE · tol`` a difference is noise),
+    or with ``tol = None`` their largest change; None if too few cycles."""
+    if cyc is None or cyc.periods.size < m + 1:
         return None
-    w = (times - t[idx - 1]) / (t[idx] - t[idx - 1])
-    points = X[idx - 1] + w[:, None] * (X[idx] - X[idx - 1])
-    amps = np.array([(_peak(y[a:b]) + _peak(-y[a:b])) / 2 for a, b in zip(idx[:-1], idx[1:])])
-    size = np.ptp(X[idx[-2]:idx[-1]], axis=0).max() if idx.size else 1.0
-    return np.diff(times), amps, points, idx, times, size
+    p, a = cyc.periods[-m - 1:], cyc.amplitudes[-m - 1:]
+    dp, da = np.diff(p) / p[-1], np.diff(a) / max(a[-1], 1e-300)
+    dx = np.max(np.abs(np.diff(cyc.points[-m - 2:], axis=0)), axis=1) / cyc.size
+    if tol is None:
+        return float(max(np.abs(dp).max(), np.abs(da).max(), dx.max()))
+    noise = NOISE * tol
+    return float(max(_remaining(dp, noise), _remaining(da, noise), _distance_to_go(dx, noise)))
 
 
-def _peak(y) -> float:
-    """Largest value of the samples, refined by a parabola through the top three."""
-    k = int(np.argmax(y))
-    if 0 < k < len(y) - 1:
-        a, b, c = y[k - 1], y[k], y[k + 1]
-        denom = a - 2 * b + c
-        if denom < 0:
-            return float(b - (a - c) ** 2 / (8 * denom))
-    return float(y[k])
+def _distance_to_go(dx: np.ndarray, noise: float) -> float:
+    """Remaining distance of Poincaré points whose successive distances are ``dx``: the
+    geometric tail if they shrink, else the largest (``noise`` once at the noise level)."""
+    if dx[-1] < noise:
+        return noise
+    return _geometric_tail(dx) if np.all(dx[1:] < dx[:-1]) else float(dx.max())
 
 
-def _settled(cyc, m, tol):
-    """Largest relative change over the last m cycles, or None if too few cycles."""
-    periods, amps, points, _, _, size = cyc
-    if periods.size < m + 1:
-        return None
-    p, a, x = periods[-m - 1:], amps[-m - 1:], points[-m - 2:]
-    size = size or 1.0
-    changes = [np.max(np.abs(np.diff(p))) / p[-1], np.max(np.abs(np.diff(a))) / max(a[-1], 1e-300),
-               np.max(np.abs(np.diff(x, axis=0))) / size]
-    return float(max(changes))
-
-
-def _decayed(cyc, crit, X, x_ref, gap):
+def _decayed(cyc: Cycles | None, crit: Criteria, X, x_ref, gap, first_amplitude) -> bool:
     if np.max(np.abs(X[-max(len(X) // 8, 1):] - x_ref)) < crit.floor * gap:
         return True
-    if cyc is None:
+    if cyc is None or cyc.amplitudes.size < crit.cycles + 1:
         return False
-    amps = cyc[1]
-    if amps.size < crit.cycles + 1:
-        return False
-    last = amps[-crit.cycles - 1:]
-    return bool(np.all(np.diff(last) < 0) and last[-1] < crit.decay_ratio * amps[0])
+    last = cyc.amplitudes[-crit.cycles - 1:]
+    return bool(np.all(np.diff(last) < 0) and last[-1] < crit.decay_ratio * first_amplitude)
 
 
-def _first_contact(t, X, model):
-    """(sample index, time, position) of the first contact, or None.
+def _first_contact(t, X, model, start: int = 0):
+    """(sample index, time, position) of the first contact at or after sample ``start``,
+    or None.
 
     The samples give the interval; the time is then located inside it (event location):
     the root of ``min_x h(x, t) − eps`` on the cubic through the samples ``k−3 .. k``
     (Lagrange interpolation of the state, error O(dt_out⁴)), by Brent's method.
     """
     eps = model.scene.contact_gap
-    h = gaps(model, X)
-    touch = h.min(axis=(1, 2)) <= eps
+    touch = gaps(model, X[start:]).min(axis=(1, 2)) <= eps
     if not touch.any():
         return None
-    k = int(np.argmax(touch))
+    k = start + int(np.argmax(touch))
     if k == 0:
-        return 0, float(t[0]), float(GAP_POINTS[np.argmin(h[0].min(axis=0))])
+        return 0, float(t[0]), float(GAP_POINTS[np.argmin(gaps(model, X[:1])[0].min(axis=0))])
     state = scipy.interpolate.BarycentricInterpolator(t[max(0, k - 3):k + 1], X[max(0, k - 3):k + 1])
     smallest = lambda s: gaps(model, state(s))[0].min(axis=0)
     tc = scipy.optimize.brentq(lambda s: smallest(s).min() - eps, t[k - 1], t[k],
@@ -182,58 +198,113 @@ def _first_contact(t, X, model):
     return k, float(tc), float(GAP_POINTS[np.argmin(smallest(tc))])
 
 
-def classify(traj: Trajectory, steady, criteria: Criteria = Criteria()) -> Outcome:
-    """Classify a trajectory and measure its cycle (module docstring)."""
-    return _classify(traj.t, traj.x, traj.model, steady, criteria, final=True,
-                     closed=traj.gap_closed)
+class Monitor:
+    """Incremental classification of a growing run (module docstring); the stop rule of
+    :func:`fsicas.timedomain.integrators.simulate`, called with all samples so far.
+
+    ``rtol``: the integrator's (the default settling tolerance follows it);
+    ``pressure(t)``: the pressure drop of a scheduled run (None: the steady state's);
+    ``contact_only``: stop only at contact (contact-free runs kept to t_end). ``outcome``
+    holds the outcome that stopped the run.
+    """
+
+    def __init__(self, model: Model, steady, criteria: Criteria = Criteria(), *,
+                 rtol: float = 1e-8, pressure: Callable | None = None, contact_only: bool = False):
+        self.model, self.steady, self.criteria = model, steady, criteria
+        self.tol = criteria.settling_tol(rtol)
+        self.pressure, self.contact_only = pressure, contact_only
+        self.outcome: Outcome | None = None
+        self._scanned, self._contact = 0, None
+        self._first_amplitude, self._period = None, None
+
+    def __call__(self, t, X) -> OutcomeKind | None:
+        if self.contact_only:   # run to t_end, but a contact-free run still ends at contact
+            return "contact" if self._contact_in(t, X) is not None else None
+        self.outcome = self.classify(t, X, final=False)
+        return None if self.outcome is None else self.outcome.outcome
+
+    def classify(self, t, X, final: bool, closed: bool = False) -> Outcome | None:
+        """The outcome of the samples so far (None while undecided and not ``final``);
+        ``closed``: the run ended on a closed gap after its last sample."""
+        model, crit = self.model, self.criteria
+        contact = self._contact_in(t, X)
+        if contact is None and closed:
+            # the gap went from > eps to 0 between the last sample and the solver failure
+            h = gaps(model, X[-1:])[0]
+            contact = len(t) - 1, float(t[-1]), float(GAP_POINTS[np.argmin(h.min(axis=0))])
+        stop_on_contact = (not model.scene.contact) if crit.stop_on_contact is None \
+            else crit.stop_on_contact
+        info = {}
+        if contact is not None:
+            info = dict(contact=True, first_contact_time=contact[1],
+                        first_contact_position=contact[2], contact_positions=[contact[2]])
+            if stop_on_contact:
+                return Outcome("contact", **info)
+        start = self._window(t)
+        cyc = self._cycles(t, X, start)
+        if cyc is None and start > 0:
+            start, cyc = 0, self._cycles(t, X, 0)
+        impacting = contact is not None
+        tol = crit.tol_impacting if impacting else self.tol
+        change = _convergence(cyc, crit.cycles, None if impacting else tol)
+        if _decayed(cyc, crit, X[start:], self.steady.x, model.scene.hstar / 2,
+                    self._first_amplitude):
+            return Outcome("decay", **info)
+        kind = "impacting_lco" if impacting else "lco"
+        if change is not None and change < tol:
+            return self._measure(kind, t[start:], X[start:], cyc, change, info, settled=True)
+        if not final:
+            return None
+        if change is not None and not impacting and change < crit.tol_end:
+            return self._measure(kind, t[start:], X[start:], cyc, change, info, settled=False)
+        return Outcome("contact", **info) if impacting else Outcome("unsettled", convergence=change)
+
+    def _contact_in(self, t, X):
+        """The first contact (:func:`_first_contact`), scanning only samples not seen."""
+        if self._contact is None and len(t) > self._scanned:
+            self._contact = _first_contact(t, X, self.model, self._scanned)
+            self._scanned = len(t)
+        return self._contact
+
+    def _window(self, t) -> int:
+        """First sample of the last ``1.5 (cycles + 4)`` periods (0 before a period is known)."""
+        if self._period is None:
+            return 0
+        return int(np.searchsorted(t, t[-1] - 1.5 * (self.criteria.cycles + 4) * self._period))
+
+    def _cycles(self, t, X, start, y_ref=None) -> Cycles | None:
+        cyc = cycles(t[start:], X[start:], self.model,
+                      lambda idx: self._xdot(t[start:], X[start:], idx), y_ref)
+        if cyc is not None:
+            self._period = float(np.max(cyc.periods[-self.criteria.cycles:]))
+            if self._first_amplitude is None:
+                self._first_amplitude = float(cyc.amplitudes[0])
+        return cyc
+
+    def _xdot(self, t, X, idx) -> np.ndarray:
+        """``xdot`` at the samples ``idx`` (rows), at the run's parameters."""
+        P = np.tile(np.asarray(self.steady.p, dtype=float)[:, None], (1, len(idx)))
+        if self.pressure is not None:
+            P[self.model.index("pressure_drop")] = self.pressure(t[idx])
+        return np.array(xdot_function(self.model).map(len(idx))(X[idx].T, P)).T
+
+    def _measure(self, kind, t, X, cyc, change, info, settled) -> Outcome:
+        m = self.criteria.cycles
+        a, b = cyc.index[-m - 1], cyc.index[-1]
+        T = float((cyc.times[-1] - cyc.times[-m - 1]) / m)
+        Qs = self.steady.x[-2:].sum()
+        flow = X[a:b, -2:].sum(axis=1)
+        reduction = 1.0 - float(np.trapezoid(flow, t[a:b]) / (t[b - 1] - t[a]) / Qs)
+        out = dict(period=T, frequency=2 * np.pi / T, tip_amplitude=float(cyc.amplitudes[-1]),
+                   convergence=change, cycles=int(cyc.periods.size), mean_flow_reduction=reduction,
+                   t_settled=float(cyc.times[-1]), settled=settled)
+        if info.get("contact"):
+            out.update(_impacts(X[a:b], self.model, m))
+        return Outcome(kind, **{**info, **out})
 
 
-def _classify(t, X, model, steady, crit, final, closed=False):
-    scene = model.scene
-    gap = scene.hstar / 2
-    contact = _first_contact(t, X, model)
-    if contact is None and closed:
-        # the gap went from > eps to 0 between the last sample and the solver failure
-        h = gaps(model, X[-1:])[0]
-        contact = len(t) - 1, float(t[-1]), float(GAP_POINTS[np.argmin(h.min(axis=0))])
-    stop_on_contact = (not scene.contact) if crit.stop_on_contact is None else crit.stop_on_contact
-    info = {}
-    if contact is not None:
-        info = dict(contact=True, first_contact_time=contact[1], first_contact_position=contact[2],
-                    contact_positions=[contact[2]])
-        if stop_on_contact:
-            return Outcome("contact", **info)
-    cyc = _cycles(t, X, model)
-    tol = crit.tol_impacting if contact is not None else crit.tol
-    change = _settled(cyc, crit.cycles, tol) if cyc is not None else None
-    if _decayed(cyc, crit, X, steady.x, gap):
-        return Outcome("decay", **info)
-    if change is not None and change < tol:
-        kind = "impacting_lco" if contact is not None else "lco"
-        return _measure(kind, t, X, model, steady, cyc, crit.cycles, change, info)
-    if not final:
-        return None
-    if contact is not None:
-        return Outcome("contact", **info)
-    return Outcome("unsettled", convergence=change)
-
-
-def _measure(kind, t, X, model, steady, cyc, m, change, info):
-    periods, amps, _, idx, times, _ = cyc
-    a, b = idx[-m - 1], idx[-1]
-    T = float(np.mean(periods[-m:]))
-    Qs = steady.x[-2:].sum()
-    flow = X[a:b, -2:].sum(axis=1)
-    reduction = 1.0 - float(np.trapezoid(flow, t[a:b]) / (t[b - 1] - t[a]) / Qs)
-    out = dict(period=T, frequency=2 * np.pi / T, tip_amplitude=float(amps[-1]), convergence=change,
-               cycles=int(periods.size), mean_flow_reduction=reduction, t_settled=float(times[-1]))
-    if info.get("contact"):
-        out.update(_impacts(t[a:b], X[a:b], model, m))
-    return Outcome(kind, **{**info, **out})
-
-
-def _impacts(t, X, model, m):
-    """Impact force, contact positions and chattering count over the settled cycles."""
+def _impacts(X, model, m):
+    """Impact force, contact positions and chattering count over the measured cycles."""
     density, total = contact_load(model, X)
     on = total > 0
     starts = np.flatnonzero(on & ~np.r_[False, on[:-1]])
@@ -244,16 +315,8 @@ def _impacts(t, X, model, m):
                 impacts_per_cycle=starts.size / m, contact_positions=positions)
 
 
-class Monitor:
-    """Stop rule for :func:`fsicas.timedomain.integrators.simulate`: classifies after each chunk
-    (``contact_only``: stops only at contact, for contact-free runs kept to t_end)."""
-
-    def __init__(self, model: Model, steady, criteria: Criteria = Criteria(), contact_only: bool = False):
-        self.model, self.steady, self.criteria = model, steady, criteria
-        self.contact_only = contact_only
-
-    def __call__(self, t, X) -> OutcomeKind | None:
-        if self.contact_only:   # run to t_end, but a contact-free run still ends at contact
-            return "contact" if _first_contact(t, X, self.model) is not None else None
-        out = _classify(t, X, self.model, self.steady, self.criteria, final=False)
-        return None if out is None else out.outcome
+def classify(traj: Trajectory, steady, criteria: Criteria = Criteria()) -> Outcome:
+    """Classify a whole trajectory and measure its cycle (module docstring)."""
+    monitor = Monitor(traj.model, steady, criteria, rtol=traj.settings.rtol,
+                      pressure=lambda s: np.interp(s, traj.t, traj.pressure_drop))
+    return monitor.classify(traj.t, traj.x, final=True, closed=traj.gap_closed)

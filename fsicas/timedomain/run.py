@@ -21,7 +21,7 @@ from ..model.accuracy import quadrature_error
 from ..model.assembly import Model, build_model
 from .outcome import Criteria, Monitor, Outcome, classify
 from ..scene import Scene
-from .integrators import Settings, Trajectory, simulate
+from .integrators import Settings, Trajectory, pressure_coefficient, simulate
 from ..linear.stability import eigenvalues
 from ..linear.steady import SteadyState, steady_state
 
@@ -58,7 +58,7 @@ class Run:
                                             "max_impact_force", "mean_flow_reduction")}
         out.update(steps=tr.steps, wall_time=self.wall_time, status=tr.status, message=tr.message,
                    t_end_reached=float(tr.t[-1]), convergence=o.convergence,
-                   impacts_per_cycle=o.impacts_per_cycle,
+                   settled=o.settled, impacts_per_cycle=o.impacts_per_cycle,
                    first_contact_position=o.first_contact_position,
                    quadrature_error=self.quadrature_error)
         return out
@@ -89,10 +89,10 @@ def run_case(scene: Scene, t_end: float, *, settings: Settings = Settings(),
         criteria = _with_stop(criteria, stop_on_contact)
     steady = steady_state(_steady_scene(scene, schedule), model)
     settings = sampled_settings(model, steady, settings)
-    if stop_early:
-        monitor = Monitor(model, steady, criteria)
-    else:
-        monitor = Monitor(model, steady, criteria, contact_only=True) if criteria.stop_on_contact else None
+    monitor = None
+    if stop_early or criteria.stop_on_contact:
+        monitor = Monitor(model, steady, criteria, rtol=settings.rtol, contact_only=not stop_early,
+                          pressure=_pressure(model, steady, schedule))
     traj = simulate(model, steady, t_end, settings=settings, schedule=schedule,
                     perturbation=perturbation, monitor=monitor)
     if criteria.stop_on_contact and traj.gap_closed:
@@ -100,7 +100,8 @@ def run_case(scene: Scene, t_end: float, *, settings: Settings = Settings(),
             "contact reached: a gap went below eps and then closed (the contact-free flow is "
             "singular at h_c = 0); the samples before are refined to dt_out/50, on which the "
             "contact time is located"))
-    outcome = classify(traj, steady, criteria)
+    decided = monitor is not None and monitor.outcome is not None and traj.stop_reason == monitor.outcome.outcome
+    outcome = monitor.outcome if decided else classify(traj, steady, criteria)
     return Run(scene, model, steady, traj, outcome, time.perf_counter() - start)
 
 
@@ -126,6 +127,14 @@ def sampled_settings(model: Model, steady, settings: Settings) -> Settings:
         return settings
     steps = 20 * math.ceil(settings.chunk / dt / 20)   # a chunk in a multiple of 20 steps
     return replace(settings, dt_out=settings.chunk / steps)
+
+
+def _pressure(model: Model, steady, schedule: PressureSchedule | None):
+    """``Δp(t)`` of a scheduled run (None for a constant one)."""
+    if schedule is None or schedule.kind == "constant":
+        return None
+    coefficient = pressure_coefficient(model, steady, schedule)
+    return lambda t: coefficient * schedule.ustar_at(t) * np.abs(schedule.ustar_at(t))
 
 
 def _with_stop(criteria: Criteria, stop: bool) -> Criteria:
