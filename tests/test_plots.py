@@ -126,6 +126,9 @@ def test_fig2_draws_each_branch_up_to_its_located_switch(boundary6):
             assert m[-1] == pytest.approx(after.mstar) and u[-1] == pytest.approx(after.ustar_below)
         assert not any(m[0] < s.mstar < m[-1] for s in switches)
         assert len(m) > 8                          # through the traced curve, not only samples
+    for line in _branch_lines(mid):                # no jump of frequency inside a stretch
+        w = line.get_ydata()
+        assert np.all(np.maximum(w[1:], w[:-1]) / np.minimum(w[1:], w[:-1]) < 1.2)
     assert "$M^*$" in left.get_xlabel() and "$U^*_c$" in left.get_ylabel()
     assert r"$\omega/\omega_1$" in mid.get_ylabel() and r"$\ell_1$" in crit.get_ylabel()
     assert all("nondim" in ax.get_ylabel() for ax in (left, mid, crit))

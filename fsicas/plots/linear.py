@@ -77,19 +77,19 @@ def _stretches(boundary, pts):
     return out
 
 
-def _lowest_on_curves(boundary, lo: float, hi: float) -> tuple[np.ndarray, set]:
-    """(M*, U*, omega) rows of the lowest traced curve at every traced curve point strictly
-    inside (lo, hi) (linear between the curves' exact Hopf points, as the boundary is
-    defined), and the pieces they lie on."""
+def _lowest_on_curves(boundary, lo: float, hi: float, pieces: set) -> np.ndarray:
+    """(M*, U*, omega) rows of the lowest of the traced ``pieces`` at every traced curve
+    point strictly inside (lo, hi) (linear between the curves' exact Hopf points, as the
+    boundary is defined). Only the stretch's own pieces: next to a located switch the
+    interpolated curves may already have changed places."""
     grid = np.unique(np.concatenate([c.mstar for c in boundary.curves] + [np.zeros(0)]))
-    rows, pieces = [], set()
+    rows = []
     for m in grid[(grid > lo) & (grid < hi)]:
-        found = [x for c in boundary.curves for x in c.crossings(math.log10(m))]
+        found = [x for c in boundary.curves for x in c.crossings(math.log10(m)) if x[2] in pieces]
         if found:
-            u, w, piece = min(found)
+            u, w, _ = min(found)
             rows.append((m, u, w))
-            pieces.add(piece)
-    return np.array(rows).reshape(-1, 3), pieces
+    return np.array(rows).reshape(-1, 3)
 
 
 def _stretch_mode(boundary, pieces: set, samples: list) -> int | None:
@@ -106,15 +106,17 @@ def _stretch_mode(boundary, pieces: set, samples: list) -> int | None:
 def branch_lines(boundary: StabilityBoundary) -> list[BranchLine]:
     """The boundary as stretches of one branch each, drawn up to their switches.
 
-    Inside a stretch the line is the lowest traced curve (several traced pieces of one
-    branch, which the boundary does not count as a switch, make one line)."""
+    Inside a stretch the line is the lowest of its pieces: the switches' branch and those
+    of its samples (several traced pieces of one branch, which the boundary does not count
+    as a switch, make one line)."""
     pts = _onsets(boundary)
     if not pts:
         return []
     lines = []
     for lo, hi, branch, start, end in _stretches(boundary, pts):
         samples = [p for p in pts if lo <= p["mstar"] <= hi]
-        dense, pieces = _lowest_on_curves(boundary, lo, hi)
+        pieces = {branch} | {p["branch"] for p in samples}
+        dense = _lowest_on_curves(boundary, lo, hi, pieces)
         rows = [dense, np.array([[p["mstar"], p["ustar_crit"], p["omega"]] for p in samples])
                 .reshape(-1, 3)]
         if start is not None:
@@ -125,7 +127,7 @@ def branch_lines(boundary: StabilityBoundary) -> list[BranchLine]:
         if not len(rows):
             continue
         rows = rows[np.argsort(rows[:, 0], kind="stable")]
-        mode = _stretch_mode(boundary, pieces | {branch}, samples)
+        mode = _stretch_mode(boundary, pieces, samples)
         lines.append(BranchLine(int(branch), mode, rows[:, 0], rows[:, 1], rows[:, 2], samples,
                                 start, end))
     return lines
@@ -214,8 +216,8 @@ def _onset_panels(left, mid, boundary: StabilityBoundary, lines: list[BranchLine
                  lw=0.8)
     for letter, line, p in marked_points(boundary):
         left.plot(p["mstar"], p["ustar_crit"], "o", ms=6, mfc="none", mec="k", mew=0.8, zorder=4)
-        left.annotate(f"({letter})", (p["mstar"], p["ustar_crit"]), xytext=(-4, 5),
-                      textcoords="offset points", ha="right", fontsize=8)
+        left.annotate(f"({letter})", (p["mstar"], p["ustar_crit"]), xytext=(0, -7),
+                      textcoords="offset points", ha="center", va="top", fontsize=8)
     sub = [p for p in _onsets(boundary) if p.get("criticality") == "subcritical"]
     if sub:
         left.plot([p["mstar"] for p in sub], [p["ustar_crit"] for p in sub], "x", color="k",
@@ -297,6 +299,11 @@ def plot_eigenvalues(result, scene, path=None):
     return finish(fig, path)
 
 
+def _math(label: str) -> str:
+    """A plain-text label with its symbols in mathtext (``zeta`` -> zeta, ``H*`` -> H^*)."""
+    return label.replace("zeta", r"$\zeta$").replace("H*", "$H^*$")
+
+
 @styled
 def plot_boundary_variants(curves: dict, path=None):
     """Several flutter boundaries on one figure, labelled by the keys of ``curves``
@@ -309,7 +316,7 @@ def plot_boundary_variants(curves: dict, path=None):
         w1 = _omega_1(boundary) if lines else 1.0
         for j, line in enumerate(lines):
             for ax, y in ((left, line.ustar), (right, line.omega / w1)):
-                ax.plot(line.mstar, y, color=color, label=label if j == 0 else None,
+                ax.plot(line.mstar, y, color=color, label=_math(label) if j == 0 else None,
                         gid=f"{label}: branch {line.branch}")
                 ax.plot([p["mstar"] for p in line.samples],
                         [(p["ustar_crit"] if ax is left else p["freq_ratio"]) for p in line.samples],
