@@ -18,7 +18,7 @@ from . import _eigen
 from ._branch import Branch, SpecialPoint
 from ._hooks import Event, Hooks, check_hooks, crossed, scalars, stopped
 from ._locate import Located, locate
-from ._palc import ContinuationIterator, Step, tangent
+from ._palc import ContinuationIterator, Step, correct, tangent
 from ._problem import Problem
 from ._settings import PALC, ContinuationSettings
 from ._threads import single_threaded
@@ -239,12 +239,40 @@ def _add_time(stats, key, t0) -> None:
     stats[key] = stats.get(key, 0.0) + time.perf_counter() - t0
 
 
+#: Halvings of one step at most while separating several crossings in it (:func:`_split`).
+MAX_SPLITS = 8
+
+
 def _detect(problem, prev, cur, settings, rec) -> list:
     """Built-in special points between ``prev`` and ``cur`` (``_Found`` or None)."""
     if not settings.detect:
         return []
-    return [_special(problem, kind, prev, cur, settings, len(rec.X), rec.stats)
-            for kind in problem.events(prev[1], cur[1])]
+    return [found for kind in problem.events(prev[1], cur[1])
+            for found in _split(problem, kind, prev, cur, settings, rec, MAX_SPLITS)]
+
+
+def _split(problem, kind, a, b, settings, rec, splits: int, offset: float = 0.0) -> list:
+    """The points of ``kind`` between ``a`` and ``b``: one located point when the counts
+    say one (:meth:`Problem.crossings`); else the step is halved at its arclength middle
+    (a corrected and monitored point), the counts taken again, and each half searched,
+    so two Hopf pairs crossing in one step give two located points. ``offset``: the
+    arclength of ``a`` from the step's start (the found points' ``s``)."""
+    if splits == 0 or problem.crossings(kind, a[1], b[1]) <= 1:
+        found = _special(problem, kind, a, b, settings, len(rec.X), rec.stats)
+        return [found if found is None else found._replace(s=offset + found.s)]
+    sa = a[0]
+    half = 0.5 * float(sa.tau @ (b[0].X - sa.X))
+    res = correct(problem, sa.X + half * sa.tau, sa.tau, settings.newton)
+    tau, lu = tangent(problem, res.X, sa.tau) if res.converged else (None, None)
+    if tau is None:
+        found = _special(problem, kind, a, b, settings, len(rec.X), rec.stats)
+        return [found if found is None else found._replace(s=offset + found.s)]
+    rec.stats["split_steps"] = rec.stats.get("split_steps", 0) + 1
+    mid = (Step(res.X, tau, half, res.iterations, res.residual, lu),
+           problem.monitor(res.X, tau, lu, settings))
+    return [found for lo, hi, at in ((a, mid, offset), (mid, b, offset + half))
+            if kind in problem.events(lo[1], hi[1])
+            for found in _split(problem, kind, lo, hi, settings, rec, splits - 1, at)]
 
 
 def _merge(stats, it_stats):

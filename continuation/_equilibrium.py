@@ -159,6 +159,13 @@ class EquilibriumProblem(Problem):
                 kinds.append("hopf")  # candidate; rejected if Re lambda keeps its sign
         return kinds
 
+    def crossings(self, kind, a: PointInfo, b: PointInfo) -> int:
+        """Hopf: the complex pairs whose real part changed sign, by the change of the
+        count of unstable complex eigenvalues (two per pair)."""
+        if kind == "hopf" and "hopf_complex" in a.counts and "hopf_complex" in b.counts:
+            return max(1, abs(a.counts["hopf_complex"] - b.counts["hopf_complex"]) // 2)
+        return 1
+
     def test_function(self, kind, X_a, info_a, X_b, info_b, settings):
         if kind == "fold":
             return lambda X, tau, lu: float(tau[-1])

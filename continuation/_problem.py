@@ -143,6 +143,11 @@ class Problem:
         return [k for k in a.tests if k in b.tests and a.tests[k] * b.tests[k] < 0] + \
             [k for k in a.counts if k in b.counts and a.counts[k] != b.counts[k]]
 
+    def crossings(self, kind, a: PointInfo, b: PointInfo) -> int:
+        """How many points of ``kind`` lie between ``a`` and ``b`` at least (from their
+        counts); more than one makes the driver split the step until each part holds one."""
+        return 1
+
     def test_function(self, kind, X_a, info_a, X_b, info_b, settings) -> Callable | None:
         """Smooth ``f(X, tau, lu)`` vanishing at the event, or None (bisection)."""
         if kind == "bp":
