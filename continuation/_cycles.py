@@ -200,11 +200,14 @@ class CycleProblem(PeriodicProblem):
 
     def on_field(self, vf: VectorField, X):
         """``(problem, X_new)``: the cycle ``X`` on the field ``vf`` (same state size and
-        parameter names), same mesh and node values."""
+        parameter names), same mesh and node values; the points counted towards the next
+        re-mesh carry over (the mesh is the same)."""
         if not isinstance(vf, VectorField) or vf.n != self.vf.n or vf.par_names != self.vf.par_names:
             raise ValueError(f"the field must be a VectorField of {self.vf.n} states and "
                              f"parameters {self.vf.par_names}")
-        return self._rebuilt(X, vf, self.settings, self.mesh)
+        new, X_new = self._rebuilt(X, vf, self.settings, self.mesh)
+        new._accepted = self._accepted
+        return new, X_new
 
     def _rebuilt(self, X, vf, settings, mesh):
         """The cycle ``X`` (its polynomial at the new nodes) as a problem on ``vf``,

@@ -30,7 +30,7 @@ def test_branch_continues_on_the_refined_field_across_remeshes():
         return fine if problem.vf is coarse and problem.params(X)[0] > 0.5 else None
 
     problem = C.CycleProblem(coarse, _circle(np.sqrt(0.2 / 1.01)), 2 * np.pi, {"mu": 0.2}, "mu",
-                             settings=C.CollocationSettings(ntst=10, ncol=4, adapt_every=2))
+                             settings=C.CollocationSettings(ntst=10, ncol=4, adapt_every=4))
     problem.refine = refine
     branch = C.continuation(problem, settings=C.ContinuationSettings(
         ds=0.05, ds_max=0.05, max_steps=40, bounds={"mu": (0.1, 1.0)}),
@@ -55,3 +55,26 @@ def test_on_field_keeps_the_cycle_and_checks_the_field():
                                       [ca.SX.zeros(2)]), None, ("nu",))
     with pytest.raises(ValueError, match="parameters"):
         problem.on_field(other, problem.X0)
+
+
+def test_refined_problems_keep_the_remesh_cadence(monkeypatch):
+    """A field swap every third point does not reset the count towards the next re-mesh
+    (``adapt_every = 4``; a swap due with a re-mesh goes first, the re-mesh follows at
+    the next point): 12 points, 4 swaps, 3 re-meshes (none if the count reset)."""
+    fields = [_stuart_landau(1.0), _stuart_landau(1.0)]
+    meshes, asked = [], []
+    remesh = C.CycleProblem.remesh
+    monkeypatch.setattr(C.CycleProblem, "remesh",
+                        lambda self, X, ntst=None: meshes.append(1) or remesh(self, X, ntst))
+
+    def refine(problem, X):
+        asked.append(1)
+        return None if len(asked) % 3 else fields[problem.vf is fields[0]]
+
+    problem = C.CycleProblem(fields[0], _circle(np.sqrt(0.2)), 2 * np.pi, {"mu": 0.2}, "mu",
+                             settings=C.CollocationSettings(ntst=10, ncol=4, adapt_every=4))
+    problem.refine = refine
+    branch = C.continuation(problem, settings=C.ContinuationSettings(
+        ds=0.05, ds_max=0.05, max_steps=12, bounds={"mu": (0.1, 1.0)}))
+    assert len(branch.s) == 13 and branch.stats["restarts"] == 4 + len(meshes)
+    assert len(meshes) >= 2
