@@ -8,6 +8,7 @@ import pytest
 
 import continuation as C
 from fsicas import Scene
+from fsicas.cycles import CycleSettings
 from fsicas.linear.adapter import PI, PI_SCALE, TIME_SCALE, flutter_field
 from fsicas.cycles.impacting import ImpactSettings, cycle_from_trajectory, \
     impacting_branch, pre_contact_start, shooting_points
@@ -15,6 +16,8 @@ from fsicas.model import build_model
 from fsicas.timedomain.integrators import Settings, simulate
 from fsicas.linear.steady import steady_state
 
+#: the start cycle on the scene's nodes, those of the impacting branch
+SCENE_NODES = CycleSettings(quadrature_tol=None)
 IMPACT = dict(contact=True, contact_stiffness=1e8, contact_eps=1e-2, contact_smoothing=0.1)
 
 
@@ -77,7 +80,7 @@ def test_shooting_passes_first_contact_onto_unstable_impacting_cycles():
     first period and then leaves it."""
     from fsicas.cycles import cycle_branch
     base = Scene(mstar=1.0, zeta=0.01, modes=4, contact_eps=1e-2)
-    start = pre_contact_start(cycle_branch(base, ustar_max=10.0))
+    start = pre_contact_start(cycle_branch(base, ustar_max=10.0, settings=SCENE_NODES))
     assert 3 < start.gap_ratio < 4
     scene = base.replace(ustar=start.ustar, **IMPACT)
     model = build_model(scene)

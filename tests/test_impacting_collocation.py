@@ -6,14 +6,16 @@ import numpy as np
 import pytest
 
 from fsicas import Scene
-from fsicas.cycles import (CollocatedImpactBranch, CollocationImpactSettings, ImpactSettings,
-                           cycle_branch, impacting_branch,
+from fsicas.cycles import (CollocatedImpactBranch, CollocationImpactSettings, CycleSettings,
+                           ImpactSettings, cycle_branch, impacting_branch,
                            impacting_collocation_branch, pre_contact_start)
 from fsicas.linear.steady import steady_state
 from fsicas.model import build_model
 from fsicas.model.contact import gaps
 from fsicas.timedomain.integrators import Settings, simulate
 
+#: the start cycle on the scene's nodes, those of the impacting branch
+SCENE_NODES = CycleSettings(quadrature_tol=None)
 IMPACT = dict(contact=True, contact_stiffness=1e8, contact_eps=1e-2, contact_smoothing=0.1)
 
 
@@ -36,7 +38,7 @@ def n3_branch():
     """M* = 1, N = 3, k* = 1e8, eps/H = 1e-2, smoothing 0.1: from the contact-free
     collocation cycle at gap >= 3 eps, five points through the first contact."""
     base = Scene(mstar=1.0, zeta=0.01, modes=3, contact_eps=1e-2)
-    start = pre_contact_start(cycle_branch(base, ustar_max=10.0))
+    start = pre_contact_start(cycle_branch(base, ustar_max=10.0, settings=SCENE_NODES))
     scene = base.replace(ustar=start.ustar, **IMPACT)
     model = build_model(scene)
     br = impacting_collocation_branch(scene, start.state, start.period, start.pressure_drop,
@@ -89,7 +91,7 @@ def test_collocation_equals_shooting_at_the_same_ustar():
     collocation converge at the stage order only: measured 1.3e-5 relative at NTST = 300,
     2e-6 at 400; the period to 1e-11)."""
     base = Scene(mstar=1.0, zeta=0.01, modes=4, contact_eps=1e-2)
-    start = pre_contact_start(cycle_branch(base, ustar_max=10.0))
+    start = pre_contact_start(cycle_branch(base, ustar_max=10.0, settings=SCENE_NODES))
     scene = base.replace(ustar=start.ustar, **IMPACT)
     model = build_model(scene)
     br = impacting_collocation_branch(scene, start.state, start.period, start.pressure_drop,

@@ -7,13 +7,15 @@ time integration commands of :mod:`fsicas.cli.timedomain`.
 from __future__ import annotations
 
 from ..cycles.collocation import CycleSettings, cycle_branch
+from ..model.accuracy import QUADRATURE_TOL
 from ..physical_report import add_physical
 from ..plots.cycles import plot_branch
 from .scene_options import add_scene_options, scene_from_args
 
 __all__ = ["add_cycle_commands"]
 
-_POINT_KEYS = ("kind", "ustar", "period", "frequency", "tip_amplitude", "gap_ratio", "stable")
+_POINT_KEYS = ("kind", "ustar", "period", "frequency", "tip_amplitude", "gap_ratio", "stable",
+               "quadrature_error", "quadrature_nodes")
 
 
 def add_cycle_commands(sub) -> None:
@@ -25,6 +27,9 @@ def add_cycle_commands(sub) -> None:
     p.add_argument("--ntst", type=int, default=20, help="collocation mesh intervals")
     p.add_argument("--ncol", type=int, default=4, help="collocation points per interval")
     p.add_argument("--max-points", type=int, default=300, help="branch points at most")
+    p.add_argument("--quadrature-tol", type=_tolerance, default=QUADRATURE_TOL, metavar="TOL",
+                   help="from a point whose quadrature error exceeds TOL, go on with the nodes "
+                        "doubled as often as needed; 'none': the scene's nodes throughout")
     p.add_argument("--out", metavar="FILE.json", help="save the full branch (multipliers, states)")
     p.add_argument("--plot", metavar="FILE", help="tip amplitude and period against U*")
     p.set_defaults(run=_cmd_cycles)
@@ -34,7 +39,8 @@ def _cmd_cycles(args) -> dict:
     scene = scene_from_args(args)
     if scene.contact:
         raise ValueError("cycles are continued on the contact-free model: drop --contact")
-    settings = CycleSettings(ntst=args.ntst, ncol=args.ncol, max_points=args.max_points)
+    settings = CycleSettings(ntst=args.ntst, ncol=args.ncol, max_points=args.max_points,
+                             quadrature_tol=args.quadrature_tol)
     branch = cycle_branch(scene, ustar_max=args.ustar_max, settings=settings)
     if args.out:
         branch.save(args.out)
@@ -45,6 +51,11 @@ def _cmd_cycles(args) -> dict:
            "contact": None if branch.contact is None else _point_summary(branch.contact),
            "points": [_point_summary(p) for p in branch.points], "wall_time": branch.wall_time}
     return add_physical(out, scene, "lco")
+
+
+def _tolerance(text: str) -> float | None:
+    """``--quadrature-tol``: a number, or 'none' (no control)."""
+    return None if text.strip().lower() == "none" else float(text)
 
 
 def _point_summary(point) -> dict:

@@ -22,9 +22,12 @@ the rest of the measures). The branch
 is one call of ``continuation.continuation``: the library locates cycle folds (the
 parameter's tangent component changes sign) and the first contact, a user event
 ``gap_ratio - 1``, on the arclength with its corrector; its ``record`` hook measures every
-point, and it re-meshes every few points (the cycle sharpens as the gap closes). The run
-stops at the first contact (the contact-free model ends there), at ``ustar_max`` or
-after ``max_points``.
+point, and it re-meshes every few points (the cycle sharpens as the gap closes). Where a
+point's quadrature error exceeds ``CycleSettings.quadrature_tol`` (the flow integrands
+sharpen as the gap closes too), the branch goes on from that point on the model with
+enough nodes (:func:`fsicas.model.accuracy.adequate_model`; the library's
+``CycleProblem.refine``). The run stops at the first contact (the contact-free model ends
+there), at ``ustar_max`` or after ``max_points``.
 """
 from __future__ import annotations
 
@@ -37,11 +40,12 @@ import numpy as np
 
 import continuation as C
 
-from ..linear.adapter import PI, pi_of
+from ..linear.adapter import PI, flutter_field, pi_of
 from ..linear.hopf import CriticalVelocityError, HopfPoint, critical_velocity, flutter_problem
+from ..model.accuracy import QUADRATURE_TOL, adequate_model
 from ..model.assembly import Model, build_model
 from ..scene import Scene
-from .gauge import Gauge, PolynomialExtrema
+from .gauge import Gauge, PolynomialExtrema, model_parameters
 from .records import BranchRecord, CycleMeasures, check_settings
 
 __all__ = ["CycleSettings", "CyclePoint", "CycleBranch", "CycleKind", "CycleStatus",
@@ -62,7 +66,10 @@ class CycleSettings:
     all node values); ``tol``: Newton tolerance; ``max_points``: branch points;
     ``adapt_every``: re-mesh (equidistribute the collocation error) every so many points,
     0 = never (the cycle sharpens as the gap closes); ``stop_at_contact``: stop at the
-    first contact (else report it and go on, e.g. on a scene with smoothed contact)."""
+    first contact (else report it and go on, e.g. on a scene with smoothed contact);
+    ``quadrature_tol``: from a point whose quadrature error exceeds it, the branch goes on
+    with the nodes doubled as often as needed (:func:`fsicas.model.accuracy.adequate_model`),
+    None = the model's nodes throughout."""
 
     ntst: int = 20
     ncol: int = 4
@@ -73,10 +80,12 @@ class CycleSettings:
     max_points: int = 300
     adapt_every: int = 5
     stop_at_contact: bool = True
+    quadrature_tol: float | None = QUADRATURE_TOL
 
     def __post_init__(self):
         check_settings(self, integers=("ntst", "ncol", "max_points"),
-                       positives=("dp", "ds", "ds_max", "tol"),
+                       positives=("dp", "ds", "ds_max", "tol") + (
+                           () if self.quadrature_tol is None else ("quadrature_tol",)),
                        nonnegative_integers=("adapt_every",))
         if not isinstance(self.stop_at_contact, bool):
             raise ValueError(f"CycleSettings.stop_at_contact must be a bool, "
@@ -98,6 +107,9 @@ class CyclePoint(CycleMeasures):
     #: relative error of the equations from the flow quadrature over the cycle
     #: (:mod:`fsicas.model.accuracy`; NaN where not measured)
     quadrature_error: float = float("nan")
+    #: quadrature nodes (``scene.n_quad``) of the model the point was computed on
+    #: (None where not recorded)
+    quadrature_nodes: int | None = None
 
     _derived = ("frequency",)
 
@@ -157,7 +169,9 @@ def cycle_branch(scene: Scene, model: Model | None = None, *, ustar_max: float =
                                         adapt_every=settings.adapt_every)
     problem = C.cycle_from_hopf(flutter_problem(scene, model, min(0.2, hopf.ustar / 2)),
                                 hopf.point, dp=settings.dp, settings=collocation)
-    gauge = _ProfileGauge(model, hopf.x)
+    gauge = _ProfileGauge(model, hopf.x, settings.quadrature_tol)
+    if settings.quadrature_tol is not None:
+        problem.refine = gauge.refine
     contact = C.Event("contact", gauge.contact_function, terminal=settings.stop_at_contact)
     branch = C.continuation(problem, settings=_steps(problem, scene, model, ustar_max, settings),
                             events=[contact], record=gauge.record)
@@ -206,10 +220,10 @@ class _ProfileGauge(Gauge):
     """Measures of X = (nodes, 100 T, Π) on the collocation polynomial, the extrema exact
     (:class:`fsicas.cycles.gauge.PolynomialExtrema`)."""
 
-    def __init__(self, model: Model, x_eq):
+    def __init__(self, model: Model, x_eq, quadrature_tol: float | None):
         super().__init__(model, x_eq)
         self._extrema = PolynomialExtrema(model)
-        self._last_gap = (None, None)
+        self.quadrature_tol = quadrature_tol
 
     def record(self, problem, X) -> dict:
         """The fields of :class:`CyclePoint` at X (branch columns)."""
@@ -224,7 +238,15 @@ class _ProfileGauge(Gauge):
 
     def gap(self, problem, X) -> float:
         """min over the cycle of the gap (kept for the last X: event and record share it)."""
-        key = (id(problem), np.asarray(X).tobytes())
-        if self._last_gap[0] != key:
-            self._last_gap = (key, self._extrema.min_gap(problem, X))
-        return self._last_gap[1]
+        return self.kept("gap", problem, X, lambda: self._extrema.min_gap(problem, X))
+
+    def refine(self, problem, X):
+        """``CycleProblem.refine``: None while the quadrature error at X is at most
+        ``quadrature_tol``, else the field of the adequate model at X, which the gauge
+        measures from then on (the branch goes on from X on it)."""
+        if self.quadrature_error(problem, X) <= self.quadrature_tol:
+            return None
+        self.model, _ = adequate_model(self.model, problem.nodes(X),
+                                       model_parameters(self.model, problem, X),
+                                       self.quadrature_tol)
+        return flutter_field(self.model)

@@ -11,17 +11,18 @@ A cycle problem of :mod:`continuation` on ``flutter_field`` has unknowns
 - from the profile, by the route: the tip half-amplitude (max − min of y(1, t))/2 and
   the minimal gap min_{x,t} h_c(x, t) with its ratio to eps (:mod:`fsicas.model.contact`);
 - ``quadrature_error``: the relative error of the equations over the cycle from the flow
-  quadrature, against a rule of twice the nodes (:mod:`fsicas.model.accuracy`).
+  quadrature, against a rule of twice the nodes (:mod:`fsicas.model.accuracy`), and
+  ``quadrature_nodes``, the nodes of the model it was computed on (``scene.n_quad``).
 """
 from __future__ import annotations
 
 import numpy as np
 
-from ..linear.adapter import LOG_M, PI_SCALE, TIME_SCALE, flutter_field, steady_ustar
+from ..linear.adapter import LOG_M, PI, PI_SCALE, TIME_SCALE, steady_ustar
 from ..model import contact
-from ..model.accuracy import finer_model, relative_error
+from ..model.accuracy import quadrature_error
 
-__all__ = ["Gauge", "PolynomialExtrema", "PERIOD_COLUMN"]
+__all__ = ["Gauge", "PolynomialExtrema", "PERIOD_COLUMN", "model_parameters"]
 
 PERIOD_COLUMN = "cycle_period"
 """Branch column of the period in units of T (the library's ``period`` is in T/100)."""
@@ -34,6 +35,7 @@ class Gauge:
         self.model = model
         self.eps = model.scene.contact_gap
         self.x_eq = np.asarray(x_eq, dtype=float)
+        self._kept = {}
 
     def common(self, problem, X) -> dict:
         """U*, Δp, period, multipliers, stability and state at X."""
@@ -45,15 +47,28 @@ class Gauge:
         return {"ustar": ustar, "pressure_drop": float(X[-1] * PI_SCALE * mstar),
                 PERIOD_COLUMN: problem.period(X) / TIME_SCALE, "multipliers": mu,
                 "stable": bool(np.all(np.abs(rest) < 1.0)), "state": problem.state(X).copy(),
-                "quadrature_error": self.quadrature_error(problem, X)}
+                "quadrature_error": self.quadrature_error(problem, X),
+                "quadrature_nodes": self.model.scene.n_quad}
 
     def quadrature_error(self, problem, X) -> float:
-        """:func:`fsicas.model.accuracy.quadrature_error` over the cycle: at the nodes of
-        a collocation problem, at the segment starts of a shooting problem."""
-        states = problem.nodes(X) if hasattr(problem, "nodes") else problem.points(X)
-        p = problem.params(X)
-        fine = flutter_field(finer_model(self.model)).F.map(len(states))(states.T, p)
-        return relative_error(fine, problem.vf.F.map(len(states))(states.T, p))
+        """:func:`fsicas.model.accuracy.quadrature_error` over the cycle (kept for the
+        last X)."""
+        return self.kept("quadrature_error", problem, X, lambda: quadrature_error(
+            self.model, self.states(problem, X), model_parameters(self.model, problem, X)))
+
+    @staticmethod
+    def states(problem, X) -> np.ndarray:
+        """States (rows) of the cycle X: the nodes of a collocation problem, the segment
+        starts of a shooting problem."""
+        return problem.nodes(X) if hasattr(problem, "nodes") else problem.points(X)
+
+    def kept(self, name: str, problem, X, compute):
+        """``compute()``, kept under ``name`` for the last (problem, X): the record and
+        the hooks of one point share it."""
+        data, last = np.asarray(X).tobytes(), self._kept.get(name)
+        if last is None or last[0] is not problem or last[1] != data:
+            last = self._kept[name] = (problem, data, compute())
+        return last[2]
 
     def tip(self, x) -> np.ndarray:
         """Tip deflection y(1) of states x (rows)."""
@@ -62,6 +77,14 @@ class Gauge:
     def min_gap(self, x) -> np.ndarray:
         """``min_{x, c} h_c(x)`` of each state (row): :func:`fsicas.model.contact.gaps`."""
         return contact.gaps(self.model, x).min(axis=(1, 2))
+
+
+def model_parameters(model, problem, X) -> np.ndarray:
+    """The model's parameter vector p at the adapter's parameters of X (Δp = 100 M* Π,
+    M* = 10^log10_mstar, the rest by name: :mod:`fsicas.linear.adapter`)."""
+    value = problem.par_dict(X)
+    mstar = 10 ** value.pop(LOG_M)
+    return model.parameters(pressure_drop=value.pop(PI) * PI_SCALE * mstar, mstar=mstar, **value)
 
 
 class PolynomialExtrema:

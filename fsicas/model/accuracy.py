@@ -29,13 +29,14 @@ __all__ = ["QUADRATURE_TOL", "quadrature_error", "finer_model", "adequate_model"
 
 QUADRATURE_TOL = 1e-8
 """Default bound on :func:`quadrature_error` for :func:`adequate_model`: the relative
-accuracy the solvers deliver on the equations, so the quadrature is not the largest error
-of a result. Time integration runs at rtol = 1e-8 (``IntegratorSettings``); collocation
-solves its residual to 1e-10 absolute (``CycleSettings.tol``) on F of size ~1-100 and
-discretizes the cycle to ~1e-7-1e-8 at NTST = 20 (docs/cycles.md). A relative error
-delta of F shifts a well-conditioned solution by about delta: near the wall the default
-rule gave ~1e-5 (amplitude 7e-5 off), while a tighter bound would only double the nodes
-for errors already below the integrators' and the mesh's."""
+accuracy the solvers are run to, so that the quadrature is not the largest error of a
+result. Time integration runs at rtol = 1e-8 (``fsicas.timedomain.integrators.Settings``);
+collocation solves its residual to 1e-10 absolute (``CycleSettings.tol``) on F of size
+1-100, and its mesh error at NTST = 20 is ~1e-6 (period at first contact, docs/cycles.md).
+The results move less than F: a relative error delta of F moved the first-contact U* of
+the cycle branch by 1e-3 delta to 1e-2 delta (N = 4 and 10), so at 1e-8 the quadrature's
+share is ~1e-10, while the default rule near the wall (delta up to 2e-2) moved it by
+3e-5. A tighter bound would double the nodes for errors already far below the solvers'."""
 
 
 @per_model
