@@ -202,7 +202,8 @@ class CycleProblem(PeriodicProblem):
         """``(problem, X_new)``: the cycle ``X`` on the field ``vf`` (same state size and
         parameter names), same mesh and node values; the points counted towards the next
         re-mesh carry over (the mesh is the same)."""
-        if not isinstance(vf, VectorField) or vf.n != self.vf.n or vf.par_names != self.vf.par_names:
+        if not (isinstance(vf, VectorField) and vf.n == self.vf.n
+                and vf.par_names == self.vf.par_names):
             raise ValueError(f"the field must be a VectorField of {self.vf.n} states and "
                              f"parameters {self.vf.par_names}")
         new, X_new = self._rebuilt(X, vf, self.settings, self.mesh)
