@@ -111,3 +111,26 @@ def step_limit(ev_a: np.ndarray, ev_b: np.ndarray, ds: float, overshoot: float,
     if not towards.any():
         return np.inf
     return float(np.min((1 + overshoot) * np.abs(b.real[towards]) * abs(ds) / d[towards]))
+
+
+def crossing_eigenvalue(ev_a, ev_b, tol):
+    """The complex eigenvalue (Im > 0) whose real part changes sign from a to b.
+
+    Each eigenvalue at b is paired with the nearest at a; among the pairs whose real parts
+    have opposite signs the closest pair wins, and its midpoint is returned. Choosing the
+    eigenvalue of smallest |Re| instead would pick a lightly damped bystander (e.g. an
+    undamped high-frequency mode) whose real part never crosses zero.
+    """
+    a, b = ev_a[ev_a.imag > tol], ev_b[ev_b.imag > tol]
+    if not a.size or not b.size:
+        return None
+    best = None
+    for lam_b in b:
+        lam_a = a[np.argmin(np.abs(a - lam_b))]
+        if np.sign(lam_a.real) != np.sign(lam_b.real):
+            if best is None or abs(lam_a - lam_b) < abs(best[0] - best[1]):
+                best = (lam_a, lam_b)
+    if best is None:
+        both = np.concatenate([a, b])
+        return both[np.argmin(np.abs(both.real))]
+    return 0.5 * (best[0] + best[1])

@@ -160,11 +160,9 @@ class EquilibriumProblem(Problem):
         return kinds
 
     def crossings(self, kind, a: PointInfo, b: PointInfo) -> int:
-        """Hopf: the complex pairs whose real part changed sign, by the change of the
-        count of unstable complex eigenvalues (two per pair)."""
-        if kind == "hopf" and "hopf_complex" in a.counts and "hopf_complex" in b.counts:
-            return max(1, abs(a.counts["hopf_complex"] - b.counts["hopf_complex"]) // 2)
-        return 1
+        """Hopf: half the change of the count of unstable complex eigenvalues (pairs)."""
+        c = "hopf_complex"
+        return max(1, abs(a.counts.get(c, 0) - b.counts.get(c, 0)) // 2) if kind == "hopf" else 1
 
     def test_function(self, kind, X_a, info_a, X_b, info_b, settings):
         if kind == "fold":
@@ -184,7 +182,7 @@ class EquilibriumProblem(Problem):
 def _hopf_function(problem, info_a, info_b, settings):
     """``Re`` of the eigenvalue nearest to the crossing one, as a function of X."""
     tol = settings.eigen.imag_tol
-    ref = _crossing_eigenvalue(info_a.eigenvalues, info_b.eigenvalues, tol)
+    ref = _eigen.crossing_eigenvalue(info_a.eigenvalues, info_b.eigenvalues, tol)
     if ref is None:
         return lambda X, tau, lu: 1.0  # no complex eigenvalue: nothing crosses
 
@@ -194,29 +192,6 @@ def _hopf_function(problem, info_a, info_b, settings):
         return float(_eigen.nearest(ev, ref).real) if ev.size else 1.0
 
     return f
-
-
-def _crossing_eigenvalue(ev_a, ev_b, tol):
-    """The complex eigenvalue (Im > 0) whose real part changes sign from a to b.
-
-    Each eigenvalue at b is paired with the nearest at a; among the pairs whose real parts
-    have opposite signs the closest pair wins, and its midpoint is returned. Choosing the
-    eigenvalue of smallest |Re| instead would pick a lightly damped bystander (e.g. an
-    undamped high-frequency mode) whose real part never crosses zero.
-    """
-    a, b = ev_a[ev_a.imag > tol], ev_b[ev_b.imag > tol]
-    if not a.size or not b.size:
-        return None
-    best = None
-    for lam_b in b:
-        lam_a = a[np.argmin(np.abs(a - lam_b))]
-        if np.sign(lam_a.real) != np.sign(lam_b.real):
-            if best is None or abs(lam_a - lam_b) < abs(best[0] - best[1]):
-                best = (lam_a, lam_b)
-    if best is None:
-        both = np.concatenate([a, b])
-        return both[np.argmin(np.abs(both.real))]
-    return 0.5 * (best[0] + best[1])
 
 
 def real_null_vector(J) -> np.ndarray:
