@@ -32,6 +32,7 @@ import numpy as np
 from tqdm import tqdm
 
 from ..linear.hopf import critical_velocity
+from ..model.accuracy import QUADRATURE_TOL
 from ..model.assembly import build_model
 from ..results_file import ResultsFile, read_records
 from .outcome import Criteria, OutcomeKind
@@ -89,7 +90,8 @@ def map_header(scene: Scene, t_end: float, settings: Settings, criteria: Criteri
     fields = {k: v for k, v in scene.replace(contact=False).to_dict().items()
               if k not in ("ustar", "mstar")}
     return {"format": "fsicas-map-1", "scene": fields, "t_end": float(t_end),
-            "settings": dataclasses.asdict(settings), "criteria": dataclasses.asdict(criteria)}
+            "settings": dataclasses.asdict(settings), "criteria": dataclasses.asdict(criteria),
+            "quadrature_tol": QUADRATURE_TOL}
 
 
 def _die_with_parent(parent: int) -> None:

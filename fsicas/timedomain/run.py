@@ -17,7 +17,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from .breathing import PressureSchedule
-from ..model.accuracy import quadrature_error
+from ..model.accuracy import QUADRATURE_TOL, adequate_model, quadrature_error
 from ..model.assembly import Model, build_model
 from .outcome import Criteria, Monitor, Outcome, classify
 from ..scene import Scene
@@ -25,7 +25,7 @@ from .integrators import Settings, Trajectory, pressure_coefficient, simulate
 from ..linear.stability import eigenvalues
 from ..linear.steady import SteadyState, steady_state
 
-__all__ = ["Run", "run_case", "guarded_model"]
+__all__ = ["Run", "run_case", "guarded_model", "sensitive_states"]
 
 
 #: Samples of a trajectory at which its quadrature error is estimated, at most.
@@ -46,9 +46,7 @@ class Run:
         """:func:`fsicas.model.accuracy.quadrature_error` over the run: at up to
         :data:`QUADRATURE_SAMPLES` samples spread over it, the last (nearest a contact or
         on the settled cycle) among them, at the steady state's parameters."""
-        x = self.trajectory.x
-        pick = np.unique(np.linspace(0, len(x) - 1, min(len(x), QUADRATURE_SAMPLES)).astype(int))
-        return quadrature_error(self.model, x[pick], self.steady.p)
+        return quadrature_error(self.model, _spread(self.trajectory.x), self.steady.p)
 
     def to_json(self) -> dict:
         """The ``fsicas simulate --json`` object (keys in docs/simulate.md)."""
@@ -60,7 +58,7 @@ class Run:
                    t_end_reached=float(tr.t[-1]), convergence=o.convergence,
                    settled=o.settled, impacts_per_cycle=o.impacts_per_cycle,
                    first_contact_position=o.first_contact_position,
-                   quadrature_error=self.quadrature_error)
+                   quadrature_error=self.quadrature_error, quadrature_nodes=self.model.scene.n_quad)
         return out
 
 
@@ -73,20 +71,66 @@ def guarded_model(scene: Scene) -> tuple[Model, bool]:
 
 def run_case(scene: Scene, t_end: float, *, settings: Settings = Settings(),
              criteria: Criteria = Criteria(), schedule: PressureSchedule | None = None,
-             perturbation=1e-2, model: Model | None = None, stop_early: bool = True) -> Run:
+             perturbation=1e-2, model: Model | None = None, stop_early: bool = True,
+             quadrature_tol: float | None = QUADRATURE_TOL) -> Run:
     """Integrate ``scene`` from its perturbed steady state and classify the run.
 
     ``model``: a prebuilt model (e.g. from :func:`guarded_model`) reused across a sweep.
     ``stop_early``: stop as soon as the outcome is decided (else run to ``t_end``).
+    ``quadrature_tol``: when the outcome depends on the flow quadrature
+    (:func:`sensitive_states`) and its error there exceeds this, the run is repeated on
+    the model with enough nodes (:func:`fsicas.model.accuracy.adequate_model`), up to
+    :data:`MAX_REPEATS` times; None: never.
     """
     if not (isinstance(t_end, (int, float)) and np.isfinite(t_end) and t_end > 0):
         raise ValueError(f"t_end must be a finite number > 0, got {t_end!r}")
+    if quadrature_tol is not None and not 0 < quadrature_tol < 1:
+        raise ValueError(f"quadrature_tol must lie in (0, 1) or be None, got {quadrature_tol!r}")
     start = time.perf_counter()
     stop_on_contact = not scene.contact
     if model is None:
         model, stop_on_contact = guarded_model(scene)
     if criteria.stop_on_contact is None:
         criteria = _with_stop(criteria, stop_on_contact)
+    once = functools.partial(_run_once, t_end=t_end, settings=settings, criteria=criteria,
+                             schedule=schedule, perturbation=perturbation, stop_early=stop_early)
+    run = once(scene, model)
+    for _ in range(MAX_REPEATS if quadrature_tol is not None else 0):
+        states = sensitive_states(run)
+        finer = run.model if states is None else adequate_model(run.model, states, run.steady.p,
+                                                                 quadrature_tol)[0]
+        if finer is run.model:
+            break
+        run = once(scene.replace(quad_nodes=finer.scene.n_quad), finer)
+    return replace(run, wall_time=time.perf_counter() - start)
+
+
+#: Repeats of a run on finer quadrature at most (:func:`run_case`).
+MAX_REPEATS = 3
+
+
+def sensitive_states(run: Run) -> np.ndarray | None:
+    """The samples (at most :data:`QUADRATURE_SAMPLES`) on which the outcome of a
+    contact-free run depends on the flow quadrature, or None: a limit cycle or an
+    unsettled run, whose amplitude near a wall moves with the rule (1.5e-6 at 40 eps on
+    the default nodes, M* = 3). A decay stays far from the walls; a contact is not
+    repeated, since the error estimate grows without bound as the gap closes to eps (a
+    graze needed 1280 nodes for 1e-8, 15x the run's cost), so it is reported; runs with
+    the contact law on penetrate the contact distance by design (reported too)."""
+    if run.scene.contact or run.outcome.outcome not in ("lco", "unsettled"):
+        return None
+    return _spread(run.trajectory.x)
+
+
+def _spread(x: np.ndarray) -> np.ndarray:
+    """At most :data:`QUADRATURE_SAMPLES` rows of ``x`` spread over it, the last among them."""
+    return x[np.unique(np.linspace(0, len(x) - 1, min(len(x), QUADRATURE_SAMPLES)).astype(int))]
+
+
+def _run_once(scene: Scene, model: Model, *, t_end: float, settings: Settings,
+              criteria: Criteria, schedule, perturbation, stop_early: bool) -> Run:
+    """One run of ``scene`` on ``model`` (:func:`run_case`)."""
+    start = time.perf_counter()
     steady = steady_state(_steady_scene(scene, schedule), model)
     settings = sampled_settings(model, steady, settings)
     monitor = None
