@@ -6,7 +6,12 @@ import math
 
 import numpy as np
 
-__all__ = ["require", "finite_number"]
+try:
+    import tomllib
+except ModuleNotFoundError:  # Python < 3.11
+    import tomli as tomllib
+
+__all__ = ["require", "finite_number", "read_toml"]
 
 
 def require(ok: bool, message: str) -> None:
@@ -21,3 +26,19 @@ def finite_number(name: str, value) -> float:
     require(isinstance(value, (int, float, np.floating, np.integer)) and not isinstance(value, bool)
             and math.isfinite(value), f"{name} must be a finite number, got {value!r}")
     return float(value)
+
+
+def read_toml(path, label: str) -> dict:
+    """The TOML document at ``path``; ValueError naming ``label`` and the path when it is
+    missing, a folder, unreadable or not valid TOML."""
+    try:
+        with open(path, "rb") as fh:
+            return tomllib.load(fh)
+    except FileNotFoundError:
+        raise ValueError(f"{label} {path}: no such file") from None
+    except IsADirectoryError:
+        raise ValueError(f"{label} {path}: is a folder, not a TOML file") from None
+    except OSError as err:
+        raise ValueError(f"{label} {path}: cannot be read ({err.strerror})") from None
+    except (tomllib.TOMLDecodeError, UnicodeDecodeError) as err:
+        raise ValueError(f"{label} {path}: not valid TOML ({err})") from None

@@ -31,8 +31,8 @@ import warnings
 from dataclasses import dataclass, field
 from functools import lru_cache
 from importlib import resources
-from pathlib import Path
 
+from .checks import read_toml
 from .scene import Scene
 from .units import friction_from_reynolds
 
@@ -159,16 +159,7 @@ def _read_toml(source: str) -> tuple[dict, str]:
             raise ValueError(f"--physical {source!r}: no such preset (presets: "
                              f"{', '.join(preset_names())}; or give a FILE.toml)")
         return tomllib.loads((_preset_folder() / f"{source}.toml").read_text("utf-8")), source
-    try:
-        return tomllib.loads(Path(source).read_text("utf-8")), source
-    except FileNotFoundError:
-        raise ValueError(f"physical file {source}: no such file") from None
-    except IsADirectoryError:
-        raise ValueError(f"physical file {source}: is a folder, not a TOML file") from None
-    except OSError as err:
-        raise ValueError(f"physical file {source}: cannot be read ({err.strerror})") from None
-    except (tomllib.TOMLDecodeError, UnicodeDecodeError) as err:
-        raise ValueError(f"physical file {source}: not valid TOML ({err})") from None
+    return read_toml(source, "physical file"), source
 
 
 def load_physical(source: str) -> "Physical":

@@ -11,14 +11,9 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .checks import finite_number, require
+from .checks import finite_number, read_toml, require
 from .profile import Profile
 from .units import Scales
-
-try:  # Python >= 3.11
-    import tomllib
-except ModuleNotFoundError:  # pragma: no cover
-    import tomli as tomllib
 
 __all__ = ["Scene", "load_scene"]
 
@@ -167,17 +162,7 @@ class Scene:
 def load_scene(path, **overrides) -> Scene:
     """Read a Scene from a TOML file; keyword overrides win over the file. ValueError
     naming the file when it is missing, a folder, unreadable or not valid TOML."""
-    try:
-        with open(path, "rb") as fh:
-            data = tomllib.load(fh)
-    except FileNotFoundError:
-        raise ValueError(f"scene file {path}: no such file") from None
-    except IsADirectoryError:
-        raise ValueError(f"scene file {path}: is a folder, not a TOML file") from None
-    except OSError as err:
-        raise ValueError(f"scene file {path}: cannot be read ({err.strerror})") from None
-    except (tomllib.TOMLDecodeError, UnicodeDecodeError) as err:
-        raise ValueError(f"scene file {path}: not valid TOML ({err})") from None
+    data = read_toml(path, "scene file")
     data.update({k: v for k, v in overrides.items() if v is not None})
     return Scene.from_dict(data)
 
