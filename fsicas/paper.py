@@ -33,7 +33,7 @@ from .timedomain.impact_map import impact_map
 from .timedomain.impacting_run import HOLDING_CONTACT, PAPER_CONTACT, impacting_run
 
 __all__ = ["PAPER_SCENE", "VARIANTS", "CYCLE_USTARS", "REPORT_FIELDS", "impacting_cycle",
-           "run_metadata", "run_paper", "summary"]
+           "run_paper", "summary"]
 
 PAPER_SCENE = Scene(mstar=1.0, ustar=5.0, hstar=0.1, friction=0.14, k0=0.0, kl=1.0,
                     zeta=0.0, modes=10)
@@ -60,22 +60,12 @@ REPORT_FIELDS = {
 }
 
 
-def run_metadata(quick: bool) -> dict:
-    """When, with what and how the report was made, and what its fields mean."""
-    import platform
-    from datetime import datetime, timezone
-    import casadi
-    import scipy
-    return {"created": datetime.now(timezone.utc).isoformat(timespec="seconds"),
-            "command": "fsicas paper" + (" --quick" if quick else ""),
-            "fsicas": __version__, "casadi": casadi.__version__, "numpy": np.__version__,
-            "scipy": scipy.__version__, "python": platform.python_version(),
-            "fields": REPORT_FIELDS}
-
-
-def run_paper(out="results", quick: bool = False, progress=None) -> dict:
+def run_paper(out="results", quick: bool = False, progress=None, meta: dict | None = None) -> dict:
     """Compute the report and the figures and write them to ``out``. ``progress(text)``
-    (optional) is told when each stage starts."""
+    (optional) is told when each stage starts. ``meta``: how the report was made
+    (versions, time, command line, settings; ``fsicas paper`` passes
+    :func:`fsicas.cli.meta.cli_meta`'s), written as the report's ``"meta"`` with
+    ``"fields"`` added (:data:`REPORT_FIELDS`)."""
     start = time.perf_counter()
     say = progress or (lambda text: None)
     out = Path(out)
@@ -90,7 +80,7 @@ def run_paper(out="results", quick: bool = False, progress=None) -> dict:
     plot_mode_shapes(boundary, model, out / "fig3_modes.png")
     report = {
         "version": __version__,
-        "meta": run_metadata(quick),
+        "meta": {**(meta or {}), "fields": REPORT_FIELDS},
         "scene": scene.to_dict(),
         "omega_invacuo": (clamped_free_betas(scene.modes) ** 2).tolist(),
         "steady": {"ustar": scene.ustar, "pressure_drop": steady.pressure_drop,

@@ -8,6 +8,11 @@ reports a failure (``"status": "failed"``: a time integration whose gap closed o
 solver failed, a continuation whose corrector failed), the result still printed; 2 for
 bad input or an analysis that could not start (the error on stderr, or as
 ``{"error": ...}`` with ``--json``).
+Every JSON printed carries a ``"meta"`` object (versions, UTC time, the command line,
+the scene, the settings and the units of each field; :mod:`fsicas.cli.meta`).
+``--quiet`` and ``--verbose`` (before or after the command) set what is told on stderr
+while it runs (:mod:`fsicas.cli.progress`). docs/cli.md lists every command and option
+(:mod:`fsicas.cli.reference` writes it from :func:`build_parser`).
 Figures are written with Matplotlib's non-interactive file backend, which the command
 line (not the library) selects before a command that writes figures runs.
 """
@@ -29,9 +34,11 @@ from ..linear.steady import SteadyStateError
 from ..plots.backend import select_file_backend
 from .cycles import add_cycle_commands
 from .linear import add_linear_commands
+from .meta import cli_meta
 from .onset import add_onset_command
 from .outputs import check_outputs
 from .paper import add_paper_command
+from .progress import reporting
 from .timedomain import add_time_commands
 
 __all__ = ["main", "build_parser", "EXIT_OK", "EXIT_FAILED_RESULT", "EXIT_ERROR"]
@@ -54,7 +61,20 @@ def build_parser() -> argparse.ArgumentParser:
     add_time_commands(sub)          # simulate, map (docs/simulate.md)
     add_cycle_commands(sub)         # lco, alias cycles (docs/cycles.md)
     add_onset_command(sub)          # onset, in physical units (docs/units.md)
+    _add_global_options(parser)
+    for command in dict.fromkeys(sub.choices.values()):     # aliases share a parser
+        _add_global_options(command, argparse.SUPPRESS)
     return parser
+
+
+def _add_global_options(parser: argparse.ArgumentParser, default=False) -> None:
+    """``--quiet`` and ``--verbose``, before the command or after it (``default``
+    SUPPRESS on the commands, so that they keep a value given before the command)."""
+    group = parser.add_mutually_exclusive_group()
+    group.add_argument("--quiet", "-q", action="store_true", default=default,
+                       help="no progress bars and no stage lines on stderr")
+    group.add_argument("--verbose", "-v", action="store_true", default=default,
+                       help="stage lines of every command and solver statistics on stderr")
 
 
 def _print_human(result: dict, prefix: str = "") -> None:
@@ -112,19 +132,20 @@ EXIT_OK, EXIT_FAILED_RESULT, EXIT_ERROR = 0, 1, 2
 def main(argv=None) -> int:
     """Run one command; its exit status (:data:`EXIT_OK`, :data:`EXIT_FAILED_RESULT`,
     :data:`EXIT_ERROR`; module docstring)."""
-    args = build_parser().parse_args(_negative_values_attached(sys.argv[1:] if argv is None
-                                                              else list(argv)))
+    argv = list(sys.argv[1:] if argv is None else argv)
+    args = build_parser().parse_args(_negative_values_attached(argv))
+    args.argv = argv
     start = time.perf_counter()
     try:
         check_outputs(args)
         if _writes_figures(args):
             select_file_backend()
-        with warnings.catch_warnings(record=True) as caught:
+        with warnings.catch_warnings(record=True) as caught, reporting(args):
             warnings.simplefilter("always", UserWarning)
             result = args.run(args)
     except (ValueError, SteadyStateError, CriticalVelocityError) as err:
         if getattr(args, "json", False):
-            print(json.dumps({"error": str(err)}))
+            print(json.dumps({"error": str(err), "meta": cli_meta(args)}))
         else:
             print(f"fsicas {args.command}: error: {err}", file=sys.stderr)
         return EXIT_ERROR
@@ -132,7 +153,7 @@ def main(argv=None) -> int:
     if notes:
         result = {**result, "warnings": notes}
     if args.json:
-        print(json.dumps(result))
+        print(json.dumps({**result, "meta": result.get("meta") or cli_meta(args)}))
     else:
         (getattr(args, "human", None) or _print_human)(result)
         print(f"{'wall time':>16}: {time.perf_counter() - start:.3f} s")

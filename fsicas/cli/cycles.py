@@ -10,6 +10,8 @@ from ..cycles.collocation import CycleSettings, cycle_branch
 from ..model.accuracy import QUADRATURE_TOL
 from ..physical_report import add_physical
 from ..plots.cycles import plot_branch
+from .meta import record, write_json
+from .progress import reporter
 from .scene_options import add_scene_options, scene_from_args
 
 __all__ = ["add_cycle_commands"]
@@ -30,7 +32,8 @@ def add_cycle_commands(sub) -> None:
     p.add_argument("--quadrature-tol", type=_tolerance, default=QUADRATURE_TOL, metavar="TOL",
                    help="from a point whose quadrature error exceeds TOL, go on with the nodes "
                         "doubled as often as needed; 'none': the scene's nodes throughout")
-    p.add_argument("--out", metavar="FILE.json", help="save the full branch (multipliers, states)")
+    p.add_argument("--out", metavar="FILE.json", help="save the full branch (multipliers, "
+                   "states) with its meta")
     p.add_argument("--plot", metavar="FILE", help="tip amplitude and period against U*")
     p.set_defaults(run=_cmd_cycles)
 
@@ -41,9 +44,14 @@ def _cmd_cycles(args) -> dict:
         raise ValueError("cycles are continued on the contact-free model: drop --contact")
     settings = CycleSettings(ntst=args.ntst, ncol=args.ncol, max_points=args.max_points,
                              quadrature_tol=args.quadrature_tol)
+    record(args, scene, cycle_settings=settings)
+    say = reporter(args)
+    say.stage(f"limit cycles from the first Hopf point up to U* = {args.ustar_max:g} "
+              f"(N = {scene.modes}, NTST = {settings.ntst}, NCOL = {settings.ncol})")
     branch = cycle_branch(scene, ustar_max=args.ustar_max, settings=settings)
+    say.stats(f"{len(branch.points)} cycles, {len(branch.folds)} folds, status {branch.status}")
     if args.out:
-        branch.save(args.out)
+        write_json(args.out, branch.to_json(), args)    # CycleBranch.load reads it
     if args.plot:
         plot_branch(branch, args.plot)
     out = {"hopf": branch.hopf, "status": branch.status, "message": branch.message,

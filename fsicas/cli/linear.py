@@ -10,6 +10,8 @@ from ..model.beam import clamped_free_betas
 from ..physical_report import add_physical
 from ..scene import MAX_MODES
 from ..plots.linear import plot_boundary, plot_eigenvalues, plot_mode_shapes
+from .meta import record
+from .progress import reporter
 from .ranges import parse_range
 from .scene_options import add_scene_options, scene_from_args
 
@@ -19,8 +21,8 @@ __all__ = ["add_linear_commands"]
 def add_linear_commands(sub) -> None:
     """Add the ``modes``, ``steady``, ``eig`` and ``boundary`` subcommands."""
     p = sub.add_parser("modes", help="in-vacuo clamped-free beam modes")
-    p.add_argument("--modes", type=int, default=10)
-    p.add_argument("--json", action="store_true")
+    p.add_argument("--modes", type=int, default=10, help="number of modes N, in [1, 200]")
+    p.add_argument("--json", action="store_true", help="print one JSON object on stdout")
     p.set_defaults(run=_cmd_modes)
     p = sub.add_parser("steady", help="steady state: pressure drop, flow split, static deflection")
     add_scene_options(p)
@@ -72,9 +74,15 @@ def _cmd_boundary(args) -> dict:
     scene = scene_from_args(args)
     mstars = ([scene.mstar] if args.mstar_values is None
               else parse_range(args.mstar_values, "mstar", log=True))
+    record(args, scene, mstar_values=mstars)
+    say = reporter(args)
+    say.stage(f"flutter boundary at {len(mstars)} M* in [{min(mstars):g}, {max(mstars):g}], "
+              f"U* < {args.ustar_max:g}, N = {scene.modes}")
     model = build_model(scene)
     boundary = stability_boundary(scene, mstars, model, ustar_max=args.ustar_max,
                                   refine=not args.no_refine)
+    say.stats(f"{len(boundary.points)} points, {len(boundary.switches)} mode switches, "
+              f"{len(boundary.curves)} Hopf curves traced")
     if args.plot:
         plot_boundary(boundary, args.plot)
         stem = args.plot.rsplit(".", 1)

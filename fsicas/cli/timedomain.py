@@ -11,6 +11,8 @@ from ..timedomain.breathing import PressureSchedule
 from ..timedomain.impact_map import MAP_SCENE, impact_map
 from ..timedomain.integrators import Settings
 from ..timedomain.run import run_case
+from .meta import record
+from .progress import reporter
 from .ranges import parse_range
 from .scene_options import add_scene_options, scene_from_args
 
@@ -22,13 +24,15 @@ def add_time_commands(sub) -> None:
     p = sub.add_parser("simulate", help="nonlinear time integration and outcome classification")
     add_scene_options(p)
     p.add_argument("--t-end", type=float, required=True, help="final time (units of T)")
-    p.add_argument("--method", default="idas", choices=["cvodes", "idas", "radau", "bdf"])
-    p.add_argument("--rtol", type=float, default=1e-8)
-    p.add_argument("--atol", type=float, default=1e-10)
+    p.add_argument("--method", default="idas", choices=["cvodes", "idas", "radau", "bdf"],
+                   help="integrator: CasADi IDAS or CVODES, SciPy Radau or BDF")
+    p.add_argument("--rtol", type=float, default=1e-8, help="relative tolerance")
+    p.add_argument("--atol", type=float, default=1e-10, help="absolute tolerance")
     p.add_argument("--dt-out", type=float, default=1e-3, help="output sampling step")
     p.add_argument("--perturbation", type=float, default=1e-2,
                    help="initial modal displacement, as a fraction of H*/2 (docs/simulate.md)")
-    p.add_argument("--schedule", default="constant", choices=["constant", "ramp", "breath"])
+    p.add_argument("--schedule", default="constant", choices=["constant", "ramp", "breath"],
+                   help="inlet flow in time: constant, a ramp from --ustar-start, or breaths")
     p.add_argument("--ustar-start", type=float, default=0.0, help="ramp: initial U*")
     p.add_argument("--ramp-time", type=float, default=1.0, help="ramp: duration")
     p.add_argument("--breath-period", type=float, default=1.0, help="breath: period")
@@ -42,14 +46,14 @@ def _add_map_command(sub) -> None:
     p = sub.add_parser("map", help="impact-boundary map in (U*, M*) (paper Fig. 4)")
     p.add_argument("--ustar", default="4:14:11", metavar="LO:HI:COUNT", help="U* grid (linear)")
     p.add_argument("--mstar", default="0.1:10:7", metavar="LO:HI:COUNT", help="M* grid (log)")
-    p.add_argument("--modes", type=int, default=10)
-    p.add_argument("--t-end", type=float, default=30.0)
+    p.add_argument("--modes", type=int, default=10, help="number of beam modes N")
+    p.add_argument("--t-end", type=float, default=30.0, help="final time of each run (units of T)")
     p.add_argument("--workers", type=int, default=None, help="local processes (default: the cores)")
     p.add_argument("--dask", metavar="ADDRESS", help="run the points on a Dask scheduler "
                    "(e.g. tcp://host:8786) instead of local processes; needs the parallel extra")
     p.add_argument("--out", default="impact_map.jsonl", help="results file (resumable)")
     p.add_argument("--plot", metavar="FILE", help="write Fig. 4 to FILE")
-    p.add_argument("--json", action="store_true")
+    p.add_argument("--json", action="store_true", help="print one JSON object on stdout")
     p.set_defaults(run=_cmd_map)
 
 
@@ -69,8 +73,13 @@ def _cmd_simulate(args) -> dict:
         raise ValueError(f"--t-end must be > 0, got {args.t_end}")
     settings = Settings(method=args.method, rtol=args.rtol, atol=args.atol, dt_out=args.dt_out)
     scene = scene_from_args(args, need_flow=True)
+    record(args, scene, integrator=settings)
+    say = reporter(args)
+    say.stage(f"time integration to t = {args.t_end:g} ({settings.method}, N = {scene.modes})")
     run = run_case(scene, args.t_end, settings=settings, schedule=_schedule(args, scene),
                    perturbation=args.perturbation, stop_early=not args.full)
+    say.stats(f"{run.trajectory.steps} steps, outcome {run.outcome.outcome}, status "
+              f"{run.trajectory.status}, {run.wall_time:.2f} s")
     if args.plot:
         plot_run(run, args.plot)
         if run.outcome.period is not None:
@@ -83,6 +92,9 @@ def _cmd_map(args) -> dict:
     ustars = parse_range(args.ustar, "ustar", log=False)
     mstars = parse_range(args.mstar, "mstar", log=True)
     scene = MAP_SCENE.replace(modes=args.modes)
+    record(args, scene, ustar_values=ustars, mstar_values=mstars)
+    reporter(args).stage(f"impact map: {ustars.size * mstars.size} points, t_end = "
+                         f"{args.t_end:g}, into {args.out}")
     if args.dask:
         try:
             from distributed import Client
