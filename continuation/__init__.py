@@ -25,7 +25,7 @@ Plotting lives in ``continuation.plotting`` (Matplotlib is imported there only).
 from ._branch import Branch, SpecialPoint, Status
 from ._curves import FoldCurveProblem, HopfCurveProblem
 from ._cycles import CycleProblem
-from ._driver import continuation
+from ._driver import continuation, observing
 from ._hooks import Event
 from ._lifted import Lifted
 from ._equilibrium import EquilibriumProblem, hopf_point
@@ -43,6 +43,6 @@ __all__ = [
     "CycleProblem", "EigenSettings", "ShootingProblem", "ShootingSettings", "cycle_from_hopf",
     "cycle_from_pd",
     "EquilibriumProblem", "FoldCurveProblem", "HopfCurveProblem", "Lifted", "NewtonSettings",
-    "PALC", "Problem", "SpecialPoint", "Step", "VectorField", "continuation", "correct",
+    "PALC", "Problem", "SpecialPoint", "Step", "VectorField", "continuation", "correct", "observing",
     "first_lyapunov", "hopf_point",
 ]

@@ -7,7 +7,9 @@ problems that ask for it and collects everything into a :class:`Branch`.
 
 from __future__ import annotations
 
+import contextvars
 import time
+from contextlib import contextmanager
 from dataclasses import replace
 from typing import Callable, Mapping, NamedTuple
 
@@ -22,6 +24,28 @@ from ._palc import ContinuationIterator, Step, correct, tangent
 from ._problem import Problem
 from ._settings import PALC, ContinuationSettings
 from ._threads import single_threaded
+
+
+#: The observers of the runs in the current context (:func:`observing`).
+_OBSERVERS: contextvars.ContextVar = contextvars.ContextVar("continuation_observers", default=())
+
+
+@contextmanager
+def observing(on_branch: Callable | None = None, progress: bool | None = None):
+    """Within the block (this thread or task only), every :func:`continuation` run shows
+    its progress bar when ``progress`` is True, never when False (None: as its settings
+    say), and hands its finished Branch to ``on_branch``. Nested blocks all observe; the
+    innermost ``progress`` that is not None wins."""
+    token = _OBSERVERS.set(_OBSERVERS.get() + ((on_branch, progress),))
+    try:
+        yield
+    finally:
+        _OBSERVERS.reset(token)
+
+
+def _observed_progress(settings: ContinuationSettings) -> bool:
+    wanted = [p for _, p in _OBSERVERS.get() if p is not None]
+    return wanted[-1] if wanted else settings.progress
 
 
 def continuation(problem: Problem, algorithm: PALC | None = None,
@@ -47,16 +71,21 @@ def continuation(problem: Problem, algorithm: PALC | None = None,
     _check(problem, algorithm, settings)
     hooks = check_hooks(events, record, stop)
     t0 = time.perf_counter()
-    with single_threaded(), tqdm(total=settings.max_steps + 1, disable=not settings.progress,
+    with single_threaded(), tqdm(total=settings.max_steps + 1, disable=not _observed_progress(settings),
                                  desc=f"{problem.kind} continuation", leave=False) as bar:
         run = _Run(_Recorder(problem), hooks, settings, bar)
         it = _run_segments(problem, algorithm, settings, run)
     stats = {**run.rec.stats, "time_total": time.perf_counter() - t0}
     if run.halt is not None:
-        return run.rec.branch(*run.halt, {}, stats)
-    message = f"reached max_steps = {settings.max_steps}" if it.status == "max_steps" \
-        else it.message  # a restarted segment only knows its remaining budget
-    return run.rec.branch(it.status, message, it.failure, stats)
+        branch = run.rec.branch(*run.halt, {}, stats)
+    else:
+        message = f"reached max_steps = {settings.max_steps}" if it.status == "max_steps" \
+            else it.message  # a restarted segment only knows its remaining budget
+        branch = run.rec.branch(it.status, message, it.failure, stats)
+    for on_branch, _ in _OBSERVERS.get():
+        if on_branch is not None:
+            on_branch(branch)
+    return branch
 
 
 def _run_segments(problem, algorithm, settings, run):

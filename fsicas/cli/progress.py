@@ -6,8 +6,9 @@ warnings), the default (progress bars when stderr is a terminal, and the stage l
 each continuation run's kind, points, Newton iterations and time, summed per kind).
 
 The progress bars are those the analyses already have: the continuation library's tqdm
-bar (``ContinuationSettings.progress``), which :func:`reporting` switches on for the
-runs of the command when stderr is a terminal, and the impact map's bar (tqdm, shown on
+bar, which :func:`reporting` switches on for the runs of the command when stderr is a
+terminal (``continuation.observing``, which also hands each run's Branch to the
+statistics), and the impact map's bar (tqdm, shown on
 a terminal only; ``--quiet`` hides stderr's terminal from it). stdout is never written
 here: with ``--json`` it holds the result only.
 """
@@ -18,7 +19,6 @@ import sys
 import time
 from collections import defaultdict
 from contextlib import contextmanager
-from dataclasses import replace
 
 import continuation as C
 
@@ -84,27 +84,15 @@ def reporting(args: argparse.Namespace):
     """Run a command with ``args.reporter`` set; continuation runs inside show the
     library's progress bar (on a terminal) and are counted for ``--verbose``."""
     rep = args.reporter = Reporter(args.command, level(args))
-    original, stderr = C.continuation, sys.stderr
-    if rep.level >= VERBOSE or rep.bars:
-        C.continuation = _observed(original, rep)
+    stderr = sys.stderr
     if rep.level == QUIET:
         sys.stderr = _NoTerminal(stderr)       # tqdm(disable=None) bars stay off
     try:
-        yield rep
+        with C.observing(on_branch=rep.count, progress=rep.bars):
+            yield rep
         rep.summary()
     finally:
-        C.continuation, sys.stderr = original, stderr
-
-
-def _observed(run, rep: Reporter):
-    """``continuation.continuation`` with its progress bar on (when ``rep.bars``) and
-    each returned branch counted."""
-    def observed(problem, algorithm=None, settings=None, **hooks):
-        settings = C.ContinuationSettings() if settings is None else settings
-        branch = run(problem, algorithm, replace(settings, progress=rep.bars), **hooks)
-        rep.count(branch)
-        return branch
-    return observed
+        sys.stderr = stderr
 
 
 def _is_terminal(stream) -> bool:

@@ -166,3 +166,17 @@ def test_stop_at_ends_the_run_past_the_first_special_point_of_a_kind(models):
     assert abs(fold.params["p"]) < 1e-8
     with pytest.raises(ValueError, match="stop_at"):
         C.ContinuationSettings(stop_at="fold")
+
+
+def test_observing_hands_over_every_branch_and_overrides_the_progress_bar(models, capsys):
+    """Within ``observing`` each run's Branch reaches the callback (nested blocks both
+    observe); ``progress=True`` shows the bar although the settings say off, and outside
+    the block nothing is observed any more."""
+    seen, inner = [], []
+    with C.observing(on_branch=seen.append, progress=True):
+        first = C.continuation(_fold_problem(models), settings=_down(max_steps=5))
+        with C.observing(on_branch=inner.append):
+            second = C.continuation(_fold_problem(models), settings=_down(max_steps=5))
+    C.continuation(_fold_problem(models), settings=_down(max_steps=5))
+    assert seen == [first, second] and inner == [second]
+    assert "equilibrium continuation" in capsys.readouterr().err
