@@ -1,6 +1,13 @@
 """Every notebook runs top to bottom in a Jupyter kernel (nbclient), as a reader runs it:
-no cell fails, every figure is shown, and the key numbers are right."""
+no cell fails, every figure is shown, and the key numbers are right.
+
+Each notebook in ``notebooks/`` is executed once (parametrized over the files, so
+``pytest -n 2`` spreads them); a notebook with an entry in :data:`REPORTS` gets that cell
+appended, which prints its key numbers as one JSON line for :data:`CHECKS`. The stored
+notebooks carry cell ids and no outputs.
+"""
 import json
+import re
 from pathlib import Path
 
 import nbclient
@@ -8,37 +15,106 @@ import nbformat
 import pytest
 
 NOTEBOOKS = Path(__file__).resolve().parent.parent / "notebooks"
+PATHS = sorted(NOTEBOOKS.glob("*.ipynb"))
+
+#: A code cell draws when it calls pyplot or a plotting function (fsicas.plots.plot_*).
+DRAWS = re.compile(r"\bplt\.|\bplot_\w+\(")
 
 #: Appended for the test only: prints the notebook's key numbers as one JSON line.
-REPORT = """
-import json as _json
+REPORTS = {
+    "quickstart": """
 print("REPORT " + _json.dumps({
     "pressure_drop": float(steady.pressure_drop), "tip": float(tip),
     "Q": [float(q) for q in st.Q], "lam": [[float(v.real), float(v.imag)] for v in lam],
     "outcome": run.outcome.outcome, "status": branch.status,
     "period_on_branch": float(period_on_branch), "period": float(run.outcome.period)}))
-"""
+""",
+    "stability_map": """
+print("REPORT " + _json.dumps({
+    "n_eig": len(lam), "onset": onset.ustar, "omega": onset.omega,
+    "growth": [growth(0.999 * onset.ustar), growth(1.001 * onset.ustar)],
+    "points": [dict(p.to_json()) for p in boundary.points],
+    "switches": [s.mstar for s in boundary.switches], "switches_located": [s.located for s in boundary.switches],
+    "rel_n6_light": float(rel[mstars < 1].max())}))
+""",
+    "time_integration": """
+print("REPORT " + _json.dumps({
+    "ustar_crit": hopf.ustar, "omega": hopf.omega, "half_gap": half_gap,
+    "runs": {str(u): r.outcome.to_json() for u, r in runs.items()},
+    "impacting": imp.outcome.to_json(), "status": imp.trajectory.status}))
+""",
+    "limit_cycles": """
+print("REPORT " + _json.dumps({
+    "hopf": branch.hopf, "status": branch.status, "gap_ratio": branch.contact.gap_ratio,
+    "stable": [bool(p.stable) for p in branch.points], "trivial": [trivial.real, trivial.imag],
+    "light_hopf": light.hopf, "light_status": light.status,
+    "folds": [f.ustar for f in light.folds], "fold_stable": [bool(f.stable) for f in light.folds],
+    "run": run.outcome.to_json(), "T_branch": point.period, "A_branch": point.tip_amplitude}))
+""",
+    "physical_units": """
+print("REPORT " + _json.dumps({
+    "onset": onset, "flows": flows, "pitches": pitches,
+    "breaths": {k: {"outcome": r.outcome.outcome, "t_c": r.outcome.first_contact_time,
+                    "flow_c": None if r.outcome.first_contact_time is None
+                    else float(sc.l_per_min(sch.ustar_at(r.outcome.first_contact_time))),
+                    "status": r.trajectory.status}
+                for k, (s, sch, r) in breaths.items()}}))
+""",
+}
 
 
 def execute(path: Path):
-    """The executed notebook (with the report cell appended) and its report."""
+    """The executed notebook (with its report cell appended, if any) and its report."""
     nb = nbformat.read(path, as_version=4)
     nbformat.validate(nb)                       # cell ids and the rest of the schema
-    nb.cells.append(nbformat.v4.new_code_cell(REPORT))
+    report = REPORTS.get(path.stem)
+    if report is not None:
+        nb.cells.append(nbformat.v4.new_code_cell("import json as _json\n" + report))
     nbclient.NotebookClient(nb, timeout=600, kernel_name="python3",
                             resources={"metadata": {"path": str(path.parent)}}).execute()
+    if report is None:
+        return nb, None
     text = "".join(o.get("text", "") for o in nb.cells[-1].outputs if o.output_type == "stream")
     line = next(line for line in text.splitlines() if line.startswith("REPORT "))
     return nb, json.loads(line[len("REPORT "):])
 
 
-def test_quickstart():
-    nb, out = execute(NOTEBOOKS / "quickstart.ipynb")
-    outputs = [o for c in nb.cells if c.cell_type == "code" for o in c.outputs]
-    assert not [o for o in outputs if o.output_type == "error"]
-    figures = [o for o in outputs if o.output_type == "display_data" and "image/png" in o.data]
-    plotting = [c for c in nb.cells if c.cell_type == "code" and "plt." in c.source]
-    assert len(figures) >= len(plotting) >= 1       # every figure is shown inline
+def test_there_are_notebooks():
+    assert {"quickstart", "stability_map", "time_integration", "limit_cycles",
+            "physical_units"} <= {p.stem for p in PATHS}
+
+
+@pytest.mark.parametrize("path", PATHS, ids=lambda p: p.stem)
+def test_stored_without_outputs(path):
+    """Outputs are stripped in the repository, every cell has a unique id."""
+    nb = nbformat.read(path, as_version=4)
+    nbformat.validate(nb)
+    ids = [c.get("id") for c in nb.cells]
+    assert all(ids) and len(set(ids)) == len(ids)
+    for cell in nb.cells:
+        if cell.cell_type == "code":
+            assert cell.outputs == [] and cell.execution_count is None, cell.id
+    assert nb.metadata.kernelspec.name == "python3"
+
+
+@pytest.mark.parametrize("path", PATHS, ids=lambda p: p.stem)
+def test_notebook(path):
+    nb, out = execute(path)
+    code = [c for c in nb.cells if c.cell_type == "code"]
+    errors = [(c.id, o.ename, o.evalue) for c in code for o in c.outputs if o.output_type == "error"]
+    assert not errors
+    figures = [o for c in code for o in c.outputs
+               if o.output_type == "display_data" and "image/png" in o.data]
+    drawing = [c for c in code if DRAWS.search(c.source)]
+    assert len(figures) >= len(drawing)            # every figure is shown inline
+    for cell in drawing:
+        assert any(o.output_type == "display_data" and "image/png" in o.data
+                   for o in cell.outputs), f"{path.name} cell {cell.id} draws but shows no figure"
+    if path.stem in CHECKS:
+        CHECKS[path.stem](out)
+
+
+def check_quickstart(out):
     assert out["pressure_drop"] == pytest.approx(1.0 * 25 * (0.5 + 2 * 0.14 / 0.1), rel=1e-14)
     assert out["tip"] > 0 and out["Q"][0] > out["Q"][1]
     lam = [complex(*v) for v in out["lam"]]
@@ -48,3 +124,71 @@ def test_quickstart():
     # two independent routes to the same limit cycle: integration and continuation
     assert out["outcome"] == "lco" and out["status"] == "contact"
     assert out["period_on_branch"] == pytest.approx(out["period"], rel=1e-4)
+
+
+def check_stability_map(out):
+    assert out["n_eig"] == 22
+    # docs/stability.md, N = 10: U*_c = 5.490136531, omega = 45.613307908 at M* = 1
+    assert out["onset"] == pytest.approx(5.490136531, rel=1e-7)
+    assert out["omega"] == pytest.approx(45.613307908, rel=1e-7)
+    below, above = out["growth"]
+    assert below < 0 < above                        # the direct eigen-solves bracket the onset
+    points = {round(p["mstar"], 4): p for p in out["points"]}
+    assert all(p["refined"] for p in points.values())
+    assert points[1.0]["ustar_crit"] == pytest.approx(5.4901, abs=1e-4)
+    assert points[0.01]["ustar_crit"] == pytest.approx(11.3567, abs=1e-4)
+    assert points[0.01]["criticality"] == "subcritical"
+    assert points[1.0]["criticality"] == "supercritical"
+    # the four switches below M* = 10 of docs/stability.md
+    assert out["switches"] == pytest.approx([0.398887, 1.754058, 4.314685, 8.633159], rel=1e-3)
+    assert all(out["switches_located"])
+    assert out["rel_n6_light"] < 1e-3
+
+
+def check_time_integration(out):
+    runs = out["runs"]
+    assert [runs[u]["outcome"] for u in ("5.0", "6.2", "8.0")] == ["decay", "lco", "contact"]
+    assert float("5.0") < out["ustar_crit"] < float("6.2")
+    lco = runs["6.2"]
+    assert lco["settled"] and not lco["contact"] and lco["tip_amplitude"] < out["half_gap"]
+    assert lco["frequency"] == pytest.approx(out["omega"], rel=0.1)
+    assert runs["8.0"]["first_contact_time"] > 0
+    imp = out["impacting"]
+    assert out["status"] == "success" and imp["outcome"] == "impacting_lco"
+    assert 1.0 in imp["contact_positions"] and imp["impacts_per_cycle"] >= 1
+    assert 0.9 < imp["tip_amplitude"] / out["half_gap"] < 1.0
+    assert 0 < imp["mean_flow_reduction"] < 1
+
+
+def check_limit_cycles(out):
+    assert out["status"] == "contact" and out["gap_ratio"] == pytest.approx(1.0, abs=1e-6)
+    assert out["hopf"]["criticality"] == "supercritical" and all(out["stable"])
+    assert complex(*out["trivial"]) == pytest.approx(1.0, abs=1e-6)
+    # subcritical: the cycles start below U*_c, unstable, and turn stable at a fold
+    assert out["light_hopf"]["criticality"] == "subcritical" and out["light_status"] == "contact"
+    assert len(out["folds"]) == 1 and out["folds"][0] < out["light_hopf"]["ustar_crit"]
+    # integration and collocation: the same cycle
+    run = out["run"]
+    assert run["outcome"] == "lco"
+    assert run["period"] == pytest.approx(out["T_branch"], rel=1e-5)
+    assert run["tip_amplitude"] == pytest.approx(out["A_branch"], rel=max(1e-4, 2 * run["convergence"]))
+
+
+def check_physical_units(out):
+    onset = out["onset"]
+    # docs/units.md: 3.789 L/min and 4.667 Hz with N = 6, 10, 20; margin -16.21 L/min at 20 L/min
+    assert onset["onset_flow_l_min"] == pytest.approx(3.789247, rel=1e-5)
+    assert onset["frequency_hz"] == pytest.approx(4.667389, rel=1e-5)
+    assert onset["margin_flow_l_min"] == pytest.approx(-16.21, abs=0.01)
+    assert onset["flutters_at_reference"] and onset["criticality"] == "subcritical"
+    assert out["flows"][1] == pytest.approx(onset["onset_flow_l_min"], rel=1e-9)   # gap 2 mm
+    assert all(a < b for a, b in zip(out["flows"], out["flows"][1:]))
+    low, high = out["breaths"]["5 L/min"], out["breaths"]["8 L/min"]
+    assert low["t_c"] is None and low["status"] == "success"
+    assert high["outcome"] == "contact" and high["status"] == "success"
+    assert onset["onset_flow_l_min"] < high["flow_c"] < 8.0
+
+
+CHECKS = {"quickstart": check_quickstart, "stability_map": check_stability_map,
+          "time_integration": check_time_integration, "limit_cycles": check_limit_cycles,
+          "physical_units": check_physical_units}
