@@ -156,3 +156,17 @@ def test_explicit_jacobian_through_the_mass_action_equals_ad_through_m(damped_sc
         assert np.all(np.isfinite(ad)) and np.max(np.abs(ad)) > 0
         for c in custom:
             assert np.max(np.abs(c - ad)) < 1e-12 * np.max(np.abs(ad))
+
+
+def test_progress_bar_of_the_integrated_time_only_when_asked(capsys):
+    """``progress=True`` draws a tqdm bar of the integrated time on stderr; the default
+    prints nothing."""
+    from fsicas import Scene, build_model, steady_state
+    from fsicas.timedomain.integrators import simulate
+    scene = Scene(mstar=1.0, ustar=4.0, zeta=0.01, modes=4)
+    model = build_model(scene)
+    st = steady_state(scene, model)
+    simulate(model, st, 1.0)
+    assert capsys.readouterr().err == ""
+    simulate(model, st, 1.0, progress=True)
+    assert "time integration" in capsys.readouterr().err

@@ -77,7 +77,7 @@ def _cmd_simulate(args) -> dict:
     say = reporter(args)
     say.stage(f"time integration to t = {args.t_end:g} ({settings.method}, N = {scene.modes})")
     run = run_case(scene, args.t_end, settings=settings, schedule=_schedule(args, scene),
-                   perturbation=args.perturbation, stop_early=not args.full)
+                   perturbation=args.perturbation, stop_early=not args.full, progress=say.bars)
     say.stats(f"{run.trajectory.steps} steps, outcome {run.outcome.outcome}, status "
               f"{run.trajectory.status}, {run.wall_time:.2f} s")
     if args.plot:

@@ -36,6 +36,7 @@ from typing import Literal, get_args
 import casadi as ca
 import numpy as np
 import scipy.integrate
+from tqdm.auto import tqdm
 
 from ..checks import finite_number, require
 from .breathing import PressureSchedule
@@ -234,12 +235,14 @@ def pressure_coefficient(model: Model, steady: SteadyState, schedule: PressureSc
 
 def simulate(model: Model, steady: SteadyState, t_end: float, *, settings: Settings = Settings(),
              schedule: PressureSchedule | None = None, perturbation=1e-2, x0=None,
-             monitor=None, integrator: Integrator | None = None) -> Trajectory:
+             monitor=None, integrator: Integrator | None = None,
+             progress: bool = False) -> Trajectory:
     """Integrate from the perturbed steady state (or ``x0``) over ``[0, t_end]``.
 
     ``monitor(t, x) -> str | None`` is called after each chunk with all samples so far;
-    a non-None return stops the run with that ``stop_reason``. Bad input raises
-    ValueError before any work; solver failures give ``status="failed"``.
+    a non-None return stops the run with that ``stop_reason``. ``progress``: a tqdm bar
+    of the integrated time on stderr. Bad input raises ValueError before any work;
+    solver failures give ``status="failed"``.
     """
     require(finite_number("t_end", t_end) > 0, f"t_end must be > 0, got {t_end}")
     schedule = schedule or PressureSchedule.constant(steady.scene.ustar)
@@ -249,7 +252,9 @@ def simulate(model: Model, steady: SteadyState, t_end: float, *, settings: Setti
     n_out = max(1, round(span / settings.dt_out))
     if integrator is None or (integrator.settings, integrator.span, integrator.n_out) != (settings, span, n_out):
         integrator = Integrator(model, settings, span, n_out)
-    return _loop(model, steady, schedule, integrator, x0, n_chunks, monitor)
+    with tqdm(total=round(t_end, 6), disable=not progress, desc="time integration", unit="T",
+              leave=False) as bar:
+        return _loop(model, steady, schedule, integrator, x0, n_chunks, monitor, bar)
 
 
 def _checked_x0(model, x0):
@@ -276,7 +281,7 @@ def solver_output():
         raise RuntimeError(f"{err}\n{printed}") from err
 
 
-def _loop(model, steady, schedule, integrator, x0, n_chunks, monitor) -> Trajectory:
+def _loop(model, steady, schedule, integrator, x0, n_chunks, monitor, bar) -> Trajectory:
     start = time.perf_counter()
     coefficient = pressure_coefficient(model, steady, schedule)
     sched = schedule.vector(coefficient)
@@ -303,6 +308,7 @@ def _loop(model, steady, schedule, integrator, x0, n_chunks, monitor) -> Traject
         ts.append(k * span + np.linspace(0.0, span, n_out + 1)[1:])
         xs.append(X.T)
         x = X[:, -1]
+        bar.update(round(span, 6))
         if monitor is not None:
             reason_now = monitor(np.concatenate(ts), np.concatenate(xs))
             if reason_now:

@@ -72,7 +72,7 @@ def guarded_model(scene: Scene) -> tuple[Model, bool]:
 def run_case(scene: Scene, t_end: float, *, settings: Settings = Settings(),
              criteria: Criteria = Criteria(), schedule: PressureSchedule | None = None,
              perturbation=1e-2, model: Model | None = None, stop_early: bool = True,
-             quadrature_tol: float | None = QUADRATURE_TOL) -> Run:
+             quadrature_tol: float | None = QUADRATURE_TOL, progress: bool = False) -> Run:
     """Integrate ``scene`` from its perturbed steady state and classify the run.
 
     ``model``: a prebuilt model (e.g. from :func:`guarded_model`) reused across a sweep.
@@ -80,7 +80,7 @@ def run_case(scene: Scene, t_end: float, *, settings: Settings = Settings(),
     ``quadrature_tol``: when the outcome depends on the flow quadrature
     (:func:`sensitive_states`) and its error there exceeds this, the run is repeated on
     the model with enough nodes (:func:`fsicas.model.accuracy.adequate_model`), up to
-    :data:`MAX_REPEATS` times; None: never.
+    :data:`MAX_REPEATS` times; None: never. ``progress``: a bar of the integrated time.
     """
     if not (isinstance(t_end, (int, float)) and np.isfinite(t_end) and t_end > 0):
         raise ValueError(f"t_end must be a finite number > 0, got {t_end!r}")
@@ -93,7 +93,8 @@ def run_case(scene: Scene, t_end: float, *, settings: Settings = Settings(),
     if criteria.stop_on_contact is None:
         criteria = _with_stop(criteria, stop_on_contact)
     once = functools.partial(_run_once, t_end=t_end, settings=settings, criteria=criteria,
-                             schedule=schedule, perturbation=perturbation, stop_early=stop_early)
+                             schedule=schedule, perturbation=perturbation, stop_early=stop_early,
+                             progress=progress)
     run = once(scene, model)
     for _ in range(MAX_REPEATS if quadrature_tol is not None else 0):
         states = sensitive_states(run)
@@ -128,7 +129,7 @@ def _spread(x: np.ndarray) -> np.ndarray:
 
 
 def _run_once(scene: Scene, model: Model, *, t_end: float, settings: Settings,
-              criteria: Criteria, schedule, perturbation, stop_early: bool) -> Run:
+              criteria: Criteria, schedule, perturbation, stop_early: bool, progress: bool) -> Run:
     """One run of ``scene`` on ``model`` (:func:`run_case`)."""
     start = time.perf_counter()
     steady = steady_state(_steady_scene(scene, schedule), model)
@@ -138,7 +139,7 @@ def _run_once(scene: Scene, model: Model, *, t_end: float, settings: Settings,
         monitor = Monitor(model, steady, criteria, rtol=settings.rtol, contact_only=not stop_early,
                           pressure=_pressure(model, steady, schedule))
     traj = simulate(model, steady, t_end, settings=settings, schedule=schedule,
-                    perturbation=perturbation, monitor=monitor)
+                    perturbation=perturbation, monitor=monitor, progress=progress)
     if criteria.stop_on_contact and traj.gap_closed:
         traj = replace(traj, status="success", stop_reason="contact", message=(
             "contact reached: a gap went below eps and then closed (the contact-free flow is "
