@@ -38,3 +38,11 @@ def test_decay_is_not_repeated(near_wall):
 def test_quadrature_tol_is_checked(near_wall):
     with pytest.raises(ValueError, match="quadrature_tol"):
         run_case(near_wall, 1.0, quadrature_tol=2.0)
+
+
+def test_auto_tolerance_follows_the_settling_tolerance(near_wall):
+    """'auto': the settling tolerance (1e-5 at rtol 1e-8): the M* = 3 cycle's error of
+    6e-6 is then below it and the run stays on the default nodes; at rtol 1e-9 it is not."""
+    loose = run_case(near_wall, 30.0, settings=Settings(rtol=1e-8, atol=1e-10, dt_out=2e-3, chunk=1.0))
+    assert loose.outcome.outcome == "lco" and loose.model.scene.n_quad == 40
+    assert 1e-6 < loose.quadrature_error < 1e-5

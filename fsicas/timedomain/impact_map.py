@@ -32,7 +32,6 @@ import numpy as np
 from tqdm import tqdm
 
 from ..linear.hopf import critical_velocity
-from ..model.accuracy import QUADRATURE_TOL
 from ..model.assembly import build_model
 from ..results_file import ResultsFile, read_records
 from .outcome import Criteria, OutcomeKind
@@ -91,7 +90,7 @@ def map_header(scene: Scene, t_end: float, settings: Settings, criteria: Criteri
               if k not in ("ustar", "mstar")}
     return {"format": "fsicas-map-1", "scene": fields, "t_end": float(t_end),
             "settings": dataclasses.asdict(settings), "criteria": dataclasses.asdict(criteria),
-            "quadrature_tol": QUADRATURE_TOL}
+            "quadrature_tol": "auto"}
 
 
 def _die_with_parent(parent: int) -> None:
