@@ -14,7 +14,7 @@ from dataclasses import replace
 from typing import Callable, Mapping, NamedTuple
 
 import numpy as np
-from tqdm.auto import tqdm
+from tqdm import tqdm
 
 from . import _eigen
 from ._branch import Branch, SpecialPoint

@@ -36,7 +36,7 @@ from typing import Literal, get_args
 import casadi as ca
 import numpy as np
 import scipy.integrate
-from tqdm.auto import tqdm
+from tqdm import tqdm
 
 from ..checks import finite_number, require
 from .breathing import PressureSchedule
