@@ -13,7 +13,7 @@ import numpy as np
 
 from .checks import finite_number, read_toml, require
 from .profile import Profile
-from .units import Scales
+from .units import MAX_BEAM_RATIO, THIN_BEAM_RATIO, Scales, thick_beam_message
 
 __all__ = ["Scene", "load_scene"]
 
@@ -27,6 +27,14 @@ def default_quad_nodes(n_modes: int) -> int:
 #: (the paper works at N = 40 and M* in [0.01, 100]): beyond them a run would take hours
 #: or run out of memory, or fail later with a misleading message.
 MAX_MODES, MAX_QUAD_NODES, MAX_MSTAR, MAX_ABS_USTAR = 200, 2000, 1e6, 1e4
+
+#: Beam theories of :class:`Scene`; e/L beyond MAX_SLENDERNESS is outside 1D beam theory.
+EULER_BERNOULLI, TIMOSHENKO = "euler-bernoulli", "timoshenko"
+BEAM_THEORIES = (EULER_BERNOULLI, TIMOSHENKO)
+MAX_SLENDERNESS = MAX_BEAM_RATIO
+#: Beam-theory fields that only the Timoshenko beam uses, with their defaults.
+_TIMOSHENKO_FIELDS = ("beam", "slenderness", "poisson", "shear_coefficient")
+_DEFAULTS = dict(beam=EULER_BERNOULLI, slenderness=None, poisson=0.3, shear_coefficient=None)
 
 
 def min_quad_nodes(n_modes: int) -> int:
@@ -50,6 +58,11 @@ class Scene:
     contact_smoothing: 0 (default) for the exact kink max(0, v) of the impact law; > 0
     replaces it by the C-infinity softplus of width contact_smoothing * eps
     (docs/simulate.md), for Newton/collocation on impacting cycles.
+    beam: "euler-bernoulli" (default) or "timoshenko" (shear and rotary inertia,
+    :mod:`fsicas.model.beam_timoshenko`, docs/beam.md), which needs slenderness = e/L in
+    (0, 0.5] and takes poisson (nu in [0, 0.5), default 0.3) and shear_coefficient
+    (kappa in (0, 1], None: Cowper's 10(1 + nu)/(12 + 11 nu)); these three apply to
+    the Timoshenko beam only and ``to_dict`` leaves them out of Euler–Bernoulli scenes.
     """
 
     mstar: float = 1.0
@@ -68,6 +81,10 @@ class Scene:
     contact_stiffness: float = 1e6
     contact_eps: float = 1e-3
     contact_smoothing: float = 0.0
+    beam: str = "euler-bernoulli"
+    slenderness: float | None = None
+    poisson: float = 0.3
+    shear_coefficient: float | None = None
     scales: Scales | None = field(default=None, compare=False)
 
     def __post_init__(self):
@@ -80,6 +97,10 @@ class Scene:
             object.__setattr__(self, "quad_nodes", int(self.quad_nodes))
         object.__setattr__(self, "zeta", float(self.zeta) if _is_scalar(self.zeta)
                            else tuple(float(z) for z in self.zeta))
+        object.__setattr__(self, "poisson", float(self.poisson))
+        for name in ("slenderness", "shear_coefficient"):
+            if getattr(self, name) is not None:
+                object.__setattr__(self, name, float(getattr(self, name)))
 
     # -- derived -------------------------------------------------------------------
     @property
@@ -123,6 +144,9 @@ class Scene:
                 d[name] = dataclasses.asdict(d[name])
         if isinstance(d["zeta"], tuple):
             d["zeta"] = list(d["zeta"])
+        if self.beam == EULER_BERNOULLI:       # the dict of every scene before Timoshenko
+            for name in _TIMOSHENKO_FIELDS:
+                del d[name]
         return d
 
     # -- construction --------------------------------------------------------------
@@ -146,17 +170,30 @@ class Scene:
 
         ``D = E e^3 / (12 (1 - nu^2))``, ``T = L^2 sqrt(rho_s e / D)``,
         ``M* = rho_f L / (rho_s e)``, ``U* = U0 T / L``, ``H* = (H1 + H2) / L``.
-        H1, H2 are the wall distances at the inlet; other fields pass through.
+        H1, H2 are the wall distances at the inlet; other fields pass through. A beam with
+        e/L >= 0.1 (not thin) gets the Timoshenko modes unless ``beam`` is given; with
+        them slenderness = e/L and poisson = nu (derived: do not pass them).
         """
         H2 = H1 if H2 is None else H2
         scales = Scales.from_physical(rho_s=rho_s, E=E, nu=nu, e=e, L=L, b=b, rho_f=rho_f,
                                       H1=H1, H2=H2, U0=U0)
-        for key in ("mstar", "ustar", "hstar", "channel1", "channel2"):
+        for key in ("mstar", "ustar", "hstar", "channel1", "channel2", "slenderness", "poisson"):
             if key in nondimensional:
                 raise ValueError(f"{key} is derived from the physical values; do not pass it")
+        nondimensional.update(_physical_beam(nondimensional.pop("beam", None), nu, e, L))
         return cls(mstar=rho_f * L / (rho_s * e), ustar=U0 * scales.time / L,
                    hstar=(H1 + H2) / L, channel1=Profile.constant(H1 / L),
                    channel2=Profile.constant(H2 / L), scales=scales, **nondimensional)
+
+
+def _physical_beam(beam, nu, e, L) -> dict:
+    """The beam fields of a physical input: Timoshenko when asked for or not thin."""
+    if beam is None:
+        beam = TIMOSHENKO if e >= THIN_BEAM_RATIO * L else EULER_BERNOULLI
+    if beam == EULER_BERNOULLI:
+        require(e < THIN_BEAM_RATIO * L, thick_beam_message(e, L))
+        return {}
+    return dict(beam=beam, slenderness=e / L, poisson=nu)
 
 
 def load_scene(path, **overrides) -> Scene:
@@ -187,6 +224,30 @@ def _validate_zeta(s: Scene) -> None:
     require(zeta.size in (1, s.modes), f"zeta must be a scalar or have one value per mode "
              f"({s.modes}), got {zeta.size} values")
     require(bool(np.all(zeta >= 0)), "zeta must be >= 0")
+
+
+def _validate_beam(s: Scene) -> None:
+    """Beam theory and its parameters (docs/beam.md)."""
+    require(s.beam in BEAM_THEORIES, f"beam must be one of {', '.join(BEAM_THEORIES)}, "
+            f"got {s.beam!r}")
+    require(0 <= finite_number("poisson", s.poisson) < 0.5,
+            f"poisson (nu) must lie in [0, 0.5), got {s.poisson}")
+    if s.shear_coefficient is not None:
+        require(0 < finite_number("shear_coefficient", s.shear_coefficient) <= 1,
+                f"shear_coefficient (kappa) must lie in (0, 1], got {s.shear_coefficient}")
+    if s.slenderness is not None:
+        require(0 < finite_number("slenderness", s.slenderness) <= MAX_SLENDERNESS,
+                f"slenderness (e/L) must lie in (0, {MAX_SLENDERNESS:g}] (beyond it 1D beam "
+                f"theory does not apply), got {s.slenderness}")
+    if s.beam == EULER_BERNOULLI:
+        given = [n for n in _TIMOSHENKO_FIELDS if getattr(s, n) != _DEFAULTS[n]]
+        require(not given, f"{', '.join(given)}: only beam = 'timoshenko' uses it; give "
+                "beam = 'timoshenko' (--beam timoshenko) or leave it out")
+    else:
+        require(s.slenderness is not None, "slenderness (e/L) is required with beam = "
+                "'timoshenko' (--slenderness)")
+        require(s.thickness is None, "thickness (a non-uniform beam) is not supported with "
+                "beam = 'timoshenko': the Timoshenko modes are those of a uniform beam")
 
 
 def _validate(s: Scene) -> None:
@@ -228,3 +289,4 @@ def _validate(s: Scene) -> None:
              f"contact_eps (eps/H) must lie in (0, 1), got {s.contact_eps}")
     require(0 <= finite_number("contact_smoothing", s.contact_smoothing) <= 1,
              f"contact_smoothing (width / eps) must lie in [0, 1], got {s.contact_smoothing}")
+    _validate_beam(s)

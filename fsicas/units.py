@@ -16,11 +16,15 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-__all__ = ["Scales", "friction_from_reynolds", "thick_beam_message", "THIN_BEAM_RATIO"]
+__all__ = ["Scales", "friction_from_reynolds", "thick_beam_message", "THIN_BEAM_RATIO",
+           "MAX_BEAM_RATIO"]
 
 #: Largest thickness-to-length ratio e/L of the Euler–Bernoulli (thin) beam: beyond it
 #: shear and rotary inertia (Timoshenko) change the modes by more than a few per cent.
 THIN_BEAM_RATIO = 0.1
+#: Largest e/L of any 1D beam theory (Timoshenko included): beyond it the strip is a
+#: 2D elastic body, not a beam.
+MAX_BEAM_RATIO = 0.5
 
 
 @dataclass(frozen=True)
@@ -80,8 +84,10 @@ class Scales:
             raise ValueError(f"U0 must be a finite number (m/s), got {U0!r}")
         if not -1.0 < nu < 0.5:
             raise ValueError(f"nu (Poisson ratio) must lie in (-1, 0.5), got {nu!r}")
-        if e >= THIN_BEAM_RATIO * L:
-            raise ValueError(thick_beam_message(e, L))
+        if e > MAX_BEAM_RATIO * L:
+            raise ValueError(f"e = {e:g} m is not small against L = {L:g} m (e/L = {e / L:.3g}"
+                             f" > {MAX_BEAM_RATIO:g}): beyond the range of 1D beam theory "
+                             "(Timoshenko included); give a longer L or a thinner e")
         if b < e:
             raise ValueError(f"b = {b} m is narrower than the thickness e = {e} m: not a plate")
         D = E * e**3 / (12.0 * (1.0 - nu**2))
@@ -90,13 +96,15 @@ class Scales:
 
 
 def thick_beam_message(e: float, L: float) -> str:
-    """Why a beam with e/L >= THIN_BEAM_RATIO is refused, and what to do instead."""
+    """Why an Euler–Bernoulli beam with e/L >= THIN_BEAM_RATIO is refused, and what to do
+    instead."""
     limit = THIN_BEAM_RATIO * L
     return (f"e = {e:g} m is not thin against L = {L:g} m (e/L = {e / L:.3g}): the 1D "
             f"Euler–Bernoulli beam of fsicas needs e/L < {THIN_BEAM_RATIO:g}, i.e. e < "
             f"{limit * 1e3:.3g} mm here. Give a thinner effective thickness e (the soft_palate "
-            "preset takes 2.5 mm for a 30 mm palate 8-10 mm thick) or a longer L; thick-beam "
-            "(Timoshenko) modes, which e/L >= 0.1 needs, are not available in fsicas yet")
+            "preset takes 2.5 mm for a 30 mm palate 8-10 mm thick) or a longer L, or use the "
+            "thick-beam (Timoshenko) modes, which e/L >= 0.1 needs: beam = 'timoshenko' "
+            "(--beam timoshenko, the choice when the beam theory is not given)")
 
 
 def friction_from_reynolds(re: float, re_transition: float = 2500.0) -> float:

@@ -186,10 +186,13 @@ def test_bad_tables_are_refused_with_the_key(tmp_path, physical, named):
 
 @pytest.mark.parametrize("e, L", [("9 mm", "30 mm"), ("8 mm", "25 mm"), ("10 mm", "35 mm")])
 def test_thick_palate_is_refused_with_what_to_do(capsys, tripwire, tmp_path, e, L):
+    """A thick palate takes the Timoshenko modes; asked for Euler–Bernoulli it is refused."""
     path = tmp_path / "thick.toml"
     path.write_text(f'preset = "soft_palate"\n[physical]\ne = "{e}"\nL = "{L}"\n')
+    scene = load_physical(str(path)).scene()
+    assert scene.beam == "timoshenko" and 0.28 < scene.slenderness < 0.33
     for command in (["onset"], ["eig"], ["boundary"], ["simulate", "--t-end", "1"], ["lco"]):
-        code, out = run(capsys, [*command, "--physical", str(path)])
+        code, out = run(capsys, [*command, "--physical", str(path), "--beam", "euler-bernoulli"])
         assert code == 2, command
         message = out["error"]
         assert "Euler–Bernoulli" in message and "e/L < 0.1" in message

@@ -91,7 +91,7 @@ def test_physical_units_round_trip():
 
 
 @pytest.mark.parametrize("changes, field", [
-    (dict(nu=0.5), "nu"), (dict(e=0.01), "e = "), (dict(rho_s=-1.0), "rho_s"),
+    (dict(nu=0.5), "nu"), (dict(e=0.02), "e = "), (dict(rho_s=-1.0), "rho_s"),
     (dict(H1=0.0), "H1"), (dict(b=1e-4), "b = "), (dict(U0=float("inf")), "U0"),
 ])
 def test_inconsistent_physical_sets_are_rejected(changes, field):

@@ -158,3 +158,126 @@ def test_running_integrals_and_uniform_load(s):
     load = timoshenko_modes(10, nodes, beam).phi @ w
     assert np.allclose(m.Phi[:, -1], load, rtol=0, atol=1e-13)
     assert np.allclose(m.Psi[:, 0], load, rtol=0, atol=1e-13)
+
+
+# -- the scene, the model and the CLI on Timoshenko modes -------------------------------
+import json  # noqa: E402
+
+from scipy.integrate import simpson  # noqa: E402
+
+from fsicas import Scene, build_model, critical_velocity, flow_fields  # noqa: E402
+from fsicas.cli import build_parser, main  # noqa: E402
+from fsicas.model import modal_basis  # noqa: E402
+from fsicas.profile import Profile  # noqa: E402
+from fsicas.scene import load_scene  # noqa: E402
+
+THICK = dict(beam="timoshenko", slenderness=0.3, poisson=0.45)
+PALATE = dict(rho_s=1100.0, E=10e3, nu=0.45, L=0.03, rho_f=1.2, U0=1.0, H1=1.5e-3, b=0.02)
+
+
+def test_euler_bernoulli_scenes_are_unchanged():
+    """New fields at their defaults: the dict, equality and hash of today's scenes."""
+    keys = ['mstar', 'ustar', 'hstar', 'friction', 'k0', 'kl', 'zeta', 'modes', 'quad_nodes',
+            'channel1', 'channel2', 'thickness', 'contact', 'contact_stiffness', 'contact_eps',
+            'contact_smoothing']
+    assert list(Scene().to_dict()) == keys
+    assert Scene(beam="euler-bernoulli") == Scene() and hash(Scene(beam="euler-bernoulli")) == hash(Scene())
+    s = Scene(modes=4, **THICK)
+    assert s.to_dict()["beam"] == "timoshenko" and Scene.from_dict(s.to_dict()) == s
+    assert s != Scene(modes=4) and s != s.replace(poisson=0.3)
+
+
+@pytest.mark.parametrize("kw, named", [
+    (dict(beam="thick"), "beam"), (dict(slenderness=0.3), "slenderness"),
+    (dict(poisson=0.4), "poisson"), (dict(shear_coefficient=0.8), "shear_coefficient"),
+    (dict(beam="timoshenko"), "slenderness"), ({**THICK, "slenderness": 0.6}, "slenderness"),
+    ({**THICK, "slenderness": 0.0}, "slenderness"), ({**THICK, "slenderness": "a"}, "slenderness"),
+    ({**THICK, "poisson": 0.5}, "poisson"), ({**THICK, "poisson": -0.1}, "poisson"),
+    ({**THICK, "shear_coefficient": 0.0}, "shear_coefficient"),
+    ({**THICK, "shear_coefficient": 1.2}, "shear_coefficient"),
+    ({**THICK, "thickness": Profile.linear(1.0, 0.6)}, "thickness"),
+])
+def test_bad_beam_fields_are_refused_with_the_field(kw, named):
+    with pytest.raises(ValueError, match=named):
+        Scene(**kw)
+
+
+def test_toml_and_modal_basis_dispatch(tmp_path):
+    path = tmp_path / "thick.toml"
+    path.write_text('modes = 5\nbeam = "timoshenko"\nslenderness = 0.3\npoisson = 0.45\n')
+    scene = load_scene(path)
+    assert scene == Scene(modes=5, **THICK)
+    x = np.linspace(0, 1, 7)
+    ref = timoshenko_modes(5, x, TimoshenkoBeam(0.3, 0.45))
+    assert np.array_equal(modal_basis(scene, x).phi, ref.phi)
+    model = build_model(scene)
+    assert np.array_equal(model.basis.omega, ref.omega)
+    with pytest.raises(ValueError, match="beam, slenderness, poisson"):
+        model.require_structure(Scene(modes=5))
+
+
+def test_from_physical_chooses_timoshenko_for_thick_beams():
+    thick = Scene.from_physical(e=9e-3, **PALATE)
+    assert thick.beam == "timoshenko" and thick.slenderness == pytest.approx(0.3)
+    assert thick.poisson == 0.45 and thick.shear_coefficient is None
+    thin = Scene.from_physical(e=2.5e-3, **PALATE)
+    assert thin.beam == "euler-bernoulli" and "beam" not in thin.to_dict()
+    assert Scene.from_physical(e=2.5e-3, beam="timoshenko", **PALATE).slenderness == pytest.approx(2.5 / 30)
+    with pytest.raises(ValueError, match="Euler–Bernoulli .* needs e/L < 0.1"):
+        Scene.from_physical(e=9e-3, beam="euler-bernoulli", **PALATE)
+    with pytest.raises(ValueError, match="1D beam theory"):
+        Scene.from_physical(e=18e-3, **PALATE)
+    with pytest.raises(ValueError, match="slenderness is derived"):
+        Scene.from_physical(e=9e-3, slenderness=0.2, **PALATE)
+
+
+def test_beam_rows_are_the_projection_of_the_load_on_phi():
+    """Timoshenko modes in the unchanged model: dr/dt + w^2 q = ∫ (p2 - p1) phi_n (the
+    load from the independent field route), so the flow load projects on phi alone."""
+    scene = Scene(mstar=2.0, ustar=4.0, modes=5, channel1=Profile.linear(0.05, 0.035),
+                  channel2=Profile.constant(0.05), **THICK)
+    model = build_model(scene)
+    rng = np.random.default_rng(1)
+    x0 = np.r_[0.1 * rng.normal(size=5) / np.arange(1, 6) ** 2,
+               1e-3 * rng.normal(size=5) / np.arange(1, 6) ** 2, 0.2, 0.15]
+    p = model.parameters(pressure_drop=30.0)
+    xdot = model.xdot(x0, p)
+    grid = np.linspace(0.0, 1.0, 16001)
+    load = flow_fields(scene, x0, xdot, 30.0, grid).load
+    modes = modal_basis(scene, grid)
+    lhs = xdot[:5] + modes.omega**2 * x0[5:10]
+    rhs = simpson(modes.phi * load, x=grid)
+    assert np.allclose(lhs, rhs, rtol=1e-9, atol=1e-9 * np.max(np.abs(rhs)))
+
+
+def test_critical_velocity_is_lower_on_a_thick_beam():
+    """N = 6, M* = 1: the onset of a Timoshenko beam at e/L = 0.3 is below Euler–Bernoulli's."""
+    onsets = {}
+    for name, kw in (("eb", {}), ("t", THICK)):
+        scene = Scene(mstar=1.0, modes=6, **kw)
+        onsets[name] = critical_velocity(scene, build_model(scene))
+    assert np.isfinite(onsets["t"].ustar) and 0 < onsets["t"].ustar < 0.8 * onsets["eb"].ustar
+
+
+def _cli(capsys, argv):
+    code = main(argv)
+    return code, json.loads(capsys.readouterr().out)
+
+
+def test_cli_modes_and_beam_options_on_every_analysis(capsys):
+    code, out = _cli(capsys, ["modes", "--modes", "6", "--beam", "timoshenko",
+                              "--slenderness", "0.3", "--poisson", "0.45", "--json"])
+    ref = timoshenko_frequencies(6, TimoshenkoBeam(0.3, 0.45))
+    assert code == 0 and np.allclose(out["omega"], ref, rtol=1e-14)
+    assert np.allclose(np.square(out["beta"]), ref, rtol=1e-14)
+    code, out = _cli(capsys, ["modes", "--modes", "3", "--beam", "timoshenko", "--json"])
+    assert code == 2 and "slenderness" in out["error"]
+    parser = build_parser()
+    commands = parser._subparsers._group_actions[0].choices
+    for name, command in commands.items():
+        if any("--hstar" in a.option_strings for a in command._actions):   # the scene options
+            options = {o for a in command._actions for o in a.option_strings}
+            assert {"--beam", "--slenderness", "--poisson", "--shear-coefficient"} <= options, name
+    code, out = _cli(capsys, ["eig", "--modes", "4", "--ustar", "2", "--beam", "timoshenko",
+                              "--slenderness", "0.3", "--poisson", "0.45", "--json"])
+    assert code == 0 and out["stable"] is True

@@ -2,18 +2,21 @@
 ``boundary`` (docs/stability.md)."""
 from __future__ import annotations
 
+import numpy as np
+
 from ..linear.boundary import stability_boundary
 from ..linear.stability import linear_stability
 from ..linear.steady import steady_state
 from ..model.assembly import build_model
 from ..model.beam import clamped_free_betas
+from ..model.beam_timoshenko import TimoshenkoBeam, timoshenko_frequencies
 from ..physical_report import add_physical
-from ..scene import MAX_MODES
+from ..scene import MAX_MODES, Scene
 from ..plots.linear import plot_boundary, plot_eigenvalues, plot_mode_shapes
 from .meta import record
 from .progress import reporter
 from .ranges import parse_range
-from .scene_options import add_scene_options, scene_from_args
+from .scene_options import add_beam_options, add_scene_options, scene_from_args
 
 __all__ = ["add_linear_commands"]
 
@@ -22,6 +25,7 @@ def add_linear_commands(sub) -> None:
     """Add the ``modes``, ``steady``, ``eig`` and ``boundary`` subcommands."""
     p = sub.add_parser("modes", help="in-vacuo clamped-free beam modes")
     p.add_argument("--modes", type=int, default=10, help="number of modes N, in [1, 200]")
+    add_beam_options(p.add_argument_group("beam theory (docs/beam.md)"))
     p.add_argument("--json", action="store_true", help="print one JSON object on stdout")
     p.set_defaults(run=_cmd_modes)
     p = sub.add_parser("steady", help="steady state: pressure drop, flow split, static deflection")
@@ -50,6 +54,13 @@ def _add_boundary_command(sub) -> None:
 def _cmd_modes(args) -> dict:
     if args.modes is None or not 1 <= args.modes <= MAX_MODES:
         raise ValueError(f"--modes must be an integer in [1, {MAX_MODES}], got {args.modes}")
+    beam = {k: getattr(args, k) for k in ("beam", "slenderness", "poisson", "shear_coefficient")
+            if getattr(args, k) is not None}
+    scene = Scene(modes=args.modes, **beam)       # checks the beam options, naming them
+    if scene.beam == "timoshenko":   # beta = sqrt(omega), the thin beam's beta_n (docs/beam.md)
+        omega = timoshenko_frequencies(args.modes, TimoshenkoBeam(
+            scene.slenderness, scene.poisson, scene.shear_coefficient))
+        return {"beta": np.sqrt(omega).tolist(), "omega": omega.tolist()}
     beta = clamped_free_betas(args.modes)
     return {"beta": beta.tolist(), "omega": (beta**2).tolist()}
 

@@ -8,7 +8,8 @@ import argparse
 from ..physical import Flow, Physical, load_physical, parse_flow, preset_names
 from ..scene import Scene, load_scene
 
-__all__ = ["SCENE_OPTIONS", "add_scene_options", "scene_from_args", "physical_from_args"]
+__all__ = ["SCENE_OPTIONS", "BEAM_OPTIONS", "add_scene_options", "add_beam_options",
+           "scene_from_args", "physical_from_args"]
 
 #: CLI option (``--quad-nodes`` for ``quad_nodes``) -> type, one per Scene field.
 SCENE_OPTIONS = {
@@ -34,6 +35,16 @@ SCENE_HELP = {
     "contact_eps": "contact layer eps/H (H = H*/2), in (0, 1)",
 }
 
+#: The beam-theory options (docs/beam.md): option -> (type, help).
+BEAM_OPTIONS = {
+    "beam": (str, "beam theory: euler-bernoulli (default) or timoshenko (shear and rotary "
+                  "inertia, for thick beams; with --physical the default when e/L >= 0.1)"),
+    "slenderness": (float, "thickness over length e/L of the Timoshenko beam, in (0, 0.5]"),
+    "poisson": (float, "Poisson ratio nu of the Timoshenko beam, in [0, 0.5) (default 0.3)"),
+    "shear_coefficient": (float, "shear coefficient kappa of the Timoshenko beam, in (0, 1] "
+                                 "(default Cowper's 10(1 + nu)/(12 + 11 nu))"),
+}
+
 
 def add_scene_options(parser: argparse.ArgumentParser, mstar: bool = True) -> None:
     """Add the scene options (without ``--mstar`` if ``mstar`` is false: the command
@@ -50,8 +61,16 @@ def add_scene_options(parser: argparse.ArgumentParser, mstar: bool = True) -> No
                                help=f"{SCENE_HELP[name]} (default {shown})")
     group.add_argument("--contact", dest="contact", action=argparse.BooleanOptionalAction,
                        default=None, help="regularized wall impact on or off (default off)")
+    add_beam_options(group)
     _add_physical_options(parser)
     parser.add_argument("--json", action="store_true", help="print one JSON object on stdout")
+
+
+def add_beam_options(group) -> None:
+    """``--beam``, ``--slenderness``, ``--poisson``, ``--shear-coefficient``."""
+    for name, (kind, text) in BEAM_OPTIONS.items():
+        group.add_argument("--" + name.replace("_", "-"), dest=name, type=kind, default=None,
+                           metavar=name.upper(), help=text)
 
 
 def _add_physical_options(parser: argparse.ArgumentParser) -> None:
@@ -66,7 +85,7 @@ def _add_physical_options(parser: argparse.ArgumentParser) -> None:
 
 
 def _values(args: argparse.Namespace) -> dict:
-    values = {k: getattr(args, k, None) for k in (*SCENE_OPTIONS, "contact")}
+    values = {k: getattr(args, k, None) for k in (*SCENE_OPTIONS, *BEAM_OPTIONS, "contact")}
     return {k: v for k, v in values.items() if v is not None}
 
 

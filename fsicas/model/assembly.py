@@ -16,6 +16,7 @@ import casadi as ca
 import numpy as np
 
 from .beam import ModalBasis, clamped_free_modes
+from .beam_timoshenko import TimoshenkoBeam, timoshenko_modes
 from .equations import LiftedEquations
 from .beam_fe import default_n_elements, nonuniform_beam_modes
 from .quadrature import composite_gauss_legendre, gauss_legendre
@@ -29,7 +30,7 @@ _CONTACT_PARAMS = ("contact_stiffness", "contact_eps")
 
 #: Scene fields that are not symbolic parameters of the model (nor U* or contact).
 _STRUCTURE_FIELDS = ("hstar", "modes", "quad_nodes", "channel1", "channel2", "thickness",
-                     "contact_smoothing")
+                     "contact_smoothing", "beam", "slenderness", "poisson", "shear_coefficient")
 
 
 def _structure(scene: Scene) -> tuple:
@@ -43,8 +44,12 @@ def parameter_names(scene: Scene) -> tuple[str, ...]:
 
 
 def modal_basis(scene: Scene, x) -> ModalBasis:
-    """The scene's beam modes at points x: analytic when uniform, FE when ``thickness`` is set."""
+    """The scene's beam modes at points x: analytic when uniform, FE when ``thickness`` is
+    set, Timoshenko (:mod:`.beam_timoshenko`) when ``beam = "timoshenko"``."""
     x = np.asarray(x, dtype=float)
+    if scene.beam == "timoshenko":
+        return timoshenko_modes(scene.modes, x, TimoshenkoBeam(
+            scene.slenderness, scene.poisson, scene.shear_coefficient))
     if scene.thickness is None:
         return clamped_free_modes(scene.modes, x)
     return nonuniform_beam_modes(scene.modes, x, thickness=scene.thickness)

@@ -46,6 +46,7 @@ term by term in closed form, ``Phi = ∫_0^x w`` likewise.
 """
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass
 from typing import NamedTuple
 
@@ -54,6 +55,7 @@ from scipy.optimize import brentq, minimize_scalar
 
 from .beam import ModalBasis, clamped_free_betas
 from .quadrature import gauss_legendre
+from ..units import MAX_BEAM_RATIO
 
 __all__ = ["TimoshenkoBeam", "TimoshenkoShapes", "cowper_shear_coefficient",
            "timoshenko_characteristic", "timoshenko_frequencies", "timoshenko_shapes",
@@ -61,7 +63,7 @@ __all__ = ["TimoshenkoBeam", "TimoshenkoShapes", "cowper_shear_coefficient",
 
 #: Largest phase step of the root-bracketing grid (roots are about pi apart in phase).
 PHASE_STEP = np.pi / 24
-MAX_SLENDERNESS = 0.5
+MAX_SLENDERNESS = MAX_BEAM_RATIO
 
 
 def cowper_shear_coefficient(nu: float) -> float:
@@ -203,6 +205,13 @@ def _first_roots(n_modes: int, beam: TimoshenkoBeam, step: float) -> np.ndarray:
 def timoshenko_frequencies(n_modes: int, beam: TimoshenkoBeam) -> np.ndarray:
     """The first ``n_modes`` natural circular frequencies (units of 1/T), both branches
     in one increasing sequence; RuntimeError if a twice finer grid counts differently."""
+    if int(n_modes) != n_modes or n_modes < 1:
+        raise ValueError(f"n_modes must be a positive integer, got {n_modes!r}")
+    return _frequencies(int(n_modes), beam).copy()
+
+
+@functools.lru_cache(maxsize=64)
+def _frequencies(n_modes: int, beam: TimoshenkoBeam) -> np.ndarray:
     roots = _first_roots(n_modes, beam, PHASE_STEP)
     if len(roots) < n_modes:
         raise RuntimeError(f"found {len(roots)} Timoshenko roots below the Euler–Bernoulli "
