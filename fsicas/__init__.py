@@ -14,6 +14,7 @@ from .linear import (CriticalVelocityError, HopfPoint, LinearStability, Stabilit
                      straight_pressure_drop)
 from .model import (FlowFields, ModalBasis, Model, build_model, clamped_free_betas,
                     clamped_free_modes, flow_fields, parameter_names)
+from .physical import Flow, Physical, load_physical, parse_flow, preset_names
 from .profile import Profile
 from .scene import Scene, load_scene
 from .timedomain import (Criteria, MapResult, Outcome, PressureSchedule, Run, Trajectory,
@@ -22,6 +23,7 @@ from .units import Scales, friction_from_reynolds
 
 __all__ = [
     "Scene", "load_scene", "Profile", "Scales", "friction_from_reynolds",
+    "Physical", "Flow", "load_physical", "parse_flow", "preset_names",
     "ModalBasis", "clamped_free_betas", "clamped_free_modes", "FlowFields", "flow_fields",
     "Model", "build_model", "parameter_names",
     "SteadyState", "SteadyStateError", "steady_state", "straight_pressure_drop",

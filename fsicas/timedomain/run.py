@@ -87,12 +87,7 @@ def run_case(scene: Scene, t_end: float, *, settings: Settings = Settings(),
     """
     if not (isinstance(t_end, (int, float)) and np.isfinite(t_end) and t_end > 0):
         raise ValueError(f"t_end must be a finite number > 0, got {t_end!r}")
-    if quadrature_tol == "auto":
-        quadrature_tol = QUADRATURE_PER_SETTLING * criteria.settling_tol(settings.rtol)
-    if quadrature_tol is not None and not (isinstance(quadrature_tol, (int, float))
-                                           and 0 < quadrature_tol < 1):
-        raise ValueError(f"quadrature_tol must lie in (0, 1), or be 'auto' or None, got "
-                         f"{quadrature_tol!r}")
+    quadrature_tol = _quadrature_tol(quadrature_tol, criteria, settings.rtol)
     start = time.perf_counter()
     stop_on_contact = not scene.contact
     if model is None:
@@ -117,6 +112,15 @@ def run_case(scene: Scene, t_end: float, *, settings: Settings = Settings(),
 MAX_REPEATS = 3
 #: The automatic quadrature tolerance of a run per unit of its settling tolerance.
 QUADRATURE_PER_SETTLING = 1.0
+
+
+def _quadrature_tol(value, criteria: Criteria, rtol: float) -> float | None:
+    """``run_case``'s ``quadrature_tol`` as a number or None (ValueError if invalid)."""
+    if value == "auto":
+        return QUADRATURE_PER_SETTLING * criteria.settling_tol(rtol)
+    if value is not None and not (isinstance(value, (int, float)) and 0 < value < 1):
+        raise ValueError(f"quadrature_tol must lie in (0, 1), or be 'auto' or None, got {value!r}")
+    return value
 
 
 def sensitive_states(run: Run) -> np.ndarray | None:
