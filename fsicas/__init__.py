@@ -4,7 +4,7 @@ Data flow: Scene (what) -> build_model (CasADi functions) -> analyses -> results
 The wings (``fsicas.model``, ``fsicas.linear``, ``fsicas.cycles``, ``fsicas.timedomain``,
 ``fsicas.plots``) hold the rest of the public API, each in its ``__all__``.
 """
-__version__ = "0.1.0"
+from .provenance import __version__
 
 from .cycles import (CycleBranch, CyclePoint, CycleSettings, ImpactBranch, ImpactPoint,
                      ImpactSettings, cycle_branch, impacting_branch)
@@ -22,6 +22,7 @@ from .timedomain import (Criteria, MapResult, Outcome, PressureSchedule, Run, Tr
 from .units import Scales, friction_from_reynolds
 
 __all__ = [
+    "__version__",
     "Scene", "load_scene", "Profile", "Scales", "friction_from_reynolds",
     "Physical", "Flow", "load_physical", "parse_flow", "preset_names",
     "ModalBasis", "clamped_free_betas", "clamped_free_modes", "FlowFields", "flow_fields",

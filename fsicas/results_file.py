@@ -54,10 +54,13 @@ def read_records(path) -> tuple[dict | None, list[dict]]:
 
 class ResultsFile:
     """``with ResultsFile(path, header) as f:`` ... ``f.records`` (the records already
-    there), ``f.append(record)``; ``f.repaired``: bytes of a torn last line cut off."""
+    there), ``f.append(record)``; ``f.repaired``: bytes of a torn last line cut off.
+    ``written_by`` (e.g. :func:`fsicas.provenance.provenance`) is stored beside the header
+    of a new file and not compared on resume."""
 
-    def __init__(self, path, header: dict):
+    def __init__(self, path, header: dict, written_by: dict | None = None):
         self.path, self.header = Path(path), _normal(header)
+        self.written_by = written_by
         self.records: list[dict] = []
         self.repaired = 0
         self._fd = None
@@ -71,7 +74,8 @@ class ResultsFile:
             header, self.records = read_records(self.path)
             self._check(header)
             if header is None:
-                self.append({"header": self.header})
+                first = {"header": self.header}
+                self.append(first if self.written_by is None else {**first, "written_by": self.written_by})
         except BaseException:
             self.close()
             raise

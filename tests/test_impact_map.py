@@ -190,3 +190,18 @@ def test_workers_die_with_a_killed_map(tmp_path, monkeypatch):
     with pytest.raises(RuntimeError, match="pool created"):
         module.impact_map([4.0], [1.0], tmp_path / "m.jsonl", scene=SCENE, t_end=1.0, workers=1)
     assert used["initializer"] is module._die_with_parent and used["initargs"] == (os.getpid(),)
+
+
+def test_results_file_records_what_wrote_it_without_comparing_it_on_resume(tmp_path):
+    """A new map file's first line carries the versions and the time beside its header;
+    a resume from a file written at another time (other ``written_by``) is accepted."""
+    from fsicas.results_file import ResultsFile, read_records
+    path = tmp_path / "m.jsonl"
+    header = {"format": "x", "t_end": 1.0}
+    with ResultsFile(path, header, {"fsicas": "0.1.0", "created": "2026-01-01T00:00:00+00:00"}) as f:
+        f.append({"ustar": 1.0})
+    first = json.loads(path.read_text().splitlines()[0])
+    assert first["written_by"]["fsicas"] == "0.1.0" and first["header"] == header
+    with ResultsFile(path, header, {"fsicas": "9.9", "created": "2027-01-01T00:00:00+00:00"}) as f:
+        assert f.records == [{"ustar": 1.0}]
+    assert read_records(path)[0] == header

@@ -14,12 +14,10 @@ from __future__ import annotations
 
 import argparse
 import json
-import platform
 import shlex
 from dataclasses import asdict, is_dataclass
-from datetime import datetime, timezone
 
-from .. import __version__
+from ..provenance import provenance, versions
 from .scene_options import SCENE_OPTIONS, scene_from_args
 
 __all__ = ["NONDIM", "UNITS", "versions", "run_meta", "cli_meta", "record", "write_json"]
@@ -80,21 +78,11 @@ _NOT_SETTINGS = frozenset({"command", "run", "human", "json", "quiet", "verbose"
                            "argv", "meta_scene", "meta_settings"})
 
 
-def versions() -> dict:
-    """The versions of fsicas, CasADi, NumPy, SciPy and Python."""
-    import casadi
-    import numpy
-    import scipy
-    return {"fsicas": __version__, "casadi": casadi.__version__, "numpy": numpy.__version__,
-            "scipy": scipy.__version__, "python": platform.python_version()}
-
-
 def run_meta(command: str, scene=None, settings: dict | None = None,
              units: dict | None = None) -> dict:
     """``meta`` of one result: versions, UTC time, ``command`` (the command line), the
     ``scene`` (a :class:`fsicas.Scene` or its dict), ``settings`` and ``units``."""
-    return {**versions(), "created": datetime.now(timezone.utc).isoformat(timespec="seconds"),
-            "command": command, "scene": scene.to_dict() if hasattr(scene, "to_dict") else scene,
+    return {**provenance(), "command": command, "scene": scene.to_dict() if hasattr(scene, "to_dict") else scene,
             "settings": _plain(settings or {}), "units": units or {}}
 
 

@@ -33,6 +33,7 @@ from tqdm import tqdm
 
 from ..linear.hopf import critical_velocity
 from ..model.assembly import build_model
+from ..provenance import provenance
 from ..results_file import ResultsFile, read_records
 from .outcome import Criteria, OutcomeKind
 from .run import guarded_model, run_case
@@ -162,7 +163,7 @@ def impact_map(ustars, mstars, path, *, scene: Scene = MAP_SCENE, t_end: float =
     start = time.perf_counter()
     criteria = Criteria(stop_on_contact=True)
     base = scene.replace(contact=False)
-    with ResultsFile(path, map_header(base, t_end, settings, criteria)) as out, \
+    with ResultsFile(path, map_header(base, t_end, settings, criteria), provenance()) as out, \
             contextlib.ExitStack() as stack:
         done = {_key(row["ustar"], row["mstar"]): row for row in out.records}
         todo = [(u, m) for m in mstars for u in ustars if _key(u, m) not in done]
