@@ -62,7 +62,9 @@ class Scene:
     :mod:`fsicas.model.beam_timoshenko`, docs/beam.md), which needs slenderness = e/L in
     (0, 0.5] and takes poisson (nu in [0, 0.5), default 0.3) and shear_coefficient
     (kappa in (0, 1], None: Cowper's 10(1 + nu)/(12 + 11 nu)); these three apply to
-    the Timoshenko beam only and ``to_dict`` leaves them out of Euler–Bernoulli scenes.
+    the Timoshenko beam only and ``to_dict`` leaves them out of Euler–Bernoulli scenes;
+    with ``thickness`` the Timoshenko modes are the locking-free FE modes of
+    :mod:`fsicas.model.beam_timoshenko_fe` (slenderness at the root).
     """
 
     mstar: float = 1.0
@@ -246,8 +248,6 @@ def _validate_beam(s: Scene) -> None:
     else:
         require(s.slenderness is not None, "slenderness (e/L) is required with beam = "
                 "'timoshenko' (--slenderness)")
-        require(s.thickness is None, "thickness (a non-uniform beam) is not supported with "
-                "beam = 'timoshenko': the Timoshenko modes are those of a uniform beam")
 
 
 def _validate(s: Scene) -> None:

@@ -17,6 +17,7 @@ import numpy as np
 
 from .beam import ModalBasis, clamped_free_modes
 from .beam_timoshenko import TimoshenkoBeam, timoshenko_modes
+from .beam_timoshenko_fe import timoshenko_fe_elements, timoshenko_fe_modes
 from .equations import LiftedEquations
 from .beam_fe import default_n_elements, nonuniform_beam_modes
 from .quadrature import composite_gauss_legendre, gauss_legendre
@@ -45,11 +46,14 @@ def parameter_names(scene: Scene) -> tuple[str, ...]:
 
 def modal_basis(scene: Scene, x) -> ModalBasis:
     """The scene's beam modes at points x: analytic when uniform, FE when ``thickness`` is
-    set, Timoshenko (:mod:`.beam_timoshenko`) when ``beam = "timoshenko"``."""
+    set; Timoshenko (:mod:`.beam_timoshenko`, FE :mod:`.beam_timoshenko_fe` when
+    ``thickness`` is set) when ``beam = "timoshenko"``."""
     x = np.asarray(x, dtype=float)
     if scene.beam == "timoshenko":
-        return timoshenko_modes(scene.modes, x, TimoshenkoBeam(
-            scene.slenderness, scene.poisson, scene.shear_coefficient))
+        beam = TimoshenkoBeam(scene.slenderness, scene.poisson, scene.shear_coefficient)
+        if scene.thickness is None:
+            return timoshenko_modes(scene.modes, x, beam)
+        return timoshenko_fe_modes(scene.modes, x, beam, thickness=scene.thickness)
     if scene.thickness is None:
         return clamped_free_modes(scene.modes, x)
     return nonuniform_beam_modes(scene.modes, x, thickness=scene.thickness)
@@ -64,8 +68,11 @@ def quadrature_rule(scene: Scene) -> tuple[np.ndarray, np.ndarray]:
     """
     if scene.thickness is None:
         return gauss_legendre(scene.n_quad)
-    elements = default_n_elements(scene.modes)
-    return composite_gauss_legendre(elements, max(4, -(-scene.n_quad // elements)))
+    if scene.beam == "timoshenko":     # piecewise quintic w: at least 6 nodes per element
+        elements, least = timoshenko_fe_elements(scene.modes), 6
+    else:
+        elements, least = default_n_elements(scene.modes), 4
+    return composite_gauss_legendre(elements, max(least, -(-scene.n_quad // elements)))
 
 
 @dataclass(frozen=True, eq=False)
