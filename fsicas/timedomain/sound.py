@@ -1,0 +1,206 @@
+"""The sound of the flutter: the acoustic monopole of the airway's outlet volume flow.
+
+The fluctuating volume flow leaving the channels radiates as a compact monopole in free
+field: at the listener distance r,
+
+    p(r, t) = ρ_f / (4π r) · d/dt [b (Q1 + Q2)](t − r/c),
+
+with ``Q1 + Q2`` the outlet flow rates per unit width (:func:`fsicas.timedomain.energy.outlet_flow_rates`;
+their sum is the inlet total ``x[-2] + x[-1]``, the beam only moves fluid between the
+channels) and b the width. The time derivative is exact at each output sample:
+``d/dt (Q1 + Q2) = ẋ[-2] + ẋ[-1]`` with ``ẋ = M⁻¹F`` (:func:`fsicas.timedomain.returns.xdot_function`).
+In SI units ``dQ/dt = b L² / T² · d(Q1* + Q2*)/dt*`` (``Scales``: L, T, b, ρ_f).
+
+Signals (:class:`Sound`, sampled at :data:`AUDIO_RATE` by default):
+
+- :func:`cycle_sound`: one settled cycle (the last between two Poincaré returns; a limit
+  cycle or an impacting one) looped to the duration by a periodic cubic spline of the
+  exact derivative samples;
+- :func:`trajectory_sound`: the whole trajectory (e.g. a breathing schedule, whose snore
+  onset and offset are heard) by a cubic spline of the same samples.
+
+docs/sound.md states the model, its assumptions and limits.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.interpolate import CubicSpline
+
+from ..units import Scales
+from .returns import cycles, poincare_returns, xdot_function
+
+__all__ = ["Sound", "AUDIO_RATE", "P_REF", "SOUND_SPEED", "HARMONICS", "flow_derivative",
+           "monopole_pressure", "spl_db", "harmonic_amplitudes", "cycle_sound",
+           "trajectory_sound", "write_wav"]
+
+#: Audio sample rate (Hz), reference pressure of dB SPL (Pa), speed of sound in air (m/s).
+AUDIO_RATE, P_REF, SOUND_SPEED = 44100, 20e-6, 343.0
+#: Harmonics reported.
+HARMONICS = 10
+#: Uniform points per period on which the harmonics are taken.
+_PERIOD_POINTS = 4096
+
+
+@dataclass(frozen=True)
+class Sound:
+    """A radiated pressure signal ``pressure`` (Pa) at ``distance_m``, sampled at
+    ``rate`` Hz; ``fundamental_hz`` (1 / the cycle's period; None without a cycle),
+    ``spl_db`` (RMS level, dB re 20 µPa), ``harmonics_pa`` (amplitudes of the first
+    :data:`HARMONICS` harmonics of the cycle, Pa), ``source`` ("cycle" or "trajectory"),
+    ``period_s`` and, for a trajectory, ``onset_s`` and ``offset_s`` (first and last time
+    the level over one cycle exceeds a tenth of its largest)."""
+
+    rate: int
+    pressure: np.ndarray
+    fundamental_hz: float | None
+    spl_db: float
+    harmonics_pa: tuple
+    distance_m: float
+    source: str
+    period_s: float | None
+    onset_s: float | None = None
+    offset_s: float | None = None
+
+    @property
+    def duration_s(self) -> float:
+        return self.pressure.size / self.rate
+
+    def to_json(self) -> dict:
+        return {"fundamental_hz": self.fundamental_hz, "spl_db": self.spl_db,
+                "harmonics_pa": list(self.harmonics_pa), "distance_m": self.distance_m,
+                "sample_rate_hz": self.rate, "duration_s": self.duration_s,
+                "source": self.source, "period_s": self.period_s,
+                "peak_pa": float(np.max(np.abs(self.pressure))) if self.pressure.size else 0.0,
+                "rms_pa": _rms(self.pressure), "onset_s": self.onset_s, "offset_s": self.offset_s}
+
+
+def flow_derivative(traj, idx=None) -> np.ndarray:
+    """``d/dt (Q1 + Q2)`` (nondimensional, per unit width) at the samples ``idx`` (all by
+    default), from ``ẋ = M⁻¹F`` at each sample's pressure drop."""
+    idx = np.arange(len(traj.t)) if idx is None else np.asarray(idx)
+    xdot = _xdot_rows(traj, idx)
+    return xdot[:, -2] + xdot[:, -1]
+
+
+def monopole_pressure(dqdt, fluid_density: float, distance: float) -> np.ndarray:
+    """``p = ρ_f / (4π r) · dQ/dt`` (Pa) of a volume-flow derivative in m³/s²."""
+    return fluid_density / (4 * np.pi * distance) * np.asarray(dqdt, dtype=float)
+
+
+def _pressure_scale(scales: Scales, distance: float) -> float:
+    """Pa per unit of the nondimensional ``d(Q1 + Q2)/dt`` (per unit width)."""
+    dqdt = scales.width * scales.length**2 / scales.time**2
+    return float(monopole_pressure(dqdt, scales.fluid_density, distance))
+
+
+def spl_db(pressure) -> float:
+    """Sound pressure level of the RMS of ``pressure`` (Pa), dB re 20 µPa."""
+    rms = _rms(pressure)
+    return float(20 * np.log10(rms / P_REF)) if rms > 0 else -np.inf
+
+
+def _rms(p) -> float:
+    p = np.asarray(p, dtype=float)
+    return float(np.sqrt(np.mean(p**2))) if p.size else 0.0
+
+
+def harmonic_amplitudes(one_period, count: int = HARMONICS) -> tuple:
+    """Amplitudes (units of the input) of harmonics 1..count of a signal sampled
+    uniformly over exactly one period (endpoint excluded)."""
+    c = np.fft.rfft(np.asarray(one_period, dtype=float)) / len(one_period)
+    amp = 2 * np.abs(c[1:count + 1])
+    return tuple(float(a) for a in np.pad(amp, (0, count - amp.size)))
+
+
+def _check(distance, duration, rate) -> None:
+    if not (np.isfinite(distance) and distance > 0):
+        raise ValueError(f"distance must be > 0 (m), got {distance}")
+    if not (np.isfinite(duration) and duration > 0):
+        raise ValueError(f"duration must be > 0 (s), got {duration}")
+    if not (isinstance(rate, (int, np.integer)) and rate >= 1000):
+        raise ValueError(f"rate must be an integer >= 1000 (Hz), got {rate!r}")
+
+
+def _last_cycle(traj) -> tuple[float, float]:
+    """Start and end (nondimensional) of the last cycle between two Poincaré returns of
+    the tip (the dense-output return times; ValueError if there are fewer than two)."""
+    model = traj.model
+    start = int(np.searchsorted(traj.t, traj.t[-1] - 0.5 * (traj.t[-1] - traj.t[0])))
+    t, X = traj.t[start:], traj.x[start:]
+    cyc = cycles(t, X, model, lambda i: _xdot_rows(traj, start + np.asarray(i)))
+    if cyc is None or cyc.times.size < 2:
+        raise ValueError("the run has no cycle to sound (fewer than two returns of the tip "
+                         "in its second half): it decayed or did not settle; raise the flow "
+                         "or the integration time")
+    return float(cyc.times[-2]), float(cyc.times[-1])
+
+
+def _xdot_rows(traj, idx) -> np.ndarray:
+    model = traj.model
+    P = np.tile(np.asarray(traj.p, dtype=float)[:, None], (1, idx.size))
+    P[model.index("pressure_drop")] = traj.pressure_drop[idx]
+    return np.array(xdot_function(model).map(idx.size)(traj.x[idx].T, P)).T
+
+
+def _periodic_spline(traj, t_a: float, t_b: float) -> CubicSpline:
+    """Periodic cubic spline of ``d(Q1 + Q2)/dt`` on the samples of [t_a, t_b) (shifted to
+    start at 0), closed by the first sample's value one period later."""
+    k = np.flatnonzero((traj.t >= t_a) & (traj.t < t_b))
+    if k.size < 8:
+        raise ValueError(f"the cycle holds {k.size} output samples; refine the output step")
+    g = flow_derivative(traj, k)
+    s = np.r_[traj.t[k], traj.t[k[0]] + (t_b - t_a)] - traj.t[k[0]]
+    return CubicSpline(s, np.r_[g, g[0]], bc_type="periodic")
+
+
+def cycle_sound(traj, scales: Scales, distance: float = 0.3, duration: float = 2.0,
+                rate: int = AUDIO_RATE, cycle: tuple[float, float] | None = None) -> Sound:
+    """The sound of the last settled cycle of ``traj`` (or of ``cycle`` = (t_a, t_b),
+    nondimensional), looped to ``duration`` seconds (module docstring)."""
+    _check(distance, duration, rate)
+    t_a, t_b = _last_cycle(traj) if cycle is None else cycle
+    spline, period = _periodic_spline(traj, t_a, t_b), t_b - t_a
+    scale = _pressure_scale(scales, distance)
+    t_audio = np.arange(int(round(duration * rate))) / rate - distance / SOUND_SPEED
+    p = scale * spline(np.mod(t_audio / scales.time, period))
+    one = scale * spline(np.arange(_PERIOD_POINTS) * period / _PERIOD_POINTS)
+    period_s = period * scales.time
+    return Sound(rate, p, 1.0 / period_s, spl_db(one), harmonic_amplitudes(one), distance,
+                 "cycle", period_s)
+
+
+def trajectory_sound(traj, scales: Scales, distance: float = 0.3, rate: int = AUDIO_RATE,
+                     t_start: float = 0.0) -> Sound:
+    """The sound of the whole trajectory from ``t_start`` (nondimensional), resampled at
+    ``rate``, with the snore's fundamental and harmonics from its loudest cycle and its
+    onset and offset (:class:`Sound`)."""
+    duration = (traj.t[-1] - t_start) * scales.time
+    _check(distance, duration, rate)
+    scale = _pressure_scale(scales, distance)
+    spline = CubicSpline(traj.t, flow_derivative(traj))
+    t_audio = t_start * scales.time + np.arange(int(duration * rate)) / rate - distance / SOUND_SPEED
+    p = np.where(t_audio >= 0, scale * spline(np.maximum(t_audio, 0.0) / scales.time), 0.0)
+    returns, _ = poincare_returns(traj.t, traj.tip)
+    returns = returns[returns >= t_start]
+    if returns.size < 2:
+        return Sound(rate, p, None, spl_db(p), (0.0,) * HARMONICS, distance, "trajectory", None)
+    cycle_p = [scale * spline(a + np.arange(_PERIOD_POINTS) * (b - a) / _PERIOD_POINTS)
+               for a, b in zip(returns[:-1], returns[1:])]
+    level = np.array([_rms(c) for c in cycle_p])
+    loud = int(np.argmax(level))
+    period_s = float(returns[loud + 1] - returns[loud]) * scales.time
+    heard = returns[:-1][level > 0.1 * level[loud]] * scales.time
+    return Sound(rate, p, 1.0 / period_s, spl_db(p), harmonic_amplitudes(cycle_p[loud]),
+                 distance, "trajectory", period_s, float(heard[0]), float(heard[-1]))
+
+
+def write_wav(sound: Sound, path) -> float:
+    """Write ``sound`` as a 16-bit mono WAV normalized to its peak; returns the scale
+    factor in Pa per count (the pressure is ``count × factor``)."""
+    from scipy.io import wavfile
+    peak = float(np.max(np.abs(sound.pressure))) if sound.pressure.size else 0.0
+    factor = peak / 32767 if peak > 0 else 1.0
+    wavfile.write(path, sound.rate, np.round(sound.pressure / factor).astype(np.int16))
+    return factor
