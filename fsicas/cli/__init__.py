@@ -39,6 +39,7 @@ from .onset import add_onset_command
 from .outputs import check_outputs
 from .paper import add_paper_command
 from .progress import reporting
+from .sound import add_sound_command
 from .timedomain import add_time_commands
 
 __all__ = ["main", "build_parser", "EXIT_OK", "EXIT_FAILED_RESULT", "EXIT_ERROR"]
@@ -61,6 +62,7 @@ def build_parser() -> argparse.ArgumentParser:
     add_time_commands(sub)          # simulate, map (docs/simulate.md)
     add_cycle_commands(sub)         # lco, alias cycles (docs/cycles.md)
     add_onset_command(sub)          # onset, in physical units (docs/units.md)
+    add_sound_command(sub)          # sound, the radiated snore (docs/sound.md)
     _add_global_options(parser)
     for command in dict.fromkeys(sub.choices.values()):     # aliases share a parser
         _add_global_options(command, argparse.SUPPRESS)
