@@ -25,7 +25,7 @@ __all__ = ["add_sound_command"]
 SOUND_STIFFNESS, SOUND_EPS = 1e8, 0.1
 
 #: Units of the fields of the JSON (its meta.units).
-SOUND_UNITS = {"fundamental_hz": "Hz", "spl_db": "dB SPL re 20 uPa (RMS)",
+SOUND_UNITS = {"fundamental_hz": "Hz", "dominant_hz": "Hz", "spl_db": "dB SPL re 20 uPa (RMS)",
                   "harmonics_pa": "Pa (amplitudes)", "distance_m": "m", "period_s": "s",
                   "duration_s": "s", "sample_rate_hz": "Hz", "peak_pa": "Pa", "rms_pa": "Pa",
                   "wav_pa_per_count": "Pa per int16 count", "onset_s": "s", "offset_s": "s",

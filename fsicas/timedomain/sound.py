@@ -32,7 +32,7 @@ from ..units import Scales
 from .returns import cycles, poincare_returns, xdot_function
 
 __all__ = ["Sound", "AUDIO_RATE", "P_REF", "SOUND_SPEED", "HARMONICS", "flow_derivative",
-           "monopole_pressure", "spl_db", "harmonic_amplitudes", "cycle_sound",
+           "monopole_pressure", "spl_db", "harmonic_amplitudes", "looped_sound", "cycle_sound",
            "trajectory_sound", "write_wav"]
 
 #: Audio sample rate (Hz), reference pressure of dB SPL (Pa), speed of sound in air (m/s).
@@ -50,7 +50,9 @@ class Sound:
     ``spl_db`` (RMS level, dB re 20 µPa), ``harmonics_pa`` (amplitudes of the first
     :data:`HARMONICS` harmonics of the cycle, Pa), ``source`` ("cycle" or "trajectory"),
     ``period_s`` and, for a trajectory, ``onset_s`` and ``offset_s`` (first and last time
-    the level over one cycle exceeds a tenth of its largest)."""
+    the level over :data:`HEARD_WINDOW` exceeds :data:`HEARD_FRACTION` of its largest);
+    a trajectory's fundamental is that of the median period between the tip's Poincaré
+    returns while heard, its harmonics those of the cycle of that period nearest it."""
 
     rate: int
     pressure: np.ndarray
@@ -64,11 +66,20 @@ class Sound:
     offset_s: float | None = None
 
     @property
+    def dominant_hz(self) -> float | None:
+        """The frequency of the strongest of the reported harmonics (the pitch heard; for
+        symmetric channels the total flow repeats each half cycle: twice the fundamental)."""
+        if self.fundamental_hz is None:
+            return None
+        return (1 + int(np.argmax(self.harmonics_pa))) * self.fundamental_hz
+
+    @property
     def duration_s(self) -> float:
         return self.pressure.size / self.rate
 
     def to_json(self) -> dict:
-        return {"fundamental_hz": self.fundamental_hz, "spl_db": self.spl_db,
+        return {"fundamental_hz": self.fundamental_hz, "dominant_hz": self.dominant_hz,
+                "spl_db": self.spl_db,
                 "harmonics_pa": list(self.harmonics_pa), "distance_m": self.distance_m,
                 "sample_rate_hz": self.rate, "duration_s": self.duration_s,
                 "source": self.source, "period_s": self.period_s,
@@ -144,24 +155,23 @@ def _xdot_rows(traj, idx) -> np.ndarray:
     return np.array(xdot_function(model).map(idx.size)(traj.x[idx].T, P)).T
 
 
-def _periodic_spline(traj, t_a: float, t_b: float) -> CubicSpline:
-    """Periodic cubic spline of ``d(Q1 + Q2)/dt`` on the samples of [t_a, t_b) (shifted to
+def _periodic_spline(t, dqdt, t_a: float, t_b: float) -> CubicSpline:
+    """Periodic cubic spline of the samples ``dqdt`` at ``t`` in [t_a, t_b) (shifted to
     start at 0), closed by the first sample's value one period later."""
-    k = np.flatnonzero((traj.t >= t_a) & (traj.t < t_b))
+    k = np.flatnonzero((t >= t_a) & (t < t_b))
     if k.size < 8:
         raise ValueError(f"the cycle holds {k.size} output samples; refine the output step")
-    g = flow_derivative(traj, k)
-    s = np.r_[traj.t[k], traj.t[k[0]] + (t_b - t_a)] - traj.t[k[0]]
-    return CubicSpline(s, np.r_[g, g[0]], bc_type="periodic")
+    s = np.r_[t[k], t[k[0]] + (t_b - t_a)] - t[k[0]]
+    return CubicSpline(s, np.r_[dqdt[k], dqdt[k[0]]], bc_type="periodic")
 
 
-def cycle_sound(traj, scales: Scales, distance: float = 0.3, duration: float = 2.0,
-                rate: int = AUDIO_RATE, cycle: tuple[float, float] | None = None) -> Sound:
-    """The sound of the last settled cycle of ``traj`` (or of ``cycle`` = (t_a, t_b),
-    nondimensional), looped to ``duration`` seconds (module docstring)."""
+def looped_sound(t, dqdt, t_a: float, t_b: float, scales: Scales, distance: float = 0.3,
+                 duration: float = 2.0, rate: int = AUDIO_RATE) -> Sound:
+    """The sound of one period [t_a, t_b) of the samples ``dqdt`` of ``d(Q1 + Q2)/dt``
+    (nondimensional, per unit width) at times ``t``, looped to ``duration`` seconds."""
     _check(distance, duration, rate)
-    t_a, t_b = _last_cycle(traj) if cycle is None else cycle
-    spline, period = _periodic_spline(traj, t_a, t_b), t_b - t_a
+    t, dqdt = np.asarray(t, dtype=float), np.asarray(dqdt, dtype=float)
+    spline, period = _periodic_spline(t, dqdt, t_a, t_b), t_b - t_a
     scale = _pressure_scale(scales, distance)
     t_audio = np.arange(int(round(duration * rate))) / rate - distance / SOUND_SPEED
     p = scale * spline(np.mod(t_audio / scales.time, period))
@@ -171,29 +181,61 @@ def cycle_sound(traj, scales: Scales, distance: float = 0.3, duration: float = 2
                  "cycle", period_s)
 
 
+def cycle_sound(traj, scales: Scales, distance: float = 0.3, duration: float = 2.0,
+                rate: int = AUDIO_RATE, cycle: tuple[float, float] | None = None) -> Sound:
+    """The sound of the last settled cycle of ``traj`` (or of ``cycle`` = (t_a, t_b),
+    nondimensional), looped to ``duration`` seconds (module docstring)."""
+    _check(distance, duration, rate)
+    t_a, t_b = _last_cycle(traj) if cycle is None else cycle
+    k = np.flatnonzero((traj.t >= t_a) & (traj.t < t_b))
+    dqdt = np.zeros(traj.t.size)
+    dqdt[k] = flow_derivative(traj, k)
+    return looped_sound(traj.t, dqdt, t_a, t_b, scales, distance, duration, rate)
+
+
 def trajectory_sound(traj, scales: Scales, distance: float = 0.3, rate: int = AUDIO_RATE,
                      t_start: float = 0.0) -> Sound:
     """The sound of the whole trajectory from ``t_start`` (nondimensional), resampled at
-    ``rate``, with the snore's fundamental and harmonics from its loudest cycle and its
-    onset and offset (:class:`Sound`)."""
+    ``rate``, with the snore's onset, offset, fundamental and harmonics (:class:`Sound`)."""
     duration = (traj.t[-1] - t_start) * scales.time
     _check(distance, duration, rate)
     scale = _pressure_scale(scales, distance)
     spline = CubicSpline(traj.t, flow_derivative(traj))
     t_audio = t_start * scales.time + np.arange(int(duration * rate)) / rate - distance / SOUND_SPEED
     p = np.where(t_audio >= 0, scale * spline(np.maximum(t_audio, 0.0) / scales.time), 0.0)
-    returns, _ = poincare_returns(traj.t, traj.tip)
-    returns = returns[returns >= t_start]
-    if returns.size < 2:
+    onset, offset = _heard(p, rate, t_audio[0])
+    if onset is None:
         return Sound(rate, p, None, spl_db(p), (0.0,) * HARMONICS, distance, "trajectory", None)
-    cycle_p = [scale * spline(a + np.arange(_PERIOD_POINTS) * (b - a) / _PERIOD_POINTS)
-               for a, b in zip(returns[:-1], returns[1:])]
-    level = np.array([_rms(c) for c in cycle_p])
-    loud = int(np.argmax(level))
-    period_s = float(returns[loud + 1] - returns[loud]) * scales.time
-    heard = returns[:-1][level > 0.1 * level[loud]] * scales.time
-    return Sound(rate, p, 1.0 / period_s, spl_db(p), harmonic_amplitudes(cycle_p[loud]),
-                 distance, "trajectory", period_s, float(heard[0]), float(heard[-1]))
+    sel = (traj.t >= onset / scales.time) & (traj.t <= offset / scales.time)
+    returns, _ = poincare_returns(traj.t[sel], traj.tip[sel])
+    if returns.size < 3:
+        return Sound(rate, p, None, spl_db(p), (0.0,) * HARMONICS, distance, "trajectory",
+                     None, onset, offset)
+    periods = np.diff(returns)
+    j = int(np.argmin(np.abs(periods - np.median(periods))))
+    one = scale * spline(returns[j] + np.arange(_PERIOD_POINTS) * periods[j] / _PERIOD_POINTS)
+    period_s = float(np.median(periods)) * scales.time
+    return Sound(rate, p, 1.0 / period_s, spl_db(p), harmonic_amplitudes(one), distance,
+                 "trajectory", period_s, onset, offset)
+
+
+#: Window (s) of the level that tells when a snore is heard, and the fraction of the
+#: largest level it must reach.
+HEARD_WINDOW, HEARD_FRACTION = 0.1, 0.1
+
+
+def _heard(p, rate: int, t0: float) -> tuple[float | None, float | None]:
+    """First and last time (s; window starts) at which the RMS over
+    :data:`HEARD_WINDOW` exceeds :data:`HEARD_FRACTION` of its largest value."""
+    n = max(1, int(HEARD_WINDOW * rate))
+    windows = p[:p.size // n * n].reshape(-1, n)
+    if not windows.size:
+        return None, None
+    level = np.sqrt(np.mean(windows**2, axis=1))
+    loud = np.flatnonzero(level > HEARD_FRACTION * level.max()) if level.max() > 0 else []
+    if not len(loud):
+        return None, None
+    return t0 + loud[0] * n / rate, t0 + (loud[-1] + 1) * n / rate
 
 
 def write_wav(sound: Sound, path) -> float:

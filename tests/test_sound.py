@@ -1,0 +1,134 @@
+"""The radiated sound (fsicas.timedomain.sound, fsicas sound): the monopole's closed form
+for a sinusoidal flow, the exact flow derivative against the sampled outlet flow, the
+WAV's fundamental, the level of a known sine, the command line and its refusals."""
+import json
+
+import numpy as np
+import pytest
+from scipy.io import wavfile
+
+from fsicas import Scene
+from fsicas.cli import main
+from fsicas.timedomain.energy import outlet_flow_rates
+from fsicas.timedomain.integrators import Settings
+from fsicas.timedomain.run import run_case
+from fsicas.timedomain.sound import (AUDIO_RATE, cycle_sound, flow_derivative, looped_sound,
+                                     monopole_pressure, spl_db, write_wav)
+from fsicas.units import Scales
+
+#: Scales of a 3 cm strip with T = 10 ms (the M* = 1 cycle then sings at 764 Hz).
+SCALES = Scales(length=0.03, time=0.01, pressure=1.0, width=0.03, fluid_density=1.2, gap=0.004)
+
+
+@pytest.fixture(scope="module")
+def lco_run():
+    """A settled contact-free limit cycle, N = 4 (about 5 s)."""
+    run = run_case(Scene(mstar=1.0, ustar=6.5, zeta=0.01, modes=4), 12.0,
+                   settings=Settings(rtol=1e-8, atol=1e-10, dt_out=1e-3))
+    assert run.outcome.outcome == "lco"
+    return run
+
+
+def test_sinusoidal_flow_gives_the_closed_form_amplitude():
+    """Q(t) = Q̂ sin ωt per unit width: p̂ = ρ ω b Q̂ L² / T / (4π r) in SI units."""
+    q_hat, omega, r = 0.02, 2 * np.pi / 0.13, 0.3            # nondimensional Q̂, ω
+    t = np.linspace(0.0, 0.26, 401)
+    sound = looped_sound(t, q_hat * omega * np.cos(omega * t), 0.0, 0.13, SCALES, r, 0.5)
+    q_si = q_hat * SCALES.width * SCALES.length**2 / SCALES.time      # m^3/s
+    expected = SCALES.fluid_density * (omega / SCALES.time) * q_si / (4 * np.pi * r)
+    assert sound.harmonics_pa[0] == pytest.approx(expected, rel=1e-6)
+    assert max(sound.harmonics_pa[1:]) < 1e-6 * expected
+    assert np.max(np.abs(sound.pressure)) == pytest.approx(expected, rel=1e-6)
+    assert sound.fundamental_hz == pytest.approx(1 / (0.13 * SCALES.time), rel=1e-12)
+    assert monopole_pressure(4 * np.pi, 1.0, 1.0) == pytest.approx(1.0)
+
+
+def test_spl_of_a_known_sine():
+    t = np.arange(AUDIO_RATE) / AUDIO_RATE
+    p = 0.2 * np.sin(2 * np.pi * 440 * t)
+    assert spl_db(p) == pytest.approx(20 * np.log10(0.2 / np.sqrt(2) / 20e-6), abs=1e-9)
+    assert spl_db(np.sqrt(2) * 20e-6 * np.sin(2 * np.pi * 440 * t)) == pytest.approx(0.0, abs=1e-9)
+
+
+def test_flow_derivative_is_the_time_derivative_of_the_outlet_flow(lco_run):
+    """xdot route against second-order central differences of the sampled outlet flow
+    over the settled part: the difference is the differences' own O(h²) error (it grows
+    4x when the step doubles), 3e-3 of the signal at 200 samples per period."""
+    tr = lco_run.trajectory
+    half = tr.t.size // 2
+    g = flow_derivative(tr)
+    total = outlet_flow_rates(tr).sum(axis=1)
+    errors = []
+    for step in (1, 2):
+        fd = np.gradient(total[::step], tr.t[::step], edge_order=2)
+        errors.append(np.max(np.abs(fd - g[::step])[half // step:-2]))
+    assert errors[1] / errors[0] == pytest.approx(4.0, rel=0.1)
+    assert errors[0] < 5e-3 * np.max(np.abs(g))
+
+
+def _peak_frequency(samples, rate, lo, hi):
+    """Frequency of the largest Hann-windowed spectral peak in [lo, hi] Hz (zero padded,
+    parabolic refinement of the log magnitude)."""
+    n = 1 << 22
+    spec = np.abs(np.fft.rfft(samples * np.hanning(samples.size), n))
+    f = np.fft.rfftfreq(n, 1 / rate)
+    band = np.flatnonzero((f >= lo) & (f <= hi))
+    j = band[np.argmax(spec[band])]
+    a, b, c = np.log(spec[j - 1:j + 2])
+    return f[j] + 0.5 * (a - c) / (a - 2 * b + c) * (f[1] - f[0])
+
+
+def test_wav_fundamental_is_one_over_the_period(lco_run, tmp_path):
+    sound = cycle_sound(lco_run.trajectory, SCALES, 0.3, 0.5)
+    path = tmp_path / "lco.wav"
+    factor = write_wav(sound, path)
+    rate, counts = wavfile.read(path)
+    assert rate == AUDIO_RATE and counts.dtype == np.int16
+    assert np.max(np.abs(counts * factor - sound.pressure)) <= 0.5 * factor + 1e-15
+    f0 = 1 / (lco_run.outcome.period * SCALES.time)
+    assert sound.fundamental_hz == pytest.approx(f0, rel=1e-3)
+    # symmetric channels: the total flow repeats each half cycle, so the file's strongest
+    # line is the second harmonic and the line at 1/T is weak; every line sits on k/T
+    assert sound.harmonics_pa[0] < 1e-2 * sound.harmonics_pa[1]
+    assert sound.dominant_hz == pytest.approx(2 * sound.fundamental_hz, rel=1e-12)
+    found = _peak_frequency(counts.astype(float), rate, 0.5 * f0, 40 * f0)
+    assert found / 2 == pytest.approx(sound.fundamental_hz, rel=1e-3)
+
+
+def _sound_cli(capsys, tmp_path, *extra):
+    argv = ["sound", "--physical", "soft_palate", "--flow", "25L/min", "--modes", "4",
+            "--breath", "--duration", "1", "--dt-out", "5e-4", *extra, "--json"]
+    code = main(argv)
+    return code, json.loads(capsys.readouterr().out)
+
+
+def test_cli_writes_the_wav_and_json(capsys, tmp_path):
+    wav, png = tmp_path / "snore.wav", tmp_path / "spec.png"
+    code, out = _sound_cli(capsys, tmp_path, "--out", str(wav), "--plot", str(png))
+    assert code == 0, out
+    for key in ("fundamental_hz", "spl_db", "harmonics_pa", "distance_m", "meta",
+                "wav_pa_per_count", "onset_s", "offset_s"):
+        assert key in out
+    assert out["distance_m"] == 0.3 and len(out["harmonics_pa"]) == 10
+    assert out["meta"]["units"]["spl_db"].startswith("dB SPL")
+    rate, counts = wavfile.read(wav)
+    assert rate == 44100 and counts.size == pytest.approx(44100, abs=2)
+    assert np.max(np.abs(counts)) == 32767 and png.stat().st_size > 0
+    p = counts * out["wav_pa_per_count"]
+    assert spl_db(p) == pytest.approx(out["spl_db"], abs=0.01)
+
+
+@pytest.mark.parametrize("argv, option", [
+    (["sound", "--modes", "4"], "--physical"),
+    (["sound", "--physical", "soft_palate", "--distance", "0"], "--distance"),
+    (["sound", "--physical", "soft_palate", "--duration", "-1"], "--duration"),
+    (["sound", "--physical", "soft_palate", "--out", "snore.mp3"], "--out"),
+    (["sound", "--physical", "soft_palate", "--out", "/nonexistent/x.wav"], "--out"),
+    (["sound", "--physical", "soft_palate", "--plot", "spec.xyz"], "--plot"),
+    (["sound", "--physical", "soft_palate", "--flow", "20kg"], "--flow"),
+    (["sound", "--physical", "soft_palate", "--mstar", "1"], "--mstar"),
+])
+def test_bad_inputs_are_refused(capsys, argv, option):
+    assert main([*argv, "--json"]) == 2
+    error = json.loads(capsys.readouterr().out)["error"]
+    assert option in error
