@@ -11,10 +11,11 @@ import math
 import warnings
 
 from ..plots.sound import plot_sound
-from ..timedomain.breathing import PressureSchedule
 from ..timedomain.integrators import Settings
+from ..timedomain.outcome import classify
 from ..timedomain.run import run_case
-from ..timedomain.sound import AUDIO_RATE, cycle_sound, trajectory_sound, write_wav
+from ..timedomain.sound import (AUDIO_RATE, breath_trajectory, cycle_sound, trajectory_sound,
+                                write_wav)
 from .meta import cli_meta, record
 from .progress import reporter
 from .scene_options import add_scene_options, scene_from_args
@@ -42,8 +43,9 @@ def add_sound_command(sub) -> None:
     p.add_argument("--distance", type=float, default=0.3, help="listener distance r (m)")
     p.add_argument("--duration", type=float, default=2.0,
                    help="length of the sound (s); with --breath the breath's duration")
-    p.add_argument("--breath", action="store_true", help="one breath: the flow rises from 0 "
-                   "to --flow and back (|sin|) over --duration; onset and offset heard")
+    p.add_argument("--breath", action="store_true", help="one breath from rest: the flow "
+                   "rises from 0 to --flow and back (|sin|) over --duration; onset and offset "
+                   "heard")
     p.add_argument("--t-end", type=float, default=20.0, help="integration time to settle a "
                    "cycle (units of T; not with --breath)")
     p.add_argument("--dt-out", type=float, default=2e-4, help="output step (units of T)")
@@ -85,12 +87,15 @@ def _cmd_sound(args) -> dict:
     say = reporter(args)
     say.stage(f"time integration to t = {t_end:g} T ({scene.scales.seconds(t_end):.3g} s), "
               f"N = {scene.modes}")
-    schedule = PressureSchedule.breath(scene.ustar, t_end) if args.breath else None
-    run = run_case(scene, t_end, settings=settings, schedule=schedule,
-                   stop_early=not args.breath, progress=say.bars)
-    sound = _sound(run, scene, args)
-    out = {**sound.to_json(), "outcome": run.outcome.outcome, "status": run.trajectory.status,
-           "message": run.trajectory.message, "t_end_reached": float(run.trajectory.t[-1]),
+    if args.breath:
+        traj, steady = breath_trajectory(scene, t_end, settings, progress=say.bars)
+        outcome = classify(traj, steady).outcome
+        sound = trajectory_sound(traj, scene.scales, args.distance, AUDIO_RATE)
+    else:
+        run = run_case(scene, t_end, settings=settings, progress=say.bars)
+        traj, outcome, sound = run.trajectory, run.outcome.outcome, _sound(run, scene, args)
+    out = {**sound.to_json(), "outcome": outcome, "status": traj.status,
+           "message": traj.message, "t_end_reached": float(traj.t[-1]),
            "contact": scene.contact, "out": args.out, "plot": args.plot}
     if args.out:
         out["wav_pa_per_count"] = write_wav(sound, args.out)
@@ -101,11 +106,9 @@ def _cmd_sound(args) -> dict:
 
 
 def _sound(run, scene, args):
-    """The cycle looped, or the trajectory (a breath, or the last ``--duration`` of a run
-    that did not settle, with a warning); ValueError if the run failed before that."""
+    """The cycle looped, or the last ``--duration`` of a run that did not settle (with a
+    warning); ValueError if the run failed before that."""
     traj, sc = run.trajectory, scene.scales
-    if args.breath:
-        return trajectory_sound(traj, sc, args.distance, AUDIO_RATE)
     if run.outcome.period is not None:
         return cycle_sound(traj, sc, args.distance, args.duration, AUDIO_RATE)
     if traj.failed or run.outcome.outcome == "decay" or (

@@ -28,12 +28,16 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.interpolate import CubicSpline
 
+from ..linear.steady import steady_state
 from ..units import Scales
+from .breathing import PressureSchedule
+from .integrators import Settings, initial_state, simulate
 from .returns import cycles, poincare_returns, xdot_function
+from .run import guarded_model
 
 __all__ = ["Sound", "AUDIO_RATE", "P_REF", "SOUND_SPEED", "HARMONICS", "flow_derivative",
            "monopole_pressure", "spl_db", "harmonic_amplitudes", "looped_sound", "cycle_sound",
-           "trajectory_sound", "write_wav"]
+           "trajectory_sound", "breath_trajectory", "write_wav"]
 
 #: Audio sample rate (Hz), reference pressure of dB SPL (Pa), speed of sound in air (m/s).
 AUDIO_RATE, P_REF, SOUND_SPEED = 44100, 20e-6, 343.0
@@ -236,6 +240,20 @@ def _heard(p, rate: int, t0: float) -> tuple[float | None, float | None]:
     if not len(loud):
         return None, None
     return t0 + loud[0] * n / rate, t0 + (loud[-1] + 1) * n / rate
+
+
+def breath_trajectory(scene, t_end: float, settings: Settings = Settings(),
+                      perturbation=1e-2, progress: bool = False):
+    """One breath of ``t_end`` (nondimensional): ``U*(t) = scene.ustar |sin(π t / t_end)|``
+    (:class:`~fsicas.timedomain.breathing.PressureSchedule`), started from rest (no flow,
+    no pressure drop: a consistent start) with the beam perturbed as by
+    :func:`~fsicas.timedomain.integrators.initial_state`, run to the end."""
+    model, _ = guarded_model(scene)
+    steady = steady_state(scene, model)
+    x0 = initial_state(model, steady, perturbation) - np.asarray(steady.x, dtype=float)
+    x0[-2:] = 0.0
+    return simulate(model, steady, t_end, settings=settings, x0=x0, progress=progress,
+                    schedule=PressureSchedule.breath(scene.ustar, t_end)), steady
 
 
 def write_wav(sound: Sound, path) -> float:
