@@ -123,7 +123,7 @@ def _sound(run, scene, args):
                          f"{args.duration:g} s: raise --t-end")
     warnings.warn(f"the oscillation did not settle ({run.outcome.outcome} by t = "
                   f"{traj.t[-1]:.4g} T): the sound is the last {args.duration:g} s of the "
-                  "trajectory, its fundamental that of its loudest cycle")
+                  "trajectory, its fundamental that of the median period between the tip's returns")
     return trajectory_sound(traj, sc, args.distance, AUDIO_RATE,
                             traj.t[-1] - args.duration / sc.time)
 
