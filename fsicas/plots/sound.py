@@ -33,7 +33,7 @@ def plot_sound(sound, path=None, title: str | None = None):
     shown = sound.pressure.size if sound.source != "cycle" else \
         min(sound.pressure.size, int(4 * sound.period_s * sound.rate))
     ax[0].plot(np.arange(shown) / sound.rate, sound.pressure[:shown] * 1e3, lw=0.7)
-    ax[0].set_xlabel("time $t$ (s)")
+    ax[0].set_xlabel("time from the start of the sound (s)")
     ax[0].set_ylabel(f"pressure $p$ at $r$ = {sound.distance_m:g} m (mPa)")
     f0 = sound.fundamental_hz
     ax[0].set_title(title or (f"{sound.spl_db:.1f} dB SPL" +
@@ -44,6 +44,6 @@ def plot_sound(sound, path=None, title: str | None = None):
     mesh = ax[1].pcolormesh(t, f[keep], level[keep], shading="nearest", cmap="magma",
                             vmin=np.max(level[keep]) - 60, vmax=np.max(level[keep]))
     fig.colorbar(mesh, ax=ax[1], label="level (dB re 20 µPa)")
-    ax[1].set_xlabel("time $t$ (s)")
+    ax[1].set_xlabel("time from the start of the sound (s)")
     ax[1].set_ylabel("frequency (Hz)")
     return finish(fig, path)
