@@ -10,7 +10,9 @@ one colour per theory, lines broken at the switches). omega is in rad per unit T
 same T for every theory (``docs/beam.md``); omega_1 is each theory's own first in-vacuo
 frequency.
 
-    python benchmarks/beam_boundaries.py [--count 29] [--out docs/figures/beam_boundaries.png]
+    python benchmarks/beam_boundaries.py [--count 29] [--modes 10] [--out docs/figures/beam_boundaries.png]
+
+(``--modes 16`` or ``24`` with another ``--out``: the truncation check of ``docs/beam.md``.)
 """
 from __future__ import annotations
 
@@ -35,12 +37,12 @@ THEORIES.update({f"Timoshenko e/L = {s:g}": dict(beam="timoshenko", slenderness=
 REPORTED = (0.1, 1.0, 10.0)
 
 
-def boundaries(count: int, say=print) -> dict:
+def boundaries(count: int, modes: int = 10, say=print) -> dict:
     """label -> StabilityBoundary of each theory on ``count`` M* in [0.01, 100]."""
     mstars = np.geomspace(0.01, 100.0, count)
     out = {}
     for label, change in THEORIES.items():
-        scene = PAPER_SCENE.replace(**change)
+        scene = PAPER_SCENE.replace(modes=modes, **change)
         t0 = time.perf_counter()
         out[label] = stability_boundary(scene, mstars, build_model(scene))
         say(f"  {label}: {time.perf_counter() - t0:.0f} s, "
@@ -77,7 +79,8 @@ def draw(curves: dict, path: Path):
     dashed (it lies on Euler–Bernoulli)."""
     fig = plot_boundary_variants(curves)
     left, right = fig.axes[:2]
-    left.set_title("effect of the beam theory", fontsize=right.title.get_fontsize())
+    left.set_title(f"effect of the beam theory (N = {next(iter(curves.values())).scene.modes})",
+                   fontsize=right.title.get_fontsize())
     for ax in (left, right):
         for line in ax.get_lines():
             if str(line.get_gid()).startswith("Timoshenko e/L = 0.01:"):
@@ -89,10 +92,11 @@ def draw(curves: dict, path: Path):
 def main(argv=None) -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--count", type=int, default=29, help="M* values in [0.01, 100]")
+    parser.add_argument("--modes", type=int, default=10, help="N, the modes kept")
     parser.add_argument("--out", type=Path, default=ROOT / "docs" / "figures" / "beam_boundaries.png")
     args = parser.parse_args(argv)
-    print(f"flutter boundaries, N = {PAPER_SCENE.modes}, {args.count} M* in [0.01, 100]")
-    curves = boundaries(args.count)
+    print(f"flutter boundaries, N = {args.modes}, {args.count} M* in [0.01, 100]")
+    curves = boundaries(args.count, args.modes)
     print(table(curves))
     args.out.parent.mkdir(parents=True, exist_ok=True)
     draw(curves, args.out)
