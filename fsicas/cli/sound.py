@@ -120,7 +120,9 @@ def _sound(run, scene, args):
     span = sc.time * (traj.t[-1] - traj.t[0])
     if span < args.duration:
         raise ValueError(f"the run ({span:.3g} s) is shorter than --duration "
-                         f"{args.duration:g} s: raise --t-end")
+                         f"{args.duration:g} s and did not settle ({run.outcome.outcome}): "
+                         f"raise --t-end to at least {args.duration / sc.time:.4g} (T = "
+                         f"{sc.time:.4g} s) or shorten --duration")
     warnings.warn(f"the oscillation did not settle ({run.outcome.outcome} by t = "
                   f"{traj.t[-1]:.4g} T): the sound is the last {args.duration:g} s of the "
                   "trajectory, its fundamental that of the median period between the tip's returns")
