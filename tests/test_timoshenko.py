@@ -370,3 +370,19 @@ def test_fe_frequencies_to_1e8_with_32_elements(s):
     beam = TimoshenkoBeam(s, 0.45)
     fe = timoshenko_fe_modes(10, np.array([0.0, 1.0]), beam, n_elements=32)
     assert np.allclose(fe.omega, timoshenko_frequencies(10, beam), rtol=1e-8, atol=0)
+
+
+def test_map_command_takes_the_beam_options(tmp_path, capsys):
+    """``fsicas map --beam timoshenko --slenderness 0.3``: the results file's header holds
+    the beam; a bad slenderness is refused before any work, naming the option."""
+    import json
+    from fsicas.cli import main
+    out = tmp_path / "m.jsonl"
+    code = main(["map", "--ustar", "2:2:1", "--mstar", "1:1:1", "--modes", "4", "--t-end", "1",
+                 "--beam", "timoshenko", "--slenderness", "0.3", "--workers", "1",
+                 "--out", str(out), "--json"])
+    assert code == 0 and sum(json.loads(capsys.readouterr().out)["counts"].values()) == 1
+    assert json.loads(out.read_text().splitlines()[0])["header"]["scene"]["slenderness"] == 0.3
+    code = main(["map", "--ustar", "2:2:1", "--mstar", "1:1:1", "--beam", "timoshenko",
+                 "--slenderness", "0.9", "--out", str(tmp_path / "n.jsonl"), "--json"])
+    assert code == 2 and "slenderness" in json.loads(capsys.readouterr().out)["error"]

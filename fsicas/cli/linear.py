@@ -16,7 +16,7 @@ from ..plots.linear import plot_boundary, plot_eigenvalues, plot_mode_shapes
 from .meta import record
 from .progress import reporter
 from .ranges import parse_range
-from .scene_options import add_beam_options, add_scene_options, scene_from_args
+from .scene_options import add_beam_options, add_scene_options, beam_fields, scene_from_args
 
 __all__ = ["add_linear_commands"]
 
@@ -54,9 +54,7 @@ def _add_boundary_command(sub) -> None:
 def _cmd_modes(args) -> dict:
     if args.modes is None or not 1 <= args.modes <= MAX_MODES:
         raise ValueError(f"--modes must be an integer in [1, {MAX_MODES}], got {args.modes}")
-    beam = {k: getattr(args, k) for k in ("beam", "slenderness", "poisson", "shear_coefficient")
-            if getattr(args, k) is not None}
-    scene = Scene(modes=args.modes, **beam)       # checks the beam options, naming them
+    scene = Scene(modes=args.modes, **beam_fields(args))   # checks the beam options, naming them
     if scene.beam == "timoshenko":   # beta = sqrt(omega), the thin beam's beta_n (docs/beam.md)
         omega = timoshenko_frequencies(args.modes, TimoshenkoBeam(
             scene.slenderness, scene.poisson, scene.shear_coefficient))

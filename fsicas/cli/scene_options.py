@@ -8,7 +8,7 @@ import argparse
 from ..physical import Flow, Physical, load_physical, parse_flow, preset_names
 from ..scene import Scene, load_scene
 
-__all__ = ["SCENE_OPTIONS", "BEAM_OPTIONS", "add_scene_options", "add_beam_options",
+__all__ = ["SCENE_OPTIONS", "BEAM_OPTIONS", "add_scene_options", "add_beam_options", "beam_fields",
            "scene_from_args", "physical_from_args"]
 
 #: CLI option (``--quad-nodes`` for ``quad_nodes``) -> type, one per Scene field.
@@ -71,6 +71,11 @@ def add_beam_options(group) -> None:
     for name, (kind, text) in BEAM_OPTIONS.items():
         group.add_argument("--" + name.replace("_", "-"), dest=name, type=kind, default=None,
                            metavar=name.upper(), help=text)
+
+
+def beam_fields(args: argparse.Namespace) -> dict:
+    """The beam options given on the command line, as Scene fields."""
+    return {k: getattr(args, k) for k in BEAM_OPTIONS if getattr(args, k, None) is not None}
 
 
 def _add_physical_options(parser: argparse.ArgumentParser) -> None:

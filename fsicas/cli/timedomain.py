@@ -14,7 +14,7 @@ from ..timedomain.run import run_case
 from .meta import record
 from .progress import reporter
 from .ranges import parse_range
-from .scene_options import add_scene_options, scene_from_args
+from .scene_options import add_beam_options, add_scene_options, beam_fields, scene_from_args
 
 __all__ = ["add_time_commands"]
 
@@ -53,6 +53,7 @@ def _add_map_command(sub) -> None:
                    "(e.g. tcp://host:8786) instead of local processes; needs the parallel extra")
     p.add_argument("--out", default="impact_map.jsonl", help="results file (resumable)")
     p.add_argument("--plot", metavar="FILE", help="write Fig. 4 to FILE")
+    add_beam_options(p.add_argument_group("beam theory (docs/beam.md)"))
     p.add_argument("--json", action="store_true", help="print one JSON object on stdout")
     p.set_defaults(run=_cmd_map)
 
@@ -91,7 +92,7 @@ def _cmd_simulate(args) -> dict:
 def _cmd_map(args) -> dict:
     ustars = parse_range(args.ustar, "ustar", log=False)
     mstars = parse_range(args.mstar, "mstar", log=True)
-    scene = MAP_SCENE.replace(modes=args.modes)
+    scene = MAP_SCENE.replace(modes=args.modes, **beam_fields(args))
     record(args, scene, ustar_values=ustars, mstar_values=mstars)
     reporter(args).stage(f"impact map: {ustars.size * mstars.size} points, t_end = "
                          f"{args.t_end:g}, into {args.out}")
