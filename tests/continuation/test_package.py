@@ -22,7 +22,7 @@ def test_public_names():
     assert set(C.__all__) == {
         "Branch", "ContinuationIterator", "ContinuationSettings", "EigenSettings",
         "EquilibriumProblem", "FoldCurveProblem", "HopfCurveProblem", "NewtonSettings",
-        "PALC", "Problem", "SpecialPoint", "Step", "VectorField", "continuation",
+        "PALC", "Problem", "SpecialPoint", "Step", "VectorField", "continuation", "observing",
         "first_lyapunov", "hopf_point", "CollocationSettings", "CycleProblem",
         "cycle_from_hopf", "ShootingProblem", "ShootingSettings",
         "cycle_from_pd", "correct", "Event", "Lifted", "Status"}
