@@ -235,18 +235,7 @@ def test_beam_rows_are_the_projection_of_the_load_on_phi():
     load from the independent field route), so the flow load projects on phi alone."""
     scene = Scene(mstar=2.0, ustar=4.0, modes=5, channel1=Profile.linear(0.05, 0.035),
                   channel2=Profile.constant(0.05), **THICK)
-    model = build_model(scene)
-    rng = np.random.default_rng(1)
-    x0 = np.r_[0.1 * rng.normal(size=5) / np.arange(1, 6) ** 2,
-               1e-3 * rng.normal(size=5) / np.arange(1, 6) ** 2, 0.2, 0.15]
-    p = model.parameters(pressure_drop=30.0)
-    xdot = model.xdot(x0, p)
-    grid = np.linspace(0.0, 1.0, 16001)
-    load = flow_fields(scene, x0, xdot, 30.0, grid).load
-    modes = modal_basis(scene, grid)
-    lhs = xdot[:5] + modes.omega**2 * x0[5:10]
-    rhs = simpson(modes.phi * load, x=grid)
-    assert np.allclose(lhs, rhs, rtol=1e-9, atol=1e-9 * np.max(np.abs(rhs)))
+    _check_beam_rows_against_the_field_route(scene, seed=1)
 
 
 def test_critical_velocity_is_lower_on_a_thick_beam():
@@ -317,18 +306,7 @@ def test_model_on_a_tapered_thick_beam():
     taper = Profile.linear(1.0, 0.6)
     scene = Scene(mstar=2.0, ustar=4.0, modes=5, channel1=Profile.linear(0.05, 0.035),
                   channel2=Profile.constant(0.05), thickness=taper, **THICK)
-    model = build_model(scene)
-    rng = np.random.default_rng(2)
-    x0 = np.r_[0.1 * rng.normal(size=5) / np.arange(1, 6) ** 2,
-               1e-3 * rng.normal(size=5) / np.arange(1, 6) ** 2, 0.2, 0.15]
-    p = model.parameters(pressure_drop=30.0)
-    xdot = model.xdot(x0, p)
-    grid = np.linspace(0.0, 1.0, 16001)
-    load = flow_fields(scene, x0, xdot, 30.0, grid).load
-    modes = modal_basis(scene, grid)
-    lhs = xdot[:5] + modes.omega**2 * x0[5:10]
-    rhs = simpson(modes.phi * load, x=grid)
-    assert np.allclose(lhs, rhs, rtol=1e-9, atol=1e-9 * np.max(np.abs(rhs)))
+    _check_beam_rows_against_the_field_route(scene, seed=2)
     thick = Scene(mstar=1.0, modes=6, thickness=taper, **THICK)
     thin = Scene(mstar=1.0, modes=6, thickness=taper)
     u_t = critical_velocity(thick, build_model(thick)).ustar
@@ -386,3 +364,20 @@ def test_map_command_takes_the_beam_options(tmp_path, capsys):
     code = main(["map", "--ustar", "2:2:1", "--mstar", "1:1:1", "--beam", "timoshenko",
                  "--slenderness", "0.9", "--out", str(tmp_path / "n.jsonl"), "--json"])
     assert code == 2 and "slenderness" in json.loads(capsys.readouterr().out)["error"]
+
+
+def _check_beam_rows_against_the_field_route(scene, seed):
+    """dr/dt + w^2 q of the model at a random state equals ∫ (p2 - p1) phi_n of the load
+    from the independent field route (N = 5, Δp = 30)."""
+    model = build_model(scene)
+    rng = np.random.default_rng(seed)
+    x0 = np.r_[0.1 * rng.normal(size=5) / np.arange(1, 6) ** 2,
+               1e-3 * rng.normal(size=5) / np.arange(1, 6) ** 2, 0.2, 0.15]
+    p = model.parameters(pressure_drop=30.0)
+    xdot = model.xdot(x0, p)
+    grid = np.linspace(0.0, 1.0, 16001)
+    load = flow_fields(scene, x0, xdot, 30.0, grid).load
+    modes = modal_basis(scene, grid)
+    lhs = xdot[:5] + modes.omega**2 * x0[5:10]
+    rhs = simpson(modes.phi * load, x=grid)
+    assert np.allclose(lhs, rhs, rtol=1e-9, atol=1e-9 * np.max(np.abs(rhs)))
