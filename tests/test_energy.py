@@ -5,7 +5,7 @@ import pytest
 from fsicas import Scene
 from fsicas.timedomain.energy import energy_balance, outlet_flow_rates
 from fsicas.model.contact import contact_load
-from fsicas.timedomain.outcome import poincare_returns
+from fsicas.timedomain.returns import poincare_returns
 from fsicas.timedomain.run import run_case
 from fsicas.timedomain.integrators import Settings
 

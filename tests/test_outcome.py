@@ -5,7 +5,8 @@ import numpy as np
 import pytest
 
 from fsicas.cli import main
-from fsicas.timedomain.outcome import Criteria, poincare_returns
+from fsicas.timedomain.outcome import Criteria
+from fsicas.timedomain.returns import poincare_returns
 from fsicas.timedomain.run import run_case
 from fsicas.timedomain.integrators import Settings
 from fsicas.linear.stability import eigenvalues

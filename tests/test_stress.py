@@ -3,7 +3,7 @@ import numpy as np
 import pytest
 
 from fsicas import Profile, build_model, steady_state
-from fsicas.timedomain.outcome import poincare_returns
+from fsicas.timedomain.returns import poincare_returns
 from fsicas.linear.hopf import critical_velocity
 from fsicas.timedomain.run import run_case
 from fsicas.timedomain.integrators import Settings, eigenvector_state, simulate

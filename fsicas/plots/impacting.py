@@ -24,7 +24,7 @@ import numpy as np
 
 from ..model.assembly import modal_basis
 from ..model.contact import contact_load, reference_force
-from ..timedomain.outcome import poincare_returns
+from ..timedomain.returns import poincare_returns
 from .backend import NONDIM, PALETTE, finish, outcome_words, pyplot, styled, subplots
 
 __all__ = ["CycleView", "cycle_view", "cycle_window", "return_period", "tip_spectrum",

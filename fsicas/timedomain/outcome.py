@@ -44,10 +44,9 @@ import scipy.optimize
 from ..model.assembly import Model
 from ..model.contact import GAP_POINTS, contact_load, gaps, reference_force
 from .integrators import Trajectory
-from .returns import Cycles, cycles, poincare_returns, xdot_function
+from .returns import Cycles, cycles, xdot_rows
 
-__all__ = ["Criteria", "Outcome", "OutcomeKind", "classify", "Monitor", "poincare_returns",
-           "SETTLING_PER_RTOL"]
+__all__ = ["Criteria", "Outcome", "OutcomeKind", "classify", "Monitor", "SETTLING_PER_RTOL"]
 
 #: What a run did (module docstring): "decay" back to the steady state; "lco" a limit
 #: cycle without contact; "impacting_lco" a settled cycle with wall contact; "contact" a
@@ -283,10 +282,8 @@ class Monitor:
 
     def _xdot(self, t, X, idx) -> np.ndarray:
         """``xdot`` at the samples ``idx`` (rows), at the run's parameters."""
-        P = np.tile(np.asarray(self.steady.p, dtype=float)[:, None], (1, len(idx)))
-        if self.pressure is not None:
-            P[self.model.index("pressure_drop")] = self.pressure(t[idx])
-        return np.array(xdot_function(self.model).map(len(idx))(X[idx].T, P)).T
+        dp = None if self.pressure is None else self.pressure(t[idx])
+        return xdot_rows(self.model, X[idx], self.steady.p, dp)
 
     def _measure(self, kind, t, X, cyc, change, info, settled) -> Outcome:
         m = self.criteria.cycles

@@ -26,7 +26,7 @@ import numpy as np
 
 from ..model.assembly import Model, per_model
 
-__all__ = ["poincare_returns", "Cycles", "cycles", "xdot_function"]
+__all__ = ["poincare_returns", "Cycles", "cycles", "xdot_rows"]
 
 
 def _crossings(y, y_ref) -> np.ndarray:
@@ -78,11 +78,21 @@ def _largest(coef) -> float:
 
 
 @per_model
-def xdot_function(model: Model) -> ca.Function:
+def _xdot_function(model: Model) -> ca.Function:
     """``xdot = M(x, p)⁻¹ F(x, p)``."""
     x = ca.MX.sym("x", model.n_state)
     p = ca.MX.sym("p", len(model.parameter_names))
     return ca.Function("xdot", [x, p], [ca.solve(model.mass(x, p), model.rhs(x, p))])
+
+
+def xdot_rows(model: Model, X, p, pressure_drop=None) -> np.ndarray:
+    """``xdot = M⁻¹F`` at the states ``X`` (rows), at parameters ``p``, with one pressure
+    drop per row when ``pressure_drop`` is given (a scheduled run), in one mapped call."""
+    X = np.atleast_2d(np.asarray(X, dtype=float))
+    P = np.tile(np.asarray(p, dtype=float)[:, None], (1, len(X)))
+    if pressure_drop is not None:
+        P[model.index("pressure_drop")] = pressure_drop
+    return np.array(_xdot_function(model).map(len(X))(X.T, P)).T
 
 
 @dataclass(frozen=True)

@@ -8,7 +8,7 @@ field: at the listener distance r,
 with ``Q1 + Q2`` the outlet flow rates per unit width (:func:`fsicas.timedomain.energy.outlet_flow_rates`;
 their sum is the inlet total ``x[-2] + x[-1]``, the beam only moves fluid between the
 channels) and b the width. The time derivative is exact at each output sample:
-``d/dt (Q1 + Q2) = ẋ[-2] + ẋ[-1]`` with ``ẋ = M⁻¹F`` (:func:`fsicas.timedomain.returns.xdot_function`).
+``d/dt (Q1 + Q2) = ẋ[-2] + ẋ[-1]`` with ``ẋ = M⁻¹F`` (:func:`fsicas.timedomain.returns.xdot_rows`).
 In SI units ``dQ/dt = b L² / T² · d(Q1* + Q2*)/dt*`` (``Scales``: L, T, b, ρ_f).
 
 Signals (:class:`Sound`, sampled at :data:`AUDIO_RATE` by default):
@@ -32,7 +32,7 @@ from ..linear.steady import steady_state
 from ..units import Scales
 from .breathing import PressureSchedule
 from .integrators import Settings, initial_state, simulate
-from .returns import cycles, poincare_returns, xdot_function
+from .returns import cycles, poincare_returns, xdot_rows
 from .run import guarded_model
 
 __all__ = ["Sound", "AUDIO_RATE", "P_REF", "SOUND_SPEED", "HARMONICS", "flow_derivative",
@@ -153,10 +153,7 @@ def _last_cycle(traj) -> tuple[float, float]:
 
 
 def _xdot_rows(traj, idx) -> np.ndarray:
-    model = traj.model
-    P = np.tile(np.asarray(traj.p, dtype=float)[:, None], (1, idx.size))
-    P[model.index("pressure_drop")] = traj.pressure_drop[idx]
-    return np.array(xdot_function(model).map(idx.size)(traj.x[idx].T, P)).T
+    return xdot_rows(traj.model, traj.x[idx], traj.p, traj.pressure_drop[idx])
 
 
 def _periodic_spline(t, dqdt, t_a: float, t_b: float) -> CubicSpline:
