@@ -6,9 +6,8 @@ frequency (Hz), pressure drop (Pa), sub- or supercritical, and the margin to the
 """
 from __future__ import annotations
 
-from ..linear.hopf import critical_velocity
+from ..linear.onset import onset_at_own_flow
 from ..model.assembly import build_model
-from ..physical import Flow
 from ..physical_report import onset_json, scales_json
 from ..scene import MAX_ABS_USTAR
 from .scene_options import add_scene_options, physical_from_args, scene_from_args
@@ -17,8 +16,6 @@ __all__ = ["add_onset_command"]
 
 #: Default search bound in U*, raised to 1.5 times the reference flow's U* above it.
 USTAR_MAX = 40.0
-#: Fixed-point steps of the friction taken from the viscosity at the onset's own flow.
-FRICTION_STEPS, FRICTION_RTOL = 12, 1e-6
 _HOPF_KEYS = ("mstar", "ustar_crit", "pressure_drop", "omega", "freq_ratio", "l1",
               "criticality", "dominant_mode")
 
@@ -43,25 +40,6 @@ def _search_bound(args, reference: float | None) -> float:
     return min(max(USTAR_MAX, 1.5 * (reference or 0.0)), MAX_ABS_USTAR)
 
 
-def _onset(scene, physical, ustar_max):
-    """The first Hopf point; with ``physical`` (whose friction comes from a viscosity)
-    the friction is taken at the onset's own flow, by fixed-point steps from the
-    reference flow's, and the Reynolds number of the last step is returned."""
-    model = build_model(scene)
-    hopf = critical_velocity(scene, model, ustar_max)
-    reynolds = None
-    for _ in range(FRICTION_STEPS if physical is not None else 0):
-        if hopf is None:
-            break
-        flow = Flow("onset", "velocity", scene.scales.m_per_s(hopf.ustar))
-        friction, reynolds = physical.friction(flow)
-        if abs(friction - scene.friction) <= FRICTION_RTOL * scene.friction:
-            break
-        scene = scene.replace(friction=friction)
-        hopf = critical_velocity(scene, model, ustar_max)
-    return scene, hopf, reynolds
-
-
 def _cmd_onset(args) -> dict:
     given = physical_from_args(args)
     scene = scene_from_args(args)
@@ -70,7 +48,8 @@ def _cmd_onset(args) -> dict:
     ustar_max = _search_bound(args, reference)
     by_viscosity = given is not None and "viscosity" in given[0].values and \
         args.friction is None and "friction" not in given[0].scene_fields
-    scene, hopf, reynolds = _onset(scene, given[0] if by_viscosity else None, ustar_max)
+    scene, hopf, reynolds = onset_at_own_flow(scene, build_model(scene), ustar_max,
+                                              given[0] if by_viscosity else None)
     found = {k: v for k, v in hopf.to_json().items() if k in _HOPF_KEYS} if hopf else \
         {k: (scene.mstar if k == "mstar" else None) for k in _HOPF_KEYS}
     out = {"found": hopf is not None, **found, "ustar_reference": reference,

@@ -3,10 +3,11 @@ stability boundary in (M*, U*), through the generic ``continuation`` library."""
 
 from .boundary import HopfCurve, ModeSwitch, StabilityBoundary, stability_boundary
 from .hopf import CriticalVelocityError, HopfPoint, critical_velocity, hopf_points
+from .onset import onset_at_own_flow
 from .stability import LinearStability, eigenvalues, linear_stability
 from .steady import SteadyState, SteadyStateError, steady_state, straight_pressure_drop
 
 __all__ = ["HopfCurve", "ModeSwitch", "StabilityBoundary", "stability_boundary",
-           "CriticalVelocityError", "HopfPoint", "critical_velocity", "hopf_points",
+           "CriticalVelocityError", "HopfPoint", "critical_velocity", "hopf_points", "onset_at_own_flow",
            "LinearStability", "eigenvalues", "linear_stability", "SteadyState",
            "SteadyStateError", "steady_state", "straight_pressure_drop"]
