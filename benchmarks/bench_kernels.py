@@ -48,7 +48,7 @@ import numpy as np  # noqa: E402
 
 import continuation as C  # noqa: E402
 from continuation._newton import factorize  # noqa: E402
-from continuation._palc import bordered  # noqa: E402
+from continuation._sparse import append_row  # noqa: E402
 
 BACKENDS = ("graph", "blocks")
 
@@ -178,7 +178,7 @@ def corrector_iteration(case: Case, timers: list) -> dict:
     before = sum(t.total for t in timers)
     t0 = time.perf_counter()
     r = np.append(prob.residual(X), 0.0)
-    A = bordered(prob.system.jacobian(X), tau)
+    A = append_row(prob.system.jacobian(X), tau)
     t1 = time.perf_counter()
     lu = factorize(A)
     lu.solve(r)

@@ -11,7 +11,7 @@ import time
 import numpy as np
 
 import continuation as C
-from bench_kernels import Case, factorize, bordered, instrument, once
+from bench_kernels import Case, factorize, instrument, once
 
 
 class TimedLU:
@@ -168,7 +168,7 @@ def shooting_row(modes: int, reps: int) -> str:
     probs = {j: C.ShootingProblem(cyc.vf, nodes, T, cyc.par_dict(X), cyc.active,
                                   settings=C.ShootingSettings(**kw))
              for j, kw in SHOOTING.items()}
-    iteration = lambda p, X: factorize(bordered(p.jacobian(X), np.ones(X.size))).solve(
+    iteration = lambda p, X: factorize(p.bordered_jacobian(X, np.ones(X.size))).solve(
         np.append(p.residual(X), 0.0))
     t = {j: [] for j in probs}
     rng = np.random.default_rng(0)

@@ -13,7 +13,8 @@ so their exact derivatives only need the vector field and its Jacobians at the
     d r_ik / d T   = -h_i F(u_k),
     d r_ik / d p   = d(M v)/dp |_(u_k, v = u'_k) - h_i T F_p(u_k),
 
-and the phase row ``c . U`` has the derivative ``c``. One mapped CasADi call
+and the phase row ``c . U`` has the derivative ``c``. ``interval_jacobian`` gives the same
+matrix as dense interval blocks for the condensed Newton solver (``_condensed``). One mapped CasADi call
 evaluates ``F, M v, F_x, d(M v)/dx, M, F_p, d(M v)/dp`` at all points (the matrix
 blocks on the union ``S`` of their structural patterns); the matrix is assembled by
 NumPy on a sparsity pattern fixed per ``(NTST, NCOL)``: the CSC index arrays and the
@@ -26,14 +27,14 @@ see :class:`PointKernel`).
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-
 import casadi as ca
 import numpy as np
 import scipy.sparse as sp
 
 from ._collocation import collocation, interval_nodes
+from ._condensed import CollocationJacobian
 from ._lifted import LiftedBatch
+from ._sparse import Layout, layout
 from .compilation import compiled_or_none, has_compiler
 from ._symbolic import BufferedFunction, as_sx_function
 from ._systems import system
@@ -86,10 +87,11 @@ class PointKernel:
 
     ``backend`` 'mx': the single-point functions mapped over the points in CasADi's
     virtual machine (expanded to SX when the VectorField is SX); 'compiled': the
-    single-point Jacobian function compiled to C (``continuation.compilation``, cached on disk
-    independently of ``K``) and mapped; ``values`` (the residual, about 5 % of the cost
-    of the Jacobian kernel) stays in the virtual machine, which saves a compilation.
-    When the Jacobian cannot be compiled the kernel stays 'mx'.
+    single-point functions compiled to C (``continuation.compilation``, cached on disk
+    independently of ``K``) and mapped; ``values`` too, since a corrector evaluates the
+    residual at every iterate (the flutter model at N = 10: 0.40 ms against 0.84 ms in
+    the virtual machine; N = 40: 2.5 against 3.4 ms). When a function cannot be compiled
+    the kernel stays 'mx'.
     """
 
     def __init__(self, vf, K: int, backend: str = "mx", cache_dir=None):
@@ -101,7 +103,7 @@ class PointKernel:
         self.backend = _backend(backend, vf)
         self.lifted = {name: LiftedBatch(lifted, K, self._compiled(lifted.D))
                        for name, lifted in vf.lifted.items()}
-        self.values = self._mapped(self.pointwise.values(), compile=False)
+        self.values = self._mapped(self.pointwise.values())
         self._jacobians: dict = {}
 
     def jacobians(self, par_columns) -> "SeededKernel":
@@ -172,31 +174,6 @@ def _backend(backend: str, vf) -> str:
 def point_kernel(vf, K: int, backend: str = "mx") -> PointKernel:
     """The pointwise kernel of ``vf`` at ``K`` points (see :class:`PointKernel`)."""
     return PointKernel(vf, K, backend)
-
-
-@dataclass(frozen=True)
-class Layout:
-    """A fixed CSC pattern and the permutation ``order`` from assembly order to CSC
-    data order: ``csc_matrix((vals[order], indices, indptr), shape)``."""
-
-    shape: tuple
-    order: np.ndarray
-    indices: np.ndarray
-    indptr: np.ndarray
-
-    def matrix(self, vals: np.ndarray) -> sp.csc_matrix:
-        """The sparse matrix with assembly-ordered values ``vals``."""
-        return sp.csc_matrix((np.take(vals, self.order), self.indices, self.indptr),
-                             shape=self.shape, copy=False)
-
-
-def layout(rows: np.ndarray, cols: np.ndarray, shape: tuple) -> Layout:
-    """CSC layout of the (duplicate-free) entries ``(rows, cols)`` in assembly order."""
-    order = np.lexsort((rows, cols))
-    counts = np.bincount(cols, minlength=shape[1])
-    indptr = np.concatenate([[0], np.cumsum(counts)])
-    idx = np.int32 if max(shape) < 2 ** 31 - 1 else np.int64
-    return Layout(shape, order, rows[order].astype(idx), indptr.astype(idx))
 
 
 def entries(n: int, ntst: int, ncol: int, prow: np.ndarray, pcol: np.ndarray,
@@ -276,20 +253,48 @@ class BlockCollocationSystem:
         r = Mv - (hk * T)[:, None] * F
         return np.append(r.ravel(), c @ U)
 
-    def jacobian(self, Y, P, D, par_columns) -> sp.csc_matrix:
-        """``[G_Y, G_p[:, par_columns]]`` as one sparse matrix (see the module doc)."""
+    def _pointwise(self, Y, P, D, par_columns) -> tuple:
+        """``(hk, c, F, W, M, Gp)`` at the collocation points: ``W = d(M v)/dx - h T F_x``
+        and ``M`` on the pattern (``K x s``), ``Gp = d(M v)/dp - h T F_p`` in the
+        directions ``par_columns`` (``K x k x n``)."""
         U, T, h, c, hk = self._split(Y, D)
         x, v = self.points(U)
         kr, cols = self.kernel, tuple(par_columns)
         F, Mv, Fx, Mvx, M, Fp, Mvp = kr.evaluate(kr.jacobians(cols), x, v, P)
-        W = (Mvx - (hk * T)[:, None] * Fx).reshape(self.ntst, self.ncol, -1)
-        Mb = M.reshape(self.ntst, self.ncol, -1)
+        W = Mvx - (hk * T)[:, None] * Fx
+        Gp = (Mvp - (hk * T)[:, None] * Fp).reshape(kr.K, len(cols), kr.n)
+        return hk, c, F, W, M, Gp
+
+    def jacobian(self, Y, P, D, par_columns) -> sp.csc_matrix:
+        """``[G_Y, G_p[:, par_columns]]`` as one sparse matrix (see the module doc)."""
+        hk, c, F, W, M, Gp = self._pointwise(Y, P, D, par_columns)
+        W, Mb = (a.reshape(self.ntst, self.ncol, -1) for a in (W, M))
         blocks = np.einsum("iks,kl->ikls", W, self.col.P) + \
             np.einsum("iks,kl->ikls", Mb, self.col.Dm)
-        Gp = (Mvp - (hk * T)[:, None] * Fp).reshape(kr.K, len(cols), kr.n)
         vals = np.concatenate([blocks.ravel(), (-hk[:, None] * F).ravel(), c,
                                Gp.transpose(1, 0, 2).ravel()])
-        return self._layout(len(cols)).matrix(vals)
+        return self._layout(Gp.shape[1]).matrix(vals)
+
+    def interval_jacobian(self, Y, P, D, par_columns) -> CollocationJacobian:
+        """The same matrix by dense interval blocks (``_condensed``): block ``(k, l)`` of
+        interval ``i`` is ``W_ik P[k, l] + M_ik Dm[k, l]``."""
+        hk, c, F, W, M, Gp = self._pointwise(Y, P, D, par_columns)
+        kr, n, ntst, ncol = self.kernel, self.kernel.n, self.ntst, self.ncol
+        X = np.zeros((kr.K, n * n, 2))               # W and M densified, side by side
+        X[:, kr.rows * n + kr.cols, 0], X[:, kr.rows * n + kr.cols, 1] = W, M
+        X = X.reshape(ntst, ncol, n, n, 2)
+        blocks = np.empty((ntst, ncol, n, ncol + 1, n))
+        for k in range(ncol):                        # (i, a, b, l) -> (i, a, l, b)
+            PD = np.stack([self.col.P[k], self.col.Dm[k]])
+            blocks[:, k] = (X[:, k] @ PD).transpose(0, 1, 3, 2)
+        extra = np.concatenate([(-hk[:, None] * F)[:, :, None], Gp.transpose(0, 2, 1)], axis=2)
+        m = n * ncol
+        return CollocationJacobian(n, ntst, ncol, blocks.reshape(ntst, m, m + n),
+                                   extra.reshape(ntst, m, -1), c)
+
+    def fill(self) -> float:
+        """Nonzero fraction of the interval blocks (of the pointwise pattern in ``n x n``)."""
+        return self.kernel.rows.size / self.kernel.n ** 2
 
 
 def builder(ntst: int, ncol: int, backend: str = "mx"):

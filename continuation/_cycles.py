@@ -27,9 +27,11 @@ from typing import Mapping
 import numpy as np
 
 from . import _blocks
+from . import _condensed
 from . import _collocation as colloc
 from . import _floquet
 from . import _mesh
+from ._condensed import CollocationJacobian
 from ._equilibrium import make_field, param_vector
 from ._problem import Description, PointInfo, Problem
 from ._settings import CollocationSettings, kernel_backend
@@ -147,6 +149,7 @@ class CycleProblem(PeriodicProblem):
         D = np.concatenate([np.diff(self.mesh), self._phase(U)])
         kind, build = _collocation_system(settings)
         self.system = bound(vf, kind, p0, D, self.free, build)
+        self.condensed = _condensed_solver(settings, self.system.compiled)
 
     # -- unknowns ------------------------------------------------------------------
     @property
@@ -233,12 +236,32 @@ class CycleProblem(PeriodicProblem):
         """Only ``T`` and ``p`` keep their meaning across a re-mesh."""
         return np.array([len(X) - 2, len(X) - 1])
 
-    # -- Floquet multipliers ------------------------------------------------------------
+    # -- Jacobians and Floquet multipliers ---------------------------------------------------
     def jacobian(self, X):
-        """``G_X``; the last one is kept for the multipliers at the same ``X``."""
+        """``G_X`` (sparse); the last one is kept for the multipliers at the same ``X``."""
         J = super().jacobian(X)
         self._last_jacobian = (np.array(X), J)
         return J
+
+    def interval_jacobian(self, X) -> CollocationJacobian:
+        """``G_X`` by dense interval blocks (``_condensed``; 'blocks' Jacobian only),
+        kept like :meth:`jacobian`."""
+        s = self.system
+        J = s.compiled.interval_jacobian(X[: s.compiled.n_state], s.params(X), s.D, s.free_idx)
+        self._last_jacobian = (np.array(X), J)
+        return J
+
+    @property
+    def fresh_factors(self) -> bool:
+        """Condensed: the factorization at a point gives its Floquet transfer maps."""
+        return self.condensed
+
+    def bordered_jacobian(self, X, rows):
+        """``[G_X; rows]``: structured and solved by condensation when
+        ``self.condensed``, else sparse."""
+        if self.condensed:
+            return self.interval_jacobian(X).bordered(rows)
+        return super().bordered_jacobian(X, rows)
 
     def transfer_matrices(self, X, full: bool = False) -> np.ndarray:
         """Condensed ``A_i`` with ``v_{i+1} = A_i v_i`` at the mesh points (``full``:
@@ -246,7 +269,15 @@ class CycleProblem(PeriodicProblem):
         of the tangent at the same ``X`` (its phase row may predate ``accept``; only
         the interval blocks are used)."""
         last = self._last_jacobian
-        J = last[1] if last is not None and np.array_equal(last[0], X) else self.jacobian(X)
+        if last is not None and np.array_equal(last[0], X):
+            J = last[1]
+        else:
+            J = self.interval_jacobian(X) if self.condensed else self.jacobian(X)
+        if isinstance(J, CollocationJacobian):
+            if J.maps is None:                  # a singular interval: LAPACK says so
+                return _floquet.block_transfer_matrices(J.blocks, self.vf.n, full)
+            maps = -J.maps[:, :, :self.vf.n]
+            return maps if full else maps[:, -self.vf.n:]
         return _floquet.transfer_matrices(J, self.vf.n, self.ntst, self.ncol, full)
 
     def evaluate(self, X, t) -> np.ndarray:
@@ -276,6 +307,15 @@ def _collocation_system(settings: CollocationSettings) -> tuple:
         return f"collocation_{ntst}_{ncol}", colloc.builder(ntst, ncol)
     backend = kernel_backend(settings.backend)
     return f"collocation_blocks_{ntst}_{ncol}_{backend}", _blocks.builder(ntst, ncol, backend)
+
+
+def _condensed_solver(settings: CollocationSettings, system) -> bool:
+    """Whether the Newton systems are solved by condensation (``settings.linear_solver``;
+    'auto': where that pays, ``_condensed.condensed_pays``)."""
+    if settings.linear_solver == "auto":
+        return settings.jacobian == "blocks" and _condensed.condensed_pays(
+            system.kernel.n * settings.ncol, system.fill())
+    return settings.linear_solver == "condensed"
 
 
 def _check_mesh(mesh, ntst) -> np.ndarray:

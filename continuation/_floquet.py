@@ -47,13 +47,19 @@ def transfer_matrices(J, n: int, ntst: int, ncol: int, full: bool = False) -> np
     m = n * ncol
     J = sp.csc_matrix(J)
     fill = np.count_nonzero(J.indices < m * ntst) / (m * ntst * (m + n))
+    if m <= DENSE_ALWAYS or (m <= DENSE_MAX and fill >= DENSE_FILL):
+        return block_transfer_matrices(_dense_blocks(J, n, ntst, ncol), n, full)
     with single_threaded():
-        if m <= DENSE_ALWAYS or (m <= DENSE_MAX and fill >= DENSE_FILL):   # batched
-            B = _dense_blocks(J, n, ntst, ncol)
-            out = np.linalg.solve(B[:, :, n:], -B[:, :, :n])
-        else:
-            out = np.array([-spla.splu(sp.csc_matrix(r)).solve(l.toarray())
-                            for r, l in _sparse_blocks(J, n, ntst, ncol)])
+        out = np.array([-spla.splu(sp.csc_matrix(r)).solve(l.toarray())
+                        for r, l in _sparse_blocks(J, n, ntst, ncol)])
+    return out if full else out[:, -n:, :]
+
+
+def block_transfer_matrices(blocks: np.ndarray, n: int, full: bool = False) -> np.ndarray:
+    """The same from the dense interval blocks ``[B_L, B_R]`` (``(ntst, n NCOL, n (NCOL +
+    1))``): ``A_i = -(B_R^{-1} B_L)``, one batched LAPACK solve."""
+    with single_threaded():
+        out = np.linalg.solve(blocks[:, :, n:], -blocks[:, :, :n])
     return out if full else out[:, -n:, :]
 
 

@@ -4,8 +4,9 @@ From a point ``X_k`` with unit tangent ``tau_k`` (``G_X(X_k) tau_k = 0``):
 
 * predictor ``X^0 = X_k + ds tau_k``;
 * corrector: Newton on the bordered system
-  ``G(X) = 0``, ``tau_k . (X - X^0) = 0`` with the sparse matrix
-  ``[G_X(X); tau_k^T]`` factorized by SuperLU;
+  ``G(X) = 0``, ``tau_k . (X - X^0) = 0`` with the matrix
+  ``[G_X(X); tau_k^T]`` (``Problem.bordered_jacobian``) factorized by SuperLU, or by the
+  problem's own structured solver (collocated cycles: condensation);
 * tangent: ``[G_X(X_{k+1}); tau_k^T] t = e_{m+1}``, ``tau_{k+1} = t / |t|``
   (so ``tau_{k+1} . tau_k > 0``: orientation is kept), or the secant; for
   problems whose ``monitor`` does not use the factors (``monitor_uses_lu``
@@ -24,10 +25,8 @@ import time
 from dataclasses import dataclass, field
 
 import numpy as np
-import scipy.sparse as sp
 
 from ._newton import NewtonResult, factorize, newton, solve
-from ._sparse import append_row
 from ._settings import PALC, ContinuationSettings
 
 
@@ -43,19 +42,15 @@ class Step:
     lu: object = field(repr=False, compare=False, default=None)
 
 
-def bordered(J: sp.spmatrix, row: np.ndarray) -> sp.csc_matrix:
-    """``[J; row^T]`` as a square sparse matrix."""
-    return append_row(J, np.asarray(row, dtype=float))
-
-
-def correct(problem, X_pred: np.ndarray, tau: np.ndarray, settings) -> NewtonResult:
-    """Newton on ``G(X) = 0, tau . (X - X_pred) = 0`` from ``X_pred``."""
+def correct(problem, X_pred: np.ndarray, tau: np.ndarray, settings, lu=None) -> NewtonResult:
+    """Newton on ``G(X) = 0, tau . (X - X_pred) = 0`` from ``X_pred`` (``lu``: factors
+    of a nearby matrix to refine on, e.g. the last point's)."""
     X_pred = np.array(X_pred, dtype=float)
 
     def H(X):
         return np.append(problem.residual(X), tau @ (X - X_pred))
 
-    return newton(H, lambda X: bordered(problem.jacobian(X), tau), X_pred, settings)
+    return newton(H, lambda X: problem.bordered_jacobian(X, tau), X_pred, settings, lu=lu)
 
 
 def tangent(problem, X: np.ndarray, tau_ref: np.ndarray, lu=None):
@@ -66,7 +61,7 @@ def tangent(problem, X: np.ndarray, tau_ref: np.ndarray, lu=None):
     converges to round-off, and the returned factors are those ``lu``."""
     rhs = np.zeros(X.size)
     rhs[-1] = 1.0
-    t, lu = solve(bordered(problem.jacobian(X), tau_ref), rhs, lu)
+    t, lu = solve(problem.bordered_jacobian(X, tau_ref), rhs, lu)
     if t is None:
         return None, None
     return t / np.linalg.norm(t), lu
@@ -124,7 +119,7 @@ class ContinuationIterator:
                               "fold or branch point?)", res, 0.0)
         if self.tau_ref is None:
             tau = self.settings.direction * tau
-        lu = factorize(bordered(prob.jacobian(res.X), tau))
+        lu = factorize(prob.bordered_jacobian(res.X, tau))
         prob.accept(res.X)
         self.stats["newton_iterations"] += res.iterations
         return Step(res.X, tau, 0.0, res.iterations, res.residual, lu)
@@ -135,7 +130,8 @@ class ContinuationIterator:
         cap, self.cap = self.cap, np.inf
         while True:
             ds = min(self.ds, cap)
-            res = correct(self.problem, step.X + ds * step.tau, step.tau, s.newton)
+            res = correct(self.problem, step.X + ds * step.tau, step.tau, s.newton,
+                          lu=step.lu)
             self.stats["newton_iterations"] += res.iterations
             new = self._accept(step, res, ds) if res.converged else None
             if new is not None:
@@ -157,12 +153,16 @@ class ContinuationIterator:
         if self.algorithm.tangent == "secant":
             tau = res.X - step.X
             tau = tau / np.linalg.norm(tau)
-            lu = factorize(bordered(self.problem.jacobian(res.X), tau))
+            lu = factorize(self.problem.bordered_jacobian(res.X, tau))
         else:
-            # the factors of [G_X; tau^T] are only needed by the detection of special points
-            exact = self.problem.monitor_uses_lu and self.settings.detect
+            # exact factors at the point: for the detection of special points, or where
+            # the problem's factorization also gives what its monitor needs
+            exact = self.problem.fresh_factors or \
+                (self.problem.monitor_uses_lu and self.settings.detect)
             reuse = None if exact else res.lu
             tau, lu = tangent(self.problem, res.X, step.tau, reuse)
+            if exact and hasattr(lu, "with_rows"):     # bordered by the new tangent:
+                lu = lu.with_rows(tau)                  # exact for the next corrector
         if tau is None or lu is None:
             return None
         return Step(res.X, tau, ds, res.iterations, res.residual, lu)

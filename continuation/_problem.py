@@ -20,6 +20,7 @@ import scipy.sparse as sp
 
 from . import _eigen
 from ._settings import ContinuationSettings
+from ._sparse import append_row
 from ._systems import bound
 from ._vectorfield import VectorField
 
@@ -57,6 +58,11 @@ class Problem:
     #: ``[G_X(X); tau^T]`` (branch-point test); when False, ``Step.lu`` may be the
     #: factors of a nearby matrix (the corrector's last one)
     monitor_uses_lu = True
+    #: the tangent at every new point is solved on a fresh factorization there (whose
+    #: factors also serve the next corrector), not by refinement on the corrector's:
+    #: for a problem whose factorization yields what its monitor needs (the Floquet
+    #: transfer maps of a condensed collocation system)
+    fresh_factors = False
     #: whether ``PointInfo.eigenvalues`` are eigenvalues of ``J v = lambda M v``, whose
     #: approach to the imaginary axis caps the next step (``ContinuationSettings.eigen_step``);
     #: False for cycles, whose monitor reports Floquet multipliers there
@@ -80,6 +86,12 @@ class Problem:
     def jacobian(self, X) -> sp.csc_matrix:
         """Exact sparse ``G_X`` of shape ``(m, m+1)``."""
         return self.system.jacobian(X)
+
+    def bordered_jacobian(self, X, rows):
+        """``[G_X; rows]``, the square matrix PALC solves with: a sparse matrix here; a
+        problem with structure may return any object with ``@`` and ``factorize()`` (whose
+        result has ``solve(b)``)."""
+        return append_row(self.jacobian(X), np.asarray(rows, dtype=float))
 
     # -- state and parameters -----------------------------------------------------
     def state(self, X) -> np.ndarray:

@@ -208,6 +208,11 @@ class CollocationSettings:
     ``docs/performance.md``; falls back to 'mx' without a C compiler) or 'auto'
     ('compiled' for MX vector fields, 'mx' for SX ones); None (default):
     ``$CONTINUATION_BACKEND`` if set, else 'auto'.
+    linear_solver : how the Newton and tangent systems are solved: 'condensed' (the
+    interior nodes of every interval eliminated by dense QR, then SuperLU on the
+    reduced system of the mesh points, as AUTO-07p does; 'blocks' only), 'sparse'
+    (SuperLU on the whole sparse matrix) or 'auto' (default: 'condensed' where the
+    interval blocks are dense enough, see ``docs/continuation.md``).
     """
 
     ntst: int = 20
@@ -218,9 +223,16 @@ class CollocationSettings:
     adapt_every: int = 0
     jacobian: str = "blocks"
     backend: str | None = None
+    linear_solver: str = "auto"
 
     def __post_init__(self):
         _positive_int(self, "ntst", "ncol", "pencil_max")
+        if self.linear_solver not in ("auto", "condensed", "sparse"):
+            raise ValueError("CollocationSettings.linear_solver must be 'auto', 'condensed' "
+                             f"or 'sparse', got {self.linear_solver!r}")
+        if self.linear_solver == "condensed" and self.jacobian != "blocks":
+            raise ValueError("CollocationSettings.linear_solver = 'condensed' needs "
+                             f"jacobian = 'blocks', got jacobian = {self.jacobian!r}")
         if self.backend is not None and self.backend not in BACKENDS:
             raise ValueError("CollocationSettings.backend must be None, 'auto', 'mx' or "
                              f"'compiled', got {self.backend!r}")

@@ -7,6 +7,8 @@ the arithmetic, are the cost.
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 import scipy.sparse as sp
 
@@ -46,3 +48,28 @@ def columns_appended(values: np.ndarray, pattern: tuple, cols: np.ndarray) -> sp
     indices = np.concatenate([row, *nz]).astype(row.dtype)
     data = np.concatenate([values, *[c[i] for c, i in zip(cols.T, nz)]])
     return sp.csc_matrix((data, indices, indptr), shape=(m, n + cols.shape[1]))
+
+
+@dataclass(frozen=True)
+class Layout:
+    """A fixed CSC pattern and the permutation ``order`` from assembly order to CSC
+    data order: ``csc_matrix((vals[order], indices, indptr), shape)``."""
+
+    shape: tuple
+    order: np.ndarray
+    indices: np.ndarray
+    indptr: np.ndarray
+
+    def matrix(self, vals: np.ndarray) -> sp.csc_matrix:
+        """The sparse matrix with assembly-ordered values ``vals``."""
+        return sp.csc_matrix((np.take(vals, self.order), self.indices, self.indptr),
+                             shape=self.shape, copy=False)
+
+
+def layout(rows: np.ndarray, cols: np.ndarray, shape: tuple) -> Layout:
+    """CSC layout of the (duplicate-free) entries ``(rows, cols)`` in assembly order."""
+    order = np.lexsort((rows, cols))
+    counts = np.bincount(cols, minlength=shape[1])
+    indptr = np.concatenate([[0], np.cumsum(counts)])
+    idx = np.int32 if max(shape) < 2 ** 31 - 1 else np.int64
+    return Layout(shape, order, rows[order].astype(idx), indptr.astype(idx))

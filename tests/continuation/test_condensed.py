@@ -1,0 +1,173 @@
+"""The condensed Newton solver of collocated cycles (``continuation._condensed``) against
+independent routes: dense LAPACK solves of the explicitly assembled matrix, SuperLU of
+the sparse route's Jacobian, the Floquet condensation of the sparse Jacobian, and whole
+branches continued with the sparse solver."""
+
+import casadi as ca
+import numpy as np
+import pytest
+
+import continuation as C
+from continuation import _floquet
+from continuation._condensed import BorderedCollocation, Chain
+from continuation._newton import factorize
+from continuation._sparse import append_row
+
+
+def _rel(a, b) -> float:
+    a, b = np.asarray(a), np.asarray(b)
+    return float(np.max(np.abs(a - b)) / max(np.max(np.abs(a)), 1e-300))
+
+
+def _ring(n=6):
+    """n Van der Pol-like oscillators coupled all-to-all (dense blocks), p = (mu, k)."""
+    x, p = ca.SX.sym("x", n), ca.SX.sym("p", 2)
+    u, v = x[0::2], x[1::2]
+    mean = ca.sum1(u) / (n // 2)
+    f = ca.vertcat(*[ca.vertcat(v[i], p[0] * (1 - u[i] ** 2) * v[i] - u[i]
+                                + p[1] * (mean - u[i])) for i in range(n // 2)])
+    return ca.Function("F", [x, p], [f])
+
+
+def _mass(n=6):
+    """A state-dependent mass ``M(x) = I + 0.1 diag(x)^2 + 0.05 (ones)`` (dense)."""
+    x, p = ca.SX.sym("x", n), ca.SX.sym("p", 2)
+    return ca.Function("M", [x, p], [ca.DM.eye(n) + 0.1 * ca.diag(x ** 2) + 0.05])
+
+
+def _backward(A, B, x) -> float:
+    """``max |A x - B x| / (max |A| max |x|)``: two routes to a product, at round-off."""
+    return float(np.max(np.abs(A @ x - B @ x)) / (np.max(np.abs(A)) * np.max(np.abs(x))))
+
+
+def _problem(ntst, ncol, solver, mass=False, n=6):
+    guess = lambda t: np.column_stack([2 * np.cos(2 * np.pi * t), -2 * np.sin(2 * np.pi * t)]
+                                      * (n // 2))
+    return C.CycleProblem(_ring(n), guess, 6.6, {"mu": 1.0, "k": 0.2}, "mu",
+                          M=_mass(n) if mass else None,
+                          settings=C.CollocationSettings(ntst=ntst, ncol=ncol,
+                                                         linear_solver=solver))
+
+
+@pytest.mark.parametrize("ntst, ncol, mass", [(7, 3, False), (8, 4, True), (13, 2, True),
+                                              (2, 4, False)])
+def test_condensed_solve_equals_dense_lapack_on_the_sparse_routes_matrix(ntst, ncol, mass):
+    """Odd and even NTST (the pairwise reduction carries an odd equation), NTST = 2, a
+    state-dependent mass, one and several right-hand sides."""
+    prob = _problem(ntst, ncol, "condensed", mass)
+    rng = np.random.default_rng(ntst)
+    X = prob.X0 * (1 + 0.01 * rng.standard_normal(prob.X0.size))
+    tau = rng.standard_normal(X.size)
+    A = prob.bordered_jacobian(X, tau)
+    assert isinstance(A, BorderedCollocation)
+    dense = append_row(C.CycleProblem.jacobian(prob, X), tau).toarray()   # sparse route
+    assert _rel(dense, A.toarray()) < 1e-15
+    assert _rel(dense, A.tocsc().toarray()) < 1e-15
+    lu = factorize(A)
+    for b in (rng.standard_normal(X.size), rng.standard_normal((X.size, 3))):
+        exact = np.linalg.solve(dense, b)
+        assert _rel(exact, lu.solve(b)) < 1e-11
+        assert _backward(dense, A, exact) < 1e-15
+
+
+def test_with_rows_equals_a_fresh_factorization_with_those_rows():
+    prob = _problem(9, 3, "condensed")
+    rng = np.random.default_rng(3)
+    X, rows = prob.X0, rng.standard_normal(prob.X0.size)
+    lu = factorize(prob.bordered_jacobian(X, rng.standard_normal(X.size))).with_rows(rows)
+    b = rng.standard_normal(X.size)
+    assert _rel(np.linalg.solve(prob.bordered_jacobian(X, rows).toarray(), b),
+                lu.solve(b)) < 1e-11
+    with pytest.raises(NotImplementedError, match="trans"):
+        lu.solve(b, trans="T")
+
+
+def test_chain_reduction_is_stable_where_a_transfer_recursion_is_not():
+    """A chain ``v_{i+1} = Phi_i v_i + ...`` whose monodromy has multipliers 1e+-20 (a
+    recursion over the transfer maps, single shooting, loses everything there): the
+    pairwise QR reduction solves it with a backward error at round-off."""
+    N, n, k = 21, 4, 2
+    rng = np.random.default_rng(5)
+    rates = np.array([20.0, 0.0, -20.0, 3.0]) * np.log(10) / N
+    A = np.empty((N, n, n))
+    Q, _ = np.linalg.qr(rng.standard_normal((n, n)))
+    for i in range(N):                                         # v_{i+1} = -A_i v_i
+        A[i] = -Q @ np.diag(np.exp(rates)) @ Q.T @ (np.eye(n) + 1e-3 * rng.standard_normal((n, n)))
+    C_ = np.broadcast_to(np.eye(n), (N, n, n))
+    G = rng.standard_normal((N, n, k))
+    Bv, By = rng.standard_normal((N, k, n)), rng.standard_normal((k, k))
+    dense = np.zeros((N * n + k, N * n + k))
+    for i in range(N):
+        j = (i + 1) % N
+        dense[i * n:(i + 1) * n, i * n:(i + 1) * n] = A[i]
+        dense[i * n:(i + 1) * n, j * n:(j + 1) * n] += C_[i]
+        dense[i * n:(i + 1) * n, N * n:] = G[i]
+    dense[N * n:, :N * n] = Bv.transpose(1, 0, 2).reshape(k, N * n)
+    dense[N * n:, N * n:] = By
+    chain = Chain.of(A, C_, G)
+    factors = chain.bordered(Bv, By)
+    rhs = rng.standard_normal((N * n + k, 2))
+    v, y = chain.solve(factors, rhs[:N * n].reshape(N, n, 2), rhs[N * n:])
+    x = np.concatenate([v.reshape(N * n, 2), y])
+    backward = np.max(np.abs(dense @ x - rhs)) / (np.max(np.abs(dense)) * np.max(np.abs(x)))
+    assert backward < 1e-14
+    mono = np.eye(n)
+    for Ai in A:
+        mono = -Ai @ mono
+    assert np.max(np.abs(np.linalg.eigvals(mono))) > 1e19           # really that hard
+
+
+def test_multipliers_from_the_factorization_equal_the_sparse_floquet_condensation():
+    prob = _problem(10, 4, "condensed", mass=True)
+    X = C.ContinuationIterator(prob, C.PALC(), C.ContinuationSettings()).start().X
+    mu = prob.multipliers(X)                        # from the tangent's factorization
+    J = C.CycleProblem.jacobian(prob, X)
+    ref = _floquet.multipliers(_floquet.transfer_matrices(J, prob.vf.n, prob.ntst,
+                                                          prob.ncol), "pencil")
+    assert _rel(ref, mu) < 1e-11
+    full = prob.transfer_matrices(X, full=True)
+    assert _rel(_floquet.transfer_matrices(J, prob.vf.n, prob.ntst, prob.ncol, full=True),
+                full) < 1e-12
+
+
+@pytest.mark.parametrize("mass", [False, True])
+def test_branches_by_condensation_equal_the_sparse_solvers(mass):
+    """Same points, tangents, Newton iterations and multipliers along a branch."""
+    settings = C.ContinuationSettings(ds=0.05, ds_max=0.2, max_steps=8)
+    branches = {s: C.continuation(_problem(12, 4, s, mass), settings=settings)
+                for s in ("sparse", "condensed")}
+    a, b = branches["sparse"], branches["condensed"]
+    assert len(a) == len(b) == settings.max_steps + 1
+    assert np.array_equal(a.iterations, b.iterations)
+    assert _rel(a.par("mu"), b.par("mu")) < 1e-10
+    assert _rel(a.x, b.x) < 1e-10 and _rel(a.columns["period"], b.columns["period"]) < 1e-10
+    assert _rel(np.array(a.eigenvalues), np.array(b.eigenvalues)) < 1e-9
+
+
+def test_a_singular_interval_falls_back_to_superlu_of_the_whole_matrix():
+    prob = _problem(6, 3, "condensed")
+    rng = np.random.default_rng(1)
+    A = prob.bordered_jacobian(prob.X0, rng.standard_normal(prob.X0.size))
+    A.J.__dict__["maps"] = None                     # as if an M_i were singular
+    lu = A.factorize()
+    b = rng.standard_normal(prob.X0.size)
+    assert _rel(np.linalg.solve(A.toarray(), b), lu.solve(b)) < 1e-11
+
+
+def test_linear_solver_setting_and_its_automatic_choice():
+    with pytest.raises(ValueError, match="linear_solver must be 'auto', 'condensed' or "
+                                         "'sparse', got 'lu'"):
+        C.CollocationSettings(linear_solver="lu")
+    with pytest.raises(ValueError, match="needs jacobian = 'blocks'"):
+        C.CollocationSettings(linear_solver="condensed", jacobian="graph")
+    # 'auto': 6 states x NCOL 4 = 24 rows per interval (too few to pay) -> sparse; a dense
+    # 20-state field (80 rows) -> condensed; a banded one of the same size -> sparse
+    assert not _problem(8, 4, "auto").condensed
+    assert _problem(8, 4, "auto", mass=True, n=20).condensed
+    x, p = ca.SX.sym("x", 20), ca.SX.sym("p", 2)
+    banded = ca.Function("F", [x, p], [ca.vertcat(x[1:], x[0]) - p[0] * x
+                                       + p[1] * ca.vertcat(x[-1], x[:-1]) ** 3])
+    prob = C.CycleProblem(banded, lambda t: np.ones((np.size(t), 20)), 1.0,
+                          {"mu": 1.0, "k": 0.2}, "mu",
+                          settings=C.CollocationSettings(ntst=8, ncol=4))
+    assert not prob.condensed
