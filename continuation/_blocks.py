@@ -116,11 +116,25 @@ class PointKernel:
         seed = np.eye(self.n_par)[:, list(cols)].ravel(order="F")
         return SeededKernel(self._jacobians[len(cols)], seed, self._lifted_outputs)
 
-    def _lifted_outputs(self, x, v, p) -> dict:
-        """The lifted matrices at the points, on the pattern ``rows, cols`` (``K x s``)."""
+    def _lifted_outputs(self, x, v, p, dense: bool = False) -> dict:
+        """The lifted matrices at the points, on the pattern ``rows, cols`` (``K x s``),
+        or ``dense`` (``K x n n``, row by row)."""
         args = {"Fx": (x, p), "M": (x, p), "Mvx": (x, p, v)}
+        if dense:
+            return {name: batch(*args[name]).reshape(self.K, -1)
+                    for name, batch in self.lifted.items()}
         return {name: batch(*args[name])[:, self.rows, self.cols]
                 for name, batch in self.lifted.items()}
+
+    def densified(self, name: str, values: np.ndarray, dense: bool) -> np.ndarray:
+        """The matrix ``name`` at the points as ``K x n n`` (row by row), from what the
+        kernel called with ``dense`` returned: values on the pattern are scattered, dense
+        lifted ones are as they are."""
+        if dense and name in self.lifted:
+            return values
+        out = np.zeros((self.K, self.n * self.n))
+        out[:, self.rows * self.n + self.cols] = values
+        return out
 
     def _compiled(self, fun: ca.Function) -> ca.Function | None:
         """``fun`` as compiled C when the backend is 'compiled' (else, or if compiling
@@ -144,9 +158,9 @@ class PointKernel:
         expand = self.expand and not compiled
         return BufferedFunction(as_sx_function(mapped) if expand else mapped)
 
-    def evaluate(self, fun, x, v, p) -> list:
+    def evaluate(self, fun, x, v, p, **kw) -> list:
         """Outputs of ``fun`` at points ``x, v`` (``(K, n)`` each) as ``(K, size)`` arrays."""
-        out = fun(x, v, p)
+        out = fun(x, v, p, **kw)
         return [o.reshape(self.K, -1) for o in out]
 
 
@@ -157,9 +171,10 @@ class SeededKernel:
     def __init__(self, fun: BufferedFunction, seed: np.ndarray, lifted=None):
         self.fun, self.seed, self.lifted = fun, seed, lifted
 
-    def __call__(self, x, v, p) -> list:
+    def __call__(self, x, v, p, dense: bool = False) -> list:
+        """``KERNEL_OUTPUTS``; with ``dense`` the lifted matrices come dense (``K x n n``)."""
         out = iter(self.fun(x, v, p, self.seed))
-        extra = self.lifted(x, v, p) if self.lifted is not None else {}
+        extra = self.lifted(x, v, p, dense) if self.lifted is not None else {}
         return [extra[name] if name in extra else next(out) for name in KERNEL_OUTPUTS]
 
 
@@ -253,14 +268,18 @@ class BlockCollocationSystem:
         r = Mv - (hk * T)[:, None] * F
         return np.append(r.ravel(), c @ U)
 
-    def _pointwise(self, Y, P, D, par_columns) -> tuple:
+    def _pointwise(self, Y, P, D, par_columns, dense: bool = False) -> tuple:
         """``(hk, c, F, W, M, Gp)`` at the collocation points: ``W = d(M v)/dx - h T F_x``
-        and ``M`` on the pattern (``K x s``), ``Gp = d(M v)/dp - h T F_p`` in the
-        directions ``par_columns`` (``K x k x n``)."""
+        and ``M`` on the pattern (``K x s``; with ``dense``, ``K x n n`` row by row),
+        ``Gp = d(M v)/dp - h T F_p`` in the directions ``par_columns`` (``K x k x n``)."""
         U, T, h, c, hk = self._split(Y, D)
         x, v = self.points(U)
         kr, cols = self.kernel, tuple(par_columns)
-        F, Mv, Fx, Mvx, M, Fp, Mvp = kr.evaluate(kr.jacobians(cols), x, v, P)
+        kw = {"dense": True} if dense else {}
+        F, Mv, Fx, Mvx, M, Fp, Mvp = kr.evaluate(kr.jacobians(cols), x, v, P, **kw)
+        if dense:
+            Fx, Mvx, M = (kr.densified(name, a, True) for name, a in
+                          (("Fx", Fx), ("Mvx", Mvx), ("M", M)))
         W = Mvx - (hk * T)[:, None] * Fx
         Gp = (Mvp - (hk * T)[:, None] * Fp).reshape(kr.K, len(cols), kr.n)
         return hk, c, F, W, M, Gp
@@ -278,11 +297,9 @@ class BlockCollocationSystem:
     def interval_jacobian(self, Y, P, D, par_columns) -> CollocationJacobian:
         """The same matrix by dense interval blocks (``_condensed``): block ``(k, l)`` of
         interval ``i`` is ``W_ik P[k, l] + M_ik Dm[k, l]``."""
-        hk, c, F, W, M, Gp = self._pointwise(Y, P, D, par_columns)
+        hk, c, F, W, M, Gp = self._pointwise(Y, P, D, par_columns, dense=True)
         kr, n, ntst, ncol = self.kernel, self.kernel.n, self.ntst, self.ncol
-        X = np.zeros((kr.K, n * n, 2))               # W and M densified, side by side
-        X[:, kr.rows * n + kr.cols, 0], X[:, kr.rows * n + kr.cols, 1] = W, M
-        X = X.reshape(ntst, ncol, n, n, 2)
+        X = np.stack([W, M], axis=-1).reshape(ntst, ncol, n, n, 2)
         blocks = np.empty((ntst, ncol, n, ncol + 1, n))
         for k in range(ncol):                        # (i, a, b, l) -> (i, a, l, b)
             PD = np.stack([self.col.P[k], self.col.Dm[k]])

@@ -68,9 +68,14 @@ def test_a_vector_field_with_lifted_matrices_gives_the_plain_collocation_jacobia
     Y = rng.normal(size=s["n"] * ntst * ncol + 1)
     D = np.concatenate([np.full(ntst, 1 / ntst), rng.normal(size=s["n"] * ntst * ncol)])
     P = np.array([0.7, 0.4])
-    J = [BlockCollocationSystem(point_kernel(vf, ntst * ncol), ntst, ncol).jacobian(Y, P, D, [1])
-         for vf in (plain, lifted)]
+    systems = [BlockCollocationSystem(point_kernel(vf, ntst * ncol), ntst, ncol)
+               for vf in (plain, lifted)]
+    J = [system.jacobian(Y, P, D, [1]) for system in systems]
     assert abs(J[0] - J[1]).max() < 1e-13 * abs(J[0]).max()
+    # the dense interval blocks of the condensed solver (lifted matrices taken dense)
+    for system in systems:
+        blocks = system.interval_jacobian(Y, P, D, [1]).toarray()
+        assert np.max(np.abs(blocks - J[0].toarray())) < 1e-13 * abs(J[0]).max()
 
 
 def test_lifted_of_mismatched_shapes_is_refused():
