@@ -9,9 +9,9 @@ from .provenance import __version__
 from .cycles import (CycleBranch, CyclePoint, CycleSettings, ImpactBranch, ImpactPoint,
                      ImpactSettings, cycle_branch, impacting_branch)
 from .linear import (CriticalVelocityError, HopfPoint, LinearStability, StabilityBoundary,
-                     SteadyState, SteadyStateError, critical_velocity, hopf_points,
-                     linear_stability, stability_boundary, steady_state,
-                     straight_pressure_drop)
+                     SteadyState, SteadyStateError, critical_velocity, design_for_flow,
+                     hopf_points, linear_stability, onset_sensitivity, palate_sensitivity,
+                     stability_boundary, steady_state, straight_pressure_drop)
 from .model import (FlowFields, ModalBasis, Model, build_model, clamped_free_betas,
                     clamped_free_modes, flow_fields, parameter_names)
 from .physical import Flow, Physical, load_physical, parse_flow, preset_names
@@ -30,6 +30,7 @@ __all__ = [
     "SteadyState", "SteadyStateError", "steady_state", "straight_pressure_drop",
     "LinearStability", "linear_stability", "CriticalVelocityError", "HopfPoint",
     "critical_velocity", "hopf_points", "StabilityBoundary", "stability_boundary",
+    "onset_sensitivity", "palate_sensitivity", "design_for_flow",
     "CycleSettings", "CyclePoint", "CycleBranch", "cycle_branch",
     "ImpactSettings", "ImpactPoint", "ImpactBranch", "impacting_branch",
     "PressureSchedule", "Trajectory", "simulate", "Criteria", "Outcome", "classify",

@@ -33,6 +33,7 @@ from ..linear.hopf import CriticalVelocityError
 from ..linear.steady import SteadyStateError
 from ..plots.backend import select_file_backend
 from .cycles import add_cycle_commands
+from .design import add_design_command
 from .linear import add_linear_commands
 from .meta import cli_meta
 from .onset import add_onset_command
@@ -63,6 +64,7 @@ def build_parser() -> argparse.ArgumentParser:
     add_cycle_commands(sub)         # lco, alias cycles (docs/cycles.md)
     add_onset_command(sub)          # onset, in physical units (docs/units.md)
     add_sound_command(sub)          # sound, the radiated snore (docs/sound.md)
+    add_design_command(sub)         # design, what change stops the snore (docs/design.md)
     _add_global_options(parser)
     for command in dict.fromkeys(sub.choices.values()):     # aliases share a parser
         _add_global_options(command, argparse.SUPPRESS)

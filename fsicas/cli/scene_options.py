@@ -9,6 +9,7 @@ from ..physical import Flow, Physical, load_physical, parse_flow, preset_names
 from ..scene import Scene, load_scene
 
 __all__ = ["SCENE_OPTIONS", "BEAM_OPTIONS", "add_scene_options", "add_beam_options", "beam_fields",
+           "scene_values",
            "scene_from_args", "physical_from_args"]
 
 #: CLI option (``--quad-nodes`` for ``quad_nodes``) -> type, one per Scene field.
@@ -89,7 +90,8 @@ def _add_physical_options(parser: argparse.ArgumentParser) -> None:
                        "(1.2m/s); default: the flow of the physical input")
 
 
-def _values(args: argparse.Namespace) -> dict:
+def scene_values(args: argparse.Namespace) -> dict:
+    """The nondimensional Scene fields given as options (a physical input's overrides)."""
     values = {k: getattr(args, k, None) for k in (*SCENE_OPTIONS, *BEAM_OPTIONS, "contact")}
     return {k: v for k, v in values.items() if v is not None}
 
@@ -122,8 +124,8 @@ def scene_from_args(args: argparse.Namespace, need_flow: bool = False) -> Scene:
         if need_flow and flow is None:
             raise ValueError(f"{physical.source} gives no airflow: give --flow (e.g. --flow "
                              "20L/min or --flow 1.2m/s) or flow = ... in its [physical] table")
-        return physical.scene(flow, **_values(args))
-    values = _values(args)
+        return physical.scene(flow, **scene_values(args))
+    values = scene_values(args)
     if args.scene:
         return load_scene(args.scene, **values)
     return Scene(**values)

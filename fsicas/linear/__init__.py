@@ -1,13 +1,19 @@
-"""The linear wing: steady state, linear stability, flutter onset (Hopf points) and the
-stability boundary in (M*, U*), through the generic ``continuation`` library."""
+"""The linear wing: steady state, linear stability, flutter onset (Hopf points), its
+sensitivities and the palate design built on them, and the stability boundary in
+(M*, U*), through the generic ``continuation`` library."""
 
 from .boundary import HopfCurve, ModeSwitch, StabilityBoundary, stability_boundary
+from .design import (Design, DesignError, PalateSensitivity, Sensitivity, design_for_flow,
+                     palate_sensitivity)
 from .hopf import CriticalVelocityError, HopfPoint, critical_velocity, hopf_points
 from .onset import onset_at_own_flow
+from .sensitivity import OnsetSensitivity, onset_sensitivity
 from .stability import LinearStability, eigenvalues, linear_stability
 from .steady import SteadyState, SteadyStateError, steady_state, straight_pressure_drop
 
 __all__ = ["HopfCurve", "ModeSwitch", "StabilityBoundary", "stability_boundary",
            "CriticalVelocityError", "HopfPoint", "critical_velocity", "hopf_points", "onset_at_own_flow",
            "LinearStability", "eigenvalues", "linear_stability", "SteadyState",
-           "SteadyStateError", "steady_state", "straight_pressure_drop"]
+           "SteadyStateError", "steady_state", "straight_pressure_drop", "OnsetSensitivity",
+           "onset_sensitivity", "Design", "DesignError", "PalateSensitivity", "Sensitivity",
+           "design_for_flow", "palate_sensitivity"]

@@ -1,0 +1,150 @@
+"""Sensitivities of the flutter onset (U*_c and omega_c) to the scene's parameters.
+
+At a Hopf point the augmented system of ``continuation`` (``F = 0``, ``J v - M w = 0``,
+``J w + kappa M v = 0``, two normalizations) defines ``Y = (x, v, w, kappa)`` and the
+pressure parameter Π as functions of every other parameter ``q`` of the model. By the
+implicit-function theorem their derivatives solve
+
+    [G_Y  G_Π] (dY/dq, dΠ/dq) = -G_q,
+
+with the exact Jacobians (CasADi AD) of the same system the onset was located on; then
+``U*_c = (Q1 + Q2)/H*`` and ``omega_c = TIME_SCALE sqrt(kappa)`` follow from ``Y``.
+This gives M*, the friction f, the singular losses K0, KL and the damping ζ (all modes
+together) exactly. The channel heights H1/L, H2/L and a Timoshenko beam's slenderness e/L
+and Poisson ratio are not parameters of the built model (its quadrature and modes carry
+them): their derivatives are central differences of the onset relocated by Newton on the
+Hopf system of rebuilt models (relative step ``FD_STEP``; the onsets are located to
+about 1e-13, so the error is about 1e-8).
+
+The derivatives hold for the Hopf point given, i.e. along its mode: where the first
+onset switches to another mode (the boundary's switches), it is not differentiable.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.linalg as sla
+
+import continuation as C
+
+from ..model.assembly import Model, build_model
+from ..profile import Profile
+from ..scene import TIMOSHENKO, Scene
+from .adapter import LOG_M, TIME_SCALE
+from .hopf import HopfPoint, flutter_problem
+
+__all__ = ["OnsetSensitivity", "onset_sensitivity", "EXACT", "BY_DIFFERENCES", "FD_STEP"]
+
+#: Parameters differentiated exactly (implicit-function theorem) and by differences.
+EXACT = ("mstar", "friction", "k0", "kl", "zeta")
+BY_DIFFERENCES = ("h1", "h2", "slenderness", "poisson")
+#: Relative step of the central differences.
+FD_STEP = 1e-4
+
+
+@dataclass(frozen=True)
+class OnsetSensitivity:
+    """``d ln U*_c / d q`` and ``d ln omega_c / d q`` for the scene's parameters ``q``:
+    ``mstar``, ``friction``, ``k0``, ``kl``, ``zeta`` (added to every mode's), ``h1``,
+    ``h2`` (the channel heights H1/L, H2/L) and, for a Timoshenko beam, ``slenderness``
+    and ``poisson``. An elasticity is ``q * d ln U*_c / d q``."""
+
+    ustar: float
+    omega: float
+    d_ln_ustar: dict
+    d_ln_omega: dict
+    values: dict
+
+    def elasticity(self, name: str) -> tuple[float, float]:
+        """``(d ln U*_c / d ln q, d ln omega_c / d ln q)`` at the scene's value of q."""
+        value = self.values[name]
+        return value * self.d_ln_ustar[name], value * self.d_ln_omega[name]
+
+    def to_json(self) -> dict:
+        return {"ustar_crit": self.ustar, "omega": self.omega,
+                "d_ln_ustar": dict(self.d_ln_ustar), "d_ln_omega": dict(self.d_ln_omega),
+                "values": dict(self.values)}
+
+
+def onset_sensitivity(scene: Scene, model: Model, hopf: HopfPoint) -> OnsetSensitivity:
+    """The derivatives of the onset ``hopf`` of ``scene`` (located on ``model``)."""
+    model.require_structure(scene)
+    du, dw = _exact(scene, model, hopf)
+    h1, h2 = _heights(scene)
+    values = {"mstar": scene.mstar, "friction": scene.friction, "k0": scene.k0,
+              "kl": scene.kl, "zeta": float(np.mean(scene.zeta_modes)), "h1": h1, "h2": h2}
+    structural = [("h1", h1), ("h2", h2)]
+    if scene.beam == TIMOSHENKO:
+        structural += [("slenderness", scene.slenderness), ("poisson", scene.poisson)]
+        values.update(slenderness=scene.slenderness, poisson=scene.poisson)
+    for name, value in structural:
+        du[name], dw[name] = _difference(scene, hopf, name, value)
+    return OnsetSensitivity(hopf.ustar, hopf.omega, du, dw, values)
+
+
+def _exact(scene: Scene, model: Model, hopf: HopfPoint) -> tuple[dict, dict]:
+    """``d ln U*_c / d q`` and ``d ln omega / d q`` for ``EXACT`` (implicit functions)."""
+    problem = flutter_problem(scene, model, ustar_start=0.2)
+    vf = problem.vf
+    columns = {"mstar": [LOG_M], "friction": ["friction"], "k0": ["k0"], "kl": ["kl"],
+               "zeta": [f"zeta{i + 1}" for i in range(scene.modes)]}
+    square, rhs = None, []
+    for name, params in columns.items():
+        col = 0.0
+        for p in params:
+            curve = C.HopfCurveProblem.from_point(problem, hopf.point, p)
+            J = curve.jacobian(curve.X0).toarray()
+            square = J[:, :-1] if square is None else square
+            col = col + J[:, -1]
+        rhs.append(-col)
+    dY = sla.lu_solve(sla.lu_factor(square), np.column_stack(rhs))
+    n = vf.n
+    kappa = float(curve.X0[3 * n])
+    d_ustar = (dY[n - 2] + dY[n - 1]) / scene.hstar
+    d_omega = TIME_SCALE * dY[3 * n] / (2 * math.sqrt(kappa))
+    scale = {"mstar": 1 / (scene.mstar * math.log(10))}      # the field's log10 M*
+    du = {name: float(d_ustar[k] * scale.get(name, 1.0) / hopf.ustar)
+          for k, name in enumerate(columns)}
+    dw = {name: float(d_omega[k] * scale.get(name, 1.0) / hopf.omega)
+          for k, name in enumerate(columns)}
+    return du, dw
+
+
+def _heights(scene: Scene) -> tuple[float, float]:
+    """H1/L and H2/L of straight channels (ValueError for shaped walls)."""
+    c1, c2 = scene.walls
+    if not (c1.kind == c2.kind == "constant"):
+        raise ValueError("the sensitivities to the channel heights need straight channels "
+                         "(constant wall profiles)")
+    return c1.heights[0], c2.heights[0]
+
+
+def _perturbed(scene: Scene, name: str, value: float) -> Scene:
+    """``scene`` with the structural parameter ``name`` set to ``value``."""
+    if name in ("h1", "h2"):
+        h1, h2 = _heights(scene)
+        h1, h2 = (value, h2) if name == "h1" else (h1, value)
+        return scene.replace(hstar=h1 + h2, channel1=Profile.constant(h1),
+                             channel2=Profile.constant(h2))
+    return scene.replace(**{name: value})
+
+
+def _difference(scene: Scene, hopf: HopfPoint, name: str, value: float) -> tuple[float, float]:
+    """Central differences of ``ln U*_c`` and ``ln omega_c`` in ``name``."""
+    h = FD_STEP * value
+    onsets = [_relocated(_perturbed(scene, name, value + s * h), hopf) for s in (1, -1)]
+    (u1, w1), (u0, w0) = onsets
+    return (math.log(u1 / u0) / (2 * h), math.log(w1 / w0) / (2 * h))
+
+
+def _relocated(scene: Scene, hopf: HopfPoint) -> tuple[float, float]:
+    """``(U*_c, omega_c)`` of the Hopf point near ``hopf`` on ``scene``'s own model, by
+    Newton on the Hopf system from the steady state at the old onset."""
+    model = build_model(scene)
+    problem = flutter_problem(scene, model, ustar_start=hopf.ustar)
+    point = C.hopf_point(problem, problem.X0[:-1], hopf.omega / TIME_SCALE)
+    if point.status != "converged":
+        raise RuntimeError(f"the onset could not be relocated at {scene}: {point.message}")
+    return float(point.x[-2:].sum() / scene.hstar), float(point.data["omega"]) * TIME_SCALE
