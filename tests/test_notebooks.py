@@ -11,6 +11,7 @@ import re
 from pathlib import Path
 
 import nbclient
+import numpy as np
 import nbformat
 import pytest
 
@@ -50,6 +51,12 @@ print("REPORT " + _json.dumps({
     "light_hopf": light.hopf, "light_status": light.status,
     "folds": [f.ustar for f in light.folds], "fold_stable": [bool(f.stable) for f in light.folds],
     "run": run.outcome.to_json(), "T_branch": point.period, "A_branch": point.tip_amplitude}))
+""",
+    "palate_design": """
+print("REPORT " + _json.dumps({
+    "onset": sens.onset_flow * 60e3, "L": sens.parameters["L"].flow, "flows": flows.tolist(),
+    "factors": factors.tolist(), "gap": gap.to_json(), "stiff": stiff.to_json(),
+    "E0": palate.values["E"], "q0": sens.onset_flow}))
 """,
     "physical_units": """
 print("REPORT " + _json.dumps({
@@ -112,6 +119,22 @@ def test_notebook(path):
                    for o in cell.outputs), f"{path.name} cell {cell.id} draws but shows no figure"
     if path.stem in CHECKS:
         CHECKS[path.stem](out)
+
+
+def check_palate_design(out):
+    # the elasticity is the slope of the recomputed onsets at L = 30 mm (central
+    # difference over +-10 %, second order: agrees to the curvature, a few per cent)
+    flows, factors = np.array(out["flows"]), np.array(out["factors"])
+    i = int(np.argmin(abs(factors - 1)))
+    slope = np.log(flows[i + 1] / flows[i - 1]) / np.log(factors[i + 1] / factors[i - 1])
+    assert out["L"] == pytest.approx(slope, rel=0.05)
+    assert flows[i] == pytest.approx(out["onset"], rel=1e-9)
+    for name in ("gap", "stiff"):
+        d = out[name]
+        assert d["onset_flow_after_l_min"] == pytest.approx(10.0, rel=1e-9)
+        assert d["verified"]["stable_below"] and d["verified"]["unstable_above"]
+    ratio = (10.0 / 60e3) / out["q0"]
+    assert out["stiff"]["after"] == pytest.approx(out["E0"] * ratio ** 2, rel=1e-9)
 
 
 def check_quickstart(out):
@@ -190,5 +213,6 @@ def check_physical_units(out):
 
 
 CHECKS = {"quickstart": check_quickstart, "stability_map": check_stability_map,
+          "palate_design": check_palate_design,
           "time_integration": check_time_integration, "limit_cycles": check_limit_cycles,
           "physical_units": check_physical_units}
