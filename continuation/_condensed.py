@@ -154,7 +154,7 @@ class BorderedCollocation:
     def tocsc(self):
         """The whole matrix as a sparse matrix (explicit zeros of the blocks kept)."""
         J = self.J
-        m, k = J.n * J.ncol, J.extra.shape[2]
+        k = J.extra.shape[2]
         values = np.concatenate([J.blocks.ravel(), J.extra.ravel(), self.border().ravel()])
         return _full_layout(J.n, J.ntst, J.ncol, k).matrix(values)
 

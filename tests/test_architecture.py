@@ -20,9 +20,11 @@ ALLOWED = {
     "linear": {"top", "model"},
     "cycles": {"top", "model", "linear"},
     "timedomain": {"top", "model", "linear"},
+    "studies": {"top", "model", "linear", "cycles", "timedomain"},
     "plots": {"top", "model", "linear", "cycles", "timedomain"},
     "paper": {"top", "model", "linear", "cycles", "timedomain", "plots", "package"},
-    "cli": {"top", "model", "linear", "cycles", "timedomain", "plots", "paper", "package"},
+    "cli": {"top", "model", "linear", "cycles", "timedomain", "studies", "plots", "paper",
+            "package"},
     "package": {"top", "model", "linear", "cycles", "timedomain", "plots"},
 }
 

@@ -148,16 +148,16 @@ def test_workers_die_with_a_killed_map(tmp_path, monkeypatch):
     import sys
     import time
     import importlib
-    module = importlib.import_module("fsicas.timedomain.impact_map")
+    module = importlib.import_module("fsicas.workers")
     script = ("import os, time\n"
               "from concurrent.futures import ProcessPoolExecutor\n"
-              "from fsicas.timedomain.impact_map import _die_with_parent\n"
+              "from fsicas.workers import die_with_parent\n"
               "def busy(x):\n"
               "    t = time.time()\n"
               "    while time.time() - t < 120:\n"
               "        sum(range(10000))\n"
               "if __name__ == '__main__':\n"
-              "    with ProcessPoolExecutor(1, initializer=_die_with_parent,\n"
+              "    with ProcessPoolExecutor(1, initializer=die_with_parent,\n"
               "                             initargs=(os.getpid(),)) as pool:\n"
               "        pool.submit(busy, 1).result()\n")
     (tmp_path / "busy.py").write_text(script)
@@ -188,8 +188,9 @@ def test_workers_die_with_a_killed_map(tmp_path, monkeypatch):
             raise RuntimeError("pool created")
     monkeypatch.setattr(module, "ProcessPoolExecutor", Pool)
     with pytest.raises(RuntimeError, match="pool created"):
-        module.impact_map([4.0], [1.0], tmp_path / "m.jsonl", scene=SCENE, t_end=1.0, workers=1)
-    assert used["initializer"] is module._die_with_parent and used["initargs"] == (os.getpid(),)
+        importlib.import_module("fsicas.timedomain.impact_map").impact_map(
+            [4.0], [1.0], tmp_path / "m.jsonl", scene=SCENE, t_end=1.0, workers=1)
+    assert used["initializer"] is module.die_with_parent and used["initargs"] == (os.getpid(),)
 
 
 def test_results_file_records_what_wrote_it_without_comparing_it_on_resume(tmp_path):

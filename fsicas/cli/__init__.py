@@ -41,6 +41,7 @@ from .outputs import check_outputs
 from .paper import add_paper_command
 from .progress import reporting
 from .sound import add_sound_command
+from .study import add_study_command
 from .timedomain import add_time_commands
 
 __all__ = ["main", "build_parser", "EXIT_OK", "EXIT_FAILED_RESULT", "EXIT_ERROR"]
@@ -65,6 +66,7 @@ def build_parser() -> argparse.ArgumentParser:
     add_onset_command(sub)          # onset, in physical units (docs/units.md)
     add_sound_command(sub)          # sound, the radiated snore (docs/sound.md)
     add_design_command(sub)         # design, what change stops the snore (docs/design.md)
+    add_study_command(sub)          # study, an analysis over many parameters (docs/studies.md)
     _add_global_options(parser)
     for command in dict.fromkeys(sub.choices.values()):     # aliases share a parser
         _add_global_options(command, argparse.SUPPRESS)

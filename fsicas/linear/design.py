@@ -28,10 +28,8 @@ target flow, unstable at 100.5 %.
 """
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass, field, replace
 
-import numpy as np
 from scipy.optimize import brentq
 
 from .hopf import HopfPoint

@@ -17,14 +17,10 @@ map's process, also when it is killed. The linear stability boundary ``U*_c(M*)`
 from __future__ import annotations
 
 import contextlib
-import ctypes
 import dataclasses
 import json
-import os
-import signal
-import threading
 import time
-from concurrent.futures import Executor, ProcessPoolExecutor, as_completed
+from concurrent.futures import Executor, as_completed
 from dataclasses import dataclass
 from typing import Literal, Union
 
@@ -35,6 +31,7 @@ from ..linear.hopf import critical_velocity
 from ..model.assembly import build_model
 from ..provenance import provenance
 from ..results_file import ResultsFile, read_records
+from ..workers import local_pool
 from .outcome import Criteria, OutcomeKind
 from .run import guarded_model, run_case
 from ..scene import Scene
@@ -94,23 +91,6 @@ def map_header(scene: Scene, t_end: float, settings: Settings, criteria: Criteri
             "quadrature_tol": "auto"}
 
 
-def _die_with_parent(parent: int) -> None:
-    """Worker initializer: end this worker when the map's process dies (also by kill -9),
-    by the kernel's parent-death signal on Linux and a watchdog thread elsewhere."""
-    try:
-        ctypes.CDLL(None, use_errno=True).prctl(1, signal.SIGKILL)     # PR_SET_PDEATHSIG
-    except (OSError, AttributeError):
-        pass
-    if os.getppid() != parent:
-        os._exit(1)
-
-    def watch():
-        while os.getppid() == parent:
-            time.sleep(1.0)
-        os._exit(1)
-    threading.Thread(target=watch, daemon=True).start()
-
-
 def _model(scene: Scene):
     """The guarded model of ``scene``'s structure, built once per worker process."""
     key = json.dumps(scene.replace(ustar=1.0, mstar=1.0).to_dict(), sort_keys=True)
@@ -168,9 +148,7 @@ def impact_map(ustars, mstars, path, *, scene: Scene = MAP_SCENE, t_end: float =
         done = {_key(row["ustar"], row["mstar"]): row for row in out.records}
         todo = [(u, m) for m in mstars for u in ustars if _key(u, m) not in done]
         if executor is None and todo:
-            executor = stack.enter_context(ProcessPoolExecutor(
-                max_workers=workers or os.cpu_count() or 1, initializer=_die_with_parent,
-                initargs=(os.getpid(),)))
+            executor = stack.enter_context(local_pool(workers))
         futures = [executor.submit(_point, base, u, m, t_end, settings, criteria) for u, m in todo]
         bar = stack.enter_context(tqdm(total=len(todo), desc="impact map", unit="point", disable=None))
         for k, fut in enumerate(as_completed(futures), start=1):

@@ -1,0 +1,60 @@
+"""CLI command ``fsicas study STUDY.toml``: one analysis over a grid or a random sample
+of parameters (:mod:`fsicas.studies`, docs/studies.md) on local processes or a Dask
+scheduler, saved as it goes (``NAME.jsonl`` beside the table) and resumed by running the
+same command again; the table is ``--out`` (``.csv`` or ``.parquet``).
+"""
+from __future__ import annotations
+
+from pathlib import Path
+
+from ..studies import check_table_path, load_study, run_study
+from .meta import cli_meta, record
+from .progress import reporter
+
+__all__ = ["add_study_command"]
+
+
+def add_study_command(sub) -> None:
+    """Add the ``study`` subcommand."""
+    p = sub.add_parser("study", help="one analysis (onset, outcome) over a grid or a random "
+                       "sample of scene or physical parameters, resumable, as one table")
+    p.add_argument("study", metavar="STUDY.toml", help="the study (docs/studies.md)")
+    p.add_argument("--out", metavar="TABLE", help="the table, .csv or .parquet (default: "
+                   "beside the study file, NAME.csv); its results file NAME.jsonl beside it")
+    p.add_argument("--workers", type=int, default=None,
+                   help="local processes (default: the cores)")
+    p.add_argument("--dask", metavar="ADDRESS", help="run the points on a Dask scheduler "
+                   "(tcp://host:8786; needs the 'parallel' extra)")
+    p.add_argument("--json", action="store_true", help="print one JSON object on stdout")
+    p.set_defaults(run=_cmd_study, human=_print_study)
+
+
+def _cmd_study(args) -> dict:
+    if args.workers is not None and args.workers < 1:
+        raise ValueError(f"--workers must be >= 1, got {args.workers}")
+    study = load_study(args.study)
+    table = check_table_path(args.out or Path(args.study).with_suffix(".csv"))
+    record(args, None, analysis=study.analysis, points=len(study.points),
+           settings=study.settings)
+    progress = reporter(args)
+    if args.dask:
+        try:
+            from dask.distributed import Client
+        except ImportError:
+            raise ValueError("--dask needs Dask: pip install -e '.[parallel]'") from None
+        with Client(args.dask) as client:
+            rows = run_study(study, table, executor=client.get_executor(),
+                             progress=progress.bars)
+    else:
+        rows = run_study(study, table, workers=args.workers, progress=progress.bars)
+    errors = sum(1 for r in rows if r["error"])
+    return {"study": study.to_json(), "table": str(table), "rows": len(rows),
+            "errors": errors, "meta": cli_meta(args)}
+
+
+def _print_study(result: dict) -> None:
+    s = result["study"]
+    print(f"{s['source']}: {s['description']}" if s["description"] else s["source"])
+    print(f"  {result['rows']} points of the {s['analysis']} analysis in {result['table']}"
+          + (f" ({result['errors']} could not be computed: see their 'error' column)"
+             if result["errors"] else ""))

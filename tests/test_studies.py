@@ -1,0 +1,223 @@
+"""Studies (fsicas.studies, ``fsicas study``): the points a study file describes, rows
+equal to the analyses run directly, resume after SIGKILL without lost, repeated or mixed
+rows, local processes against a Dask cluster, and refusals before any work."""
+
+import csv
+import json
+import os
+import signal
+import subprocess
+import sys
+import time
+from concurrent.futures import ThreadPoolExecutor
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import fsicas
+from fsicas.cli import main
+from fsicas.studies import load_study, run_study, study_point
+
+ONSET = """
+description = "palate onsets"
+analysis = "onset"
+physical = "soft_palate"
+[scene]
+modes = 4
+[grid]
+E = ["1 kPa", "3 kPa"]
+e = {start = "2 mm", stop = "3 mm", num = 3}
+"""
+
+SAMPLE = """
+analysis = "onset"
+[scene]
+modes = 4
+[sample]
+size = 5
+seed = 3
+mstar = {distribution = "loguniform", low = 0.1, high = 10.0}
+friction = {distribution = "normal", mean = 0.14, std = 0.01}
+"""
+
+
+# The in-process tests run the points on one thread: CasADi's model building and the
+# warnings a point records are not thread-safe (a study runs on processes).
+
+
+def _write(tmp_path, text, name="s.toml") -> Path:
+    path = tmp_path / name
+    path.write_text(text)
+    return path
+
+
+def _table(path) -> tuple[dict, list[dict]]:
+    with open(path) as fh:
+        header = json.loads(fh.readline()[2:])
+        return header, list(csv.DictReader(fh))
+
+
+def test_grid_points_are_every_combination_in_si_units(tmp_path):
+    study = load_study(_write(tmp_path, ONSET))
+    assert [(p["E"], p["e"]) for p in study.points] == \
+        [(E, e) for E in (1000.0, 3000.0) for e in (0.002, 0.0025, 0.003)]
+    assert study.header["points"] == 6 and len(study.header["points_sha256"]) == 64
+
+
+def test_a_sample_is_the_same_in_every_run_and_follows_its_distributions(tmp_path):
+    a, b = (load_study(_write(tmp_path, SAMPLE, f"{k}.toml")) for k in "ab")
+    assert a.points == b.points
+    rng = np.random.default_rng(3)                      # the documented draw, by hand
+    mstar = np.exp(rng.uniform(np.log(0.1), np.log(10.0), 5))
+    friction = rng.normal(0.14, 0.01, 5)
+    assert [p["mstar"] for p in a.points] == pytest.approx(mstar, rel=1e-15)
+    assert [p["friction"] for p in a.points] == pytest.approx(friction, rel=1e-15)
+
+
+def test_rows_equal_the_analysis_run_directly(tmp_path):
+    """The physical study's rows against onsets computed here from the preset."""
+    study = load_study(_write(tmp_path, ONSET))
+    rows = run_study(study, tmp_path / "t.csv", executor=ThreadPoolExecutor(1), progress=False)
+    palate = fsicas.load_physical("soft_palate")
+    for row in rows:
+        table = {**palate.raw, "E": row["E"], "e": row["e"]}
+        scene = fsicas.Physical.from_table(table, "check").scene(None, modes=4)
+        hopf = fsicas.critical_velocity(scene)
+        assert row["ustar_crit"] == pytest.approx(hopf.ustar, rel=1e-12)
+        assert row["onset_flow_l_min"] == pytest.approx(scene.scales.l_per_min(hopf.ustar),
+                                                        rel=1e-12)
+        assert row["error"] == ""
+    header, written = _table(tmp_path / "t.csv")
+    assert header["analysis"] == "onset" and header["description"] == "palate onsets"
+    assert [int(r["index"]) for r in written] == list(range(6))
+    assert float(written[4]["ustar_crit"]) == rows[4]["ustar_crit"]     # repr round trip
+
+
+def test_resume_computes_only_the_missing_points_and_refuses_another_study(tmp_path):
+    study = load_study(_write(tmp_path, SAMPLE))
+    first = run_study(study, tmp_path / "t.csv", executor=ThreadPoolExecutor(1), progress=False)
+    lines = (tmp_path / "t.jsonl").read_text().splitlines()
+    (tmp_path / "t.jsonl").write_text("\n".join(lines[:3]) + "\n" + lines[3][:20])   # torn
+    calls = []
+
+    class Counting(ThreadPoolExecutor):
+        def submit(self, fn, *args):
+            calls.append(args[1])
+            return super().submit(fn, *args)
+
+    again = run_study(study, tmp_path / "t.csv", executor=Counting(1), progress=False)
+    assert sorted(calls) == [2, 3, 4] and again == first
+    other = load_study(_write(tmp_path, SAMPLE.replace("seed = 3", "seed = 4"), "o.toml"))
+    with pytest.raises(ValueError, match="points_sha256"):
+        run_study(other, tmp_path / "t.csv", executor=ThreadPoolExecutor(1), progress=False)
+
+
+def test_a_point_that_fails_is_a_row_with_its_error(tmp_path):
+    study = load_study(_write(tmp_path, 'analysis = "onset"\n[scene]\nmodes = 2\n'
+                                        '[grid]\nmstar = [-1.0, 1.0]\n'))
+    row = study_point(study, 0)
+    assert "mstar" in row["error"] and row["index"] == 0 and "ustar_crit" not in row
+    row = study_point(study, 1)               # N = 2: no onset resolved
+    assert row["error"] == "" and not row["found"] and "N = 2 modes" in row["warnings"]
+
+
+def test_sigkill_and_restart_lose_and_repeat_no_row(tmp_path):
+    """``fsicas study`` killed with SIGKILL while it writes, then run again to the end:
+    every point once, and the rows equal those of an uninterrupted run."""
+    text = ONSET.replace('["1 kPa", "3 kPa"]', '["1 kPa", "2 kPa", "3 kPa", "4 kPa"]') \
+        .replace("num = 3", "num = 5")
+    path = _write(tmp_path, text)
+    argv = [sys.executable, "-m", "fsicas.cli", "study", str(path), "--workers", "1",
+            "--out", str(tmp_path / "k.csv"), "--quiet"]
+    proc = subprocess.Popen(argv, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    results, deadline = tmp_path / "k.jsonl", time.time() + 120
+    while time.time() < deadline:
+        if results.exists() and len(results.read_text().splitlines()) >= 4:
+            break
+        time.sleep(0.05)
+    os.kill(proc.pid, signal.SIGKILL)
+    proc.wait()
+    partial = len(results.read_text().splitlines()) - 1
+    assert 3 <= partial < 20, "the kill did not land mid-study"
+    assert subprocess.run(argv).returncode == 0
+    lines = [json.loads(line) for line in results.read_text().splitlines()[1:]]
+    assert sorted(r["index"] for r in lines) == list(range(20))        # none lost or repeated
+    clean = run_study(load_study(path), tmp_path / "c.csv", executor=ThreadPoolExecutor(1),
+                      progress=False)
+    assert _table(tmp_path / "k.csv")[1] == _table(tmp_path / "c.csv")[1]
+    assert sorted(lines, key=lambda r: r["index"]) == clean
+
+
+def test_local_processes_and_a_dask_cluster_give_identical_tables(tmp_path):
+    distributed = pytest.importorskip("distributed")
+    study = load_study(_write(tmp_path, SAMPLE))
+    run_study(study, tmp_path / "local.csv", workers=2, progress=False)
+    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
+                                  dashboard_address=None) as cluster, \
+            distributed.Client(cluster) as client:
+        run_study(study, tmp_path / "dask.csv", executor=client.get_executor(), progress=False)
+    assert (tmp_path / "local.csv").read_text() == (tmp_path / "dask.csv").read_text()
+
+
+def test_cli_study_json_and_resume(tmp_path, capsys):
+    path = _write(tmp_path, SAMPLE)
+    out = tmp_path / "cli.csv"
+    assert main(["study", str(path), "--out", str(out), "--workers", "2", "--json"]) == 0
+    result = json.loads(capsys.readouterr().out)
+    assert result["rows"] == 5 and result["errors"] == 0 and result["table"] == str(out)
+    assert result["study"]["points"] == 5 and "meta" in result
+    before = out.read_text()
+    assert main(["study", str(path), "--out", str(out)]) == 0         # all there: no work
+    assert "5 points of the onset analysis" in capsys.readouterr().out
+    assert out.read_text() == before
+
+
+@pytest.mark.parametrize("text, message", [
+    ('analysis = "flutter"\n[grid]\nmstar = [1.0]\n', "analysis must be one of onset, outcome"),
+    ('analysis = "onset"\n', "give either a [grid] or a [sample] table"),
+    ('analysis = "onset"\n[grid]\ncolour = [1.0]\n', "'colour' is not a Scene field"),
+    ('analysis = "onset"\nphysical = "soft_palate"\n[grid]\nE = ["3 m"]\n',
+     "E: '3 m' is not in units of Pa"),
+    ('analysis = "onset"\n[settings]\nt_end = 3.0\n[grid]\nmstar = [1.0]\n',
+     "not settings of 'onset'"),
+    ('analysis = "onset"\n[sample]\nsize = 3\nmstar = {distribution = "beta"}\n',
+     "distribution must be one of uniform"),
+    ('analysis = "onset"\n[sample]\nsize = 3\nmstar = {distribution = "uniform", low = 2.0, '
+     'high = 1.0}\n', "need 0 < low < high"),
+])
+def test_bad_study_files_are_refused_before_any_work(tmp_path, capsys, text, message):
+    assert main(["study", str(_write(tmp_path, text)), "--json"]) == 2
+    assert message in json.loads(capsys.readouterr().out)["error"]
+
+
+@pytest.mark.parametrize("out, message", [("t.txt", "must end in .csv or .parquet"),
+                                          ("nowhere/t.csv", "does not exist")])
+def test_bad_table_paths_are_refused_before_any_work(tmp_path, capsys, out, message):
+    path = _write(tmp_path, SAMPLE)
+    assert main(["study", str(path), "--out", str(tmp_path / out), "--json"]) == 2
+    assert message in json.loads(capsys.readouterr().out)["error"]
+    assert not (tmp_path / "t.jsonl").exists()
+
+
+def test_parquet_table(tmp_path):
+    study = load_study(_write(tmp_path, SAMPLE))
+    try:
+        import pyarrow.parquet as pq
+    except ImportError:
+        with pytest.raises(ValueError, match="needs pyarrow"):
+            run_study(study, tmp_path / "t.parquet", executor=ThreadPoolExecutor(1))
+        return
+    rows = run_study(study, tmp_path / "t.parquet", executor=ThreadPoolExecutor(1),
+                     progress=False)
+    table = pq.read_table(tmp_path / "t.parquet")
+    assert table.column("ustar_crit").to_pylist() == [r["ustar_crit"] for r in rows]
+    assert json.loads(table.schema.metadata[b"fsicas_study"])["points"] == 5
+
+
+def test_shipped_example_studies_load():
+    root = Path(__file__).resolve().parents[1] / "examples" / "studies"
+    onset, fig4 = load_study(root / "palate_onset.toml"), load_study(root / "fig4_map.toml")
+    assert len(onset.points) == 200 and onset.physical == "soft_palate"
+    assert len(fig4.points) == 105 and fig4.analysis == "outcome"
+    assert 0.1 * 0.999 < min(p["mstar"] for p in fig4.points) < 0.1 * 1.001
