@@ -113,6 +113,26 @@ def test_resume_computes_only_the_missing_points_and_refuses_another_study(tmp_p
         run_study(other, tmp_path / "t.csv", executor=ThreadPoolExecutor(1), progress=False)
 
 
+def test_sound_rows_equal_the_sound_of_the_same_run(tmp_path):
+    """The sound analysis against run_case and trajectory_sound called here."""
+    from fsicas.timedomain.integrators import Settings
+    from fsicas.timedomain.sound import trajectory_sound
+    text = ('analysis = "sound"\nphysical = "soft_palate"\n[scene]\nmodes = 4\nzeta = 0.01\n'
+            'contact = true\ncontact_stiffness = 1e8\ncontact_eps = 0.1\n[settings]\n'
+            't_end = 6.0\n[grid]\nflow = ["6 L/min"]\n')
+    row = study_point(load_study(_write(tmp_path, text)), 0)
+    scene = fsicas.load_physical("soft_palate").scene(
+        fsicas.parse_flow("6 L/min"), modes=4, zeta=0.01, contact=True, contact_stiffness=1e8,
+        contact_eps=0.1)
+    run = fsicas.run_case(scene, 6.0, settings=Settings(rtol=1e-7, atol=1e-9, dt_out=2e-4,
+                                                         chunk=1.0))
+    assert row["outcome"] == run.outcome.outcome == "contact" and row["error"] == ""
+    traj = run.trajectory
+    sound = trajectory_sound(traj, scene.scales, 0.3, t_start=traj.t[-1] * 2 / 3)
+    assert row["spl_db"] == pytest.approx(sound.spl_db, rel=1e-9)
+    assert row["fundamental_hz"] == pytest.approx(sound.fundamental_hz, rel=1e-9)
+
+
 def test_a_point_that_fails_is_a_row_with_its_error(tmp_path):
     study = load_study(_write(tmp_path, 'analysis = "onset"\n[scene]\nmodes = 2\n'
                                         '[grid]\nmstar = [-1.0, 1.0]\n'))
@@ -174,7 +194,7 @@ def test_cli_study_json_and_resume(tmp_path, capsys):
 
 
 @pytest.mark.parametrize("text, message", [
-    ('analysis = "flutter"\n[grid]\nmstar = [1.0]\n', "analysis must be one of onset, outcome"),
+    ('analysis = "flutter"\n[grid]\nmstar = [1.0]\n', "analysis must be one of onset, outcome, sound"),
     ('analysis = "onset"\n', "give either a [grid] or a [sample] table"),
     ('analysis = "onset"\n[grid]\ncolour = [1.0]\n', "'colour' is not a Scene field"),
     ('analysis = "onset"\nphysical = "soft_palate"\n[grid]\nE = ["3 m"]\n',

@@ -16,7 +16,7 @@ __all__ = ["add_study_command"]
 
 def add_study_command(sub) -> None:
     """Add the ``study`` subcommand."""
-    p = sub.add_parser("study", help="one analysis (onset, outcome) over a grid or a random "
+    p = sub.add_parser("study", help="one analysis (onset, outcome, sound) over a grid or a random "
                        "sample of scene or physical parameters, resumable, as one table")
     p.add_argument("study", metavar="STUDY.toml", help="the study (docs/studies.md)")
     p.add_argument("--out", metavar="TABLE", help="the table, .csv or .parquet (default: "

@@ -19,6 +19,7 @@ from ..scene import Scene
 from ..timedomain.integrators import Settings
 from ..timedomain.outcome import Criteria
 from ..timedomain.run import guarded_model, run_case
+from ..timedomain.sound import cycle_sound, trajectory_sound
 from .spec import Study
 
 __all__ = ["study_point"]
@@ -89,14 +90,19 @@ def _onset(study: Study, point: dict) -> dict:
     return row
 
 
-def _outcome(study: Study, point: dict) -> dict:
-    scene, physical, flow = _scene(study, point)
+def _run(study: Study, point: dict):
+    """``(scene, physical, run)``: the point's time integration, classified."""
+    scene, physical, _ = _scene(study, point)
     if scene.ustar <= 0:
         raise ValueError("the outcome needs a flow: give ustar (or flow, with physical = ...)")
     s = study.settings
     settings = Settings(rtol=s["rtol"], atol=s["atol"], dt_out=s["dt_out"], chunk=1.0)
     run = run_case(scene, s["t_end"], settings=settings, criteria=Criteria(),
                    model=_model(scene, guarded=not scene.contact))
+    return scene, physical, run
+
+
+def _outcome_row(scene: Scene, physical, run) -> dict:
     out = run.to_json()
     keep = ("outcome", "period", "frequency", "tip_amplitude", "contact", "first_contact_time",
             "max_impact_force", "mean_flow_reduction", "settled", "convergence", "status")
@@ -107,4 +113,29 @@ def _outcome(study: Study, point: dict) -> dict:
     return row
 
 
-_ANALYSES = {"onset": _onset, "outcome": _outcome}
+def _outcome(study: Study, point: dict) -> dict:
+    return _outcome_row(*_run(study, point))
+
+
+def _sound(study: Study, point: dict) -> dict:
+    """The outcome and the radiated sound at ``distance`` (:mod:`fsicas.timedomain.sound`):
+    of the settled cycle, or of the last third of a run that oscillates but did not
+    settle; none after a decay or a contact-free run's first contact."""
+    if study.physical is None:
+        raise ValueError("the sound analysis needs physical = ... (Pa at a distance in m)")
+    scene, physical, run = _run(study, point)
+    row = _outcome_row(scene, physical, run)
+    traj, o, r = run.trajectory, run.outcome, study.settings["distance"]
+    row.update(spl_db=None, fundamental_hz=None, dominant_hz=None)
+    if o.period is not None:
+        sound = cycle_sound(traj, scene.scales, r, duration=1.0)
+    elif o.outcome in ("unsettled",) or (o.outcome == "contact" and scene.contact):
+        sound = trajectory_sound(traj, scene.scales, r, t_start=traj.t[-1] * 2 / 3)
+    else:
+        return row
+    row.update(spl_db=sound.spl_db, fundamental_hz=sound.fundamental_hz,
+               dominant_hz=sound.dominant_hz)
+    return row
+
+
+_ANALYSES = {"onset": _onset, "outcome": _outcome, "sound": _sound}

@@ -3,7 +3,7 @@
 ::
 
     description = "onset airflow over published palate stiffness and thickness"
-    analysis = "onset"            # onset | outcome
+    analysis = "onset"            # onset | outcome | sound
     physical = "soft_palate"      # a preset or FILE.toml: the parameters are its [physical]
                                   # keys (SI numbers or strings with units); without it they
                                   # are nondimensional Scene fields
@@ -25,10 +25,12 @@ Distributions: ``uniform`` (low, high), ``loguniform`` (low, high), ``normal`` (
 std), ``lognormal`` (median, sigma of ln). The points are drawn once, from NumPy's
 ``default_rng(seed)``, in the order of the keys: a study always has the same points.
 
-Analyses and their settings: ``onset`` (the first Hopf point: ``ustar_max``; with a
-physical input also in L/min, Hz, Pa) and ``outcome`` (a time integration classified as
-decay, limit cycle or contact: ``t_end``, ``rtol``, ``atol``, ``dt_out``; the point needs
-``ustar``, or a ``flow`` with a physical input).
+Analyses and their settings: ``onset`` (the first Hopf point, i.e. the boundary point at
+the point's M*: ``ustar_max``; with a physical input also in L/min, Hz, Pa), ``outcome``
+(a time integration classified as decay, limit cycle or contact, with the cycle's
+amplitude: ``t_end``, ``rtol``, ``atol``, ``dt_out``; the point needs ``ustar``, or a
+``flow`` with a physical input) and ``sound`` (the outcome and the radiated sound's level
+and pitch at ``distance`` m; physical input only).
 """
 from __future__ import annotations
 
@@ -46,7 +48,9 @@ __all__ = ["Study", "load_study", "ANALYSES", "SETTINGS", "DISTRIBUTIONS"]
 
 #: The analyses a study can run, and the settings each takes (with defaults).
 SETTINGS = {"onset": {"ustar_max": 40.0},
-            "outcome": {"t_end": 30.0, "rtol": 1e-7, "atol": 1e-9, "dt_out": 2e-3}}
+            "outcome": {"t_end": 30.0, "rtol": 1e-7, "atol": 1e-9, "dt_out": 2e-3},
+            "sound": {"t_end": 30.0, "rtol": 1e-7, "atol": 1e-9, "dt_out": 2e-4,
+                      "distance": 0.3}}
 ANALYSES = tuple(SETTINGS)
 DISTRIBUTIONS = {"uniform": ("low", "high"), "loguniform": ("low", "high"),
                  "normal": ("mean", "std"), "lognormal": ("median", "sigma")}
