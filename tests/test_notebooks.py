@@ -58,6 +58,12 @@ print("REPORT " + _json.dumps({
     "factors": factors.tolist(), "gap": gap.to_json(), "stiff": stiff.to_json(),
     "E0": palate.values["E"], "q0": sens.onset_flow}))
 """,
+    "studies": """
+print("REPORT " + _json.dumps({
+    "rows": len(rows), "errors": sum(1 for r in rows if r["error"]), "coef": coef.tolist(),
+    "exact_E": sens.parameters["E"].flow, "exact_e": sens.parameters["e"].flow,
+    "again": again == rows, "table": len(table), "header_points": header["points"]}))
+""",
     "physical_units": """
 print("REPORT " + _json.dumps({
     "onset": onset, "flows": flows, "pitches": pitches,
@@ -137,6 +143,14 @@ def check_palate_design(out):
     assert out["stiff"]["after"] == pytest.approx(out["E0"] * ratio ** 2, rel=1e-9)
 
 
+def check_studies(out):
+    assert out["rows"] == out["table"] == out["header_points"] == 60 and out["errors"] == 0
+    assert out["coef"][1] == pytest.approx(0.5, abs=1e-4)        # Q ~ sqrt(E); the fit's bias
+    assert out["exact_E"] == pytest.approx(0.5, abs=1e-12)
+    assert out["coef"][2] == pytest.approx(out["exact_e"], rel=0.1)   # a range average
+    assert out["again"]
+
+
 def check_quickstart(out):
     assert out["pressure_drop"] == pytest.approx(1.0 * 25 * (0.5 + 2 * 0.14 / 0.1), rel=1e-14)
     assert out["tip"] > 0 and out["Q"][0] > out["Q"][1]
@@ -213,6 +227,6 @@ def check_physical_units(out):
 
 
 CHECKS = {"quickstart": check_quickstart, "stability_map": check_stability_map,
-          "palate_design": check_palate_design,
+          "palate_design": check_palate_design, "studies": check_studies,
           "time_integration": check_time_integration, "limit_cycles": check_limit_cycles,
           "physical_units": check_physical_units}
