@@ -12,7 +12,7 @@ import pytest
 
 import fsicas
 from fsicas.cli import main
-from fsicas.linear.design import DesignError, design_for_flow, palate_sensitivity
+from fsicas.linear import DesignError, design_for_flow, palate_sensitivity
 from fsicas.linear.hopf import ModalTruncationWarning
 from fsicas.linear.sensitivity import onset_sensitivity
 from fsicas.physical import Physical, load_physical, parse_flow
@@ -179,6 +179,50 @@ def test_design_by_stiffness_and_width_meets_their_closed_forms(palate):
         assert d.verified and d.stable_below and d.unstable_above
 
 
+def test_weighted_combination_meets_its_closed_form(palate):
+    """Stiffer and wider together (weights 1, 1): ln Q = ln Q_0 + (1/2 + 1) s exactly,
+    so s = ln(Q_t / Q_0) / 1.5 and both parameters grow by exp(s)."""
+    physical, sens = palate
+    target = parse_flow("8L/min")
+    d = design_for_flow(physical, target, "stiffness=1,width=1", modes=MODES)
+    s = math.log(target.value / sens.onset_flow) / 1.5
+    E, b = d.changes
+    assert (E.parameter, b.parameter) == ("E", "b") and d.weights == (1.0, 1.0)
+    assert E.after == pytest.approx(physical.values["E"] * math.exp(s), rel=1e-9)
+    assert b.after == pytest.approx(physical.values["b"] * math.exp(s), rel=1e-9)
+    assert d.verified
+    with pytest.raises(AttributeError, match="several parameters"):
+        d.after
+
+
+def test_stiffening_against_shortening(palate):
+    """E up and L down in equal log steps (weights 1, -1), checked by an onset of the
+    designed palate computed here."""
+    physical, _ = palate
+    target = parse_flow("6L/min")
+    d = design_for_flow(physical, target, {"E": 1.0, "L": -1.0}, modes=MODES)
+    E, L = d.changes
+    assert math.log(E.after / E.before) == pytest.approx(-math.log(L.after / L.before),
+                                                         rel=1e-12)
+    assert E.after > E.before and L.after < L.before and d.verified
+    flow, _ = _physical_onset(_table(physical, E=E.after, L=L.after))
+    assert flow == pytest.approx(target.value, rel=1e-8)
+    out = d.to_json()
+    assert [c["parameter"] for c in out["changes"]] == ["E", "L"] and "after" not in out
+
+
+@pytest.mark.parametrize("vary, message", [
+    ("stiffness=1,damping=1", "varies only on its own"),
+    ("stiffness=0", "a finite weight other than 0"),
+    ("stiffness=1,E=2", "each parameter once"),
+    ("stiffness=x", "'x' is not a weight"),
+])
+def test_bad_combinations_are_refused(palate, vary, message):
+    physical, _ = palate
+    with pytest.raises(ValueError, match=message):
+        design_for_flow(physical, parse_flow("6L/min"), vary, modes=MODES)
+
+
 def test_design_by_the_gap_is_verified_by_an_independent_onset(palate):
     physical, _ = palate
     target = parse_flow("5L/min")
@@ -196,7 +240,7 @@ def test_design_needs_no_change_below_the_onset_and_says_when_none_reaches(palat
     assert d.after == d.before and "no change" in d.note and d.verified is not None
     d = design_for_flow(physical, parse_flow("4.5L/min"), "damping", modes=4)   # from 0
     assert d.before == 0.0 and d.relative_change is None and 0 < d.after < 1 and d.verified
-    with pytest.raises(DesignError, match="damping ratio of 1 lifts the onset"):
+    with pytest.raises(DesignError, match="up to a damping ratio of 1 lifts the onset"):
         design_for_flow(physical, parse_flow("30L/min"), "damping", modes=4)
     with pytest.raises(ValueError, match="--vary 'colour': not a parameter.*allowed: E"):
         design_for_flow(physical, parse_flow("30L/min"), "colour", modes=MODES)

@@ -1,12 +1,14 @@
 """CLI command ``fsicas design``: what change of the palate would stop the snore
-(:mod:`fsicas.linear.design`, docs/design.md). The onset airflow and frequency of a physical
-configuration and their elasticities to every physical parameter; with
-``--target-flow`` and ``--vary``, the smallest change of that parameter that lifts the
-onset to the target, verified by the eigenvalues at 99.5 % and 100.5 % of it.
+(:mod:`fsicas.linear.elasticity`, :mod:`fsicas.linear.design`, docs/design.md). The onset
+airflow and frequency of a physical configuration and their elasticities to every
+physical parameter; with ``--target-flow`` and ``--vary``, the smallest change of that
+parameter (or weighted combination) that lifts the onset to the target, verified by the
+eigenvalues at 99.5 % and 100.5 % of it.
 """
 from __future__ import annotations
 
-from ..linear.design import ALIASES, DESIGN_MAX_FACTOR, design_for_flow, palate_sensitivity
+from ..linear.design import ALIASES, DESIGN_MAX_FACTOR, design_for_flow
+from ..linear.elasticity import palate_sensitivity
 from ..physical import parse_flow
 from ..scene import MAX_ABS_USTAR
 from .meta import cli_meta, record
@@ -33,8 +35,10 @@ def add_design_command(sub) -> None:
     add_scene_options(p)
     p.add_argument("--target-flow", metavar="FLOW", help="lift the onset to this airflow "
                    "(e.g. 30L/min, the patient's peak inspiratory flow); with --vary")
-    p.add_argument("--vary", metavar="NAME", help="the parameter to change: a [physical] key "
-                   f"(E, e, L, rho_s, zeta, gap, H1, H2, b, ...) or {', '.join(ALIASES)}")
+    p.add_argument("--vary", metavar="NAME[=W],...", help="the parameter to change: a "
+                   "[physical] key (E, e, L, rho_s, zeta, gap, H1, H2, b, ...) or "
+                   f"{', '.join(ALIASES)}; or a weighted combination moved together, "
+                   "ln theta_j changing as w_j (e.g. stiffness=1,length=-1)")
     p.add_argument("--ustar-max", type=float, default=40.0,
                    help="search the onset below this U* (default 40)")
     p.set_defaults(run=_cmd_design, human=_print_design)
@@ -91,9 +95,10 @@ def _print_design(result: dict) -> None:
     if d["note"]:
         print(f"  {d['note']}")
         return
-    change = "" if d["relative_change"] is None else f" ({100 * d['relative_change']:+.3g} %)"
-    print(f"  to lift the onset to {d['target_flow_l_min']:.4g} L/min: {d['parameter']} from "
-          f"{d['before']:.4g} to {d['after']:.4g} {d['unit']}{change}")
+    print(f"  to lift the onset to {d['target_flow_l_min']:.4g} L/min:")
+    for c in d["changes"]:
+        change = "" if c["relative_change"] is None else f" ({100 * c['relative_change']:+.3g} %)"
+        print(f"    {c['parameter']} from {c['before']:.4g} to {c['after']:.4g} {c['unit']}{change}")
     print(f"  then the onset is at {d['onset_flow_after_l_min']:.4g} L/min and "
           f"{d['frequency_after_hz']:.4g} Hz; checked: "
           f"{'stable' if d['verified']['stable_below'] else 'NOT stable'} at 99.5 % and "

@@ -3,8 +3,8 @@ sensitivities and the palate design built on them, and the stability boundary in
 (M*, U*), through the generic ``continuation`` library."""
 
 from .boundary import HopfCurve, ModeSwitch, StabilityBoundary, stability_boundary
-from .design import (Design, DesignError, PalateSensitivity, Sensitivity, design_for_flow,
-                     palate_sensitivity)
+from .design import Change, Design, design_for_flow
+from .elasticity import DesignError, PalateSensitivity, Sensitivity, palate_sensitivity
 from .hopf import CriticalVelocityError, HopfPoint, critical_velocity, hopf_points
 from .onset import onset_at_own_flow
 from .sensitivity import OnsetSensitivity, onset_sensitivity
@@ -15,5 +15,5 @@ __all__ = ["HopfCurve", "ModeSwitch", "StabilityBoundary", "stability_boundary",
            "CriticalVelocityError", "HopfPoint", "critical_velocity", "hopf_points", "onset_at_own_flow",
            "LinearStability", "eigenvalues", "linear_stability", "SteadyState",
            "SteadyStateError", "steady_state", "straight_pressure_drop", "OnsetSensitivity",
-           "onset_sensitivity", "Design", "DesignError", "PalateSensitivity", "Sensitivity",
+           "onset_sensitivity", "Change", "Design", "DesignError", "PalateSensitivity", "Sensitivity",
            "design_for_flow", "palate_sensitivity"]
