@@ -64,6 +64,12 @@ print("REPORT " + _json.dumps({
     "exact_E": sens.parameters["E"].flow, "exact_e": sens.parameters["e"].flow,
     "again": again == rows, "table": len(table), "header_points": header["points"]}))
 """,
+    "snore_sound": """
+print("REPORT " + _json.dumps({
+    "period": run.outcome.period, "f0": tone.fundamental_hz, "spl": tone.spl_db,
+    "harmonics": list(tone.harmonics_pa), "sine": sine.harmonics_pa[0], "closed": closed,
+    "snore_spl": snore.spl_db, "snore_f0": snore.fundamental_hz}))
+""",
     "physical_units": """
 print("REPORT " + _json.dumps({
     "onset": onset, "flows": flows, "pitches": pitches,
@@ -151,6 +157,15 @@ def check_studies(out):
     assert out["again"]
 
 
+def check_snore_sound(out):
+    # the looped cycle is the run's last, the outcome's period its settled estimate: they
+    # agree to the settling (3e-7 here); T = 10 ms
+    assert out["f0"] == pytest.approx(1 / (out["period"] * 0.01), rel=1e-5)
+    assert out["sine"] == pytest.approx(out["closed"], rel=1e-6)
+    assert int(np.argmax(out["harmonics"])) == 1          # symmetric channels: 2nd harmonic
+    assert 0 < out["snore_spl"] < out["spl"] and out["snore_f0"] > 0
+
+
 def check_quickstart(out):
     assert out["pressure_drop"] == pytest.approx(1.0 * 25 * (0.5 + 2 * 0.14 / 0.1), rel=1e-14)
     assert out["tip"] > 0 and out["Q"][0] > out["Q"][1]
@@ -228,5 +243,6 @@ def check_physical_units(out):
 
 CHECKS = {"quickstart": check_quickstart, "stability_map": check_stability_map,
           "palate_design": check_palate_design, "studies": check_studies,
+          "snore_sound": check_snore_sound,
           "time_integration": check_time_integration, "limit_cycles": check_limit_cycles,
           "physical_units": check_physical_units}

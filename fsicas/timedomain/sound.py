@@ -201,7 +201,10 @@ def trajectory_sound(traj, scales: Scales, distance: float = 0.3, rate: int = AU
     duration = (traj.t[-1] - t_start) * scales.time
     _check(distance, duration, rate)
     scale = _pressure_scale(scales, distance)
-    spline = CubicSpline(traj.t, flow_derivative(traj))
+    # the flow's derivative only where it is heard: from the retarded start on
+    first = np.searchsorted(traj.t, t_start - distance / SOUND_SPEED / scales.time) - 2
+    k = np.arange(max(first, 0), traj.t.size)
+    spline = CubicSpline(traj.t[k], flow_derivative(traj, k))
     t_audio = t_start * scales.time + np.arange(int(duration * rate)) / rate - distance / SOUND_SPEED
     p = np.where(t_audio >= 0, scale * spline(np.maximum(t_audio, 0.0) / scales.time), 0.0)
     onset, offset = _heard(p, rate, t_audio[0])
