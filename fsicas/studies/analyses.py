@@ -9,7 +9,6 @@ length of a thin beam) builds it once.
 from __future__ import annotations
 
 import json
-import math
 import warnings
 
 from ..linear.onset import onset_at_own_flow
@@ -109,7 +108,7 @@ def _outcome_row(scene: Scene, physical, run) -> dict:
     row = {k: out[k] for k in keep}
     row.update(ustar=scene.ustar, mstar=scene.mstar)
     if physical is not None and row["frequency"] is not None:
-        row["frequency_hz"] = scene.scales.hz(2 * math.pi * row["frequency"])
+        row["frequency_hz"] = scene.scales.hz(row["frequency"])      # angular: 2 pi / T
     return row
 
 
