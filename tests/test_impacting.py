@@ -141,3 +141,56 @@ def test_impact_settings_validation():
         ImpactSettings(threads=0)
     with pytest.raises(ValueError, match="contact"):
         impacting_branch(Scene(modes=2), np.zeros(6), 0.1, 1.0)
+
+
+@pytest.fixture(scope="module")
+def through_contact():
+    """The first impacting cycles past contact at M* = 1, N = 4 (5 points, about 10 s)."""
+    from fsicas.cycles import cycle_branch
+    base = Scene(mstar=1.0, zeta=0.01, modes=4, contact_eps=1e-2, contact_smoothing=0.1,
+                 contact_stiffness=1e8)
+    start = pre_contact_start(cycle_branch(base, ustar_max=8.0, settings=SCENE_NODES))
+    scene = base.replace(ustar=start.ustar, contact=True)
+    return scene, impacting_branch(scene, start.state, start.period, start.pressure_drop,
+                                   settings=ImpactSettings(max_points=5))
+
+
+def test_peak_force_and_flow_reduction_against_a_time_integration(through_contact):
+    """The branch's impact measures (shooting samples) against an IDAS integration of the
+    same cycle over one period from its state (another integrator and sampling): peak
+    force to 1e-2 (the sampled maximum of a sharp impact), mean flow to 1e-5."""
+    from fsicas.model.contact import contact_load, reference_force
+    scene, branch = through_contact
+    before, last = branch.points[0], branch.points[-1]
+    assert before.impacts == 0 and before.peak_force == 0.0
+    assert last.impacts >= 1 and last.gap_ratio < 1 and last.peak_force > 0
+    model = build_model(scene)
+    at = scene.replace(ustar=last.ustar)
+    st = steady_state(at, model)
+    assert st.pressure_drop == pytest.approx(last.pressure_drop, rel=1e-8)
+    traj = simulate(model, st, last.period, x0=last.state,
+                    settings=Settings(rtol=1e-10, atol=1e-12, dt_out=last.period / 20000,
+                                      chunk=last.period))
+    _, total = contact_load(model, traj.x)
+    assert total.max() / reference_force(model) == pytest.approx(last.peak_force, rel=1e-2)
+    flow = traj.x[:, -2:].sum(axis=1)
+    mean = np.trapezoid(flow, traj.t) / (traj.t[-1] - traj.t[0])
+    assert 1 - mean / st.x[-2:].sum() == pytest.approx(last.flow_reduction, abs=1e-5)
+
+
+def test_cli_lco_through_contact(capsys):
+    """``fsicas lco --through-contact``: the collocation branch to the wall, then the
+    shooting branch on the contact model from 3 eps before it (plumbing: one point)."""
+    import json
+    from fsicas.cli import main
+    code = main(["lco", "--mstar", "1", "--zeta", "0.01", "--modes", "4", "--ustar-max", "8",
+                 "--through-contact", "--impact-points", "1", "--json"])
+    out = json.loads(capsys.readouterr().out)
+    imp = out["impacting"]
+    assert code == 0 and out["status"] == "contact" and imp["status"] == "max_points"
+    point = imp["points"][0]
+    assert set(point) == {"ustar", "period", "tip_amplitude", "min_gap", "gap_ratio", "impacts",
+                          "peak_force", "flow_reduction", "stable"}
+    assert point["gap_ratio"] == pytest.approx(3.0, abs=1.0) and imp["eps"] > 0
+    assert main(["lco", "--modes", "4", "--through-contact", "--impact-points", "0",
+                 "--json"]) == 2

@@ -1,5 +1,6 @@
 """CLI command ``fsicas lco`` (alias ``cycles``): the flutter limit-cycle branch versus U*
-(docs/cycles.md); ``lco`` is the name the command-line contract (shared DESIGN.md) fixes.
+(docs/cycles.md), with ``--through-contact`` on past the first contact into the impacting
+regime; ``lco`` is the name the command-line contract fixes.
 
 Registered by :func:`add_cycle_commands` from :func:`fsicas.cli.build_parser`, like the
 time integration commands of :mod:`fsicas.cli.timedomain`.
@@ -7,6 +8,7 @@ time integration commands of :mod:`fsicas.cli.timedomain`.
 from __future__ import annotations
 
 from ..cycles.collocation import CycleSettings, cycle_branch
+from ..cycles.impacting import ImpactSettings, impacting_branch, pre_contact_start
 from ..model.accuracy import QUADRATURE_TOL
 from ..physical_report import add_physical
 from ..plots.cycles import plot_branch
@@ -18,6 +20,11 @@ __all__ = ["add_cycle_commands"]
 
 _POINT_KEYS = ("kind", "ustar", "period", "frequency", "tip_amplitude", "gap_ratio", "stable",
                "quadrature_error", "quadrature_nodes")
+_IMPACT_KEYS = ("ustar", "period", "tip_amplitude", "min_gap", "gap_ratio", "impacts",
+                "peak_force", "flow_reduction", "stable")
+#: The contact law of ``--through-contact`` where none is given: that of Figs. 6-9
+#: (docs/simulate.md), smoothed (docs/cycles.md).
+THROUGH_STIFFNESS, THROUGH_EPS, THROUGH_SMOOTHING = 1e8, 1e-2, 0.1
 
 
 def add_cycle_commands(sub) -> None:
@@ -35,13 +42,27 @@ def add_cycle_commands(sub) -> None:
     p.add_argument("--out", metavar="FILE.json", help="save the full branch (multipliers, "
                    "states) with its meta")
     p.add_argument("--plot", metavar="FILE", help="tip amplitude and period against U*")
+    p.add_argument("--through-contact", action="store_true",
+                   help="go on past the first contact on the model with the wall-contact law "
+                   f"(k* = --contact-stiffness, default {THROUGH_STIFFNESS:g}; eps/H = "
+                   f"--contact-eps, default {THROUGH_EPS:g}; smoothed) by multiple shooting: "
+                   "per point impacts, peak force, flow reduction, Floquet stability")
+    p.add_argument("--impact-points", type=int, default=10,
+                   help="points of the impacting branch at most (with --through-contact)")
     p.set_defaults(run=_cmd_cycles)
 
 
 def _cmd_cycles(args) -> dict:
     scene = scene_from_args(args)
     if scene.contact:
-        raise ValueError("cycles are continued on the contact-free model: drop --contact")
+        raise ValueError("cycles are continued on the contact-free model: drop --contact "
+                         "(--through-contact turns the contact law on past the first contact)")
+    if args.impact_points < 1:
+        raise ValueError(f"--impact-points must be >= 1, got {args.impact_points}")
+    if args.through_contact:
+        scene = scene.replace(contact_stiffness=args.contact_stiffness or THROUGH_STIFFNESS,
+                              contact_eps=args.contact_eps or THROUGH_EPS,
+                              contact_smoothing=scene.contact_smoothing or THROUGH_SMOOTHING)
     settings = CycleSettings(ntst=args.ntst, ncol=args.ncol, max_points=args.max_points,
                              quadrature_tol=args.quadrature_tol)
     record(args, scene, cycle_settings=settings)
@@ -58,7 +79,28 @@ def _cmd_cycles(args) -> dict:
            "eps": branch.eps, "folds": [_point_summary(p) for p in branch.folds],
            "contact": None if branch.contact is None else _point_summary(branch.contact),
            "points": [_point_summary(p) for p in branch.points], "wall_time": branch.wall_time}
+    if args.through_contact:
+        out["impacting"] = _through_contact(scene, branch, args, say)
     return add_physical(out, scene, "lco")
+
+
+def _through_contact(scene, branch, args, say) -> dict:
+    """The impacting branch from the last contact-free cycle well before the wall
+    (:func:`fsicas.cycles.impacting.pre_contact_start`), on the model with contact."""
+    if branch.contact is None:
+        return {"status": "not_reached", "message": "the contact-free branch did not reach "
+                "the wall below --ustar-max", "points": []}
+    start = pre_contact_start(branch)
+    settings = ImpactSettings(max_points=args.impact_points)
+    say.stage(f"through contact from U* = {start.ustar:.5g} by multiple shooting "
+              f"({settings.segments} segments, k* = {scene.contact_stiffness:g}, eps/H = "
+              f"{scene.contact_eps:g})")
+    imp = impacting_branch(scene.replace(ustar=start.ustar, contact=True), start.state,
+                           start.period, start.pressure_drop, ustar_max=args.ustar_max,
+                           settings=settings)
+    return {"status": imp.status, "message": imp.message, "eps": imp.eps,
+            "start_ustar": start.ustar, "wall_time": imp.wall_time,
+            "points": [{k: getattr(p, k) for k in _IMPACT_KEYS} for p in imp.points]}
 
 
 def _tolerance(text: str) -> float | None:

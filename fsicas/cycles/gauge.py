@@ -74,6 +74,18 @@ class Gauge:
         """Tip deflection y(1) of states x (rows)."""
         return self.model.tip_deflection(x)
 
+    def impact_measures(self, x, weights) -> dict:
+        """``peak_force``: the largest total impact load over the samples ``x`` in units
+        of the reference force of Fig. 9 (:func:`fsicas.model.contact.reference_force`);
+        ``flow_reduction``: 1 - the time mean of Q1 + Q2 (quadrature ``weights`` of the
+        samples) over the steady flow at the same pressure drop (call after
+        :meth:`common`, which finds that steady state)."""
+        _, total = contact.contact_load(self.model, x)
+        flow = np.asarray(x)[:, -2:].sum(axis=1)
+        mean = float(np.dot(weights, flow) / np.sum(weights))
+        return {"peak_force": float(total.max() / contact.reference_force(self.model)),
+                "flow_reduction": 1.0 - mean / float(self.x_eq[-2:].sum())}
+
     def min_gap(self, x) -> np.ndarray:
         """``min_{x, c} h_c(x)`` of each state (row): :func:`fsicas.model.contact.gaps`."""
         return contact.gaps(self.model, x).min(axis=(1, 2))

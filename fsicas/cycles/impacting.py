@@ -101,6 +101,11 @@ class ImpactPoint(CycleMeasures):
     #: relative error of the equations from the flow quadrature over the cycle
     #: (:mod:`fsicas.model.accuracy`; NaN where not measured)
     quadrature_error: float = float("nan")
+    #: the largest total impact load over the cycle / the reference force of Fig. 9, and
+    #: 1 - the cycle's mean flow over the steady flow at the same pressure drop
+    #: (:meth:`fsicas.cycles.gauge.Gauge.impact_measures`; NaN where not measured)
+    peak_force: float = float("nan")
+    flow_reduction: float = float("nan")
 
 
 @dataclass(frozen=True)
@@ -257,8 +262,10 @@ class _ImpactGauge(Gauge):
         y, gap = self.tip(x), self.min_gap(x)
         inside = gap < self.eps
         impacts = int(np.sum(inside & ~np.roll(inside, 1))) if not inside.all() else 1
+        common = self.common(problem, X)
         now = time.perf_counter()
         wall, self.t_last = now - self.t_last, now
-        return {**self.common(problem, X), "tip_amplitude": float(y.max() - y.min()) / 2,
+        return {**common, "tip_amplitude": float(y.max() - y.min()) / 2,
                 "min_gap": float(gap.min()), "gap_ratio": float(gap.min() / self.eps),
-                "impacts": impacts, "wall_time": wall}
+                "impacts": impacts, "wall_time": wall,
+                **self.impact_measures(x, np.ones(len(x)))}   # samples equally spaced in t

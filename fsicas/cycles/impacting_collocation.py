@@ -198,12 +198,15 @@ class _PolynomialGauge(Gauge):
         mesh = problem.mesh
         t = (mesh[:-1, None] + np.diff(mesh)[:, None] * np.arange(self.samples)
              / self.samples).ravel()
-        inside = self.min_gap(problem.evaluate(X, t)) < self.eps
+        x = problem.evaluate(X, t)
+        inside = self.min_gap(x) < self.eps
         impacts = int(np.sum(inside & ~np.roll(inside, 1))) if not inside.all() else 1
         y_min, y_max = self._extrema.tip(problem, X)
         lowest = self._extrema.min_gap(problem, X)
+        common = self.common(problem, X)
         now = time.perf_counter()
         wall, self.t_last = now - self.t_last, now
-        return {**self.common(problem, X), "tip_amplitude": (y_max - y_min) / 2,
+        weights = np.repeat(np.diff(mesh), self.samples)          # the samples' time steps
+        return {**common, "tip_amplitude": (y_max - y_min) / 2,
                 "min_gap": lowest, "gap_ratio": lowest / self.eps, "impacts": impacts,
-                "ntst": problem.ntst, "wall_time": wall}
+                "ntst": problem.ntst, "wall_time": wall, **self.impact_measures(x, weights)}
