@@ -298,7 +298,7 @@ class BlockCollocationSystem:
         """The same matrix by dense interval blocks (``_condensed``): block ``(k, l)`` of
         interval ``i`` is ``W_ik P[k, l] + M_ik Dm[k, l]``."""
         hk, c, F, W, M, Gp = self._pointwise(Y, P, D, par_columns, dense=True)
-        kr, n, ntst, ncol = self.kernel, self.kernel.n, self.ntst, self.ncol
+        n, ntst, ncol = self.kernel.n, self.ntst, self.ncol
         X = np.stack([W, M], axis=-1).reshape(ntst, ncol, n, n, 2)
         blocks = np.empty((ntst, ncol, n, ncol + 1, n))
         for k in range(ncol):                        # (i, a, b, l) -> (i, a, l, b)

@@ -21,7 +21,7 @@ block-cyclic bidiagonal, an identity on one diagonal, dense borders: ten times f
 nonzeros than the whole matrix at NCOL = 4), solved by SuperLU with pivoting as a
 multiple-shooting system is (not by recursion over the transfer maps, which would be
 single shooting); the interior nodes follow by back-substitution. One factorization
-per point serves the tangent, the next corrector (by refinement) and the multipliers.
+per point serves the tangent and the multipliers.
 
 The interval blocks are dense: the route pays where the model couples many components
 at every point (a modal model), and is chosen by :func:`dense_enough`; banded fields
@@ -170,10 +170,8 @@ class CondensedLU:
     """Factors of a :class:`BorderedCollocation` by condensation (module doc), with
     ``solve(b)`` like SciPy's ``SuperLU`` (``b``: a vector or a matrix of columns).
 
-    The work on the border rows is a small part (a few products per level): with
-    :meth:`with_rows` the factors of the same ``G_X`` with other border rows cost no new
-    interval or chain factorization (PALC's next corrector borders with the new
-    tangent)."""
+    The work on the border rows is a small part (a few products per level), kept apart
+    from the chain's factorization."""
 
     def __init__(self, J: CollocationJacobian, chain: "Chain", border_w, bordered):
         #: the Jacobian (its interval factors and maps ``Z``), the chain of the mesh
@@ -205,11 +203,6 @@ class CondensedLU:
             bordered = chain.bordered(bu[:, :, 0, :] - Wv[:, :, :n],
                                       border[:, ntst * m:] - Wv[:, :, n:].sum(axis=0))
         return None if bordered is None else cls(J, chain, border_w, bordered)
-
-    def with_rows(self, rows):
-        """The factors of ``[G_X; rows]`` (the same ``G_X``, other border rows), or None
-        when that matrix is singular."""
-        return self._bordered(self.J, self.chain, self.J.bordered(rows).border())
 
     def solve(self, b: np.ndarray, trans: str = "N") -> np.ndarray:
         if trans != "N":

@@ -146,22 +146,22 @@ def _ordering(A: sp.csc_matrix):
 
 
 def newton(residual: Callable, jacobian: Callable, X0: np.ndarray,
-           settings: NewtonSettings, polish: int = 0, lu=None) -> NewtonResult:
+           settings: NewtonSettings, polish: int = 0) -> NewtonResult:
     """Solve ``H(X) = 0`` by ``X <- X - H_X(X)^{-1} H(X)``.
 
     Converged when ``||H(X)||_inf <= tol`` or when an update was at round-off
     level (``||dX||_inf <= xtol (1 + ||X||_inf)``). Stops on a singular Jacobian, a
     non-finite or diverging residual, or after ``max_iter`` iterations; the
-    last residual is always reported. Every step is solved by refinement on the
-    previous factors when that converges to round-off (``solve``), saving a
-    factorization; ``lu`` (factors of a nearby matrix, e.g. the last point's) serves
-    the first step so. ``polish`` extra iterations after
+    last residual is always reported. From the second iteration on, the step is
+    solved by refinement on the previous factors when that converges to round-off
+    (``solve``), saving a factorization. ``polish`` extra iterations after
     convergence are kept while they decrease the residual (used to refine
     special points to round-off).
     """
     X = np.array(X0, dtype=float)
     r = residual(X)
     res = res0 = _norm(r)
+    lu = None
     tiny_step = False
     for it in range(settings.max_iter + 1):
         if res <= settings.tol or (tiny_step and np.isfinite(res)):

@@ -42,15 +42,14 @@ class Step:
     lu: object = field(repr=False, compare=False, default=None)
 
 
-def correct(problem, X_pred: np.ndarray, tau: np.ndarray, settings, lu=None) -> NewtonResult:
-    """Newton on ``G(X) = 0, tau . (X - X_pred) = 0`` from ``X_pred`` (``lu``: factors
-    of a nearby matrix to refine on, e.g. the last point's)."""
+def correct(problem, X_pred: np.ndarray, tau: np.ndarray, settings) -> NewtonResult:
+    """Newton on ``G(X) = 0, tau . (X - X_pred) = 0`` from ``X_pred``."""
     X_pred = np.array(X_pred, dtype=float)
 
     def H(X):
         return np.append(problem.residual(X), tau @ (X - X_pred))
 
-    return newton(H, lambda X: problem.bordered_jacobian(X, tau), X_pred, settings, lu=lu)
+    return newton(H, lambda X: problem.bordered_jacobian(X, tau), X_pred, settings)
 
 
 def tangent(problem, X: np.ndarray, tau_ref: np.ndarray, lu=None):
@@ -130,8 +129,7 @@ class ContinuationIterator:
         cap, self.cap = self.cap, np.inf
         while True:
             ds = min(self.ds, cap)
-            res = correct(self.problem, step.X + ds * step.tau, step.tau, s.newton,
-                          lu=step.lu)
+            res = correct(self.problem, step.X + ds * step.tau, step.tau, s.newton)
             self.stats["newton_iterations"] += res.iterations
             new = self._accept(step, res, ds) if res.converged else None
             if new is not None:
@@ -161,8 +159,6 @@ class ContinuationIterator:
                 (self.problem.monitor_uses_lu and self.settings.detect)
             reuse = None if exact else res.lu
             tau, lu = tangent(self.problem, res.X, step.tau, reuse)
-            if exact and hasattr(lu, "with_rows"):     # bordered by the new tangent:
-                lu = lu.with_rows(tau)                  # exact for the next corrector
         if tau is None or lu is None:
             return None
         return Step(res.X, tau, ds, res.iterations, res.residual, lu)
