@@ -14,17 +14,16 @@ mesh point ``v_{i+1}``. With ``M_i = [B_i^w, B_i^R]`` (square, the columns of ``
     [w_i; v_{i+1}] + Z_i [v_i; y] = M_i^-1 r_i,     Z_i = M_i^-1 [B_i^L, E_i],
 
 whose last ``n`` rows are the condensed equations and whose ``-Z_i[:, :n]`` are the
-interval's Floquet transfer maps (``_floquet``: the multipliers come with the
-factorization). The border rows are freed of ``w`` by the same relation. What is left
-is the reduced system in the mesh points and ``y`` (``n NTST + k`` unknowns,
-block-cyclic bidiagonal, an identity on one diagonal, dense borders: ten times fewer
-nonzeros than the whole matrix at NCOL = 4), solved by SuperLU with pivoting as a
-multiple-shooting system is (not by recursion over the transfer maps, which would be
-single shooting); the interior nodes follow by back-substitution. One factorization
-per point serves the tangent and the multipliers.
+interval's Floquet transfer maps (``_floquet``: the multipliers come with the interval
+factorizations, cached on the Jacobian). The border rows are freed of ``w`` by the same
+relation. What is left is the reduced system in the mesh points and ``y`` (``n NTST + k``
+unknowns, block-cyclic bidiagonal with an identity on one diagonal, dense borders),
+reduced pairwise by QR as AUTO-07p's ``REDUCE`` does (:class:`Chain`: stable like a
+multiple-shooting system, not a recursion over the transfer maps, which would be single
+shooting); the interior nodes follow by back-substitution.
 
 The interval blocks are dense: the route pays where the model couples many components
-at every point (a modal model), and is chosen by :func:`dense_enough`; banded fields
+at every point (a modal model), and is chosen by :func:`condensed_pays`; banded fields
 (a discretized PDE) stay on SuperLU of the whole matrix. An interval whose ``M_i`` is
 singular (not met in practice: ``M_i`` is the derivative part of the collocation
 equations, ``h T F_x`` is small against it) falls back to SuperLU of the whole matrix.

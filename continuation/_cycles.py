@@ -251,11 +251,6 @@ class CycleProblem(PeriodicProblem):
         self._last_jacobian = (np.array(X), J)
         return J
 
-    @property
-    def fresh_factors(self) -> bool:
-        """Condensed: the factorization at a point gives its Floquet transfer maps."""
-        return self.condensed
-
     def bordered_jacobian(self, X, rows):
         """``[G_X; rows]``: structured and solved by condensation when
         ``self.condensed``, else sparse."""

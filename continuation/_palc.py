@@ -153,10 +153,8 @@ class ContinuationIterator:
             tau = tau / np.linalg.norm(tau)
             lu = factorize(self.problem.bordered_jacobian(res.X, tau))
         else:
-            # exact factors at the point: for the detection of special points, or where
-            # the problem's factorization also gives what its monitor needs
-            exact = self.problem.fresh_factors or \
-                (self.problem.monitor_uses_lu and self.settings.detect)
+            # the factors of [G_X; tau^T] are only needed by the detection of special points
+            exact = self.problem.monitor_uses_lu and self.settings.detect
             reuse = None if exact else res.lu
             tau, lu = tangent(self.problem, res.X, step.tau, reuse)
         if tau is None or lu is None:

@@ -58,10 +58,6 @@ class Problem:
     #: ``[G_X(X); tau^T]`` (branch-point test); when False, ``Step.lu`` may be the
     #: factors of a nearby matrix (the corrector's last one)
     monitor_uses_lu = True
-    #: the tangent at every new point is solved on a fresh factorization there, not by
-    #: refinement on the corrector's: for a problem whose factorization yields what its
-    #: monitor needs (the Floquet transfer maps of a condensed collocation system)
-    fresh_factors = False
     #: whether ``PointInfo.eigenvalues`` are eigenvalues of ``J v = lambda M v``, whose
     #: approach to the imaginary axis caps the next step (``ContinuationSettings.eigen_step``);
     #: False for cycles, whose monitor reports Floquet multipliers there

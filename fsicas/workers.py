@@ -1,6 +1,6 @@
-"""Local worker processes for sweeps that run points in parallel: a pool whose workers
+"""Worker processes for sweeps that run points in parallel: a local pool whose workers
 end with the process that started them (also when it is killed with SIGKILL), so an
-interrupted sweep leaves nothing running."""
+interrupted sweep leaves nothing running, or the executor of a Dask scheduler."""
 from __future__ import annotations
 
 import ctypes
@@ -9,8 +9,9 @@ import signal
 import threading
 import time
 from concurrent.futures import ProcessPoolExecutor
+from contextlib import contextmanager
 
-__all__ = ["die_with_parent", "local_pool"]
+__all__ = ["die_with_parent", "local_pool", "dask_executor"]
 
 
 def die_with_parent(parent: int) -> None:
@@ -35,3 +36,15 @@ def local_pool(workers: int | None = None) -> ProcessPoolExecutor:
     """A process pool of ``workers`` (default: the local cores) that die with this process."""
     return ProcessPoolExecutor(max_workers=workers or os.cpu_count() or 1,
                                initializer=die_with_parent, initargs=(os.getpid(),))
+
+
+@contextmanager
+def dask_executor(address: str):
+    """The ``concurrent.futures`` executor of the Dask scheduler at ``address`` (the
+    'parallel' extra), closed on exit; ValueError when Dask is not installed."""
+    try:
+        from distributed import Client
+    except ImportError:
+        raise ValueError("--dask needs Dask: pip install -e '.[parallel]'") from None
+    with Client(address) as client:
+        yield client.get_executor()

@@ -55,9 +55,6 @@ def _check(args):
     if not 0.2 < args.ustar_max <= MAX_ABS_USTAR:
         raise ValueError(f"--ustar-max must lie in (0.2, {MAX_ABS_USTAR:g}], got "
                          f"{args.ustar_max}")
-    for name in ("ustar", "mstar", "hstar"):
-        if getattr(args, name, None) is not None:
-            raise ValueError(f"--{name} is derived from --physical")
     target = None if args.target_flow is None else parse_flow(args.target_flow, "--target-flow")
     return given[0], target
 

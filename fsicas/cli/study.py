@@ -8,6 +8,7 @@ from __future__ import annotations
 from pathlib import Path
 
 from ..studies import check_table_path, load_study, run_study
+from ..workers import dask_executor
 from .meta import cli_meta, record
 from .progress import reporter
 
@@ -38,13 +39,8 @@ def _cmd_study(args) -> dict:
            settings=study.settings)
     progress = reporter(args)
     if args.dask:
-        try:
-            from dask.distributed import Client
-        except ImportError:
-            raise ValueError("--dask needs Dask: pip install -e '.[parallel]'") from None
-        with Client(args.dask) as client:
-            rows = run_study(study, table, executor=client.get_executor(),
-                             progress=progress.bars)
+        with dask_executor(args.dask) as executor:
+            rows = run_study(study, table, executor=executor, progress=progress.bars)
     else:
         rows = run_study(study, table, workers=args.workers, progress=progress.bars)
     errors = sum(1 for r in rows if r["error"])

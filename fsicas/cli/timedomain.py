@@ -11,6 +11,7 @@ from ..timedomain.breathing import PressureSchedule
 from ..timedomain.impact_map import MAP_SCENE, impact_map
 from ..timedomain.integrators import Settings
 from ..timedomain.run import run_case
+from ..workers import dask_executor
 from .meta import record
 from .progress import reporter
 from .ranges import parse_range
@@ -97,13 +98,9 @@ def _cmd_map(args) -> dict:
     reporter(args).stage(f"impact map: {ustars.size * mstars.size} points, t_end = "
                          f"{args.t_end:g}, into {args.out}")
     if args.dask:
-        try:
-            from distributed import Client
-        except ImportError:
-            raise ValueError("--dask needs Dask: pip install -e '.[parallel]'") from None
-        with Client(args.dask) as client:
+        with dask_executor(args.dask) as executor:
             result = impact_map(ustars, mstars, args.out, scene=scene, t_end=args.t_end,
-                                executor=client.get_executor())
+                                executor=executor)
     else:
         result = impact_map(ustars, mstars, args.out, scene=scene, t_end=args.t_end,
                             workers=args.workers)

@@ -32,7 +32,7 @@ import continuation as C
 from ..model.assembly import Model, build_model
 from ..profile import Profile
 from ..scene import TIMOSHENKO, Scene
-from .adapter import LOG_M, TIME_SCALE
+from .adapter import LOG_M, PI, TIME_SCALE
 from .hopf import HopfPoint, flutter_problem
 
 __all__ = ["OnsetSensitivity", "onset_sensitivity", "EXACT", "BY_DIFFERENCES", "FD_STEP"]
@@ -90,18 +90,18 @@ def _exact(scene: Scene, model: Model, hopf: HopfPoint) -> tuple[dict, dict]:
     vf = problem.vf
     columns = {"mstar": [LOG_M], "friction": ["friction"], "k0": ["k0"], "kl": ["kl"],
                "zeta": [f"zeta{i + 1}" for i in range(scene.modes)]}
-    square, rhs = None, []
-    for name, params in columns.items():
-        col = 0.0
-        for p in params:
-            curve = C.HopfCurveProblem.from_point(problem, hopf.point, p)
-            J = curve.jacobian(curve.X0).toarray()
-            square = J[:, :-1] if square is None else square
-            col = col + J[:, -1]
-        rhs.append(-col)
-    dY = sla.lu_solve(sla.lu_factor(square), np.column_stack(rhs))
+    # one Jacobian of the Hopf system in Y, Π and every parameter named above
+    curve = C.HopfCurveProblem.from_point(problem, hopf.point, LOG_M)
+    system, X = curve.system, curve.X0
+    names = [p for ps in columns.values() for p in ps]
+    J = system.compiled.jacobian(X[:system.compiled.n_state], system.params(X), system.D,
+                                 [vf.par_index(PI)] + [vf.par_index(p) for p in names]).toarray()
+    m = J.shape[0]
+    by_name = dict(zip(names, J[:, m:].T))
+    rhs = [-sum(by_name[p] for p in ps) for ps in columns.values()]
+    dY = sla.lu_solve(sla.lu_factor(J[:, :m]), np.column_stack(rhs))
     n = vf.n
-    kappa = float(curve.X0[3 * n])
+    kappa = float(X[3 * n])
     d_ustar = (dY[n - 2] + dY[n - 1]) / scene.hstar
     d_omega = TIME_SCALE * dY[3 * n] / (2 * math.sqrt(kappa))
     scale = {"mstar": 1 / (scene.mstar * math.log(10))}      # the field's log10 M*

@@ -2,32 +2,27 @@
 exception (a point that cannot be computed is a row with its ``error``; the warnings of
 its analysis, e.g. a modal truncation too short, are its ``warnings``).
 
-Each worker process keeps the models it built, keyed by structure, so a sweep over
-parameters that do not shape the model (M*, f, damping, the flow; E, densities, the
-length of a thin beam) builds it once.
+Each worker process keeps the models it built, keyed by structure
+(:func:`fsicas.timedomain.run.sweep_model`), so a sweep over parameters that do not
+shape the model (M*, f, damping, the flow; E, densities, the length of a thin beam)
+builds it once.
 """
 from __future__ import annotations
 
-import json
 import warnings
 
+from ..linear.design import with_values
 from ..linear.onset import onset_at_own_flow
-from ..model.assembly import Model, build_model
 from ..physical import Flow, Physical, load_physical, parse_flow
 from ..scene import Scene
 from ..timedomain.integrators import Settings
 from ..timedomain.outcome import Criteria
-from ..timedomain.run import guarded_model, run_case
+from ..timedomain.run import run_case, sweep_model
 from ..timedomain.sound import cycle_sound, trajectory_sound
 from .spec import Study
 
 __all__ = ["study_point"]
 
-#: The models of this process, by the structure of their scene; the Scene fields that
-#: are parameters of a model (not its structure).
-_MODELS: dict = {}
-_PARAMETERS = ("ustar", "mstar", "friction", "k0", "kl", "zeta", "contact_stiffness",
-               "contact_eps")
 
 
 def study_point(study: Study, index: int) -> dict:
@@ -49,31 +44,17 @@ def _scene(study: Study, point: dict) -> tuple[Scene, Physical | None, Flow | No
     """The point's scene (and its physical input and airflow, for a physical study)."""
     if study.physical is None:
         return Scene(**{**study.scene, **point}), None, None
-    base = load_physical(study.physical)
-    values = {k: v for k, v in point.items() if k != "flow"}
-    if "gap" in values:
-        values.update(H1=values["gap"], H2=values["gap"])
-    H1, H2 = values.pop("H1", base.H1), values.pop("H2", base.H2)
-    physical = Physical(base.source, base.description, {**base.values, **values}, H1, H2,
-                        base.flow, base.scene_fields, base.raw)
+    physical = with_values(load_physical(study.physical),
+                           {k: v for k, v in point.items() if k != "flow"})
     flow = parse_flow(point["flow"]) if "flow" in point else physical.flow
     return physical.scene(flow, **study.scene), physical, flow
-
-
-def _model(scene: Scene, guarded: bool = False) -> Model:
-    """This process's model of ``scene``'s structure (with contact when ``guarded``)."""
-    fields = {k: v for k, v in scene.to_dict().items() if k not in _PARAMETERS}
-    key = (json.dumps(fields, sort_keys=True, default=str), guarded)
-    if key not in _MODELS:
-        _MODELS[key] = guarded_model(scene)[0] if guarded else build_model(scene)
-    return _MODELS[key]
 
 
 def _onset(study: Study, point: dict) -> dict:
     scene, physical, flow = _scene(study, point)
     viscous = physical is not None and "viscosity" in physical.values and \
         "friction" not in physical.scene_fields and "friction" not in study.scene
-    scene, hopf, _ = onset_at_own_flow(scene, _model(scene), study.settings["ustar_max"],
+    scene, hopf, _ = onset_at_own_flow(scene, sweep_model(scene, guarded=False), study.settings["ustar_max"],
                                        physical if viscous else None)
     row = {"found": hopf is not None, "mstar": scene.mstar, "hstar": scene.hstar,
            "friction": scene.friction}
@@ -97,7 +78,7 @@ def _run(study: Study, point: dict):
     s = study.settings
     settings = Settings(rtol=s["rtol"], atol=s["atol"], dt_out=s["dt_out"], chunk=1.0)
     run = run_case(scene, s["t_end"], settings=settings, criteria=Criteria(),
-                   model=_model(scene, guarded=not scene.contact))
+                   model=sweep_model(scene))
     return scene, physical, run
 
 

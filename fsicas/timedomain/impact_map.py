@@ -18,7 +18,6 @@ from __future__ import annotations
 
 import contextlib
 import dataclasses
-import json
 import time
 from concurrent.futures import Executor, as_completed
 from dataclasses import dataclass
@@ -33,7 +32,7 @@ from ..provenance import provenance
 from ..results_file import ResultsFile, read_records
 from ..workers import local_pool
 from .outcome import Criteria, OutcomeKind
-from .run import guarded_model, run_case
+from .run import run_case, sweep_model
 from ..scene import Scene
 from .integrators import Settings
 
@@ -41,9 +40,6 @@ __all__ = ["MAP_SCENE", "MapOutcome", "MapResult", "impact_map", "stability_boun
 
 MAP_SCENE = Scene(mstar=1.0, ustar=5.0, hstar=0.1, friction=0.14, k0=0.0, kl=1.0, zeta=0.01,
                   modes=10)
-_MODELS: dict = {}
-
-
 #: The ``outcome`` of a map point: an :data:`~fsicas.timedomain.outcome.OutcomeKind`, or
 #: "error" when the point could not run (its ``message`` says why).
 MapOutcome = Union[OutcomeKind, Literal["error"]]
@@ -91,19 +87,11 @@ def map_header(scene: Scene, t_end: float, settings: Settings, criteria: Criteri
             "quadrature_tol": "auto"}
 
 
-def _model(scene: Scene):
-    """The guarded model of ``scene``'s structure, built once per worker process."""
-    key = json.dumps(scene.replace(ustar=1.0, mstar=1.0).to_dict(), sort_keys=True)
-    if key not in _MODELS:
-        _MODELS[key] = guarded_model(scene)[0]
-    return _MODELS[key]
-
-
 def _point(scene: Scene, ustar: float, mstar: float, t_end: float, settings: Settings,
            criteria: Criteria) -> dict:
     scene = scene.replace(ustar=float(ustar), mstar=float(mstar))
     try:
-        run = run_case(scene, t_end, settings=settings, criteria=criteria, model=_model(scene))
+        run = run_case(scene, t_end, settings=settings, criteria=criteria, model=sweep_model(scene))
     except Exception as err:  # a point that cannot run is data, not a crash of the map
         return {"ustar": ustar, "mstar": mstar, "outcome": "error", "message": str(err)}
     row = run.to_json()

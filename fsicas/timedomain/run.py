@@ -10,6 +10,7 @@ sample and the one before, the guard keeps the solver away from the singular flo
 from __future__ import annotations
 
 import functools
+import json
 import math
 import time
 from dataclasses import dataclass, replace
@@ -25,7 +26,7 @@ from .integrators import Settings, Trajectory, pressure_coefficient, simulate
 from ..linear.stability import eigenvalues
 from ..linear.steady import SteadyState, steady_state
 
-__all__ = ["Run", "run_case", "guarded_model", "sensitive_states"]
+__all__ = ["Run", "run_case", "guarded_model", "sweep_model", "sensitive_states"]
 
 
 #: Samples of a trajectory at which its quadrature error is estimated, at most.
@@ -67,6 +68,24 @@ def guarded_model(scene: Scene) -> tuple[Model, bool]:
     if scene.contact:
         return build_model(scene), False
     return build_model(scene.replace(contact=True)), True
+
+
+#: The models of this process by structure (:func:`sweep_model`), and the Scene fields
+#: that are parameters of a model rather than its structure.
+_SWEEP_MODELS: dict = {}
+_PARAMETER_FIELDS = ("ustar", "mstar", "friction", "k0", "kl", "zeta", "contact_stiffness",
+                     "contact_eps")
+
+
+def sweep_model(scene: Scene, guarded: bool = True) -> Model:
+    """The model of ``scene``'s structure (``guarded``: :func:`guarded_model`'s), built
+    once per process: the points of a sweep on a worker differ in parameters only, as a
+    rule, and reuse it."""
+    fields = {k: v for k, v in scene.to_dict().items() if k not in _PARAMETER_FIELDS}
+    key = (json.dumps(fields, sort_keys=True, default=str), guarded, scene.contact)
+    if key not in _SWEEP_MODELS:
+        _SWEEP_MODELS[key] = guarded_model(scene)[0] if guarded else build_model(scene)
+    return _SWEEP_MODELS[key]
 
 
 def run_case(scene: Scene, t_end: float, *, settings: Settings = Settings(),
