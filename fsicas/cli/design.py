@@ -68,8 +68,8 @@ def _cmd_design(args) -> dict:
     out = {"source": physical.source, "description": physical.description, **sens.to_json(),
            "design": None}
     if target is not None:
-        out["design"] = design_for_flow(physical, target, args.vary,
-                                        ustar_max=args.ustar_max, **overrides).to_json()
+        out["design"] = design_for_flow(physical, target, args.vary, ustar_max=args.ustar_max,
+                                        base=sens, **overrides).to_json()
     meta = cli_meta(args)
     return {**out, "meta": {**meta, "units": {**DESIGN_UNITS, **meta["units"]}}}
 

@@ -154,14 +154,15 @@ def with_values(physical: Physical, values: dict) -> Physical:
 
 
 def design_for_flow(physical: Physical, target: Flow, vary, *, ustar_max: float = USTAR_MAX,
-                    **overrides) -> Design:
+                    base: PalateSensitivity | None = None, **overrides) -> Design:
     """The smallest change of ``vary`` (:func:`parse_vary`) that raises the onset airflow
     of ``physical`` to ``target`` (module doc); ``overrides``: nondimensional Scene fields
-    (modes, ...). Verified by the eigenvalues at the design."""
+    (modes, ...); ``base``: :func:`palate_sensitivity` of ``physical`` with them, if
+    already computed. Verified by the eigenvalues at the design."""
     weights = parse_vary(vary, physical)
     q_target = target.value if target.kind == "volume" else \
         target.value * physical.values["b"] * physical.gap
-    base = palate_sensitivity(physical, ustar_max=ustar_max, **overrides)
+    base = base or palate_sensitivity(physical, ustar_max=ustar_max, **overrides)
     start = {k: physical.values[k] if k in physical.values else getattr(physical, k)
              for k in weights}
     if base.onset_flow >= q_target:
@@ -257,11 +258,10 @@ def _design(physical, weights, before, after, base, designed, q_target, override
             evaluations, note="") -> Design:
     """The Design, with its verification by eigenvalues at the designed parameters."""
     ph = with_values(physical, after)
-    checks = []
-    for factor in (1 - VERIFY_MARGIN, 1 + VERIFY_MARGIN):
-        scene = physical_scene(ph, Flow("check", "volume", factor * designed.onset_flow),
-                               overrides)
-        checks.append(linear_stability(scene, build_model(scene)).stable)
+    scenes = [physical_scene(ph, Flow("check", "volume", factor * designed.onset_flow),
+                             overrides) for factor in (1 - VERIFY_MARGIN, 1 + VERIFY_MARGIN)]
+    model = build_model(scenes[0])                 # the two differ in the flow only
+    checks = [linear_stability(scene, model).stable for scene in scenes]
     unit = lambda k: KEYS.get(k) or ("m" if k in ("H1", "H2") else "-")
     changes = tuple(Change(k, unit(k), float(before[k]), float(after[k])) for k in weights)
     return Design(changes, tuple(weights.values()), base.onset_flow, designed.onset_flow,

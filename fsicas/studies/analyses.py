@@ -109,7 +109,7 @@ def _sound(study: Study, point: dict) -> dict:
     row.update(spl_db=None, fundamental_hz=None, dominant_hz=None)
     if o.period is not None:
         sound = cycle_sound(traj, scene.scales, r, duration=1.0)
-    elif o.outcome in ("unsettled",) or (o.outcome == "contact" and scene.contact):
+    elif o.outcome == "unsettled" or (o.outcome == "contact" and scene.contact):
         sound = trajectory_sound(traj, scene.scales, r, t_start=traj.t[-1] * 2 / 3)
     else:
         return row
