@@ -15,6 +15,9 @@ Public API (everything else is private)::
     CycleProblem(F, orbit, period, params, active, *, M=None, settings=CollocationSettings())
     cycle_from_hopf(problem, hopf_point, *, dp=1e-3, settings=None) -> CycleProblem
     cycle_from_pd(cycle_problem, pd_point, *, amplitude=1e-2, settings=None) -> CycleProblem
+    CycleCurveProblem(cycle_problem, X, free, condition)   # a cycle with one more equation:
+    locate_cycle(cycle_problem, X, condition) -> (problem, NewtonResult)   # curve / located
+    Extremum(rows, offset, level), CycleFold(), PeriodDoubling()   # the conditions
     ShootingProblem(F, orbit, period, params, active, *, M=None, settings=ShootingSettings())
     Branch, SpecialPoint, ContinuationIterator, PALC, ContinuationSettings,
     NewtonSettings, EigenSettings, CollocationSettings, ShootingSettings
@@ -25,6 +28,8 @@ Plotting lives in ``continuation.plotting`` (Matplotlib is imported there only).
 from ._branch import Branch, SpecialPoint, Status
 from ._curves import FoldCurveProblem, HopfCurveProblem
 from ._cycles import CycleProblem
+from ._cycle_curves import (Condition, CycleCurveProblem, CycleFold, Extremum, PeriodDoubling,
+                            locate_cycle)
 from ._driver import continuation, observing
 from ._hooks import Event
 from ._lifted import Lifted
@@ -39,7 +44,8 @@ from ._switching import cycle_from_hopf, cycle_from_pd
 from ._vectorfield import VectorField
 
 __all__ = [
-    "Branch", "Event", "Status", "CollocationSettings", "ContinuationIterator", "ContinuationSettings",
+    "Branch", "Event", "Status", "CollocationSettings", "Condition", "CycleCurveProblem",
+    "CycleFold", "Extremum", "PeriodDoubling", "locate_cycle", "ContinuationIterator", "ContinuationSettings",
     "CycleProblem", "EigenSettings", "ShootingProblem", "ShootingSettings", "cycle_from_hopf",
     "cycle_from_pd",
     "EquilibriumProblem", "FoldCurveProblem", "HopfCurveProblem", "Lifted", "NewtonSettings",

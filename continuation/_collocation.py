@@ -111,21 +111,39 @@ def extrema(U, mesh: np.ndarray, ncol: int, n: int, A: np.ndarray,
     sample is polished by Newton on ``d/ds (A u) = 0`` (the extremum of a polynomial, to
     rounding); a polished value is kept only where it improves the sample.
     """
+    coef, s, values = _row_polynomials(U, mesh, ncol, n, A, samples)
+    return tuple(sign * _interval_minima(coef, s, sign * values, sign)[1].min(axis=0)
+                 for sign in (1.0, -1.0))
+
+
+def minimizer(U, mesh: np.ndarray, ncol: int, n: int, A: np.ndarray,
+              samples: int = 8) -> tuple[float, int, float, int]:
+    """``(value, i, s, j)``: ``min_{t, j} (A u(t))_j`` over the cycle (as :func:`extrema`)
+    and where it is taken: interval ``i``, local time ``s`` in ``[0, 1]``, row ``j``."""
+    coef, s, values = _row_polynomials(U, mesh, ncol, n, A, samples)
+    t, low = _interval_minima(coef, s, values, 1.0)
+    i, j = np.unravel_index(np.argmin(low), low.shape)
+    return float(low[i, j]), int(i), float(t[i, j]), int(j)
+
+
+def _row_polynomials(U, mesh, ncol, n, A, samples):
+    """Monomial coefficients ``(degree, interval, row)`` of the rows of ``A u`` in the
+    local time, the sample times and the values there ``(sample, interval, row)``."""
     ntst = len(mesh) - 1
     nodes = interval_nodes(U, n, ntst, ncol) @ np.asarray(A, dtype=float).T  # (ntst, l, m)
     coef = np.linalg.solve(np.vander(np.linspace(0.0, 1.0, ncol + 1), increasing=True),
                            nodes.transpose(1, 0, 2).reshape(ncol + 1, -1))
-    coef = coef.reshape(ncol + 1, ntst, -1)                  # (degree, interval, row)
+    coef = coef.reshape(ncol + 1, ntst, -1)
     s = np.arange(samples) / samples
-    values = np.einsum("jd,dim->jim", np.vander(s, ncol + 1, increasing=True), coef)
-    return tuple(_polished(coef, s, values, sign) for sign in (1.0, -1.0))
+    return coef, s, np.einsum("jd,dim->jim", np.vander(s, ncol + 1, increasing=True), coef)
 
 
-def _polished(coef, s, values, sign) -> np.ndarray:
-    """``sign * min_t (sign * p)`` per row of the polynomials ``coef`` (see :func:`extrema`):
-    Newton from the best sample of every interval, the smallest result over intervals."""
-    v = sign * values                                       # (sample, interval, row)
-    t = s[np.argmin(v, axis=0)]                             # (interval, row)
+def _interval_minima(coef, s, v, sign) -> tuple[np.ndarray, np.ndarray]:
+    """Per interval and row of ``sign * p`` (``p`` the polynomials ``coef``, ``v`` the
+    signed samples): the local time of its minimum and the minimum, by Newton from the
+    best sample (kept where it improves the sample)."""
+    best = np.argmin(v, axis=0)
+    t = s[best]                                             # (interval, row)
     d = np.arange(1, coef.shape[0])[:, None, None] * coef[1:]   # derivative coefficients
     dd = np.arange(1, d.shape[0])[:, None, None] * d[1:]
     horner = lambda a, t: np.polynomial.polynomial.polyval(t, a, tensor=False)
@@ -133,7 +151,8 @@ def _polished(coef, s, values, sign) -> np.ndarray:
         curvature = horner(dd, t)
         step = np.divide(horner(d, t), curvature, out=np.zeros_like(t), where=curvature != 0)
         t = np.clip(t - step, 0.0, 1.0)
-    return sign * np.minimum(v.min(axis=0), sign * horner(coef, t)).min(axis=0)
+    polished, sampled = sign * horner(coef, t), v.min(axis=0)
+    return np.where(polished < sampled, t, s[best]), np.minimum(sampled, polished)
 
 
 def phase_coefficients(U_ref: np.ndarray, n: int, ntst: int, ncol: int) -> np.ndarray:

@@ -63,8 +63,9 @@ class PeriodicProblem(Problem):
             raise ValueError(f"period must be a positive finite number, got {period!r}")
         self.vf = make_field(F, M, params)
         self.settings = settings
-        self.active, self.free = active, (active,)
-        self.free_idx = (self.vf.par_index(active),)
+        self.free = (active,) if isinstance(active, str) else tuple(active)
+        self.active = self.free[-1]
+        self.free_idx = tuple(self.vf.par_index(name) for name in self.free)
         return param_vector(self.vf, params)
 
     def frame(self, X) -> np.ndarray:
@@ -123,7 +124,9 @@ class CycleProblem(PeriodicProblem):
         period, vectorized or not) or an array ``(m, n)`` of equally spaced
         samples over one period (interpolated periodically).
     period : initial guess of ``T``.
-    params : ``{name: value}`` of all parameters; active : continuation parameter.
+    params : ``{name: value}`` of all parameters; active : continuation parameter, or
+        a tuple of free parameters (the last is the continuation parameter; a curve of
+        cycles needs one more equation, :class:`CycleCurveProblem`).
     M : casadi.Function ``(x, p) -> M`` or None (identity).
     settings : :class:`CollocationSettings` (NTST, NCOL, Floquet method, adaptation).
     mesh : ``NTST + 1`` increasing times from 0 to 1 (default uniform).
@@ -145,7 +148,7 @@ class CycleProblem(PeriodicProblem):
         self._accepted = 0
         self._last_jacobian = None
         U = sample_orbit(orbit, colloc.node_times(self.mesh, self.ncol), vf.n)
-        self.X0 = np.concatenate([U, [float(period), p0[self.free_idx[0]]]])
+        self.X0 = np.concatenate([U, [float(period)], p0[list(self.free_idx)]])
         D = np.concatenate([np.diff(self.mesh), self._phase(U)])
         kind, build = _collocation_system(settings)
         self.system = bound(vf, kind, p0, D, self.free, build)
@@ -217,7 +220,7 @@ class CycleProblem(PeriodicProblem):
         """The cycle ``X`` (its polynomial at the new nodes) as a problem on ``vf``,
         ``settings`` and ``mesh``, keeping ``refine``; and its unknowns."""
         new = CycleProblem(vf, lambda t: self.evaluate(X, t), self.period(X), self.par_dict(X),
-                           self.active, settings=settings, mesh=mesh)
+                           self.free, settings=settings, mesh=mesh)
         new.refine = self.refine
         return new, new.X0.copy()
 
@@ -234,7 +237,7 @@ class CycleProblem(PeriodicProblem):
 
     def frame(self, X) -> np.ndarray:
         """Only ``T`` and ``p`` keep their meaning across a re-mesh."""
-        return np.array([len(X) - 2, len(X) - 1])
+        return np.arange(self.n_nodes * self.vf.n, len(X))
 
     # -- Jacobians and Floquet multipliers ---------------------------------------------------
     def jacobian(self, X):

@@ -25,7 +25,8 @@ def test_public_names():
         "PALC", "Problem", "SpecialPoint", "Step", "VectorField", "continuation", "observing",
         "first_lyapunov", "hopf_point", "CollocationSettings", "CycleProblem",
         "cycle_from_hopf", "ShootingProblem", "ShootingSettings",
-        "cycle_from_pd", "correct", "Event", "Lifted", "Status"}
+        "cycle_from_pd", "correct", "Event", "Lifted", "Status", "Condition",
+        "CycleCurveProblem", "CycleFold", "Extremum", "PeriodDoubling", "locate_cycle"}
 
 
 def test_new_problem_kind_plugs_into_palc():

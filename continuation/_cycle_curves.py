@@ -1,0 +1,262 @@
+"""Cycles with one more equation: located special cycles and codimension-one curves.
+
+A collocated cycle ``X = (U, T, p_free)`` with ``k`` free parameters satisfies the
+``m`` collocation and phase equations ``G(X) = 0`` (``_cycles``). One more scalar
+equation ``g(X) = 0`` (a :class:`Condition`) makes, with one free parameter, a square
+system that *locates* a special cycle by Newton (:func:`locate_cycle`) and, with two,
+a curve of such cycles continued by the same PALC (:class:`CycleCurveProblem`):
+
+* :class:`Extremum` (an event boundary, e.g. grazing): ``min_{t, j} (A u(t))_j + b_j
+  = level``. At a minimum inside an interval, ``d/dt (A u)_j = 0``, so (envelope
+  theorem) ``g_X`` is ``a_j`` times the Lagrange weights of the minimizer's interval
+  at its local time: exact and sparse.
+* :class:`CycleFold` (LPC) and :class:`PeriodDoubling` (PD), minimally extended
+  (bordering, as MATCONT): with ``A(X)`` the square matrix that is singular at the
+  point, ``[[A, b], [c^T, 0]] (v, g) = (0, 1)`` defines ``g``, zero exactly where
+  ``A`` is singular, and ``g_X = -w^T A_X v`` with ``(w, g)`` from the transposed
+  system. For the fold ``A = G_(U, T)`` (the tangent of a one-parameter branch has
+  no parameter component there); for period doubling ``A`` is the collocation
+  Jacobian ``G_U`` with the antiperiodic wrap ``u(1) = -u(0)`` (the monodromy has
+  the multiplier -1). ``w^T A_X v`` is the Hessian of ``w^T G`` in the direction
+  ``v``: the difference of two Jacobians, ``(G_X(X + h v) - G_X(X - h v))^T w / 2h``
+  (error ``O(h^2)``), no second derivatives compiled. The borders ``b, c`` are the
+  last accepted point's ``w, v`` (``g`` is then well scaled along the curve).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, replace
+
+import numpy as np
+import scipy.sparse as sp
+
+from . import _collocation as colloc
+from ._cycles import CycleProblem
+from ._newton import NewtonResult, factorize, newton
+from ._problem import PointInfo
+from ._settings import NewtonSettings
+from ._sparse import append_row
+
+
+class Condition:
+    """One scalar equation ``g(X) = 0`` on a collocated cycle (see the module)."""
+
+    def bind(self, problem: CycleProblem, X) -> "Condition":
+        """The condition ready for ``problem`` at ``X`` (borders set); default: itself."""
+        return self
+
+    def value(self, problem: CycleProblem, X, J) -> float:
+        """``g(X)``; ``J``: the cycle's Jacobian ``G_X`` at ``X``."""
+        raise NotImplementedError
+
+    def gradient(self, problem: CycleProblem, X, J) -> np.ndarray:
+        """``g_X`` (one entry per unknown)."""
+        raise NotImplementedError
+
+    def accept(self, problem: CycleProblem, X) -> None:
+        """Refresh data that follows the curve (borders) at an accepted point."""
+
+
+@dataclass(frozen=True)
+class Extremum(Condition):
+    """``min_{t, j} (rows u(t))_j + offset_j - level = 0``: the cycle's least value of
+    the affine functions ``rows u + offset`` (``rows``: m x n) reaches ``level``."""
+
+    rows: np.ndarray
+    offset: np.ndarray | float = 0.0
+    level: float = 0.0
+
+    def _minimum(self, problem, X):
+        rows = np.atleast_2d(np.asarray(self.rows, dtype=float))
+        offset = np.broadcast_to(np.asarray(self.offset, dtype=float), rows.shape[:1])
+        U = X[: problem.n_nodes * problem.vf.n]
+        shifted = np.hstack([rows, offset[:, None]])
+        with_one = np.hstack([U.reshape(problem.n_nodes, -1),
+                              np.ones((problem.n_nodes, 1))]).ravel()
+        value, i, s, j = colloc.minimizer(with_one, problem.mesh, problem.ncol,
+                                          problem.vf.n + 1, shifted)
+        return value, i, s, rows[j]
+
+    def value(self, problem, X, J=None) -> float:
+        return self._minimum(problem, X)[0] - float(self.level)
+
+    def gradient(self, problem, X, J=None) -> np.ndarray:
+        _, i, s, a = self._minimum(problem, X)
+        n, ncol = problem.vf.n, problem.ncol
+        L, _ = colloc.lagrange(np.linspace(0.0, 1.0, ncol + 1), s)
+        row = np.zeros(len(X))
+        for l, weight in enumerate(L[0]):
+            node = (i * ncol + l) % problem.n_nodes
+            row[node * n: (node + 1) * n] += weight * a
+        return row
+
+
+class _Bordered(Condition):
+    """A bordered singularity test of the square matrix ``self.matrix(problem, J)``."""
+
+    def __init__(self):
+        self.b = self.c = None
+
+    def matrix(self, problem, J) -> sp.csc_matrix:
+        raise NotImplementedError
+
+    def pairs(self, problem, X, v, w) -> list:
+        """``[(w_k, d_k)]`` with ``w^T A_X v = sum_k (d/dh) G_X(X + h d_k)^T w_k``: the
+        Hessians of ``w_k^T G`` in the directions ``d_k`` (both zero-padded)."""
+        raise NotImplementedError
+
+    def bind(self, problem, X) -> "_Bordered":
+        bound = type(self)()
+        A = self.matrix(problem, problem.cycle_jacobian(X))
+        bound.c, bound.b = _null_vectors(A)
+        return bound
+
+    def _solve(self, problem, J):
+        A = self.matrix(problem, J)
+        B = sp.bmat([[A, self.b[:, None]], [self.c[None, :], None]], format="csc")
+        lu = factorize(B)
+        if lu is None:
+            raise np.linalg.LinAlgError("the bordered matrix is singular: borders lost")
+        e = np.zeros(B.shape[0])
+        e[-1] = 1.0
+        vg, wg = lu.solve(e), lu.solve(e, trans="T")
+        return vg[:-1], wg[:-1], float(vg[-1])
+
+    def value(self, problem, X, J) -> float:
+        return self._solve(problem, J)[2]
+
+    def gradient(self, problem, X, J) -> np.ndarray:
+        v, w, _ = self._solve(problem, J)
+        out = np.zeros(len(X))
+        for weights, d in self.pairs(problem, X, v, w):
+            h = 1e-5 * (1.0 + np.max(np.abs(X))) / np.max(np.abs(d))
+            difference = problem.cycle_jacobian(X + h * d) - problem.cycle_jacobian(X - h * d)
+            out -= difference.T @ _padded(weights, difference.shape[0]) / (2 * h)
+        return out
+
+    def accept(self, problem, X) -> None:
+        v, w, _ = self._solve(problem, problem.cycle_jacobian(X))
+        self.c, self.b = v / np.linalg.norm(v), w / np.linalg.norm(w)
+
+
+class CycleFold(_Bordered):
+    """Fold of cycles (LPC): ``G_(U, T)`` singular."""
+
+    def matrix(self, problem, J) -> sp.csc_matrix:
+        return J[:, : J.shape[0]]
+
+    def pairs(self, problem, X, v, w) -> list:
+        return [(w, _padded(v, len(X)))]
+
+
+class PeriodDoubling(_Bordered):
+    """Period doubling: the antiperiodic collocation Jacobian ``G_U`` (wrap
+    ``u_(NTST, 0) = -u_(0, 0)``) singular, i.e. a Floquet multiplier at -1."""
+
+    def matrix(self, problem, J) -> sp.csc_matrix:
+        rows = problem.n_nodes * problem.vf.n
+        A = sp.csc_matrix(J[:rows, :rows])
+        last, wrap = self._masks(problem)
+        flip = sp.diags(last.astype(float)) @ A @ sp.diags(-2.0 * wrap)
+        return sp.csc_matrix(A + flip)
+
+    def pairs(self, problem, X, v, w) -> list:
+        """The wrap's entries (last interval's rows, node 0's columns) are negated: those
+        rows see ``v`` with node 0 negated."""
+        last, wrap = self._masks(problem)
+        return [(np.where(last, 0.0, w), _padded(v, len(X))),
+                (np.where(last, w, 0.0), _padded(np.where(wrap, -v, v), len(X)))]
+
+    @staticmethod
+    def _masks(problem):
+        """Rows of the last interval and columns of node 0 (in ``G_U``)."""
+        n, rows = problem.vf.n, problem.n_nodes * problem.vf.n
+        index = np.arange(rows)
+        return index >= rows - n * problem.ncol, index < n
+
+
+def _padded(v, size) -> np.ndarray:
+    """``v`` followed by zeros, ``size`` entries."""
+    out = np.zeros(size)
+    out[: v.size] = v
+    return out
+
+
+def _null_vectors(A, iterations: int = 4):
+    """Approximate right and left null vectors of a nearly singular ``A`` by inverse
+    iteration (random starts, fixed seed); ``A`` exactly singular is nudged."""
+    lu = factorize(A)
+    if lu is None:
+        lu = factorize(A + 1e-12 * sp.eye(A.shape[0], format="csc"))
+    rng = np.random.default_rng(0)
+    v, w = rng.standard_normal(A.shape[0]), rng.standard_normal(A.shape[0])
+    for _ in range(iterations):
+        v = lu.solve(v)
+        v /= np.linalg.norm(v)
+        w = lu.solve(w, trans="T")
+        w /= np.linalg.norm(w)
+    return v, w
+
+
+class CycleCurveProblem(CycleProblem):
+    """Collocated cycles with the free parameters ``free`` and one more equation
+    ``condition``: with two free parameters a curve (the last is the continuation
+    parameter), with one a square system (:func:`locate_cycle`).
+
+    Built from a one-parameter cycle ``problem`` at ``X`` (same field, mesh and
+    settings; the sparse linear solver, since ``g``'s row is dense). Re-meshing and
+    ``refine`` work as for the cycle. ``columns`` adds ``condition`` (``g``)."""
+
+    def __init__(self, problem: CycleProblem, X, free, condition: Condition):
+        settings = replace(problem.settings, linear_solver="sparse")
+        super().__init__(problem.vf, lambda t: problem.evaluate(X, t), problem.period(X),
+                         problem.par_dict(X), tuple(free), settings=settings, mesh=problem.mesh)
+        self.refine = problem.refine
+        self.condition = condition.bind(self, self.X0)
+
+    def cycle_jacobian(self, X) -> sp.csc_matrix:
+        """``G_X`` of the collocation and phase equations (without ``g``)."""
+        return CycleProblem.jacobian(self, X)
+
+    def residual(self, X) -> np.ndarray:
+        G = super().residual(X)
+        return np.append(G, self.condition.value(self, X, self.cycle_jacobian(X)))
+
+    def jacobian(self, X) -> sp.csc_matrix:
+        J = self.cycle_jacobian(X)
+        return append_row(J, self.condition.gradient(self, X, J))
+
+    def bordered_jacobian(self, X, rows):
+        return append_row(self.jacobian(X), np.asarray(rows, dtype=float))
+
+    def accept(self, X) -> None:
+        super().accept(X)
+        self.condition.accept(self, X)
+
+    def _rebuilt(self, X, vf, settings, mesh):
+        cycle = CycleProblem(vf, lambda t: self.evaluate(X, t), self.period(X),
+                             self.par_dict(X), self.free, settings=settings, mesh=mesh)
+        new = CycleCurveProblem(cycle, cycle.X0, self.free, self.condition)
+        new.refine = self.refine
+        return new, new.X0.copy()
+
+    def columns(self, X) -> dict:
+        return {**super().columns(X), "condition": float(self.residual(X)[-1])}
+
+    def monitor(self, X, tau, lu, settings) -> PointInfo:
+        """Turns of the curve in its continuation parameter ('fold'); the multipliers
+        only when asked (no codimension-two points are detected)."""
+        tests = {"fold": float(tau[-1])}
+        if not settings.compute_eigenvalues:
+            return PointInfo(np.zeros(0, dtype=complex), tests)
+        return PointInfo(self.multipliers(X), tests)
+
+
+def locate_cycle(problem: CycleProblem, X, condition: Condition,
+                 settings: NewtonSettings = NewtonSettings()) -> tuple[CycleCurveProblem,
+                                                                       NewtonResult]:
+    """The special cycle ``condition`` defines, by Newton on the square system (cycle
+    equations and ``g``) in ``problem``'s unknowns, from ``X`` (e.g. a point located
+    on the arclength). Returns the square problem and the Newton outcome."""
+    square = CycleCurveProblem(problem, X, problem.free, condition)
+    return square, newton(square.residual, square.jacobian, square.X0, settings)

@@ -1,0 +1,131 @@
+"""Cycles with one more equation: located folds / period doublings and curves of
+grazing cycles, cycle folds (LPC) and period doublings, on systems with closed forms."""
+
+import casadi as ca
+import numpy as np
+import pytest
+
+import continuation as C
+
+SETTINGS = C.CollocationSettings(ntst=20, ncol=4)
+
+
+def _shifted_hopf():
+    """x' = b X - y - X r^2, y' = X + b y - y r^2 with X = x - c: the circle of radius
+    sqrt(b) about (c, 0), period 2 pi. Its least x is c - sqrt(b): it grazes the wall
+    x = 0 on the curve c = sqrt(b). p = (b, c)."""
+    x, p = ca.SX.sym("x", 2), ca.SX.sym("p", 2)
+    X, y = x[0] - p[1], x[1]
+    r2 = X ** 2 + y ** 2
+    return ca.Function("F", [x, p], [ca.vertcat(p[0] * X - y - X * r2, X + p[0] * y - y * r2)])
+
+
+def _bautin():
+    """r' = r (b1 + b2 r^2 - r^4), theta' = 1: cycles b1 = rho^2 - b2 rho (rho = r^2),
+    folding (LPC) on b1 = -b2^2 / 4 at rho = b2 / 2. p = (b1, b2)."""
+    x, p = ca.SX.sym("x", 2), ca.SX.sym("p", 2)
+    r2 = x[0] ** 2 + x[1] ** 2
+    g = p[0] + p[1] * r2 - r2 ** 2
+    return ca.Function("F", [x, p], [ca.vertcat(g * x[0] - x[1], x[0] + g * x[1])])
+
+
+def _mobius():
+    """The half-twisted cycle of test_cycles_pd with the transverse rate mu - nu^2: the
+    circle r = 1, z = 0 has the multiplier -exp(2 pi (mu - nu^2)), a period doubling
+    on mu = nu^2. p = (mu, nu)."""
+    X, p = ca.SX.sym("x", 3), ca.SX.sym("p", 2)
+    x, y, z = X[0], X[1], X[2]
+    r = ca.sqrt(x ** 2 + y ** 2)
+    c, s = x / r, y / r
+    v = ca.vertcat(r - 1, z)
+    P = 0.5 * ca.vertcat(ca.horzcat(1 + c, s), ca.horzcat(s, 1 - c))
+    Pv = ca.mtimes(P, v)
+    dv = (p[0] - p[1] ** 2) * Pv - ca.dot(v, Pv) * Pv - (v - Pv) + 0.5 * ca.vertcat(-z, r - 1)
+    return ca.Function("F", [X, p], [ca.vertcat(dv[0] * c - y, dv[0] * s + x, dv[1])])
+
+
+def _circle(radius=1.0, centre=0.0, z=False, phase=0.013):
+    """A circle guess; its phase puts extrema off the mesh points (a minimum at a mesh
+    point is a kink of the condition, where finite differences do not apply)."""
+    def orbit(t):
+        t = np.atleast_1d(t) + phase
+        u = np.c_[centre + radius * np.cos(2 * np.pi * t), radius * np.sin(2 * np.pi * t)]
+        return np.c_[u, 0 * t] if z else u
+    return orbit
+
+
+def _cycle(F, orbit, params, active):
+    prob = C.CycleProblem(F, orbit, 2 * np.pi, params, active, settings=SETTINGS)
+    step = C.ContinuationIterator(prob, C.PALC(), C.ContinuationSettings()).start()
+    assert step is not None
+    return prob, step.X
+
+
+def _curve(cycle, X, second, condition, bounds, max_steps=100):
+    curve = C.CycleCurveProblem(cycle, X, (cycle.active, second), condition)
+    return curve, C.continuation(curve, settings=C.ContinuationSettings(
+        ds=0.05, ds_max=0.5, max_steps=max_steps, bounds=bounds, compute_eigenvalues=False))
+
+
+def _fd_gradient_error(curve, X, seed=1):
+    """Largest relative error of g_X . d against central differences of g along
+    random directions d (the condition's own value function, a different route)."""
+    rng = np.random.default_rng(seed)
+    g = curve.jacobian(X).toarray()[-1]
+    errors = []
+    for _ in range(3):
+        d = rng.standard_normal(X.size)
+        d /= np.linalg.norm(d)
+        h = 1e-6
+        fd = (curve.residual(X + h * d)[-1] - curve.residual(X - h * d)[-1]) / (2 * h)
+        errors.append(abs(g @ d - fd) / max(1.0, np.abs(g).max()))
+    return max(errors)
+
+
+def test_grazing_curve_of_the_shifted_circle_is_c_equal_sqrt_b():
+    cycle, X = _cycle(_shifted_hopf(), _circle(0.5, 0.6), {"b": 0.25, "c": 0.6}, "c")
+    wall = C.Extremum(rows=[[1.0, 0.0]], level=0.0)
+    curve, branch = _curve(cycle, X, "b", wall, {"b": (0.2, 1.0)})
+    b, c = branch.par("b"), branch.par("c")
+    assert branch.status == "bound" and b.max() > 0.9
+    assert np.max(np.abs(c - np.sqrt(b))) < 1e-8
+    assert _fd_gradient_error(curve, curve.X0) < 1e-6
+
+
+def test_lpc_located_by_newton_and_continued_on_the_bautin_fold_curve():
+    rho = 0.5
+    cycle, X = _cycle(_bautin(), _circle(np.sqrt(0.55)), {"b1": -0.24, "b2": 1.0}, "b1")
+    square, result = C.locate_cycle(cycle, X, C.CycleFold())
+    assert result.converged
+    assert abs(square.par_dict(result.X)["b1"] + 0.25) < 1e-9
+    assert np.allclose(np.sum(square.nodes(result.X) ** 2, axis=1), rho, atol=1e-8)
+    mu = square.multipliers(result.X)
+    assert np.sort(np.abs(mu - 1))[1] < 1e-6                 # the double multiplier at +1
+    curve, branch = _curve(square, result.X, "b2", C.CycleFold(), {"b2": (0.6, 1.6)})
+    b1, b2 = branch.par("b1"), branch.par("b2")
+    assert branch.status == "bound" and b2.max() > 1.45
+    assert np.max(np.abs(b1 + b2 ** 2 / 4)) < 1e-8
+    assert _fd_gradient_error(curve, curve.X0) < 1e-5
+
+
+def test_period_doubling_located_and_continued_on_mu_equal_nu_squared():
+    cycle, X = _cycle(_mobius(), _circle(z=True), {"mu": 0.05, "nu": 0.0}, "mu")
+    square, result = C.locate_cycle(cycle, X, C.PeriodDoubling())
+    assert result.converged and abs(square.par_dict(result.X)["mu"]) < 1e-9
+    mu = square.multipliers(result.X)
+    assert np.min(np.abs(mu + 1)) < 1e-6
+    curve, branch = _curve(square, result.X, "nu", C.PeriodDoubling(), {"nu": (-0.1, 0.6)})
+    m, nu = branch.par("mu"), branch.par("nu")
+    assert branch.status == "bound" and nu.max() > 0.35
+    assert np.max(np.abs(m - nu ** 2)) < 1e-9
+    assert _fd_gradient_error(curve, curve.X0) < 1e-5
+
+
+def test_locating_fails_cleanly_far_from_any_fold():
+    cycle, X = _cycle(_bautin(), _circle(np.sqrt(0.9)), {"b1": 0.0, "b2": 1.0}, "b1")
+    square, result = C.locate_cycle(cycle, X, C.CycleFold(),
+                                    C.NewtonSettings(max_iter=3))
+    if result.converged:      # Newton may still reach the fold: it must then be the fold
+        assert abs(square.par_dict(result.X)["b1"] + 0.25) < 1e-8
+    else:
+        assert "did not converge" in result.message or "singular" in result.message
