@@ -45,11 +45,11 @@ class Condition:
         """The condition ready for ``problem`` at ``X`` (borders set); default: itself."""
         return self
 
-    def value(self, problem: CycleProblem, X, J) -> float:
-        """``g(X)``; ``J``: the cycle's Jacobian ``G_X`` at ``X``."""
+    def value(self, problem: CycleProblem, X) -> float:
+        """``g(X)``."""
         raise NotImplementedError
 
-    def gradient(self, problem: CycleProblem, X, J) -> np.ndarray:
+    def gradient(self, problem: CycleProblem, X) -> np.ndarray:
         """``g_X`` (one entry per unknown)."""
         raise NotImplementedError
 
@@ -77,10 +77,10 @@ class Extremum(Condition):
                                           problem.vf.n + 1, shifted)
         return value, i, s, rows[j]
 
-    def value(self, problem, X, J=None) -> float:
+    def value(self, problem, X) -> float:
         return self._minimum(problem, X)[0] - float(self.level)
 
-    def gradient(self, problem, X, J=None) -> np.ndarray:
+    def gradient(self, problem, X) -> np.ndarray:
         _, i, s, a = self._minimum(problem, X)
         n, ncol = problem.vf.n, problem.ncol
         L, _ = colloc.lagrange(np.linspace(0.0, 1.0, ncol + 1), s)
@@ -122,11 +122,11 @@ class _Bordered(Condition):
         vg, wg = lu.solve(e), lu.solve(e, trans="T")
         return vg[:-1], wg[:-1], float(vg[-1])
 
-    def value(self, problem, X, J) -> float:
-        return self._solve(problem, J)[2]
+    def value(self, problem, X) -> float:
+        return self._solve(problem, problem.cycle_jacobian(X))[2]
 
-    def gradient(self, problem, X, J) -> np.ndarray:
-        v, w, _ = self._solve(problem, J)
+    def gradient(self, problem, X) -> np.ndarray:
+        v, w, _ = self._solve(problem, problem.cycle_jacobian(X))
         out = np.zeros(len(X))
         for weights, d in self.pairs(problem, X, v, w):
             h = 1e-5 * (1.0 + np.max(np.abs(X))) / np.max(np.abs(d))
@@ -215,16 +215,19 @@ class CycleCurveProblem(CycleProblem):
         self.condition = condition.bind(self, self.X0)
 
     def cycle_jacobian(self, X) -> sp.csc_matrix:
-        """``G_X`` of the collocation and phase equations (without ``g``)."""
+        """``G_X`` of the collocation and phase equations (without ``g``; the last one
+        is reused at the same ``X``)."""
+        last = self._last_jacobian
+        if last is not None and np.array_equal(last[0], X):
+            return last[1]
         return CycleProblem.jacobian(self, X)
 
     def residual(self, X) -> np.ndarray:
-        G = super().residual(X)
-        return np.append(G, self.condition.value(self, X, self.cycle_jacobian(X)))
+        return np.append(super().residual(X), self.condition.value(self, X))
 
     def jacobian(self, X) -> sp.csc_matrix:
         J = self.cycle_jacobian(X)
-        return append_row(J, self.condition.gradient(self, X, J))
+        return append_row(J, self.condition.gradient(self, X))
 
     def bordered_jacobian(self, X, rows):
         return append_row(self.jacobian(X), np.asarray(rows, dtype=float))

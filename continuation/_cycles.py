@@ -270,7 +270,7 @@ class CycleProblem(PeriodicProblem):
         if last is not None and np.array_equal(last[0], X):
             J = last[1]
         else:
-            J = self.interval_jacobian(X) if self.condensed else self.jacobian(X)
+            J = self.interval_jacobian(X) if self.condensed else CycleProblem.jacobian(self, X)
         if isinstance(J, CollocationJacobian):
             if J.maps is None:                  # a singular interval: LAPACK says so
                 return _floquet.block_transfer_matrices(J.blocks, self.vf.n, full)

@@ -32,6 +32,7 @@ from .. import __version__
 from ..linear.hopf import CriticalVelocityError
 from ..linear.steady import SteadyStateError
 from ..plots.backend import select_file_backend
+from .curves import add_curve_command
 from .cycles import add_cycle_commands
 from .design import add_design_command
 from .linear import add_linear_commands
@@ -63,6 +64,7 @@ def build_parser() -> argparse.ArgumentParser:
     add_paper_command(sub)          # paper
     add_time_commands(sub)          # simulate, map (docs/simulate.md)
     add_cycle_commands(sub)         # lco, alias cycles (docs/cycles.md)
+    add_curve_command(sub)          # grazing, Fig. 4's boundaries as curves (docs/cycles.md)
     add_onset_command(sub)          # onset, in physical units (docs/units.md)
     add_sound_command(sub)          # sound, the radiated snore (docs/sound.md)
     add_design_command(sub)         # design, what change stops the snore (docs/design.md)

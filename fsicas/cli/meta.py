@@ -60,6 +60,10 @@ UNITS = {
             "points": ", ".join(f"{k} {_BRANCH[k]}" for k in ("ustar", "period", "frequency",
                                                               "tip_amplitude", "gap_ratio")),
             "folds": "as points", "contact": "as points"},
+    "grazing": {"grazing": f"mstar, ustar, gap_ratio {_RATIO}; period {_TIME}; tip_amplitude "
+                f"{_LENGTH}", "fold": "as grazing", "hopf": f"mstar, ustar {_RATIO}; omega "
+                f"{_RATE}; l1 nondimensional", "switches": "mstar, ustar " + _RATIO,
+                "seeds": "mstar " + _RATIO},
     "onset": {"mstar": _RATIO, "ustar_crit": _BRANCH["ustar"], "pressure_drop": _PRESSURE,
               "omega": _RATE, "freq_ratio": _RATIO + " (omega / omega_1)",
               "ustar_reference": _BRANCH["ustar"], "ustar_max": _BRANCH["ustar"]},

@@ -1,8 +1,11 @@
 """The cycles wing: flutter limit cycles continued in U* by collocation up to the first
 wall contact, and on through contact into the impacting regime by multiple shooting, or by
-adaptive collocation of the smoothed contact law."""
+adaptive collocation of the smoothed contact law; and the curves of special cycles in
+(M*, U*): grazing (first contact) and fold of cycles."""
 
 from .collocation import CycleBranch, CyclePoint, CycleSettings, cycle_branch
+from .curves import (CurveMap, CurvePoint, CurveSettings, CycleCurve, cycle_curves, curve_seeds,
+                     fold_curves, grazing_curve)
 from .impacting import (ImpactBranch, ImpactPoint, ImpactSettings, cycle_from_trajectory,
                         impacting_branch, pre_contact_start)
 from .impacting_collocation import (CollocatedImpactBranch, CollocatedImpactPoint,
@@ -13,4 +16,5 @@ __all__ = ["CycleBranch", "CyclePoint", "CycleSettings", "cycle_branch", "Impact
            "ImpactPoint", "ImpactSettings", "cycle_from_trajectory", "impacting_branch",
            "pre_contact_start", "CollocatedImpactBranch", "CollocatedImpactPoint",
            "CollocationImpactSettings", "impacting_collocation_branch",
-           "impacting_collocation_problem"]
+           "impacting_collocation_problem", "CurveMap", "CurvePoint", "CurveSettings",
+           "CycleCurve", "cycle_curves", "curve_seeds", "fold_curves", "grazing_curve"]

@@ -49,7 +49,7 @@ from .gauge import Gauge, PolynomialExtrema, model_parameters
 from .records import BranchRecord, CycleMeasures, check_settings
 
 __all__ = ["CycleSettings", "CyclePoint", "CycleBranch", "CycleKind", "CycleStatus",
-           "cycle_branch"]
+           "CycleRun", "ProfileGauge", "cycle_branch", "continue_cycles"]
 
 CycleKind = Literal["regular", "fold", "contact"]
 """A branch point, a located cycle fold, or the located first wall contact."""
@@ -161,6 +161,32 @@ def cycle_branch(scene: Scene, model: Model | None = None, *, ustar_max: float =
     same model). Raises :class:`CriticalVelocityError` if there is none below
     ``ustar_max``."""
     start = time.perf_counter()
+    run = continue_cycles(scene, model, ustar_max=ustar_max, settings=settings, hopf=hopf)
+    return _result(scene, run.gauge.eps, run.hopf, run.branch, settings,
+                   time.perf_counter() - start)
+
+
+@dataclass(frozen=True)
+class CycleRun:
+    """The library's side of :func:`cycle_branch`: its ``branch`` (``continuation.Branch``),
+    the Hopf point, the ``gauge`` measuring points (:class:`ProfileGauge`: its ``model``
+    is the last, possibly refined one) and :meth:`problem_at`."""
+
+    branch: C.Branch
+    hopf: HopfPoint
+    gauge: "ProfileGauge"
+    problems: dict = field(repr=False)
+
+    def problem_at(self, point: C.SpecialPoint):
+        """The collocation problem (mesh, field) a special point's unknowns belong to."""
+        return self.problems[np.asarray(point.unknowns, dtype=float).tobytes()]
+
+
+def continue_cycles(scene: Scene, model: Model | None = None, *, ustar_max: float = 20.0,
+                    settings: CycleSettings = CycleSettings(), hopf: HopfPoint | None = None
+                    ) -> CycleRun:
+    """:func:`cycle_branch` as a :class:`CycleRun` (the start of the curves of cycles in
+    (M*, U*), :mod:`fsicas.cycles.curves`)."""
     model = model or build_model(scene)
     hopf = hopf or critical_velocity(scene, model, ustar_max=ustar_max)
     if hopf is None:
@@ -169,13 +195,19 @@ def cycle_branch(scene: Scene, model: Model | None = None, *, ustar_max: float =
                                         adapt_every=settings.adapt_every)
     problem = C.cycle_from_hopf(flutter_problem(scene, model, min(0.2, hopf.ustar / 2)),
                                 hopf.point, dp=settings.dp, settings=collocation)
-    gauge = _ProfileGauge(model, hopf.x, settings.quadrature_tol)
+    gauge = ProfileGauge(model, hopf.x, settings.quadrature_tol)
     if settings.quadrature_tol is not None:
         problem.refine = gauge.refine
+    problems = {}
+
+    def record(problem, X):
+        problems[np.asarray(X, dtype=float).tobytes()] = problem
+        return gauge.record(problem, X)
+
     contact = C.Event("contact", gauge.contact_function, terminal=settings.stop_at_contact)
     branch = C.continuation(problem, settings=_steps(problem, scene, model, ustar_max, settings),
-                            events=[contact], record=gauge.record)
-    return _result(scene, gauge.eps, hopf, branch, settings, time.perf_counter() - start)
+                            events=[contact], record=record)
+    return CycleRun(branch, hopf, gauge, problems)
 
 
 def _steps(problem, scene, model, ustar_max, settings) -> C.ContinuationSettings:
@@ -216,7 +248,7 @@ def _status(branch, contact, settings) -> tuple[CycleStatus, str]:
     return "failed", branch.message
 
 
-class _ProfileGauge(Gauge):
+class ProfileGauge(Gauge):
     """Measures of X = (nodes, 100 T, Π) on the collocation polynomial, the extrema exact
     (:class:`fsicas.cycles.gauge.PolynomialExtrema`)."""
 
@@ -227,10 +259,18 @@ class _ProfileGauge(Gauge):
 
     def record(self, problem, X) -> dict:
         """The fields of :class:`CyclePoint` at X (branch columns)."""
-        y_min, y_max = self._extrema.tip(problem, X)
+        y_min, y_max = self.tip_extremes(problem, X)
         gap = self.gap(problem, X)
         return {**self.common(problem, X), "tip_amplitude": (y_max - y_min) / 2,
                 "min_gap": gap, "gap_ratio": gap / self.eps}
+
+    def tip_extremes(self, problem, X) -> tuple[float, float]:
+        """``(min_t y(1, t), max_t y(1, t))`` (kept for the last X)."""
+        return self.kept("tip", problem, X, lambda: self._extrema.tip(problem, X))
+
+    def grazing_condition(self) -> C.Extremum:
+        """The cycle's minimal gap equals eps (``continuation.Extremum``)."""
+        return self._extrema.gap_condition(self.eps)
 
     def contact_function(self, problem, X) -> float:
         """``min gap / eps - 1``: zero at the first wall contact."""

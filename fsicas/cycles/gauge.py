@@ -18,6 +18,8 @@ from __future__ import annotations
 
 import numpy as np
 
+import continuation as C
+
 from ..linear.adapter import LOG_M, PI, PI_SCALE, TIME_SCALE, steady_ustar
 from ..model import contact
 from ..model.accuracy import quadrature_error
@@ -44,7 +46,8 @@ class Gauge:
         rest = np.delete(mu, np.argmin(np.abs(mu - 1.0)))
         mstar = 10 ** p[problem.vf.par_index(LOG_M)]
         ustar, self.x_eq = steady_ustar(problem.vf, p, self.x_eq, self.model.scene.hstar)
-        return {"ustar": ustar, "pressure_drop": float(X[-1] * PI_SCALE * mstar),
+        return {"ustar": ustar, "mstar": float(mstar),
+                "pressure_drop": float(p[problem.vf.par_index(PI)] * PI_SCALE * mstar),
                 PERIOD_COLUMN: problem.period(X) / TIME_SCALE, "multipliers": mu,
                 "stable": bool(np.all(np.abs(rest) < 1.0)), "state": problem.state(X).copy(),
                 "quadrature_error": self.quadrature_error(problem, X),
@@ -117,6 +120,10 @@ class PolynomialExtrema:
         """``(min_t y(1, t), max_t y(1, t))``."""
         low, high = problem.extrema(X, self._tip_row)
         return float(low[0]), float(high[0])
+
+    def gap_condition(self, level: float) -> C.Extremum:
+        """``min_{t, x_j, c} h_c(x_j, t) = level`` as a condition on the cycle."""
+        return C.Extremum(self._gap_rows, self._walls, level)
 
     def min_gap(self, problem, X) -> float:
         """``min_{t, x_j, c} h_c(x_j, t)``."""

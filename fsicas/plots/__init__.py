@@ -6,11 +6,11 @@ charge. Each returns its Figure (saved to ``path`` when given, in the format its
 says: ``.png``, ``.pdf``, ``.svg``, ...)."""
 
 from .backend import pyplot
-from .cycles import plot_branch
+from .cycles import plot_branch, plot_curves
 from .linear import plot_boundary, plot_boundary_variants, plot_eigenvalues, plot_mode_shapes
 from .impacting import CycleView, cycle_view, tip_spectrum
 from .timedomain import cycle_window, plot_cycle, plot_cycles, plot_map, plot_run
 
 __all__ = ["pyplot", "plot_boundary", "plot_boundary_variants", "plot_eigenvalues",
-           "plot_mode_shapes", "plot_branch", "plot_cycle", "plot_cycles", "plot_map", "plot_run",
+           "plot_mode_shapes", "plot_branch", "plot_curves", "plot_cycle", "plot_cycles", "plot_map", "plot_run",
            "cycle_window", "cycle_view", "CycleView", "tip_spectrum"]

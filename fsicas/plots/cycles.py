@@ -4,8 +4,13 @@ from __future__ import annotations
 import numpy as np
 
 from .backend import NONDIM, PALETTE, finish, styled, subplots
+from .linear import boundary_function, draw_boundary
 
-__all__ = ["plot_branch"]
+__all__ = ["plot_branch", "plot_curves", "draw_curves", "mark_cases"]
+
+#: Line style of each kind of curve of cycles in the (U*, M*) plane.
+_CURVE_STYLE = {"grazing": dict(color=PALETTE[5], ls="--", label="grazing (first contact)"),
+                "fold": dict(color=PALETTE[6], ls="-.", label="fold of cycles")}
 
 _PANELS = (("tip_amplitude", f"tip half-amplitude $A/L$ {NONDIM}"),
            ("period", "period (units of $T$)"))
@@ -42,3 +47,64 @@ def _branch_panel(ax, branch, name: str) -> None:
         ax.plot(branch.contact.ustar, getattr(branch.contact, name), "*", ms=9, color=PALETTE[1],
                 label="first wall contact")
     ax.axvline(branch.hopf["ustar_crit"], color="0.6", lw=0.8, label="Hopf point")
+
+
+def draw_curves(ax, curves, hopf=None) -> None:
+    """The grazing and fold-of-cycles curves of a :class:`fsicas.cycles.curves.CurveMap`
+    (U* across, M* up) and, given ``hopf(mstar) -> U*_c`` (the flutter boundary), the
+    band of contact-free cycles between it and each grazing curve shaded grey (along the
+    stretch of the curve through its seed on which M* is monotone)."""
+    for kind in ("grazing", "fold"):
+        for k, curve in enumerate(getattr(curves, kind)):
+            style = dict(_CURVE_STYLE[kind])
+            label = style.pop("label") if k == 0 else None
+            ax.plot(curve.column("ustar"), curve.column("mstar"), lw=1.4, label=label,
+                    zorder=2, **style)
+    if hopf is None:
+        return
+    for k, curve in enumerate(curves.grazing):
+        m, u = _monotone_stretch(curve)
+        if m.size > 1:
+            ax.fill_betweenx(m, hopf(m), u, color="0.85", zorder=0, lw=0,
+                             label="contact-free cycles" if k == 0 else None)
+
+
+def _monotone_stretch(curve) -> tuple[np.ndarray, np.ndarray]:
+    """``(M*, U*)`` of the stretch of ``curve`` through its seed with M* monotone."""
+    m, u = curve.column("mstar"), curve.column("ustar")
+    k = int(np.argmin(np.abs(m - curve.seed.mstar) + np.abs(u - curve.seed.ustar)))
+    step = np.sign(np.diff(m))
+    lo = k
+    while lo > 0 and step[lo - 1] == step[min(k, step.size - 1)]:
+        lo -= 1
+    hi = k
+    while hi < step.size and step[hi] == step[max(k - 1, 0)]:
+        hi += 1
+    return m[lo: hi + 1], u[lo: hi + 1]
+
+
+def mark_cases(ax, cases) -> None:
+    """The marked cases ``[(label, U*, M*)]`` (e.g. the paper's (1a)-(1c)): star and label."""
+    for k, (label, ustar, mstar) in enumerate(cases):
+        ax.plot(ustar, mstar, "*", color="k", ms=9, zorder=4,
+                label="cases of Figs. 6-9" if k == 0 else None)
+        ax.annotate(label, (ustar, mstar), textcoords="offset points", xytext=(4, 5),
+                    fontsize=8)
+
+
+@styled
+def plot_curves(curves, boundary=None, path=None):
+    """The (U*, M*) plane: the flutter boundary (``boundary``: a StabilityBoundary),
+    the grazing and fold-of-cycles curves, the contact-free band shaded. Returns the
+    Figure."""
+    fig, axes = subplots(figsize=(6.4, 3.9))
+    ax = axes[0][0]
+    hopf = None
+    if boundary is not None:
+        draw_boundary(ax, boundary)
+        hopf = boundary_function(boundary)
+    draw_curves(ax, curves, hopf)
+    ax.set(yscale="log", xlabel=f"flow velocity $U^*$ {NONDIM}",
+           ylabel=f"mass ratio $M^*$ {NONDIM}")
+    fig.legend(*ax.get_legend_handles_labels(), loc="outside right upper")
+    return finish(fig, path)

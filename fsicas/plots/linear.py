@@ -23,7 +23,7 @@ from ..linear.stability import linear_stability
 from ..model.assembly import Model
 from .backend import NONDIM, PALETTE, finish, styled, subplots
 
-__all__ = ["BranchLine", "branch_lines", "marked_points", "mode_color", "plot_boundary",
+__all__ = ["BranchLine", "branch_lines", "draw_boundary", "boundary_function", "marked_points", "mode_color", "plot_boundary",
            "plot_mode_shapes", "plot_eigenvalues", "plot_boundary_variants"]
 
 MSTAR = f"mass ratio $M^*$ {NONDIM}"
@@ -131,6 +131,27 @@ def branch_lines(boundary: StabilityBoundary) -> list[BranchLine]:
         lines.append(BranchLine(int(branch), mode, rows[:, 0], rows[:, 1], rows[:, 2], samples,
                                 start, end))
     return lines
+
+
+def draw_boundary(ax, boundary: StabilityBoundary) -> None:
+    """The boundary's stretches (U* across, M* up), each up to its switches; the jumps at
+    the switches dotted."""
+    for k, line in enumerate(branch_lines(boundary)):
+        ax.plot(line.ustar, line.mstar, color="k", lw=1.5, zorder=2, gid=f"branch {line.branch}",
+                label="linear stability boundary" if k == 0 else None)
+    for s in boundary.switches:
+        ax.plot([s.ustar_below, s.ustar_above], [s.mstar] * 2, ":", color=LINK_GREY, lw=0.9)
+
+
+def boundary_function(boundary: StabilityBoundary):
+    """``U*_c(M*)`` of the drawn boundary (linear in log M* between its points); None
+    for a boundary without points."""
+    lines = branch_lines(boundary)
+    if not lines:
+        return None
+    rows = np.concatenate([np.c_[line.mstar, line.ustar] for line in lines])
+    rows = rows[np.argsort(rows[:, 0], kind="stable")]
+    return lambda m: np.interp(np.log(m), np.log(rows[:, 0]), rows[:, 1])
 
 
 def marked_points(boundary: StabilityBoundary) -> list[tuple[str, BranchLine, dict]]:

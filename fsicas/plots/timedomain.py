@@ -12,7 +12,8 @@ import numpy as np
 from ..model.contact import contact_load, reference_force
 from .backend import NONDIM, PALETTE, finish, outcome_words, styled, subplots
 from .impacting import cycle_view, cycle_window, plot_cycle, plot_cycles, return_period
-from .linear import LINK_GREY, branch_lines
+from .cycles import draw_curves, mark_cases
+from .linear import boundary_function, branch_lines, draw_boundary
 
 __all__ = ["plot_run", "plot_map", "plot_cycle", "plot_cycles", "cycle_view", "cycle_window",
            "return_period"]
@@ -51,13 +52,16 @@ def plot_run(run, path=None):
 
 
 @styled
-def plot_map(result, path=None, linear=None):
+def plot_map(result, path=None, linear=None, curves=None, cases=()):
     """Fig. 4: outcome of each (U*, M*) point and the linear stability boundary.
 
     ``linear``: a dense :class:`~fsicas.linear.boundary.StabilityBoundary` of the map's
     scene (contact-free), drawn per branch and broken at its mode switches; without it,
     the map's own boundary samples (``result.boundary``), broken where the frequency
-    jumps between neighbours (a mode switch between them). Returns the Figure."""
+    jumps between neighbours (a mode switch between them). ``curves``: a
+    :class:`~fsicas.cycles.curves.CurveMap` (grazing and fold-of-cycles curves; with
+    ``linear`` the band of contact-free cycles shaded); ``cases``: ``[(label, U*, M*)]``
+    marked. Returns the Figure."""
     fig, axes = subplots(figsize=(6.4, 3.9))
     ax = axes[0][0]
     for kind, (color, marker) in _MARKERS.items():
@@ -67,9 +71,12 @@ def plot_map(result, path=None, linear=None):
             ax.scatter(u, m, s=22, color=color, marker=marker, label=outcome_words(kind),
                        zorder=3)
     if linear is not None and branch_lines(linear):
-        _dense_boundary(ax, linear)
+        draw_boundary(ax, linear)
     else:
         _sampled_boundary(ax, result.boundary)
+    if curves is not None:
+        draw_curves(ax, curves, boundary_function(linear) if linear is not None else None)
+    mark_cases(ax, cases)
     ms = [p["mstar"] for p in result.points]
     if ms:
         ax.set_ylim(min(ms) / 1.25, max(ms) * 1.25)
@@ -85,16 +92,6 @@ def plot_map(result, path=None, linear=None):
                      f"$N$ = {scene.modes}")
     fig.legend(*ax.get_legend_handles_labels(), loc="outside right upper")   # off the points
     return finish(fig, path)
-
-
-def _dense_boundary(ax, linear) -> None:
-    """The boundary's stretches (M* up, U* across), each up to its switches; folds' jumps
-    dotted."""
-    for k, line in enumerate(branch_lines(linear)):
-        ax.plot(line.ustar, line.mstar, color="k", lw=1.5, zorder=2, gid=f"branch {line.branch}",
-                label="linear stability boundary" if k == 0 else None)
-    for s in linear.switches:
-        ax.plot([s.ustar_below, s.ustar_above], [s.mstar] * 2, ":", color=LINK_GREY, lw=0.9)
 
 
 def _sampled_boundary(ax, boundary: dict) -> None:

@@ -1,0 +1,104 @@
+"""Curves of special cycles of the flutter model in (M*, U*): the grazing curve against
+time integration and against the branch's own located first contact, the fold-of-cycles
+curve against the Hopf analysis (it ends on the Hopf curve where l1 = 0), the CLI."""
+
+import json
+
+import numpy as np
+import pytest
+
+from fsicas import Scene
+from fsicas.cycles.collocation import continue_cycles
+from fsicas.cycles.curves import CurveSettings, curve_seeds, fold_curves, grazing_curve
+from fsicas.linear.hopf import hopf_points
+from fsicas.linear.steady import steady_state
+from fsicas.model import build_model
+from fsicas.model.contact import gaps
+from fsicas.timedomain.integrators import Settings, simulate
+
+SCENE = Scene(mstar=1.0, modes=10)
+
+
+@pytest.fixture(scope="module")
+def grazing():
+    model = build_model(SCENE)
+    run = continue_cycles(SCENE, model)
+    curve = grazing_curve(SCENE, run=run, settings=CurveSettings(mstar_min=0.9, mstar_max=1.1,
+                                                                 max_points=8))
+    return model, run, curve
+
+
+def test_grazing_curve_passes_through_the_branch_first_contact(grazing):
+    """The curve (Newton on the cycle with min gap = eps, continued in M*) against the
+    branch's first contact (a user event located on the U* branch by Illinois)."""
+    _, run, curve = grazing
+    (contact,) = run.branch.special("contact")
+    assert curve.seed.mstar == pytest.approx(1.0, rel=1e-12)
+    assert curve.seed.ustar == pytest.approx(contact.record["ustar"], rel=1e-8)
+    assert np.all(np.abs(curve.column("gap_ratio") - 1) < 1e-8)
+    m = curve.column("mstar")
+    assert m.min() < 0.95 and m.max() > 1.05 and np.all(np.diff(m) > 0)
+    assert curve.status == ("bound", "bound")
+
+
+def _settled_min_gap(model, state, ustar, period, periods=40, last=4):
+    """min gap / eps over the last periods of an IDAS integration of the contact-free
+    model at U* from ``state``; 0 when the gap closed (past grazing the beam closes it
+    within a few periods, and so it does with the paper's contact law, k* = 1e6)."""
+    st = steady_state(model.scene.replace(ustar=ustar), model)
+    traj = simulate(model, st, periods * period, x0=state,
+                    settings=Settings(rtol=1e-9, atol=1e-11, dt_out=period / 400,
+                                      chunk=periods * period))
+    if traj.gap_closed:
+        return 0.0
+    assert traj.status == "success", traj.message
+    tail = traj.t >= traj.t[-1] - last * period
+    return gaps(model, traj.x[tail]).min() / SCENE.contact_gap
+
+
+def test_integration_just_below_the_curve_stays_off_the_wall_and_just_above_reaches_it(
+        grazing):
+    _, run, curve = grazing
+    (contact,) = run.branch.special("contact")
+    state, period = contact.record["state"], contact.record["cycle_period"]
+    model = build_model(SCENE)
+    below = _settled_min_gap(model, state, 0.995 * curve.seed.ustar, period)
+    above = _settled_min_gap(model, state, 1.005 * curve.seed.ustar, period)
+    assert below > 1.0 > above
+
+
+@pytest.mark.slow
+def test_fold_curve_ends_on_the_hopf_curve_at_a_generalized_hopf_point():
+    """Subcritical flutter at M* = 0.6: the cycle fold refined by Newton on its minimally
+    extended system has a second multiplier at +1; the fold curve continued in M* ends
+    where its cycles shrink to zero, i.e. on the Hopf curve (U* to 1e-2 relative of the
+    Hopf location there) where the first Lyapunov coefficient changes sign."""
+    scene = Scene(mstar=0.6, modes=10)
+    (fold,) = fold_curves(scene, settings=CurveSettings(mstar_min=0.2, mstar_max=2.0))
+    assert fold.status == ("stopped", "stopped")
+    for end in (fold.points[0], fold.points[-1]):
+        points = hopf_points(scene.replace(mstar=end.mstar), ustar_max=1.5 * end.ustar)
+        hopf = min(points, key=lambda h: abs(h.ustar - end.ustar))
+        assert end.ustar == pytest.approx(hopf.ustar, rel=1e-2)
+        assert abs(hopf.l1) < 0.05
+
+
+def test_seeds_one_per_piece_of_the_boundary():
+    assert curve_seeds([0.4, 1.75, 40.0], 0.1, 10.0) == pytest.approx(
+        [0.2, np.sqrt(0.4 * 1.75), np.sqrt(17.5)])
+    with pytest.raises(ValueError, match="mstar_min"):
+        CurveSettings(mstar_min=2.0, mstar_max=1.0)
+
+
+def test_cli_grazing(capsys, tmp_path):
+    from fsicas.cli import main
+    code = main(["grazing", "--mstar", "0.95:1.05:3", "--seeds", "1", "--max-points", "3",
+                 "--json", "-q", "--plot", str(tmp_path / "curves.png")])
+    out = json.loads(capsys.readouterr().out)
+    assert code == 0 and set(out) >= {"grazing", "fold", "hopf", "seeds", "meta"}
+    assert any(p["mstar"] == pytest.approx(1.0) for p in out["grazing"])
+    assert all(p["gap_ratio"] == pytest.approx(1.0, abs=1e-8) for p in out["grazing"])
+    assert {"mstar", "ustar", "l1"} <= set(out["hopf"][0])
+    assert (tmp_path / "curves.png").stat().st_size > 0
+    code = main(["grazing", "--mstar", "0.5:2:3", "--seeds", "5", "--json"])
+    assert code == 2 and "--seeds" in json.loads(capsys.readouterr().out)["error"]
