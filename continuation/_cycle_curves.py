@@ -129,7 +129,7 @@ class _Bordered(Condition):
         v, w, _ = self._solve(problem, problem.cycle_jacobian(X))
         out = np.zeros(len(X))
         for weights, d in self.pairs(problem, X, v, w):
-            h = 1e-5 * (1.0 + np.max(np.abs(X))) / np.max(np.abs(d))
+            h = 1e-7 * (1.0 + np.max(np.abs(X))) / np.max(np.abs(d))
             difference = problem.cycle_jacobian(X + h * d) - problem.cycle_jacobian(X - h * d)
             out -= difference.T @ _padded(weights, difference.shape[0]) / (2 * h)
         return out

@@ -4,7 +4,9 @@ Default (paper, Fig. 2): H* = 1/10, f = 0.14, K0 = 0, KL = 1, zeta = 0, N = 10 m
 Writes to the output folder: ``report.json`` (in-vacuo frequencies, steady state against
 its closed form, the flutter boundary with frequencies, branches, mode switches and
 criticality, the impact map's counts and the impacting cycles), ``fig2_boundary.png``,
-``fig3_modes.png``, ``fig4_impact_map.png`` (with its resumable ``fig4_map.jsonl``),
+``fig3_modes.png``, ``fig4_impact_map.png`` (with its resumable ``fig4_map.jsonl``; unless
+``quick``, over the grazing and fold-of-cycles curves, ``fig4_curves.json``, and the
+report counts the map points the curves explain),
 ``fig6_9_U7.png``, ``fig6_9_U8.5.png``, ``fig6_9_U10.png`` (impacting cycles at N = 10,
 zeta = 0.01, with the contact law that holds, k* = 1e8, eps/H = 1e-2; the paper's
 k* = 1e6, eps/H = 1e-3 is run too and reported: its gap closes, docs/simulate.md),
@@ -22,18 +24,21 @@ from pathlib import Path
 import numpy as np
 
 from . import __version__
+from .cycles.collocation import CycleSettings
+from .cycles.curves import CurveMap, CurveSettings, curve_seeds, cycle_curves, expected_outcomes
 from .linear.boundary import stability_boundary
 from .linear.steady import steady_state, straight_pressure_drop
 from .model.assembly import build_model
 from .model.beam import clamped_free_betas
-from .plots.linear import plot_boundary, plot_boundary_variants, plot_mode_shapes
+from .plots.linear import (boundary_function, plot_boundary, plot_boundary_variants,
+                           plot_mode_shapes)
 from .plots.timedomain import cycle_view, plot_cycle, plot_cycles, plot_map, return_period
 from .scene import Scene
-from .timedomain.impact_map import impact_map
+from .timedomain.impact_map import MAP_SCENE, impact_map
 from .timedomain.impacting_run import HOLDING_CONTACT, PAPER_CONTACT, impacting_run
 
 __all__ = ["PAPER_SCENE", "VARIANTS", "CYCLE_USTARS", "REPORT_FIELDS", "impacting_cycle",
-           "run_paper", "summary"]
+           "run_paper", "summary", "consistency"]
 
 PAPER_SCENE = Scene(mstar=1.0, ustar=5.0, hstar=0.1, friction=0.14, k0=0.0, kl=1.0,
                     zeta=0.0, modes=10)
@@ -53,6 +58,9 @@ REPORT_FIELDS = {
                 "switches (crossings and folds of Hopf curves, located)",
     "variants": "the boundary for zeta = 0.01 and H* = 1/20, 1/5",
     "impact_map": "Fig. 4: outcome counts of the (U*, M*) map (decay, lco, contact, unsettled)",
+    "fig4_curves": "Fig. 4's map against its curves (fig4_curves.json: grazing and fold-of-"
+                   "cycles curves, mstar and ustar per point): points whose outcome agrees "
+                   "with the region the curves put them in, and the exceptions",
     "impacting_cycles": "Figs. 6-9: per U* the settled cycle's outcome, period (units of T), "
                         "tip amplitude (units of L), impacts per cycle, peak impact force, mean "
                         "flow-rate reduction",
@@ -149,14 +157,49 @@ def _time_domain(out: Path, quick: bool, say, linear=None) -> dict:
         jobs.append((8.5, 10, PAPER_CONTACT, 1.0, None))
     say(f"Fig. 4: the impact map, {ustars.size * mstars.size} time integrations")
     result = impact_map(ustars, mstars, out / "fig4_map.jsonl", t_end=t_map, workers=2)
-    plot_map(result, out / "fig4_impact_map.png", linear=linear)
+    curves = None if quick or linear is None else _fig4_curves(linear, mstars, ustars, say)
+    plot_map(result, out / "fig4_impact_map.png", linear=linear, curves=curves,
+             cases=[] if quick else [(f"1{c}", u, 1.0) for c, u in zip("abc", CYCLE_USTARS)])
     say(f"Figs. 6-9: {len(jobs)} impacting cycles (N = 10)")
     with ProcessPoolExecutor(max_workers=2) as pool:
         done = list(pool.map(_cycle_job, jobs))
     views = [view for (_, view), job in zip(done, jobs) if job[4] is not None and view is not None]
     if views:
         plot_cycles(views, out / "fig6_9_cycles.png")
-    return {"impact_map": result.to_json(), "impacting_cycles": [c for c, _ in done]}
+    report = {"impact_map": result.to_json(), "impacting_cycles": [c for c, _ in done]}
+    if curves is not None:
+        (out / "fig4_curves.json").write_text(json.dumps(curves.to_json(), indent=1))
+        report["fig4_curves"] = consistency(result, curves, boundary_function(linear))
+    return report
+
+
+def _fig4_curves(linear, mstars, ustars, say) -> CurveMap:
+    """The grazing and fold-of-cycles curves over the map's window, seeded one per piece
+    of its flutter boundary (two processes)."""
+    settings = CurveSettings(mstar_min=float(mstars.min()), mstar_max=float(mstars.max()))
+    seeds = curve_seeds([s.mstar for s in linear.switches], settings.mstar_min,
+                        settings.mstar_max)
+    say(f"Fig. 4: grazing and fold-of-cycles curves from {len(seeds)} cycle branches")
+    return cycle_curves(MAP_SCENE, seeds, settings=settings,
+                        cycles=CycleSettings(quadrature_tol=settings.quadrature_tol),
+                        ustar_max=float(ustars.max()), workers=2)
+
+
+def consistency(result, curves: CurveMap, hopf) -> dict:
+    """The map's outcomes against what the curves say (``expected_outcomes``): the count
+    of agreeing points and each exception (an unsettled run or an outcome across a
+    curve), with what was expected."""
+    points = [p for p in result.points if p["outcome"] != "error"]
+    expected = expected_outcomes(curves, hopf, [p["ustar"] for p in points],
+                                 [p["mstar"] for p in points])
+    accepted = {"decay": {"decay"}, "lco": {"lco"}, "contact": {"contact", "impacting_lco"},
+                "bistable": {"decay", "lco", "contact", "impacting_lco"},
+                "unknown": {"lco", "contact", "impacting_lco"}}
+    exceptions = [{"ustar": p["ustar"], "mstar": p["mstar"], "outcome": p["outcome"],
+                   "expected": e} for p, e in zip(points, expected)
+                  if p["outcome"] not in accepted[e]]
+    return {"consistent": len(points) - len(exceptions), "exceptions": exceptions,
+            "expected_counts": {k: expected.count(k) for k in accepted}}
 
 
 def summary(report: dict) -> dict:
@@ -167,6 +210,10 @@ def summary(report: dict) -> dict:
            "U*_c at M* = 1": next((p["ustar_crit"] for p in b["points"] if abs(p["mstar"] - 1) < 1e-9), None)}
     if "impact_map" in report:
         out["impact map (Fig. 4)"] = report["impact_map"]["counts"]
+    if "fig4_curves" in report:
+        c = report["fig4_curves"]
+        out["map against the curves"] = (f"{c['consistent']} consistent, "
+                                         f"{len(c['exceptions'])} exceptions")
     for c in report.get("impacting_cycles", []):
         key = f"U* = {c['ustar']:g}, k* = {c['contact_stiffness']:g}, eps/H = {c['contact_eps']:g}"
         out[key] = (f"{c['outcome']}: period {c['period']:.5f}, {c['impacts_per_cycle']:g} impacts/cycle, "

@@ -56,14 +56,33 @@ def _settled_min_gap(model, state, ustar, period, periods=40, last=4):
     return gaps(model, traj.x[tail]).min() / SCENE.contact_gap
 
 
+def _crossing_check(scene, point):
+    """min gap / eps of integrations from a curve point's state at 0.995 and 1.005 times
+    its U* (at its M*)."""
+    model = build_model(scene.replace(mstar=point.mstar))
+    return [_settled_min_gap(model, point.state, f * point.ustar, point.period)
+            for f in (0.995, 1.005)]
+
+
 def test_integration_just_below_the_curve_stays_off_the_wall_and_just_above_reaches_it(
         grazing):
-    _, run, curve = grazing
-    (contact,) = run.branch.special("contact")
-    state, period = contact.record["state"], contact.record["cycle_period"]
-    model = build_model(SCENE)
-    below = _settled_min_gap(model, state, 0.995 * curve.seed.ustar, period)
-    above = _settled_min_gap(model, state, 1.005 * curve.seed.ustar, period)
+    """At the curve's last point (M* = 1.1, continued from the seed at M* = 1)."""
+    _, _, curve = grazing
+    point = curve.points[-1]
+    assert point.mstar > 1.05
+    below, above = _crossing_check(SCENE, point)
+    assert below > 1.0 > above
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("mstar", [0.3, 3.0])
+def test_grazing_curve_against_integration_at_other_mass_ratios(mstar):
+    scene = SCENE.replace(mstar=mstar)
+    curve = grazing_curve(scene, settings=CurveSettings(mstar_min=mstar / 1.2,
+                                                        mstar_max=mstar * 1.2, max_points=4))
+    point = curve.points[-1]
+    assert point.mstar != pytest.approx(mstar, rel=1e-3)
+    below, above = _crossing_check(scene, point)
     assert below > 1.0 > above
 
 

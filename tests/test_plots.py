@@ -284,3 +284,54 @@ def test_drawing_leaves_the_users_rcparams_alone(boundary6, lco_view):
     assert after == before
     assert fig.axes[0].yaxis.label.get_fontsize() == 9                 # the figure's own style
     assert fig.axes[0].yaxis.label.get_fontfamily()[0] == "serif"
+
+
+def _synthetic_curves():
+    """A grazing curve U* = 7 + log10 M* and a fold curve U* = 3.5 at M* in [0.1, 0.3]."""
+    from fsicas.cycles.curves import CurveMap, CurvePoint, CycleCurve
+    point = lambda m, u: CurvePoint(m, u, 0.1, 0.05, 1.0, True, np.zeros(2))
+    graze = [point(m, 7 + np.log10(m)) for m in np.geomspace(0.1, 10, 30)]
+    fold = [point(m, 3.5) for m in np.geomspace(0.1, 0.3, 5)]
+    return CurveMap([CycleCurve("grazing", graze[10], graze, ("bound", "bound"), "", 0.0)],
+                    [CycleCurve("fold", fold[2], fold, ("bound", "stopped"), "", 0.0)],
+                    [1.0], [], 0.0)
+
+
+def test_fig4_draws_the_curves_the_band_and_the_cases(boundary6):
+    from fsicas.plots import plot_map
+    boundary, _ = boundary6
+    points = [{"ustar": 4.0, "mstar": 1.0, "outcome": "lco"}]
+    fig = plot_map(_map_result(points, {"mstar": [1.0], "ustar_crit": [5.5], "omega": [45.0]}),
+                   linear=boundary, curves=_synthetic_curves(), cases=[("1a", 7.0, 1.0)])
+    labels = {t.get_text() for t in fig.legends[0].get_texts()}
+    assert {"grazing (first contact)", "fold of cycles", "contact-free cycles",
+            "cases of Figs. 6-9"} <= labels
+    ax = _panels(fig)[0]
+    assert any(t.get_text() == "1a" for t in ax.texts)
+    grazing = [line for line in ax.lines if line.get_label() == "grazing (first contact)"]
+    assert np.allclose(grazing[0].get_xdata(), 7 + np.log10(grazing[0].get_ydata()))
+
+
+def test_curves_give_each_map_point_its_expected_outcome():
+    """Below the boundary decay, between the fold curve and the boundary either, from the
+    boundary to the grazing curve lco, beyond contact; an outcome across a curve is an
+    exception."""
+    from fsicas.cycles.curves import expected_outcomes, lowest_ustar
+    from fsicas.paper import consistency
+    curves = _synthetic_curves()
+    hopf = lambda m: np.full(np.shape(m), 4.0)
+    assert lowest_ustar(curves.grazing, [1.0, 100.0]) == pytest.approx([7.0, np.nan],
+                                                                      nan_ok=True)
+    u = [3.0, 3.7, 5.0, 7.5, 5.0]
+    m = [1.0, 0.2, 1.0, 1.0, 20.0]
+    assert expected_outcomes(curves, hopf, u, m) == ["decay", "bistable", "lco", "contact",
+                                                     "unknown"]
+    outcomes = ["decay", "lco", "lco", "contact", "contact"]
+
+    class Map:
+        points = [{"ustar": a, "mstar": b, "outcome": o} for a, b, o in zip(u, m, outcomes)]
+        points += [{"ustar": 5.0, "mstar": 1.0, "outcome": "contact"}]      # across a curve
+    report = consistency(Map(), curves, hopf)
+    assert report["consistent"] == 5
+    assert report["exceptions"] == [{"ustar": 5.0, "mstar": 1.0, "outcome": "contact",
+                                     "expected": "lco"}]

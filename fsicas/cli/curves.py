@@ -34,6 +34,7 @@ def add_curve_command(sub) -> None:
     p.add_argument("--ntst", type=int, default=20, help="collocation mesh intervals")
     p.add_argument("--max-points", type=int, default=150,
                    help="points of each curve per direction at most")
+    p.add_argument("--workers", type=int, default=1, help="seeds computed in parallel processes")
     p.add_argument("--out", metavar="FILE.json", help="save the curves whole, with their meta")
     p.add_argument("--plot", metavar="FILE", help="the (U*, M*) plane with the three curves")
     p.set_defaults(run=_cmd_grazing)
@@ -43,13 +44,15 @@ def _cmd_grazing(args) -> dict:
     scene = scene_from_args(args)
     if scene.contact:
         raise ValueError("the curves are of contact-free cycles: drop --contact")
+    if args.workers < 1:
+        raise ValueError(f"--workers must be >= 1, got {args.workers}")
     mstars = parse_range(args.mstar_values, "mstar", log=True)
     if mstars.size < 2:
         raise ValueError(f"--mstar must give a window of at least two values, got "
                          f"{args.mstar_values!r}")
     settings = CurveSettings(mstar_min=float(mstars.min()), mstar_max=float(mstars.max()),
                              max_points=args.max_points)
-    cycles = CycleSettings(ntst=args.ntst)
+    cycles = CycleSettings(ntst=args.ntst, quadrature_tol=settings.quadrature_tol)
     seeds = None if args.seeds is None else parse_range(args.seeds, "seeds", log=True)
     _check_seeds(seeds, settings)
     record(args, scene, curve_settings=settings, cycle_settings=cycles)
@@ -60,8 +63,8 @@ def _cmd_grazing(args) -> dict:
     seeds = curve_seeds([s.mstar for s in boundary.switches], settings.mstar_min,
                         settings.mstar_max) if seeds is None else list(seeds)
     say.stage(f"grazing and fold curves from {len(seeds)} cycle branches (N = {scene.modes})")
-    curves = cycle_curves(scene, seeds, model, settings=settings, cycles=cycles,
-                          ustar_max=args.ustar_max, progress=say.stage)
+    curves = cycle_curves(scene, seeds, settings=settings, cycles=cycles,
+                          ustar_max=args.ustar_max, workers=args.workers, progress=say.stage)
     say.stats(f"{len(curves.grazing)} grazing and {len(curves.fold)} fold curves "
               f"in {curves.wall_time:.1f} s")
     out = {**curves.to_json(), "hopf": _hopf_points(boundary),

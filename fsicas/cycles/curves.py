@@ -15,28 +15,31 @@ window (``continuation.CycleCurveProblem``: PALC, the mesh re-equidistributed an
 quadrature refined as on the branch). Per point: M*, U* (the steady state at the same
 pressure drop, as on the branch), period, tip half-amplitude, min gap / eps, stability.
 A fold curve ends where its cycles shrink below ``CurveSettings.min_amplitude`` (it meets
-the Hopf curve at a generalized Hopf point, l1 = 0).
+the Hopf curve at a generalized Hopf point, l1 = 0) or reach the wall (it crosses the
+grazing curve: beyond, the contact-free model does not hold).
 """
 from __future__ import annotations
 
 import math
 import time
-from dataclasses import asdict, dataclass
+from contextlib import nullcontext
+from dataclasses import dataclass, field
 from typing import Literal
 
 import numpy as np
 
 import continuation as C
 
-from ..linear.adapter import LOG_M, PI
+from ..linear.adapter import LOG_M, PI, pi_of
 from ..linear.hopf import CriticalVelocityError
-from ..model.assembly import Model, build_model
+from ..model.assembly import Model
 from ..scene import Scene
+from ..workers import local_pool
 from .collocation import CycleRun, CycleSettings, ProfileGauge, continue_cycles
 from .records import check_settings, plain_value
 
 __all__ = ["CurveKind", "CurveSettings", "CurvePoint", "CycleCurve", "CurveMap", "grazing_curve",
-           "fold_curves", "cycle_curves", "curve_seeds"]
+           "fold_curves", "cycle_curves", "curve_seeds", "lowest_ustar", "expected_outcomes"]
 
 CurveKind = Literal["grazing", "fold"]
 """A curve of grazing cycles (min gap = eps) or of cycle folds (LPC)."""
@@ -47,20 +50,26 @@ class CurveSettings:
     """``mstar_min``/``mstar_max``: the M* window; ``ds``/``ds_max``: arclength steps
     (Euclidean norm of all node values, log10 M* and Π); ``max_points``: points per
     direction; ``tol``: Newton tolerance; ``min_amplitude``: a fold curve ends where its
-    cycles' tip half-amplitude falls below this (they shrink onto the Hopf curve)."""
+    cycles' tip half-amplitude falls below this (they shrink onto the Hopf curve);
+    ``quadrature_tol``: the flow quadrature's relative error allowed on the curve's cycles
+    (nodes doubled from a point that exceeds it, as on a branch: ``CycleSettings``); the
+    default 1e-6 moves the grazing U* at M* = 1 by 1e-7 relative against 1e-8 at a
+    quarter of the nodes (320 against 1280), None = the seed's nodes throughout."""
 
     mstar_min: float = 0.05
     mstar_max: float = 20.0
-    ds: float = 0.02
-    ds_max: float = 0.3
+    ds: float = 0.1
+    ds_max: float = 0.5
     max_points: int = 150
     tol: float = 1e-9
     min_amplitude: float = 2e-3
+    quadrature_tol: float | None = 1e-6
 
     def __post_init__(self):
         check_settings(self, integers=("max_points",),
                        positives=("mstar_min", "mstar_max", "ds", "ds_max", "tol",
-                                  "min_amplitude"))
+                                  "min_amplitude") + (
+                           () if self.quadrature_tol is None else ("quadrature_tol",)))
         if not self.mstar_min < self.mstar_max:
             raise ValueError(f"CurveSettings.mstar_min must be below mstar_max, got "
                              f"{self.mstar_min!r} and {self.mstar_max!r}")
@@ -68,7 +77,8 @@ class CurveSettings:
 
 @dataclass(frozen=True)
 class CurvePoint:
-    """One cycle of a curve (units: U*, M* nondimensional; period in T)."""
+    """One cycle of a curve (units: U*, M* nondimensional; period in T); ``state``: the
+    model state on the cycle at its phase 0 (a start for time integration)."""
 
     mstar: float
     ustar: float
@@ -76,12 +86,21 @@ class CurvePoint:
     tip_amplitude: float
     gap_ratio: float
     stable: bool
+    state: np.ndarray = field(repr=False, compare=False, default=None)
 
     @classmethod
     def from_columns(cls, columns: dict, k: int) -> "CurvePoint":
         names = {"period": "cycle_period"}
         return cls(**{f: plain_value(columns[names.get(f, f)][k])
                       for f in cls.__dataclass_fields__})
+
+    def to_json(self) -> dict:
+        return {**{f: getattr(self, f) for f in self.__dataclass_fields__ if f != "state"},
+                "state": [float(v) for v in self.state]}
+
+    @classmethod
+    def from_json(cls, d: dict) -> "CurvePoint":
+        return cls(**{**d, "state": np.asarray(d["state"], dtype=float)})
 
 
 @dataclass(frozen=True)
@@ -101,13 +120,14 @@ class CycleCurve:
         return np.array([getattr(p, name) for p in self.points])
 
     def to_json(self) -> dict:
-        return {"kind": self.kind, "seed": asdict(self.seed),
-                "points": [asdict(p) for p in self.points], "status": list(self.status),
+        return {"kind": self.kind, "seed": self.seed.to_json(),
+                "points": [p.to_json() for p in self.points], "status": list(self.status),
                 "message": self.message, "wall_time": self.wall_time}
 
     @classmethod
     def from_json(cls, d: dict) -> "CycleCurve":
-        return cls(d["kind"], CurvePoint(**d["seed"]), [CurvePoint(**p) for p in d["points"]],
+        return cls(d["kind"], CurvePoint.from_json(d["seed"]),
+                   [CurvePoint.from_json(p) for p in d["points"]],
                    tuple(d["status"]), d["message"], d["wall_time"])
 
 
@@ -125,13 +145,46 @@ class CurveMap:
     def to_json(self) -> dict:
         """``grazing`` / ``fold``: the points of all curves, each with ``mstar``, ``ustar``
         and its ``curve`` (index in ``curves[kind]``); ``curves``: each curve whole."""
-        flat = lambda curves: [{**asdict(p), "curve": i}
+        flat = lambda curves: [{**p.to_json(), "curve": i}
                                for i, c in enumerate(curves) for p in c.points]
         return {"grazing": flat(self.grazing), "fold": flat(self.fold),
                 "curves": {"grazing": [c.to_json() for c in self.grazing],
                            "fold": [c.to_json() for c in self.fold]},
                 "seeds": list(self.seeds), "failures": list(self.failures),
                 "wall_time": self.wall_time}
+
+
+def lowest_ustar(curves: list, mstar, floor=None) -> np.ndarray:
+    """At each ``mstar``, the lowest U* where one of ``curves`` crosses it (linear in
+    log M* between curve points), only counting crossings at or above ``floor`` (an
+    array like ``mstar``); NaN where none."""
+    x = np.log(np.atleast_1d(np.asarray(mstar, dtype=float)))
+    floor = np.full(x.shape, -np.inf) if floor is None else np.asarray(floor, dtype=float)
+    out = np.full(x.shape, np.inf)
+    for curve in curves:
+        m, u = np.log(curve.column("mstar")), curve.column("ustar")
+        for k in np.flatnonzero(m[1:] != m[:-1]):
+            w = (x - m[k]) / (m[k + 1] - m[k])
+            value = u[k] + w * (u[k + 1] - u[k])
+            hit = (w >= 0) & (w <= 1) & (value >= floor)
+            out[hit] = np.minimum(out[hit], value[hit])
+    return np.where(np.isfinite(out), out, np.nan)
+
+
+def expected_outcomes(curves: CurveMap, hopf, ustar, mstar) -> list:
+    """What the curves say a time integration at each (``ustar``, ``mstar``) from the
+    perturbed steady state should end in: "decay" below the flutter boundary ``hopf``
+    (``hopf(mstar) -> U*_c``), "bistable" between a fold-of-cycles curve and it (the
+    steady state and a large cycle both stable: either outcome), "lco" from it to the
+    lowest grazing curve above it, "contact" from there on, "unknown" above the boundary
+    where no grazing curve crosses the M*."""
+    u, m = np.asarray(ustar, dtype=float), np.asarray(mstar, dtype=float)
+    critical = hopf(m)
+    fold = lowest_ustar(curves.fold, m)
+    grazing = lowest_ustar(curves.grazing, m, floor=critical)
+    return ["decay" if uk < ck and not fk <= uk else "bistable" if uk < ck else
+            "unknown" if np.isnan(gk) else "lco" if uk < gk else "contact"
+            for uk, ck, fk, gk in zip(u, critical, fold, grazing)]
 
 
 def curve_seeds(switches, mstar_min: float, mstar_max: float) -> list:
@@ -143,52 +196,70 @@ def curve_seeds(switches, mstar_min: float, mstar_max: float) -> list:
     return [math.sqrt(a * b) for a, b in zip(edges[:-1], edges[1:])]
 
 
-def cycle_curves(scene: Scene, seeds, model: Model | None = None, *,
-                 settings: CurveSettings = CurveSettings(),
+def cycle_curves(scene: Scene, seeds, *, settings: CurveSettings = CurveSettings(),
                  cycles: CycleSettings = CycleSettings(), ustar_max: float = 20.0,
-                 progress=None) -> CurveMap:
-    """The grazing and fold curves through the cycle branches at the M* ``seeds`` (each
-    curve traced once: a seed's contact or fold already on a traced curve starts none).
-    ``progress(text)`` is told of each seed."""
+                 workers: int = 1, progress=None) -> CurveMap:
+    """The grazing and fold curves through the cycle branches at the M* ``seeds``, the
+    seeds in ``workers`` processes; a curve whose seed lies on a curve of an earlier seed
+    is the same curve and kept once. ``progress(text)`` is told of each finished seed."""
     start = time.perf_counter()
-    model = model or build_model(scene)
+    jobs = [(scene.replace(mstar=float(m)), settings, cycles, ustar_max) for m in seeds]
     found = {"grazing": [], "fold": []}
     failures = []
-    for mstar in seeds:
-        if progress:
-            progress(f"cycle branch at M* = {mstar:.4g}")
-        try:
-            run = continue_cycles(scene.replace(mstar=float(mstar)), model,
-                                  ustar_max=ustar_max, settings=cycles)
-        except CriticalVelocityError as err:
-            failures.append(f"M* = {mstar:.4g}: {err}")
-            continue
-        _add_new(found, run, settings, failures, mstar)
+    with (local_pool(workers) if workers > 1 else nullcontext()) as pool:
+        results = pool.map(_seed_curves, jobs) if pool else map(_seed_curves, jobs)
+        for mstar, (curves, failed) in zip(seeds, results):
+            if progress:
+                progress(f"cycle branch at M* = {mstar:.4g}: {len(curves['grazing'])} "
+                         f"grazing, {len(curves['fold'])} fold curves")
+            failures += failed
+            for kind, new in curves.items():
+                found[kind] += [c for c in new if not _traced(found[kind], c.seed)]
     return CurveMap(found["grazing"], found["fold"], [float(m) for m in seeds], failures,
                     time.perf_counter() - start)
 
 
-def _add_new(found: dict, run: CycleRun, settings: CurveSettings, failures: list, mstar):
-    """The curves through ``run``'s contact and folds that are not traced yet."""
-    for sp in run.branch.special("contact"):
-        if sp.status == "converged" and not _traced(found["grazing"], sp):
-            found["grazing"].append(_trace(run, run.problem_at(sp), sp.unknowns, "grazing",
-                                           settings))
+def _seed_curves(job) -> tuple[dict, list]:
+    """The curves through the contact and the folds of the branch at one seed (the scene's
+    M*) and the failures, as text."""
+    scene, settings, cycles, ustar_max = job
+    try:
+        run = continue_cycles(scene, ustar_max=ustar_max, settings=cycles)
+    except CriticalVelocityError as err:
+        return {"grazing": [], "fold": []}, [f"M* = {scene.mstar:.4g}: {err}"]
+    pi_max = _pi_max(run, ustar_max)
+    grazing = [_trace(run, run.problem_at(sp), sp.unknowns, "grazing", settings, pi_max)
+               for sp in run.branch.special("contact") if sp.status == "converged"]
+    folds, failures = _fold_curves(run, settings, pi_max)
+    return {"grazing": grazing, "fold": folds}, failures
+
+
+def _fold_curves(run: CycleRun, settings: CurveSettings, pi_max: float) -> tuple[list, list]:
+    """The fold curves through the run's cycle folds (each refined by Newton on its
+    minimally extended system first; a fold on a curve already traced starts none) and
+    the failures, as text."""
+    curves, failures = [], []
     for sp in run.branch.special("fold"):
-        if _traced(found["fold"], sp):
+        if _traced(curves, _point(sp)):
             continue
         square, result = C.locate_cycle(run.problem_at(sp), sp.unknowns, C.CycleFold(),
                                         C.NewtonSettings(tol=settings.tol))
         if result.converged:
-            found["fold"].append(_trace(run, square, result.X, "fold", settings))
+            curves.append(_trace(run, square, result.X, "fold", settings, pi_max))
         else:
-            failures.append(f"M* = {mstar:.4g}: fold not refined ({result.message})")
+            failures.append(f"M* = {run.hopf.mstar:.4g}: fold not refined ({result.message})")
+    return curves, failures
 
 
-def _traced(curves: list, sp, rtol: float = 5e-3) -> bool:
-    """Whether the special point ``sp`` (M*, U*) lies on one of ``curves`` (U* linear
-    between the curve's points that bracket its M*)."""
-    mstar, ustar = sp.record["mstar"], sp.record["ustar"]
+def _point(sp) -> CurvePoint:
+    """A special point of a branch as a curve point (its M* and U*)."""
+    return CurvePoint.from_columns({k: [v] for k, v in sp.record.items()}, 0)
+
+
+def _traced(curves: list, point: CurvePoint, rtol: float = 5e-3) -> bool:
+    """Whether ``point`` (M*, U*) lies on one of ``curves`` (U* linear between the
+    curve's points that bracket its M*)."""
+    mstar, ustar = point.mstar, point.ustar
     for curve in curves:
         m, u = curve.column("mstar"), curve.column("ustar")
         for k in np.flatnonzero((m[:-1] - mstar) * (m[1:] - mstar) <= 0):
@@ -203,15 +274,16 @@ def grazing_curve(scene: Scene, model: Model | None = None, *,
                   cycles: CycleSettings = CycleSettings(), run: CycleRun | None = None,
                   ustar_max: float = 20.0) -> CycleCurve:
     """The grazing curve through the first contact of the cycle branch at ``scene.mstar``
-    (``run``: that branch's :class:`CycleRun` if already computed). Raises ValueError when
-    the branch reaches no contact below ``ustar_max``."""
+    (``run``: that branch's :class:`CycleRun` if already computed), for U* below
+    ``ustar_max``. Raises ValueError when the branch reaches no contact there."""
     run = run or continue_cycles(scene, model, ustar_max=ustar_max, settings=cycles)
     contacts = [sp for sp in run.branch.special("contact") if sp.status == "converged"]
     if not contacts:
         raise ValueError(f"the cycle branch at M* = {scene.mstar:g} reaches no located wall "
                          f"contact below U* = {ustar_max:g} ({run.branch.message})")
     sp = contacts[0]
-    return _trace(run, run.problem_at(sp), sp.unknowns, "grazing", settings)
+    return _trace(run, run.problem_at(sp), sp.unknowns, "grazing", settings,
+                  _pi_max(run, ustar_max))
 
 
 def fold_curves(scene: Scene, model: Model | None = None, *,
@@ -220,27 +292,31 @@ def fold_curves(scene: Scene, model: Model | None = None, *,
                 ustar_max: float = 20.0) -> list:
     """The fold-of-cycles curves through the cycle folds of the branch at ``scene.mstar``
     (none when flutter there is supercritical and the branch does not fold), each fold
-    refined by Newton on its minimally extended system first."""
+    refined by Newton on its minimally extended system first (a fold that is not refined
+    starts no curve)."""
     run = run or continue_cycles(scene, model, ustar_max=ustar_max, settings=cycles)
-    curves = []
-    for sp in run.branch.special("fold"):
-        square, result = C.locate_cycle(run.problem_at(sp), sp.unknowns, C.CycleFold(),
-                                        C.NewtonSettings(tol=settings.tol))
-        if result.converged:
-            curves.append(_trace(run, square, result.X, "fold", settings))
-    return curves
+    return _fold_curves(run, settings, _pi_max(run, ustar_max))[0]
 
 
-def _trace(run: CycleRun, problem, X, kind: CurveKind, settings: CurveSettings) -> CycleCurve:
-    """Continue the curve of ``kind`` through the cycle ``X`` of ``problem`` both ways."""
+def _pi_max(run: CycleRun, ustar_max: float) -> float:
+    """Π of U* = ``ustar_max`` at the run's M* (Π ≈ 3.3 U*² / 100 at any M*: the bound of
+    the curves in U*)."""
+    model = run.gauge.model
+    return pi_of(model.scene.replace(mstar=run.hopf.mstar), model, ustar_max)
+
+
+def _trace(run: CycleRun, problem, X, kind: CurveKind, settings: CurveSettings,
+           pi_max: float) -> CycleCurve:
+    """Continue the curve of ``kind`` through the cycle ``X`` of ``problem`` both ways,
+    inside the M* window and below Π = ``pi_max``."""
     start = time.perf_counter()
-    gauge = ProfileGauge(run.gauge.model, run.hopf.x, run.gauge.quadrature_tol)
+    gauge = ProfileGauge(run.gauge.model, run.hopf.x, settings.quadrature_tol)
     condition = gauge.grazing_condition() if kind == "grazing" else C.CycleFold()
     halves = []
     for direction in (-1, 1):
         curve = C.CycleCurveProblem(problem, X, (PI, LOG_M), condition)
         curve.refine = gauge.refine if gauge.quadrature_tol is not None else None
-        halves.append(C.continuation(curve, settings=_steps(settings, direction),
+        halves.append(C.continuation(curve, settings=_steps(settings, direction, pi_max),
                                      record=gauge.record, stop=_stop(kind, gauge, settings)))
     down, up = ([CurvePoint.from_columns(b.columns, k) for k in range(len(b.s))]
                 for b in halves)
@@ -250,23 +326,26 @@ def _trace(run: CycleRun, problem, X, kind: CurveKind, settings: CurveSettings) 
                       message, time.perf_counter() - start)
 
 
-def _steps(settings: CurveSettings, direction: int) -> C.ContinuationSettings:
+def _steps(settings: CurveSettings, direction: int, pi_max: float) -> C.ContinuationSettings:
     window = (math.log10(settings.mstar_min), math.log10(settings.mstar_max))
     return C.ContinuationSettings(
         ds=settings.ds, ds_min=1e-9, ds_max=settings.ds_max, direction=direction,
-        max_steps=settings.max_points - 1, bounds={LOG_M: window, PI: (0.0, math.inf)},
+        max_steps=settings.max_points - 1, bounds={LOG_M: window, PI: (0.0, pi_max)},
         newton=C.NewtonSettings(tol=settings.tol), compute_eigenvalues=False)
 
 
 def _stop(kind: CurveKind, gauge: ProfileGauge, settings: CurveSettings):
-    """A fold curve's stop rule: its cycles shrank onto the Hopf curve."""
+    """A fold curve's stop rule: its cycles shrank onto the Hopf curve, or reached the wall
+    (past the grazing curve the contact-free model no longer describes the beam)."""
     if kind != "fold":
         return None
 
-    def shrunk(problem, X):
+    def ended(problem, X):
         low, high = gauge.tip_extremes(problem, X)
         if (high - low) / 2 < settings.min_amplitude:
             return f"the cycles shrank below tip amplitude {settings.min_amplitude:g}"
+        if gauge.gap(problem, X) < gauge.eps:
+            return "the cycles reached the wall (min gap below eps)"
         return False
 
-    return shrunk
+    return ended

@@ -3,6 +3,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..cycles.curves import lowest_ustar
 from .backend import NONDIM, PALETTE, finish, styled, subplots
 from .linear import boundary_function, draw_boundary
 
@@ -52,35 +53,22 @@ def _branch_panel(ax, branch, name: str) -> None:
 def draw_curves(ax, curves, hopf=None) -> None:
     """The grazing and fold-of-cycles curves of a :class:`fsicas.cycles.curves.CurveMap`
     (U* across, M* up) and, given ``hopf(mstar) -> U*_c`` (the flutter boundary), the
-    band of contact-free cycles between it and each grazing curve shaded grey (along the
-    stretch of the curve through its seed on which M* is monotone)."""
+    band of contact-free cycles shaded grey: at each M*, from U*_c to the lowest grazing
+    curve above it."""
     for kind in ("grazing", "fold"):
         for k, curve in enumerate(getattr(curves, kind)):
             style = dict(_CURVE_STYLE[kind])
-            label = style.pop("label") if k == 0 else None
-            ax.plot(curve.column("ustar"), curve.column("mstar"), lw=1.4, label=label,
-                    zorder=2, **style)
-    if hopf is None:
+            label = style.pop("label")
+            ax.plot(curve.column("ustar"), curve.column("mstar"), lw=1.4,
+                    label=label if k == 0 else None, zorder=2, **style)
+    grazing = [p.mstar for c in curves.grazing for p in c.points]
+    if hopf is None or not grazing:
         return
-    for k, curve in enumerate(curves.grazing):
-        m, u = _monotone_stretch(curve)
-        if m.size > 1:
-            ax.fill_betweenx(m, hopf(m), u, color="0.85", zorder=0, lw=0,
-                             label="contact-free cycles" if k == 0 else None)
-
-
-def _monotone_stretch(curve) -> tuple[np.ndarray, np.ndarray]:
-    """``(M*, U*)`` of the stretch of ``curve`` through its seed with M* monotone."""
-    m, u = curve.column("mstar"), curve.column("ustar")
-    k = int(np.argmin(np.abs(m - curve.seed.mstar) + np.abs(u - curve.seed.ustar)))
-    step = np.sign(np.diff(m))
-    lo = k
-    while lo > 0 and step[lo - 1] == step[min(k, step.size - 1)]:
-        lo -= 1
-    hi = k
-    while hi < step.size and step[hi] == step[max(k - 1, 0)]:
-        hi += 1
-    return m[lo: hi + 1], u[lo: hi + 1]
+    m = np.geomspace(min(grazing), max(grazing), 400)
+    critical = hopf(m)
+    ceiling = lowest_ustar(curves.grazing, m, floor=critical)
+    ax.fill_betweenx(m, critical, ceiling, where=np.isfinite(ceiling), color="0.85", zorder=0,
+                     lw=0, label="contact-free cycles")
 
 
 def mark_cases(ax, cases) -> None:
