@@ -15,8 +15,9 @@ window (``continuation.CycleCurveProblem``: PALC, the mesh re-equidistributed an
 quadrature refined as on the branch). Per point: M*, U* (the steady state at the same
 pressure drop, as on the branch), period, tip half-amplitude, min gap / eps, stability.
 A fold curve ends where its cycles shrink below ``CurveSettings.min_amplitude`` (it meets
-the Hopf curve at a generalized Hopf point, l1 = 0) or reach the wall (it crosses the
-grazing curve: beyond, the contact-free model does not hold).
+the Hopf curve at a generalized Hopf point, l1 = 0, or where the Hopf curve turns back in
+M*) or reach the wall (it crosses the grazing curve: beyond, the contact-free model does
+not hold).
 """
 from __future__ import annotations
 
