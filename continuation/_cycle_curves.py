@@ -33,7 +33,7 @@ import scipy.sparse as sp
 from . import _collocation as colloc
 from ._cycles import CycleProblem
 from ._newton import NewtonResult, factorize, newton
-from ._problem import PointInfo
+from ._problem import PointInfo, null_vectors
 from ._settings import NewtonSettings
 from ._sparse import append_row
 
@@ -182,20 +182,13 @@ def _padded(v, size) -> np.ndarray:
     return out
 
 
-def _null_vectors(A, iterations: int = 4):
-    """Approximate right and left null vectors of a nearly singular ``A`` by inverse
-    iteration (random starts, fixed seed); ``A`` exactly singular is nudged."""
+def _null_vectors(A):
+    """Approximate right and left null vectors of a nearly singular ``A`` (an exactly
+    singular one is nudged first)."""
     lu = factorize(A)
     if lu is None:
         lu = factorize(A + 1e-12 * sp.eye(A.shape[0], format="csc"))
-    rng = np.random.default_rng(0)
-    v, w = rng.standard_normal(A.shape[0]), rng.standard_normal(A.shape[0])
-    for _ in range(iterations):
-        v = lu.solve(v)
-        v /= np.linalg.norm(v)
-        w = lu.solve(w, trans="T")
-        w /= np.linalg.norm(w)
-    return v, w
+    return null_vectors(lu, A.shape[0], iterations=4)
 
 
 class CycleCurveProblem(CycleProblem):

@@ -197,13 +197,15 @@ def _bp_function(problem, X_a):
 
     def g(X, tau, lu):
         if "phi" not in state:
-            state["phi"], state["psi"] = _approx_null(lu, X.size)
+            state["phi"], state["psi"] = null_vectors(lu, X.size)
         return 1.0 / float(state["phi"] @ lu.solve(state["psi"]))
 
     return g
 
 
-def _approx_null(lu, n, iterations=3):
+def null_vectors(lu, n: int, iterations: int = 3) -> tuple[np.ndarray, np.ndarray]:
+    """Approximate right and left null vectors of a nearly singular matrix from its
+    factors ``lu`` by inverse iteration (random starts, fixed seed)."""
     rng = np.random.default_rng(0)
     phi, psi = rng.standard_normal(n), rng.standard_normal(n)
     for _ in range(iterations):
