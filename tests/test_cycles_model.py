@@ -114,6 +114,20 @@ def test_subcritical_branch_folds_and_turns_stable(subcritical):
     assert branch.contact is not None and branch.contact.stable
 
 
+def test_fold_refined_by_newton_on_its_extended_system(subcritical):
+    """The fold, refined by Newton on the minimally extended system: the pair of
+    multipliers at +1 (the trivial one and the fold's, a Jordan block) has its mean at 1
+    to 1e-9 (the mean of a perturbed Jordan pair moves with the perturbation r, each one
+    with sqrt(r): 3e-6 here), and it is the turning point of the branch in U*."""
+    _, _, branch = subcritical
+    (fold,) = branch.folds
+    mu = fold.multipliers
+    pair = mu[np.argsort(np.abs(mu - 1))[:2]]
+    assert abs(np.mean(pair) - 1) < 1e-9 and np.max(np.abs(pair - 1)) < 1e-5
+    assert fold.ustar <= min(p.ustar for p in branch.points) + 1e-9
+    assert fold.gap_ratio > 1
+
+
 def test_subcritical_hysteresis_by_integration(subcritical):
     """Between the fold and U*_c the steady state is linearly stable and yet a perturbed
     start on the stable large cycle stays there (direct integration, 60 periods)."""

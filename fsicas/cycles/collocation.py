@@ -162,7 +162,8 @@ def cycle_branch(scene: Scene, model: Model | None = None, *, ustar_max: float =
     ``ustar_max``."""
     start = time.perf_counter()
     run = continue_cycles(scene, model, ustar_max=ustar_max, settings=settings, hopf=hopf)
-    return _result(scene, run.gauge.eps, run.hopf, run.branch, settings,
+    folds = [_refined_fold(run, sp) for sp in run.branch.special("fold")]
+    return _result(scene, run.gauge.eps, run.hopf, run.branch, folds, settings,
                    time.perf_counter() - start)
 
 
@@ -219,18 +220,28 @@ def _steps(problem, scene, model, ustar_max, settings) -> C.ContinuationSettings
         newton=C.NewtonSettings(tol=settings.tol), compute_eigenvalues=False)
 
 
-def _result(scene, eps, hopf, branch, settings, wall_time) -> CycleBranch:
+def _result(scene, eps, hopf, branch, folds, settings, wall_time) -> CycleBranch:
     """The branch's points (the located contact is its own record, not a point), its
-    located folds and contact, status and message."""
+    ``folds`` and located contact, status and message."""
     points = [CyclePoint.from_columns(branch.columns, k) for k in range(len(branch.s))]
     contacts = [_special(sp, "contact") for sp in branch.special("contact")]
     if branch.status == "event":
         points = points[:-1]
-    folds = [_special(sp, "fold") for sp in branch.special("fold")]
     contact = contacts[0] if contacts else None
     status, message = _status(branch, contact, settings)
     return CycleBranch(scene, eps, hopf.to_json(), points, folds, contact, status, message,
                        wall_time)
+
+
+def _refined_fold(run: CycleRun, sp) -> CyclePoint:
+    """A cycle fold located on the arclength, refined by Newton on its minimally extended
+    system (``continuation.CycleFold``: the second multiplier at +1 to the round-off the
+    Jordan block allows); the arclength location where that Newton does not converge."""
+    square, result = C.locate_cycle(run.problem_at(sp), sp.unknowns, C.CycleFold(),
+                                    C.NewtonSettings(tol=1e-12))
+    if not result.converged:
+        return _special(sp, "fold")
+    return CyclePoint.from_columns(run.gauge.record(square, result.X), None, kind="fold")
 
 
 def _special(sp, kind: str) -> CyclePoint:
