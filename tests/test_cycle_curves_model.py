@@ -128,5 +128,7 @@ def test_cli_grazing(capsys, tmp_path):
     assert all(p["gap_ratio"] == pytest.approx(1.0, abs=1e-8) for p in out["grazing"])
     assert {"mstar", "ustar", "l1"} <= set(out["hopf"][0])
     assert (tmp_path / "curves.png").stat().st_size > 0
-    code = main(["grazing", "--mstar", "0.5:2:3", "--seeds", "5", "--json"])
-    assert code == 2 and "--seeds" in json.loads(capsys.readouterr().out)["error"]
+    for bad, option in ((["--seeds", "5"], "--seeds"), (["--ntst", "1"], "--ntst"),
+                        (["--workers", "0"], "--workers"), (["--ustar-max", "-1"], "--ustar-max")):
+        code = main(["grazing", "--mstar", "0.5:2:3", "--json", *bad])
+        assert code == 2 and option in json.loads(capsys.readouterr().out)["error"]

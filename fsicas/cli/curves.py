@@ -46,6 +46,10 @@ def _cmd_grazing(args) -> dict:
         raise ValueError("the curves are of contact-free cycles: drop --contact")
     if args.workers < 1:
         raise ValueError(f"--workers must be >= 1, got {args.workers}")
+    if args.ntst < 2:
+        raise ValueError(f"--ntst must be >= 2, got {args.ntst}")
+    if not args.ustar_max > 0:
+        raise ValueError(f"--ustar-max must be > 0, got {args.ustar_max}")
     mstars = parse_range(args.mstar_values, "mstar", log=True)
     if mstars.size < 2:
         raise ValueError(f"--mstar must give a window of at least two values, got "
