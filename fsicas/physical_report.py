@@ -10,6 +10,8 @@ Conversions are those of :mod:`fsicas.units`.
 """
 from __future__ import annotations
 
+import math
+
 from .scene import Scene
 from .units import Scales
 
@@ -92,17 +94,43 @@ def _lco_point(sc: Scales, p: dict) -> dict:
     return {**flow_json(sc, p["ustar"]), **_cycle(sc, p)}
 
 
+def _impact_point(sc: Scales, p: dict) -> dict:
+    """An impacting cycle: as a limit cycle, plus the least gap (impacts per cycle, peak
+    force in F0 and the flow reduction stay dimensionless)."""
+    frequency = 2 * math.pi / p["period"] if p.get("period") else None
+    return {**flow_json(sc, p["ustar"]), **_cycle(sc, {**p, "frequency": frequency}),
+            "min_gap_mm": _opt(sc.mm, p.get("min_gap"))}
+
+
 def _lco(out: dict, scene: Scene, sc: Scales) -> dict:
     hopf = out.get("hopf")
-    return {"hopf": None if hopf is None else _onset_point(sc, hopf),
-            "points": [_lco_point(sc, p) for p in out["points"]],
-            "folds": [_lco_point(sc, p) for p in out["folds"]],
-            "contact": _opt(lambda p: _lco_point(sc, p), out.get("contact"))}
+    result = {"hopf": None if hopf is None else _onset_point(sc, hopf),
+              "points": [_lco_point(sc, p) for p in out["points"]],
+              "folds": [_lco_point(sc, p) for p in out["folds"]],
+              "contact": _opt(lambda p: _lco_point(sc, p), out.get("contact"))}
+    if "impacting" in out:
+        result["impacting"] = [_impact_point(sc, p) for p in out["impacting"]["points"]]
+    return result
+
+
+def _curve_point(sc: Scales, p: dict) -> dict:
+    """A point of a curve in (M*, U*): at its own M*, i.e. the same beam in a fluid of
+    density M* rho_s e / L (as the boundary's points)."""
+    frequency = 2 * math.pi / p["period"]
+    return {"mstar": p["mstar"], **flow_json(sc, p["ustar"]),
+            "fluid_density_kg_m3": p["mstar"] * sc.beam_mass_per_area / sc.length,
+            **_cycle(sc, {**p, "frequency": frequency})}
+
+
+def _grazing(out: dict, scene: Scene, sc: Scales) -> dict:
+    return {"grazing": [_curve_point(sc, p) for p in out["grazing"]],
+            "fold": [_curve_point(sc, p) for p in out["fold"]],
+            "hopf": [_onset_point(sc, p, "ustar") for p in out["hopf"]]}
 
 
 #: command -> conversion of its JSON
 CONVERTERS = {"steady": _steady, "eig": _eig, "boundary": _boundary,
-              "simulate": _simulate, "lco": _lco}
+              "simulate": _simulate, "lco": _lco, "grazing": _grazing}
 
 
 def add_physical(out: dict, scene: Scene, command: str) -> dict:

@@ -252,3 +252,32 @@ def test_boundary_defaults_to_the_physical_mass_ratio(capsys):
     assert point["mstar"] == pytest.approx(s["mstar"], rel=1e-12)
     assert ph["onset_velocity_m_s"] == pytest.approx(point["ustar_crit"] * s["velocity"], rel=1e-12)
     assert ph["fluid_density_kg_m3"] == pytest.approx(PALATE["rho_f"], rel=1e-12)
+
+
+def test_impacting_cycles_and_curves_in_physical_units():
+    """The impacting part of ``lco`` and the curves of ``grazing`` in SI units from the
+    palate's scales: period T t, frequency 1/(T t), gap L y in mm, the velocity U* L / T
+    and, on a curve, the fluid density M* rho_s e / L of each point."""
+    from fsicas.physical_report import add_physical
+    palate = load_physical("soft_palate")
+    scene = palate.scene()
+    sc = scene.scales
+    impact = {"ustar": 7.0, "period": 0.127, "tip_amplitude": 0.0496, "min_gap": 3e-4,
+              "impacts": 2, "peak_force": 5e3, "flow_reduction": 0.058, "stable": True}
+    lco = {"hopf": None, "points": [], "folds": [], "contact": None,
+           "impacting": {"points": [impact]}}
+    (p,) = add_physical(lco, scene, "lco")["physical"]["impacting"]
+    assert p["period_s"] == pytest.approx(0.127 * sc.time, rel=1e-12)
+    assert p["frequency_hz"] == pytest.approx(1 / (0.127 * sc.time), rel=1e-12)
+    assert p["min_gap_mm"] == pytest.approx(3e-4 * sc.length * 1e3, rel=1e-12)
+    assert p["velocity_m_s"] == pytest.approx(7.0 * sc.length / sc.time, rel=1e-12)
+    point = {"mstar": 0.5, "ustar": 6.5, "period": 0.13, "tip_amplitude": 0.04995,
+             "gap_ratio": 1.0, "stable": True}
+    hopf = {"mstar": 0.5, "ustar": 5.0, "omega": 46.0, "l1": 0.1}
+    out = add_physical({"grazing": [point], "fold": [], "hopf": [hopf]}, scene, "grazing")
+    (g,) = out["physical"]["grazing"]
+    rho_s_e = sc.beam_mass_per_area
+    assert g["fluid_density_kg_m3"] == pytest.approx(0.5 * rho_s_e / sc.length, rel=1e-12)
+    assert g["tip_amplitude_mm"] == pytest.approx(0.04995 * sc.length * 1e3, rel=1e-12)
+    assert out["physical"]["hopf"][0]["frequency_hz"] == pytest.approx(
+        46.0 / (2 * math.pi * sc.time), rel=1e-12)

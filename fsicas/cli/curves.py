@@ -10,6 +10,7 @@ from ..cycles.collocation import CycleSettings
 from ..cycles.curves import CurveSettings, curve_seeds, cycle_curves
 from ..linear.boundary import stability_boundary
 from ..model.assembly import build_model
+from ..physical_report import add_physical
 from ..plots.cycles import plot_curves
 from .meta import record, write_json
 from .progress import reporter
@@ -78,7 +79,7 @@ def _cmd_grazing(args) -> dict:
     if args.plot:
         plot_curves(curves, boundary, args.plot)
     out.pop("curves")
-    return out
+    return add_physical(out, scene, "grazing")
 
 
 def _check_seeds(seeds, settings: CurveSettings) -> None:
