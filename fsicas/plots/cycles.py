@@ -11,7 +11,7 @@ __all__ = ["plot_branch", "plot_curves", "draw_curves", "mark_cases"]
 
 #: Line style of each kind of curve of cycles in the (U*, M*) plane.
 _CURVE_STYLE = {"grazing": dict(color=PALETTE[5], ls="--", label="grazing (first contact)"),
-                "fold": dict(color=PALETTE[6], ls="-.", label="fold of cycles")}
+                "fold": dict(color=PALETTE[1], ls="-.", label="fold of cycles")}
 
 _PANELS = (("tip_amplitude", f"tip half-amplitude $A/L$ {NONDIM}"),
            ("period", "period (units of $T$)"))
