@@ -74,7 +74,7 @@ def main(argv=None) -> None:
         r = curve_cost(kind, mstar, args.points)
         print(f"{kind:8} {r['points']:6d} {r['s_per_point']:8.3f} {r['kernel']:8.0%} "
               f"{r['algebra']:8.0%}")
-    print(f"\ngrazing point at M* = 1 (first contact of the branch):")
+    print("\ngrazing point at M* = 1 (first contact of the branch):")
     ref, t = contact_ustar(10, 20)
     print(f"N = 10, NTST = 20: U* = {ref:.10f}  ({t:.1f} s)")
     for modes, ntst in ((10, 40), (20, 20)):

@@ -97,6 +97,21 @@ def benchmark(name):
     return mod
 
 
+def half_twisted(n_par=1, rate=lambda p: p[0]):
+    """The half-twisted cycle of test_cycles_pd (a period doubling where ``rate(p)``,
+    default mu = p[0], crosses 0): the circle r = 1, z = 0 has the multipliers 1,
+    -exp(2 pi rate), -exp(-2 pi)."""
+    X, p = ca.SX.sym("x", 3), ca.SX.sym("p", n_par)
+    x, y, z = X[0], X[1], X[2]
+    r = ca.sqrt(x ** 2 + y ** 2)
+    c, s = x / r, y / r
+    v = ca.vertcat(r - 1, z)
+    P = 0.5 * ca.vertcat(ca.horzcat(1 + c, s), ca.horzcat(s, 1 - c))
+    Pv = ca.mtimes(P, v)
+    dv = rate(p) * Pv - ca.dot(v, Pv) * Pv - (v - Pv) + 0.5 * ca.vertcat(-z, r - 1)
+    return ca.Function("F", [X, p], [ca.vertcat(dv[0] * c - y, dv[0] * s + x, dv[1])])
+
+
 import types
 
 import pytest
@@ -109,4 +124,4 @@ def models():
         scalar=scalar, brusselator=brusselator, hopf_normal_form=hopf_normal_form,
         guckenheimer_holmes_a=guckenheimer_holmes_a, mass_model=mass_model,
         van_der_pol=van_der_pol, van_der_pol_guess=van_der_pol_guess, corrected=corrected,
-        benchmark=benchmark)
+        benchmark=benchmark, half_twisted=half_twisted)

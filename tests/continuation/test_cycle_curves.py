@@ -3,7 +3,6 @@ grazing cycles, cycle folds (LPC) and period doublings, on systems with closed f
 
 import casadi as ca
 import numpy as np
-import pytest
 
 import continuation as C
 
@@ -27,21 +26,6 @@ def _bautin():
     r2 = x[0] ** 2 + x[1] ** 2
     g = p[0] + p[1] * r2 - r2 ** 2
     return ca.Function("F", [x, p], [ca.vertcat(g * x[0] - x[1], x[0] + g * x[1])])
-
-
-def _mobius():
-    """The half-twisted cycle of test_cycles_pd with the transverse rate mu - nu^2: the
-    circle r = 1, z = 0 has the multiplier -exp(2 pi (mu - nu^2)), a period doubling
-    on mu = nu^2. p = (mu, nu)."""
-    X, p = ca.SX.sym("x", 3), ca.SX.sym("p", 2)
-    x, y, z = X[0], X[1], X[2]
-    r = ca.sqrt(x ** 2 + y ** 2)
-    c, s = x / r, y / r
-    v = ca.vertcat(r - 1, z)
-    P = 0.5 * ca.vertcat(ca.horzcat(1 + c, s), ca.horzcat(s, 1 - c))
-    Pv = ca.mtimes(P, v)
-    dv = (p[0] - p[1] ** 2) * Pv - ca.dot(v, Pv) * Pv - (v - Pv) + 0.5 * ca.vertcat(-z, r - 1)
-    return ca.Function("F", [X, p], [ca.vertcat(dv[0] * c - y, dv[0] * s + x, dv[1])])
 
 
 def _circle(radius=1.0, centre=0.0, z=False, phase=0.013):
@@ -108,8 +92,11 @@ def test_lpc_located_by_newton_and_continued_on_the_bautin_fold_curve():
     assert _fd_gradient_error(curve, curve.X0) < 1e-5
 
 
-def test_period_doubling_located_and_continued_on_mu_equal_nu_squared():
-    cycle, X = _cycle(_mobius(), _circle(z=True), {"mu": 0.05, "nu": 0.0}, "mu")
+def test_period_doubling_located_and_continued_on_mu_equal_nu_squared(models):
+    """The half-twisted cycle (conftest) with the transverse rate mu - nu^2: a period
+    doubling on mu = nu^2."""
+    F = models.half_twisted(n_par=2, rate=lambda p: p[0] - p[1] ** 2)
+    cycle, X = _cycle(F, _circle(z=True), {"mu": 0.05, "nu": 0.0}, "mu")
     square, result = C.locate_cycle(cycle, X, C.PeriodDoubling())
     assert result.converged and abs(square.par_dict(result.X)["mu"]) < 1e-9
     mu = square.multipliers(result.X)

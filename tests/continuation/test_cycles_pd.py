@@ -12,28 +12,15 @@ doubling at mu = 0 exactly. For mu > 0 the doubled cycle is a = sqrt(mu), b = 0:
 (r - 1)^2 + z^2 = mu, period 4 pi, multipliers 1, exp(-8 pi mu), exp(-4 pi).
 """
 
-import casadi as ca
 import numpy as np
 import pytest
 
 import continuation as C
 
 
-def _mobius():
-    X, p = ca.SX.sym("x", 3), ca.SX.sym("p", 1)
-    x, y, z = X[0], X[1], X[2]
-    r = ca.sqrt(x ** 2 + y ** 2)
-    c, s = x / r, y / r
-    v = ca.vertcat(r - 1, z)
-    P = 0.5 * ca.vertcat(ca.horzcat(1 + c, s), ca.horzcat(s, 1 - c))
-    Pv = ca.mtimes(P, v)
-    dv = p[0] * Pv - ca.dot(v, Pv) * Pv - (v - Pv) + 0.5 * ca.vertcat(-z, r - 1)
-    return ca.Function("F", [X, p], [ca.vertcat(dv[0] * c - y, dv[0] * s + x, dv[1])])
-
-
 @pytest.fixture(scope="module")
-def pd_branch():
-    prob = C.CycleProblem(_mobius(), lambda t: np.c_[np.cos(2 * np.pi * t),
+def pd_branch(models):
+    prob = C.CycleProblem(models.half_twisted(), lambda t: np.c_[np.cos(2 * np.pi * t),
                                                      np.sin(2 * np.pi * t), 0 * t],
                           6.0, {"mu": -0.3}, "mu",
                           settings=C.CollocationSettings(ntst=20, ncol=4))
