@@ -22,6 +22,7 @@ from ._hooks import Event, Hooks, check_hooks, crossed, scalars, stopped
 from ._locate import Located, locate
 from ._palc import ContinuationIterator, Step, correct, tangent
 from ._problem import Problem
+from ._recorder import Recorder
 from ._settings import PALC, ContinuationSettings
 from ._threads import single_threaded
 
@@ -73,7 +74,7 @@ def continuation(problem: Problem, algorithm: PALC | None = None,
     t0 = time.perf_counter()
     with single_threaded(), tqdm(total=settings.max_steps + 1, disable=not _observed_progress(settings),
                                  desc=f"{problem.kind} continuation", leave=False) as bar:
-        run = _Run(_Recorder(problem), hooks, settings, bar)
+        run = _Run(Recorder(problem), hooks, settings, bar)
         it = _run_segments(problem, algorithm, settings, run)
     stats = {**run.rec.stats, "time_total": time.perf_counter() - t0}
     if run.halt is not None:
@@ -357,55 +358,3 @@ def _special(problem, kind, a, b, settings, index, stats) -> _Found | None:
     point = SpecialPoint(kind, index, problem.state(desc.X), problem.par_dict(desc.X),
                          status, float(precision), data, message, unknowns=np.array(desc.X))
     return _Found(loc.s, point, np.array(desc.X))
-
-
-def _check_names(info, values) -> None:
-    """User event names must not shadow the problem's test-function columns."""
-    clash = sorted(set(values) & (set(info.tests) | set(info.counts)))
-    if clash:
-        raise ValueError(f"events {clash} have the names of test functions of the problem; "
-                         "rename them")
-
-
-class _Recorder:
-    """Accumulates monitored points; builds the Branch at the end."""
-
-    def __init__(self, problem):
-        self.problem = problem
-        self.X, self.steps, self.infos, self.special, self.cols = [], [], [], [], []
-        self.values, self.stats = [], {}
-
-    def add(self, step, info, columns, values):
-        """Record a point; ``columns`` are taken now, from the problem that
-        produced it (a restarted cycle problem has a different mesh); ``values``
-        are the user events' values."""
-        if not self.X:
-            _check_names(info, values)
-        self.cols.append(columns)
-        self.values.append(values)
-        self.X.append(step.X)
-        self.steps.append(step)
-        self.infos.append(info)
-
-    def branch(self, status, message, failure, stats) -> Branch:
-        prob = self.problem
-        X = np.array(self.X).reshape(len(self.X), prob.system.n_unknowns)
-        s = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(X, axis=0), axis=1))]) \
-            if len(X) else np.zeros(0)
-        tests = {k: np.array([i.tests.get(k, 0.0) for i in self.infos])
-                 for k in (self.infos[0].tests if self.infos else {})}
-        tests.update({k: np.array([i.counts.get(k, 0) for i in self.infos], dtype=float)
-                      for k in (self.infos[0].counts if self.infos else {})})
-        tests.update({k: np.array([v[k] for v in self.values])
-                      for k in (self.values[0] if self.values else {})})
-        cols = self.cols
-        columns = {k: np.array([c[k] for c in cols]) for k in (cols[0] if cols else {})}
-        return Branch(prob.kind, prob.vf.par_names, prob.free,
-                      np.array([prob.state(x) for x in self.X]).reshape(len(X), prob.vf.n),
-                      np.array([prob.params(x) for x in self.X]).reshape(
-                          len(X), len(prob.vf.par_names)),
-                      s, np.array([st.ds for st in self.steps]),
-                      np.array([st.iterations for st in self.steps], dtype=int),
-                      np.array([st.residual for st in self.steps]),
-                      [i.eigenvalues for i in self.infos], tests, columns,
-                      self.special, status, message, failure, stats)
