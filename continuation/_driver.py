@@ -89,30 +89,18 @@ def continuation(problem: Problem, algorithm: PALC | None = None,
     return branch
 
 
-#: accepted points after a failed restart during which the problem is not asked again
-RESTART_PAUSE = 3
-
-
 def _run_segments(problem, algorithm, settings, run):
     """Iterate PALC; when the problem asks for a restart (reference vectors of
     an augmented system drifted, a re-mesh), continue with the rebuilt problem
-    from the same point, oriented by the previous tangent. When the rebuilt problem's
-    start does not converge, go on with the old problem from that point (counted in
-    ``stats['failed_restarts']``; it is not asked again for ``RESTART_PAUSE`` points).
-    Returns the last iterator."""
-    tau_ref, seg_settings, start, previous, pause = None, settings, None, None, -1
+    from the same point, oriented by the previous tangent. Returns the last
+    iterator."""
+    tau_ref, seg_settings = None, settings
     while True:
-        it = ContinuationIterator(problem, algorithm, seg_settings, tau_ref, X0=start)
-        step, restart = _iterate(problem, it, tau_ref is not None, settings, run, pause)
+        it = ContinuationIterator(problem, algorithm, seg_settings, tau_ref)
+        step, restart = _iterate(problem, it, tau_ref is not None, settings, run)
         _merge(run.rec.stats, it.stats)
-        if step is None and previous is not None:
-            problem, start, tau_ref = previous
-            previous, pause = None, len(run.rec.X) - 1 + RESTART_PAUSE
-            run.rec.stats["failed_restarts"] = run.rec.stats.get("failed_restarts", 0) + 1
-            continue
         if restart is None:
             return it
-        previous, start = (problem, step.X, step.tau), None
         problem, X_new = restart
         tau_ref = np.zeros(X_new.size)
         frame = problem.frame(X_new)
@@ -123,9 +111,8 @@ def _run_segments(problem, algorithm, settings, run):
                                ds=min(max(it.ds, settings.ds_min), settings.ds_max))
 
 
-def _iterate(problem, it, restarted, settings, run, pause=-1):
-    """One segment: ``(last step, restart or None)``; stops early on ``run.halt``. The
-    problem is asked for a restart once more than ``pause`` points are recorded."""
+def _iterate(problem, it, restarted, settings, run):
+    """One segment: ``(last step, restart or None)``; stops early on ``run.halt``."""
     step = None
     for step in it:
         info = problem.monitor(step.X, step.tau, step.lu, settings)
@@ -139,7 +126,7 @@ def _iterate(problem, it, restarted, settings, run, pause=-1):
         if problem.steps_by_eigenvalues:
             _limit_by_eigenvalues(it, before, info, step, settings)
         done = len(run.rec.X) - 1
-        restart = problem.restart(step.X) if pause < done < settings.max_steps else None
+        restart = problem.restart(step.X) if done < settings.max_steps else None
         if restart is not None:
             return step, restart
     return step, None

@@ -73,14 +73,12 @@ class ContinuationIterator:
     ``'bound'`` (a parameter left ``settings.bounds``), ``'failed'`` (corrector
     failed at ``ds_min``, or the start point did not converge).
     ``tau_ref`` (optional) orients the first tangent (``tau . tau_ref > 0``)
-    instead of ``settings.direction``; used when a curve is restarted. ``X0`` (optional)
-    starts from there instead of ``problem.X0`` (going on after a failed restart).
+    instead of ``settings.direction``; used when a curve is restarted.
     """
 
     def __init__(self, problem, algorithm: PALC, settings: ContinuationSettings,
-                 tau_ref: np.ndarray | None = None, X0: np.ndarray | None = None):
+                 tau_ref: np.ndarray | None = None):
         self.problem, self.algorithm, self.settings = problem, algorithm, settings
-        self.X0 = problem.X0 if X0 is None else np.asarray(X0, dtype=float)
         self.tau_ref = None if tau_ref is None else np.asarray(tau_ref, dtype=float)
         self.status, self.message, self.failure = "running", "", {}
         self.stats = {"steps": 0, "newton_iterations": 0, "rejected_steps": 0,
@@ -106,7 +104,7 @@ class ContinuationIterator:
     # ------------------------------------------------------------------------
     def start(self) -> Step | None:
         """Correct ``X0`` at fixed parameter and orient the first tangent."""
-        prob, X0 = self.problem, self.X0
+        prob, X0 = self.problem, self.problem.X0
         e = prob.start_row()
         res = correct(prob, X0, e, self.settings.newton)
         if not res.converged:

@@ -180,25 +180,3 @@ def test_observing_hands_over_every_branch_and_overrides_the_progress_bar(models
     C.continuation(_fold_problem(models), settings=_down(max_steps=5))
     assert seen == [first, second] and inner == [second]
     assert "equilibrium continuation" in capsys.readouterr().err
-
-
-def test_a_restart_that_does_not_start_goes_on_with_the_old_problem(models):
-    """A problem asks for a restart onto a problem whose start cannot converge (x^2 + 1 = 0
-    has no real root): the branch goes on with the old problem from the same point,
-    counts the failure, and asks again only after a pause; its points stay on x = sqrt(p)."""
-    broken = C.EquilibriumProblem(models.scalar(lambda x, p: x ** 2 + 1 + 0 * p[0]), [1.0],
-                                  {"p": 1.0}, "p")
-    asked = []
-
-    class Restarting(C.EquilibriumProblem):
-        def restart(self, X):
-            asked.append(len(asked))
-            return (broken, np.array(X)) if len(asked) in (3, 4) else None
-
-    problem = Restarting(models.scalar(lambda x, p: p[0] - x ** 2), [1.0], {"p": 1.0}, "p")
-    br = C.continuation(problem, settings=_down(max_steps=12, detect=False))
-    assert br.status == "max_steps" and len(br.s) == 13
-    assert br.stats["restarts"] == 2 and br.stats["failed_restarts"] == 2
-    assert len(asked) == 12 - 2 * C._driver.RESTART_PAUSE
-    p = br.par("p")
-    assert np.allclose(br.x[:, 0], np.sqrt(p), atol=1e-10) and np.all(np.diff(p) < 0)
