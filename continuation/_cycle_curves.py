@@ -96,6 +96,8 @@ class _Bordered(Condition):
 
     def __init__(self):
         self.b = self.c = None
+        self._last = None           # (X, (v, w, g)) of the last solve: residual and
+        #                             Jacobian of one Newton iterate share it
 
     def matrix(self, problem, J) -> sp.csc_matrix:
         raise NotImplementedError
@@ -111,6 +113,12 @@ class _Bordered(Condition):
         bound.c, bound.b = _null_vectors(A)
         return bound
 
+    def _solved(self, problem, X):
+        """``(v, w, g)`` at ``X`` (kept for the last ``X``)."""
+        if self._last is None or not np.array_equal(self._last[0], X):
+            self._last = (np.array(X), self._solve(problem, problem.cycle_jacobian(X)))
+        return self._last[1]
+
     def _solve(self, problem, J):
         A = self.matrix(problem, J)
         B = sp.bmat([[A, self.b[:, None]], [self.c[None, :], None]], format="csc")
@@ -123,10 +131,10 @@ class _Bordered(Condition):
         return vg[:-1], wg[:-1], float(vg[-1])
 
     def value(self, problem, X) -> float:
-        return self._solve(problem, problem.cycle_jacobian(X))[2]
+        return self._solved(problem, X)[2]
 
     def gradient(self, problem, X) -> np.ndarray:
-        v, w, _ = self._solve(problem, problem.cycle_jacobian(X))
+        v, w, _ = self._solved(problem, X)
         out = np.zeros(len(X))
         for weights, d in self.pairs(problem, X, v, w):
             h = 1e-7 * (1.0 + np.max(np.abs(X))) / np.max(np.abs(d))
@@ -135,8 +143,9 @@ class _Bordered(Condition):
         return out
 
     def accept(self, problem, X) -> None:
-        v, w, _ = self._solve(problem, problem.cycle_jacobian(X))
+        v, w, _ = self._solved(problem, X)
         self.c, self.b = v / np.linalg.norm(v), w / np.linalg.norm(w)
+        self._last = None                                   # g changed with the borders
 
 
 class CycleFold(_Bordered):
@@ -221,9 +230,6 @@ class CycleCurveProblem(CycleProblem):
     def jacobian(self, X) -> sp.csc_matrix:
         J = self.cycle_jacobian(X)
         return append_row(J, self.condition.gradient(self, X))
-
-    def bordered_jacobian(self, X, rows):
-        return append_row(self.jacobian(X), np.asarray(rows, dtype=float))
 
     def accept(self, X) -> None:
         super().accept(X)

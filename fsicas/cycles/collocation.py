@@ -182,6 +182,12 @@ class CycleRun:
         """The collocation problem (mesh, field) a special point's unknowns belong to."""
         return self.problems[np.asarray(point.unknowns, dtype=float).tobytes()]
 
+    def refined_fold(self, point: C.SpecialPoint, tol: float):
+        """``(problem, NewtonResult)``: the cycle fold ``point`` refined by Newton on its
+        minimally extended system (``continuation.CycleFold``) to ``tol``."""
+        return C.locate_cycle(self.problem_at(point), point.unknowns, C.CycleFold(),
+                              C.NewtonSettings(tol=tol))
+
 
 def continue_cycles(scene: Scene, model: Model | None = None, *, ustar_max: float = 20.0,
                     settings: CycleSettings = CycleSettings(), hopf: HopfPoint | None = None
@@ -237,8 +243,7 @@ def _refined_fold(run: CycleRun, sp) -> CyclePoint:
     """A cycle fold located on the arclength, refined by Newton on its minimally extended
     system (``continuation.CycleFold``: the second multiplier at +1 to the round-off the
     Jordan block allows); the arclength location where that Newton does not converge."""
-    square, result = C.locate_cycle(run.problem_at(sp), sp.unknowns, C.CycleFold(),
-                                    C.NewtonSettings(tol=1e-12))
+    square, result = run.refined_fold(sp, 1e-12)
     if not result.converged:
         return _special(sp, "fold")
     return CyclePoint.from_columns(run.gauge.record(square, result.X), None, kind="fold")

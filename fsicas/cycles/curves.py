@@ -40,7 +40,8 @@ from .collocation import CycleRun, CycleSettings, ProfileGauge, continue_cycles
 from .records import check_settings, plain_value
 
 __all__ = ["CurveKind", "CurveSettings", "CurvePoint", "CycleCurve", "CurveMap", "grazing_curve",
-           "fold_curves", "cycle_curves", "curve_seeds", "lowest_ustar", "expected_outcomes"]
+           "fold_curves", "cycle_curves", "curve_seeds", "crossings", "lowest_ustar",
+           "expected_outcomes"]
 
 CurveKind = Literal["grazing", "fold"]
 """A curve of grazing cycles (min gap = eps) or of cycle folds (LPC)."""
@@ -155,20 +156,31 @@ class CurveMap:
                 "wall_time": self.wall_time}
 
 
+def crossings(curve: CycleCurve, mstar) -> np.ndarray:
+    """U* of ``curve`` at each ``mstar`` it crosses (linear in log M* between its
+    points): ``(M*, U*)`` rows, one per crossing."""
+    x = np.log(np.atleast_1d(np.asarray(mstar, dtype=float)))
+    m, u = np.log(curve.column("mstar")), curve.column("ustar")
+    rows = []
+    for k in np.flatnonzero(m[1:] != m[:-1]):
+        w = (x - m[k]) / (m[k + 1] - m[k])
+        hit = (w >= 0) & (w <= 1)
+        rows.append(np.c_[np.flatnonzero(hit), u[k] + w[hit] * (u[k + 1] - u[k])])
+    return np.concatenate(rows) if rows else np.zeros((0, 2))
+
+
 def lowest_ustar(curves: list, mstar, floor=None) -> np.ndarray:
     """At each ``mstar``, the lowest U* where one of ``curves`` crosses it (linear in
     log M* between curve points), only counting crossings at or above ``floor`` (an
     array like ``mstar``); NaN where none."""
-    x = np.log(np.atleast_1d(np.asarray(mstar, dtype=float)))
-    floor = np.full(x.shape, -np.inf) if floor is None else np.asarray(floor, dtype=float)
-    out = np.full(x.shape, np.inf)
+    size = np.atleast_1d(np.asarray(mstar)).size
+    floor = np.full(size, -np.inf) if floor is None else np.asarray(floor, dtype=float)
+    out = np.full(size, np.inf)
     for curve in curves:
-        m, u = np.log(curve.column("mstar")), curve.column("ustar")
-        for k in np.flatnonzero(m[1:] != m[:-1]):
-            w = (x - m[k]) / (m[k + 1] - m[k])
-            value = u[k] + w * (u[k + 1] - u[k])
-            hit = (w >= 0) & (w <= 1) & (value >= floor)
-            out[hit] = np.minimum(out[hit], value[hit])
+        index, value = crossings(curve, mstar).T
+        index = index.astype(int)
+        keep = value >= floor[index]
+        np.minimum.at(out, index[keep], value[keep])
     return np.where(np.isfinite(out), out, np.nan)
 
 
@@ -243,8 +255,7 @@ def _fold_curves(run: CycleRun, settings: CurveSettings, pi_max: float) -> tuple
     for sp in run.branch.special("fold"):
         if _traced(curves, _point(sp)):
             continue
-        square, result = C.locate_cycle(run.problem_at(sp), sp.unknowns, C.CycleFold(),
-                                        C.NewtonSettings(tol=settings.tol))
+        square, result = run.refined_fold(sp, settings.tol)
         if result.converged:
             curves.append(_trace(run, square, result.X, "fold", settings, pi_max))
         else:
@@ -258,16 +269,9 @@ def _point(sp) -> CurvePoint:
 
 
 def _traced(curves: list, point: CurvePoint, rtol: float = 5e-3) -> bool:
-    """Whether ``point`` (M*, U*) lies on one of ``curves`` (U* linear between the
-    curve's points that bracket its M*)."""
-    mstar, ustar = point.mstar, point.ustar
-    for curve in curves:
-        m, u = curve.column("mstar"), curve.column("ustar")
-        for k in np.flatnonzero((m[:-1] - mstar) * (m[1:] - mstar) <= 0):
-            w = (mstar - m[k]) / (m[k + 1] - m[k]) if m[k + 1] != m[k] else 0.0
-            if abs(u[k] + w * (u[k + 1] - u[k]) - ustar) <= rtol * ustar:
-                return True
-    return False
+    """Whether ``point`` (M*, U*) lies on one of ``curves`` (:func:`crossings`)."""
+    return any(np.any(np.abs(crossings(c, point.mstar)[:, 1] - point.ustar)
+                      <= rtol * point.ustar) for c in curves)
 
 
 def grazing_curve(scene: Scene, model: Model | None = None, *,
