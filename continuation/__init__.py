@@ -17,7 +17,7 @@ Public API (everything else is private)::
     cycle_from_pd(cycle_problem, pd_point, *, amplitude=1e-2, settings=None) -> CycleProblem
     CycleCurveProblem(cycle_problem, X, free, condition)   # a cycle with one more equation:
     locate_cycle(cycle_problem, X, condition) -> (problem, NewtonResult)   # curve / located
-    Extremum(rows, offset, level), CycleFold(), PeriodDoubling()   # the conditions
+    Extremum(rows, offset, level), CycleFold(), PeriodDoubling(), NeimarkSacker()   # conditions
     ShootingProblem(F, orbit, period, params, active, *, M=None, settings=ShootingSettings())
     Branch, SpecialPoint, ContinuationIterator, PALC, ContinuationSettings,
     NewtonSettings, EigenSettings, CollocationSettings, ShootingSettings
@@ -28,8 +28,8 @@ Plotting lives in ``continuation.plotting`` (Matplotlib is imported there only).
 from ._branch import Branch, SpecialPoint, Status
 from ._curves import FoldCurveProblem, HopfCurveProblem
 from ._cycles import CycleProblem
-from ._cycle_curves import (Condition, CycleCurveProblem, CycleFold, Extremum, PeriodDoubling,
-                            locate_cycle)
+from ._cycle_curves import (Condition, CycleCurveProblem, CycleFold, Extremum, NeimarkSacker,
+                            PeriodDoubling, locate_cycle)
 from ._driver import continuation, observing
 from ._hooks import Event
 from ._lifted import Lifted
@@ -45,7 +45,7 @@ from ._vectorfield import VectorField
 
 __all__ = [
     "Branch", "Event", "Status", "CollocationSettings", "Condition", "CycleCurveProblem",
-    "CycleFold", "Extremum", "PeriodDoubling", "locate_cycle", "ContinuationIterator", "ContinuationSettings",
+    "CycleFold", "Extremum", "NeimarkSacker", "PeriodDoubling", "locate_cycle", "ContinuationIterator", "ContinuationSettings",
     "CycleProblem", "EigenSettings", "ShootingProblem", "ShootingSettings", "cycle_from_hopf",
     "cycle_from_pd",
     "EquilibriumProblem", "FoldCurveProblem", "HopfCurveProblem", "Lifted", "NewtonSettings",

@@ -21,6 +21,9 @@ a curve of such cycles continued by the same PALC (:class:`CycleCurveProblem`):
   ``v``: the difference of two Jacobians, ``(G_X(X + h v) - G_X(X - h v))^T w / 2h``
   (error ``O(h^2)``), no second derivatives compiled. The borders ``b, c`` are the
   last accepted point's ``w, v`` (``g`` is then well scaled along the curve).
+* :class:`NeimarkSacker` (NS): ``|mu(X)| - 1`` of the complex multiplier ``mu(X)`` at
+  which ``G_U`` with the wrap ``u(1) = mu u(0)`` is singular (``mu`` by an inner Newton
+  on the same bordered test, its gradient by implicit differentiation).
 """
 
 from __future__ import annotations
@@ -120,15 +123,8 @@ class _Bordered(Condition):
         return self._last[1]
 
     def _solve(self, problem, J):
-        A = self.matrix(problem, J)
-        B = sp.bmat([[A, self.b[:, None]], [self.c[None, :], None]], format="csc")
-        lu = factorize(B)
-        if lu is None:
-            raise np.linalg.LinAlgError("the bordered matrix is singular: borders lost")
-        e = np.zeros(B.shape[0])
-        e[-1] = 1.0
-        vg, wg = lu.solve(e), lu.solve(e, trans="T")
-        return vg[:-1], wg[:-1], float(vg[-1])
+        v, w, g = _bordered_solve(self.matrix(problem, J), self.b, self.c)
+        return v, w, float(g)
 
     def value(self, problem, X) -> float:
         return self._solved(problem, X)[2]
@@ -137,9 +133,8 @@ class _Bordered(Condition):
         v, w, _ = self._solved(problem, X)
         out = np.zeros(len(X))
         for weights, d in self.pairs(problem, X, v, w):
-            h = 1e-7 * (1.0 + np.max(np.abs(X))) / np.max(np.abs(d))
-            difference = problem.cycle_jacobian(X + h * d) - problem.cycle_jacobian(X - h * d)
-            out -= difference.T @ _padded(weights, difference.shape[0]) / (2 * h)
+            H = _hessian(problem, X, d)
+            out -= H.T @ _padded(weights, H.shape[0])
         return out
 
     def accept(self, problem, X) -> None:
@@ -163,30 +158,136 @@ class PeriodDoubling(_Bordered):
     ``u_(NTST, 0) = -u_(0, 0)``) singular, i.e. a Floquet multiplier at -1."""
 
     def matrix(self, problem, J) -> sp.csc_matrix:
-        rows = problem.n_nodes * problem.vf.n
-        A = sp.csc_matrix(J[:rows, :rows])
-        last, wrap = self._masks(problem)
-        flip = sp.diags(last.astype(float)) @ A @ sp.diags(-2.0 * wrap)
-        return sp.csc_matrix(A + flip)
+        return _twisted(problem, J, -1.0)[0]
 
     def pairs(self, problem, X, v, w) -> list:
-        """The wrap's entries (last interval's rows, node 0's columns) are negated: those
-        rows see ``v`` with node 0 negated."""
-        last, wrap = self._masks(problem)
-        return [(np.where(last, 0.0, w), _padded(v, len(X))),
-                (np.where(last, w, 0.0), _padded(np.where(wrap, -v, v), len(X)))]
+        return _twisted_pairs(problem, X, v, w, -1.0)
 
-    @staticmethod
-    def _masks(problem):
-        """Rows of the last interval and columns of node 0 (in ``G_U``)."""
-        n, rows = problem.vf.n, problem.n_nodes * problem.vf.n
-        index = np.arange(rows)
-        return index >= rows - n * problem.ncol, index < n
+
+class NeimarkSacker(Condition):
+    """Neimark-Sacker (torus bifurcation): a complex pair of multipliers on the unit
+    circle, ``g(X) = |mu(X)| - 1``.
+
+    ``mu(X)`` is the multiplier of the discretized variational equation: the root of
+    the bordered ``g(X, mu)`` of ``A(mu)``, the collocation Jacobian ``G_U`` with the
+    wrap ``u(1) = mu u(0)`` (complex, analytic in ``mu``), found by Newton in ``mu``
+    from the last root (``g_mu = -w^T A_mu v``). Then ``mu_X = -g_X / g_mu`` with
+    ``g_X = -w^T A_X v`` by the Jacobian differences of the fold, in real and imaginary
+    parts, and ``d|mu| = Re(conj(mu) mu_X) / |mu|``. ``multiplier``: the start (default:
+    the problem's complex multiplier nearest the unit circle, upper half-plane)."""
+
+    def __init__(self, multiplier: complex | None = None):
+        self.multiplier = None if multiplier is None else complex(multiplier)
+        self.b = self.c = None
+        self._last = None           # (X, (mu, v, w, g_mu)) of the last root
+
+    def bind(self, problem, X) -> "NeimarkSacker":
+        mu = self.multiplier if self.multiplier is not None else _complex_nearest_circle(
+            problem.multipliers(X))
+        bound = NeimarkSacker(mu)
+        A, _ = _twisted(problem, problem.cycle_jacobian(X), mu)
+        bound.c, bound.b = _null_vectors(A)
+        return bound
+
+    def _root(self, problem, X):
+        """``(mu, v, w, g_mu)`` at ``X`` (kept for the last ``X``)."""
+        if self._last is not None and np.array_equal(self._last[0], X):
+            return self._last[1]
+        J, mu = problem.cycle_jacobian(X), self.multiplier
+        for _ in range(30):
+            A, A_mu = _twisted(problem, J, mu)
+            v, w, g = _bordered_solve(A, self.b, self.c)
+            g_mu = -(w @ (A_mu @ v))
+            step = g / g_mu
+            mu -= step
+            if abs(step) <= 1e-13 * abs(mu):
+                break
+        else:
+            raise np.linalg.LinAlgError("no multiplier near the unit circle: Newton in mu "
+                                        "did not converge")
+        self._last = (np.array(X), (mu, v, w, g_mu))
+        return self._last[1]
+
+    def value(self, problem, X) -> float:
+        return abs(self._root(problem, X)[0]) - 1.0
+
+    def multiplier_at(self, problem, X) -> complex:
+        """``mu(X)``, the discretized multiplier the condition follows."""
+        return complex(self._root(problem, X)[0])
+
+    def gradient(self, problem, X) -> np.ndarray:
+        mu, v, w, g_mu = self._root(problem, X)
+        g_X = np.zeros(len(X), dtype=complex)
+        for weights, d in _twisted_pairs(problem, X, v, w, mu):
+            for part, factor in ((d.real, 1.0), (d.imag, 1j)):
+                H = _hessian(problem, X, part)
+                g_X -= factor * (H.T @ _padded(weights, H.shape[0]))
+        mu_X = -g_X / g_mu
+        return np.real(np.conj(mu) * mu_X) / abs(mu)
+
+    def accept(self, problem, X) -> None:
+        mu, v, w, _ = self._root(problem, X)
+        self.multiplier = mu
+        self.c, self.b = v / np.linalg.norm(v), w / np.linalg.norm(w)
+        self._last = None
+
+
+def _complex_nearest_circle(mu) -> complex:
+    """The multiplier with positive imaginary part nearest the unit circle."""
+    mu = np.asarray(mu, dtype=complex)
+    upper = mu[mu.imag > 1e-8 * np.maximum(1.0, np.abs(mu))]
+    if upper.size == 0:
+        raise ValueError("NeimarkSacker needs a complex pair of multipliers; none here")
+    return complex(upper[np.argmin(np.abs(np.abs(upper) - 1.0))])
+
+
+def _wrap_masks(problem):
+    """Rows of the last interval and columns of node 0 (in ``G_U``)."""
+    n, rows = problem.vf.n, problem.n_nodes * problem.vf.n
+    index = np.arange(rows)
+    return index >= rows - n * problem.ncol, index < n
+
+
+def _twisted(problem, J, mu):
+    """``(A(mu), A_mu)``: ``G_U`` with the wrap ``u(1) = mu u(0)`` (the wrap's entries,
+    last interval's rows and node 0's columns, times ``mu``) and its derivative in mu."""
+    rows = problem.n_nodes * problem.vf.n
+    A = sp.csc_matrix(J[:rows, :rows])
+    last, wrap = _wrap_masks(problem)
+    A_mu = sp.csc_matrix(sp.diags(last.astype(float)) @ A @ sp.diags(wrap.astype(float)))
+    return sp.csc_matrix(A + (mu - 1.0) * A_mu), A_mu
+
+
+def _twisted_pairs(problem, X, v, w, mu) -> list:
+    """``[(w_k, d_k)]`` of ``w^T A(mu)_X v`` (see ``_Bordered.pairs``): the rows of the
+    last interval see ``v`` with node 0 times ``mu``."""
+    last, wrap = _wrap_masks(problem)
+    return [(np.where(last, 0.0, w), _padded(v, len(X))),
+            (np.where(last, w, 0.0), _padded(np.where(wrap, mu * v, v), len(X)))]
+
+
+def _hessian(problem, X, d) -> sp.csc_matrix:
+    """``(d/dh) G_X(X + h d)`` by the central difference of two Jacobians (error
+    ``O(h^2)``): ``H^T w`` is the Hessian of ``w^T G`` in the direction ``d``."""
+    h = 1e-7 * (1.0 + np.max(np.abs(X))) / max(np.max(np.abs(d)), 1e-300)
+    return (problem.cycle_jacobian(X + h * d) - problem.cycle_jacobian(X - h * d)) / (2 * h)
+
+
+def _bordered_solve(A, b, c):
+    """``(v, w, g)``: ``[[A, b], [c^T, 0]] (v, g) = (0, 1)`` and its transpose."""
+    B = sp.bmat([[A, b[:, None]], [c[None, :], None]], format="csc")
+    lu = factorize(B)
+    if lu is None:
+        raise np.linalg.LinAlgError("the bordered matrix is singular: borders lost")
+    e = np.zeros(B.shape[0], dtype=B.dtype)
+    e[-1] = 1.0
+    vg, wg = lu.solve(e), lu.solve(e, trans="T")
+    return vg[:-1], wg[:-1], vg[-1]
 
 
 def _padded(v, size) -> np.ndarray:
     """``v`` followed by zeros, ``size`` entries."""
-    out = np.zeros(size)
+    out = np.zeros(size, dtype=np.result_type(v, float))
     out[: v.size] = v
     return out
 

@@ -3,6 +3,7 @@ grazing cycles, cycle folds (LPC) and period doublings, on systems with closed f
 
 import casadi as ca
 import numpy as np
+import pytest
 
 import continuation as C
 
@@ -28,13 +29,29 @@ def _bautin():
     return ca.Function("F", [x, p], [ca.vertcat(g * x[0] - x[1], x[0] + g * x[1])])
 
 
-def _circle(radius=1.0, centre=0.0, z=False, phase=0.013):
-    """A circle guess; its phase puts extrema off the mesh points (a minimum at a mesh
-    point is a kink of the condition, where finite differences do not apply)."""
+def _torus(omega=0.3, a=0.7):
+    """The unit circle r' = r (1 - r^2), theta' = 1 in (x1, x2) (period 2 pi) and a
+    transverse plane y' = B(t) y, B = (rate + a x1 (1 + x2)) I + [[0, -omega + x2 / 5],
+    [omega, 0]], rate = mu - nu^2. B's parts do not commute, yet by Liouville the
+    transverse pair's product is exp(int tr B) = exp(4 pi rate): while complex, both lie
+    on the circle |mu| = exp(2 pi rate), so a Neimark-Sacker on mu = nu^2."""
+    x, p = ca.SX.sym("x", 4), ca.SX.sym("p", 2)
+    x1, x2, y1, y2 = x[0], x[1], x[2], x[3]
+    r2 = x1 ** 2 + x2 ** 2
+    rate = p[0] - p[1] ** 2 + a * x1 * (1 + x2)
+    return ca.Function("F", [x, p], [ca.vertcat(
+        x1 * (1 - r2) - x2, x2 * (1 - r2) + x1,
+        rate * y1 + (x2 / 5 - omega) * y2, rate * y2 + omega * y1)])
+
+
+def _circle(radius=1.0, centre=0.0, z=0, phase=0.013):
+    """A circle guess (``z`` zero components appended); its phase puts extrema off the
+    mesh points (a minimum at a mesh point is a kink of the condition, where finite
+    differences do not apply)."""
     def orbit(t):
         t = np.atleast_1d(t) + phase
         u = np.c_[centre + radius * np.cos(2 * np.pi * t), radius * np.sin(2 * np.pi * t)]
-        return np.c_[u, 0 * t] if z else u
+        return np.c_[u, np.zeros((len(t), int(z)))] if z else u
     return orbit
 
 
@@ -96,7 +113,7 @@ def test_period_doubling_located_and_continued_on_mu_equal_nu_squared(models):
     """The half-twisted cycle (conftest) with the transverse rate mu - nu^2: a period
     doubling on mu = nu^2."""
     F = models.half_twisted(n_par=2, rate=lambda p: p[0] - p[1] ** 2)
-    cycle, X = _cycle(F, _circle(z=True), {"mu": 0.05, "nu": 0.0}, "mu")
+    cycle, X = _cycle(F, _circle(z=1), {"mu": 0.05, "nu": 0.0}, "mu")
     square, result = C.locate_cycle(cycle, X, C.PeriodDoubling())
     assert result.converged and abs(square.par_dict(result.X)["mu"]) < 1e-9
     mu = square.multipliers(result.X)
@@ -106,6 +123,28 @@ def test_period_doubling_located_and_continued_on_mu_equal_nu_squared(models):
     assert branch.status == "bound" and nu.max() > 0.35
     assert np.max(np.abs(m - nu ** 2)) < 1e-9
     assert _fd_gradient_error(curve, curve.X0) < 1e-5
+
+
+def test_neimark_sacker_located_and_continued_on_mu_equal_nu_squared():
+    cycle, X = _cycle(_torus(), _circle(z=2), {"mu": 0.05, "nu": 0.0}, "mu")
+    square, result = C.locate_cycle(cycle, X, C.NeimarkSacker())
+    assert result.converged and abs(square.par_dict(result.X)["mu"]) < 1e-9
+    mu = square.multipliers(result.X)
+    pair = mu[np.abs(mu.imag) > 0.1]
+    assert pair.size == 2 and np.max(np.abs(np.abs(pair) - 1)) < 1e-6
+    located = square.condition.multiplier_at(square, result.X)
+    assert abs(abs(located) - 1) < 1e-12 and np.min(np.abs(pair - located)) < 1e-6
+    curve, branch = _curve(square, result.X, "nu", C.NeimarkSacker(), {"nu": (-0.1, 0.6)})
+    m, nu = branch.par("mu"), branch.par("nu")
+    assert branch.status == "bound" and nu.max() > 0.35
+    assert np.max(np.abs(m - nu ** 2)) < 1e-9
+    assert _fd_gradient_error(curve, curve.X0) < 1e-5
+
+
+def test_neimark_sacker_needs_a_complex_pair(models):
+    cycle, X = _cycle(models.half_twisted(), _circle(z=1), {"mu": 0.05}, "mu")
+    with pytest.raises(ValueError, match="complex pair"):
+        C.locate_cycle(cycle, X, C.NeimarkSacker())
 
 
 def test_locating_fails_cleanly_far_from_any_fold():
