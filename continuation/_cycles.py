@@ -147,6 +147,7 @@ class CycleProblem(PeriodicProblem):
         self.mesh = _check_mesh(mesh, self.ntst)
         self._accepted = 0
         self._last_jacobian = None
+        self._last_multipliers = None          # (X, multipliers) of the last point
         U = sample_orbit(orbit, colloc.node_times(self.mesh, self.ncol), vf.n)
         self.X0 = np.concatenate([U, [float(period)], p0[list(self.free_idx)]])
         D = np.concatenate([np.diff(self.mesh), self._phase(U)])
@@ -195,6 +196,30 @@ class CycleProblem(PeriodicProblem):
         """A-posteriori indicator ``max_i h_i^(NCOL+1) |u^(NCOL+1)|_i`` (``_mesh``)."""
         return _mesh.error_indicator(X[: self.n_nodes * self.vf.n], self.mesh, self.ncol,
                                      self.vf.n)
+
+    def describe(self, kind, X, tau, settings) -> Description:
+        """As for every periodic problem, plus ``data['mesh']``: the point's own mesh (an
+        adapted branch re-meshes as it goes; :meth:`at` rebuilds the point's problem)."""
+        found = super().describe(kind, X, tau, settings)
+        found.data["mesh"] = [float(t) for t in self.mesh]
+        return found
+
+    def at(self, point) -> tuple["CycleProblem", np.ndarray]:
+        """``(problem, X)`` of a special ``point`` of this problem's branch: the same
+        field, free parameters and settings on the point's mesh (``point.data['mesh']``,
+        this problem's where absent), and the point's unknowns ``point.data['X']``."""
+        X = np.asarray(point.data["X"], dtype=float)
+        mesh = np.asarray(point.data.get("mesh", self.mesh), dtype=float)
+        n, rows = self.vf.n, (len(mesh) - 1) * self.ncol * self.vf.n
+        if X.size != rows + 1 + len(self.free):
+            raise ValueError(f"the point's unknowns ({X.size}) do not fit its mesh of "
+                             f"{len(mesh) - 1} intervals")
+        params = dict(zip(self.vf.par_names, map(float, self.params(X))))
+        orbit = lambda t: colloc.evaluate(X[:rows], mesh, self.ncol, n, t)  # noqa: E731
+        new = CycleProblem(self.vf, orbit, float(X[rows]), params, self.free,
+                           settings=replace(self.settings, ntst=len(mesh) - 1), mesh=mesh)
+        new.refine = self.refine
+        return new, X.copy()
 
     def remesh(self, X, ntst: int | None = None):
         """``(problem, X_new)`` on a mesh equidistributing the error of ``X`` (same
@@ -290,11 +315,17 @@ class CycleProblem(PeriodicProblem):
                               self.vf.n, np.atleast_2d(A))
 
     def multipliers(self, X) -> np.ndarray:
-        """Floquet multipliers sorted by decreasing modulus."""
+        """Floquet multipliers sorted by decreasing modulus (kept for the last ``X``:
+        the monitor and a ``record`` callback ask at the same point)."""
+        last = self._last_multipliers
+        if last is not None and np.array_equal(last[0], X):
+            return last[1].copy()
         s = self.settings
         method = s.floquet if s.floquet != "auto" else \
             ("pencil" if self.vf.n * self.ntst <= s.pencil_max else "product")
-        return _floquet.multipliers(self.transfer_matrices(X), method)
+        mu = _floquet.multipliers(self.transfer_matrices(X), method)
+        self._last_multipliers = (np.array(X), mu)
+        return mu.copy()
 
 
 def _collocation_system(settings: CollocationSettings) -> tuple:

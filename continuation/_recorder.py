@@ -32,7 +32,7 @@ class Recorder:
         self.cols.append(columns)
         self.values.append(values)
         self.X.append(step.X)
-        self.steps.append(step)
+        self.steps.append((step.ds, step.iterations, step.residual))   # not its factors
         self.infos.append(info)
 
     def branch(self, status, message, failure, stats) -> Branch:
@@ -52,8 +52,8 @@ class Recorder:
                       np.array([prob.state(x) for x in self.X]).reshape(len(X), prob.vf.n),
                       np.array([prob.params(x) for x in self.X]).reshape(
                           len(X), len(prob.vf.par_names)),
-                      s, np.array([st.ds for st in self.steps]),
-                      np.array([st.iterations for st in self.steps], dtype=int),
-                      np.array([st.residual for st in self.steps]),
+                      s, np.array([st[0] for st in self.steps]),
+                      np.array([st[1] for st in self.steps], dtype=int),
+                      np.array([st[2] for st in self.steps]),
                       [i.eigenvalues for i in self.infos], tests, columns,
                       self.special, status, message, failure, stats)

@@ -124,7 +124,9 @@ def cycle_from_pd(problem: CycleProblem, point: SpecialPoint, *, amplitude: floa
 
         u2(s) = u(2s) + a w(s),   w(s) = +v(2s) (s < 1/2),  -v(2s - 1) (s >= 1/2),
 
-    with period ``2T`` on ``2 NTST`` intervals (default). The start corrector fixes
+    with period ``2T`` on the point's mesh run through twice (``2 NTST`` intervals, each
+    halved: an adapted mesh stays adapted), or uniform on ``settings.ntst`` intervals
+    if ``settings`` are given. The start corrector fixes
     the amplitude ``w . (X - X0) = 0`` instead of the parameter (the doubled branch
     is tangent to ``w`` at the PD point), so ``direction=+1`` continues towards
     larger amplitudes.
@@ -135,7 +137,7 @@ def cycle_from_pd(problem: CycleProblem, point: SpecialPoint, *, amplitude: floa
         raise ValueError("point must be a 'pd' SpecialPoint of a cycle branch")
     if not (np.isfinite(amplitude) and amplitude > 0):
         raise ValueError(f"amplitude must be a positive finite number, got {amplitude!r}")
-    X = np.asarray(point.data["X"], dtype=float)
+    problem, X = problem.at(point)
     V = floquet_eigenfunction(problem, X, -1.0).ravel()
 
     def doubled(s, which):
@@ -144,9 +146,10 @@ def cycle_from_pd(problem: CycleProblem, point: SpecialPoint, *, amplitude: floa
         w = sgn * problem.evaluate(np.r_[V, 0.0, 0.0], 2 * s)
         return w if which == "w" else problem.evaluate(X, 2 * s) + amplitude * w
 
+    mesh = None if settings else np.concatenate([problem.mesh, 1.0 + problem.mesh[1:]]) / 2
     settings = settings or replace(problem.settings, ntst=2 * problem.ntst)
     new = CycleProblem(problem.vf, lambda s: doubled(s, "u"), 2 * problem.period(X),
-                       problem.par_dict(X), problem.active, settings=settings)
+                       problem.par_dict(X), problem.active, settings=settings, mesh=mesh)
     w = doubled(new.times(), "w").ravel()
     new.start_direction = np.concatenate([w / np.linalg.norm(w), [0.0, 0.0]])
     return new

@@ -61,6 +61,31 @@ def test_doubled_branch_from_period_doubling(pd_branch):
     assert b2.stable.all()
 
 
+def test_doubled_branch_from_a_re_meshed_branch(models):
+    """On an adapted branch the PD point lies on a mesh of its own (not the first
+    problem's): the switch rebuilds its problem (``CycleProblem.at``) and runs that mesh
+    through twice."""
+    first = np.linspace(0.0, 1.0, 21) ** 1.6                       # far from equidistributed
+    prob = C.CycleProblem(models.half_twisted(), lambda t: np.c_[np.cos(2 * np.pi * t),
+                                                     np.sin(2 * np.pi * t), 0 * t],
+                          6.0, {"mu": -0.3}, "mu", mesh=first,
+                          settings=C.CollocationSettings(ntst=20, ncol=4, adapt_every=1))
+    br = C.continuation(prob, settings=C.ContinuationSettings(
+        ds=0.05, ds_max=0.5, max_steps=30, bounds={"mu": (-1, 0.3)}))
+    (pd,) = br.special("pd")
+    mesh = np.asarray(pd.data["mesh"])
+    assert abs(pd.params["mu"]) < 1e-9 and np.max(np.abs(mesh - first)) > 0.05
+    on_point, X = prob.at(pd)
+    assert np.array_equal(on_point.mesh, mesh) and np.max(np.abs(on_point.residual(X))) < 1e-8
+    new = C.cycle_from_pd(prob, pd, amplitude=0.05)
+    assert np.allclose(new.mesh, np.r_[mesh, 1 + mesh[1:]] / 2, rtol=0, atol=1e-15)
+    b2 = C.continuation(new, settings=C.ContinuationSettings(
+        ds=0.05, ds_max=0.3, max_steps=8, bounds={"mu": (-1, 0.3)}))
+    mu, r = b2.par("mu"), np.hypot(b2.x[:, 0], b2.x[:, 1])
+    assert b2.status == "max_steps" and np.all(mu > 0)
+    assert np.max(np.abs((r - 1) ** 2 + b2.x[:, 2] ** 2 - mu)) < 1e-8
+
+
 def test_pd_switching_bad_input(pd_branch):
     prob, br = pd_branch
     with pytest.raises(ValueError, match="pd"):

@@ -26,7 +26,8 @@ def test_public_names():
         "first_lyapunov", "hopf_point", "CollocationSettings", "CycleProblem",
         "cycle_from_hopf", "ShootingProblem", "ShootingSettings",
         "cycle_from_pd", "correct", "Event", "Lifted", "Status", "Condition",
-        "CycleCurveProblem", "CycleFold", "Extremum", "PeriodDoubling", "locate_cycle"}
+        "CycleCurveProblem", "CycleFold", "Extremum", "NeimarkSacker", "PeriodDoubling",
+        "locate_cycle"}
 
 
 def test_new_problem_kind_plugs_into_palc():
