@@ -8,7 +8,8 @@ import pytest
 from fsicas import Scene
 from fsicas.cycles import (CollocatedImpactBranch, CollocationImpactSettings, CycleSettings,
                            ImpactSettings, cycle_branch, impacting_branch,
-                           impacting_collocation_branch, pre_contact_start)
+                           impacting_collocation_branch, period_doubled_branch,
+                           pre_contact_start)
 from fsicas.linear.steady import steady_state
 from fsicas.model import build_model
 from fsicas.model.contact import gaps
@@ -81,6 +82,8 @@ def test_save_load_and_validation(n3_branch, tmp_path):
         CollocationImpactSettings(mesh_passes=-1)
     with pytest.raises(ValueError, match="contact_smoothing"):
         impacting_collocation_branch(scene.replace(contact_smoothing=0.0), np.zeros(8), 0.1, 1.0)
+    with pytest.raises(ValueError, match="kind 'pd'"):
+        period_doubled_branch(scene, br.points[-1])
 
 
 @pytest.mark.slow
@@ -138,3 +141,44 @@ def test_subharmonic_cycle_from_time_integration(period3_impacting_run):
     assert all(q.stable for q in br.points)
     miss, amplitude, _ = _one_period(model, scene, p, method="idas", rtol=1e-10)
     assert miss < 1e-5 and abs(amplitude / p.tip_amplitude - 1) < 1e-6
+
+
+@pytest.fixture(scope="module")
+def n4_torus():
+    """M* = 1, N = 4, same law, NTST = 100: the period-1 impacting cycle loses stability
+    shortly past the first contact through a complex pair of multipliers."""
+    base = Scene(mstar=1.0, zeta=0.01, modes=4, contact_eps=1e-2)
+    start = pre_contact_start(cycle_branch(base, ustar_max=10.0, settings=SCENE_NODES))
+    scene = base.replace(ustar=start.ustar, **IMPACT)
+    model = build_model(scene)
+    br = impacting_collocation_branch(scene, start.state, start.period, start.pressure_drop,
+                                      model=model, ustar_max=6.7, settings=CollocationImpactSettings(
+                                          ntst=100, max_points=12))
+    return scene, model, br
+
+
+def test_neimark_sacker_located_where_shooting_multipliers_cross_the_circle(n4_torus):
+    """The loss of stability is a located Neimark-Sacker point (Newton on the minimally
+    extended system: the pair on the unit circle); shooting (CVODES, an independent
+    discretization) from the located cycle finds its complex pair on the circle to 1e-3,
+    i.e. U* to about 2e-5 (|mu| grows by about 60 per unit U* there)."""
+    scene, model, br = n4_torus
+    (ns,) = br.special
+    assert ns.kind == "ns" and ns.located
+    rest = ns.nontrivial_multipliers                    # by decreasing modulus
+    assert abs(rest[0].imag) > 0.1 and rest[1] == np.conj(rest[0])
+    assert np.max(np.abs(np.abs(rest[:2]) - 1)) < 1e-9 and np.abs(rest[2]) < 0.9
+    before = [p for p in br.points if p.ustar < ns.ustar]
+    after = [p for p in br.points if p.ustar > ns.ustar]
+    assert before and after and all(p.stable for p in before) and not any(p.stable for p in after)
+    assert ns.impacts == 2 and 6.59 < ns.ustar < 6.62
+    back = CollocatedImpactBranch.from_json(br.to_json())
+    assert [(p.kind, p.ustar) for p in back.special] == [("ns", ns.ustar)]
+    shot = impacting_branch(scene.replace(ustar=ns.ustar), ns.state, ns.period,
+                            ns.pressure_drop, model=model,
+                            settings=ImpactSettings(segments=12, max_points=1))
+    (point,) = shot.points
+    assert abs(point.period / ns.period - 1) < 1e-6
+    mu = point.multipliers
+    complex_pair = mu[np.abs(mu.imag) > 1e-3]
+    assert complex_pair.size >= 2 and np.min(np.abs(np.abs(complex_pair) - 1)) < 1e-3

@@ -1,6 +1,7 @@
 """The cycles wing: flutter limit cycles continued in U* by collocation up to the first
 wall contact, and on through contact into the impacting regime by multiple shooting, or by
-adaptive collocation of the smoothed contact law; and the curves of special cycles in
+adaptive collocation of the smoothed contact law (its folds, period doublings and
+Neimark-Sacker points located, the period-doubled branches switched onto); and the curves of special cycles in
 (M*, U*): grazing (first contact) and fold of cycles."""
 
 from .collocation import CycleBranch, CyclePoint, CycleSettings, cycle_branch
@@ -10,11 +11,11 @@ from .impacting import (ImpactBranch, ImpactPoint, ImpactSettings, cycle_from_tr
                         impacting_branch, pre_contact_start)
 from .impacting_collocation import (CollocatedImpactBranch, CollocatedImpactPoint,
                                     CollocationImpactSettings, impacting_collocation_branch,
-                                    impacting_collocation_problem)
+                                    impacting_collocation_problem, period_doubled_branch)
 
 __all__ = ["CycleBranch", "CyclePoint", "CycleSettings", "cycle_branch", "ImpactBranch",
            "ImpactPoint", "ImpactSettings", "cycle_from_trajectory", "impacting_branch",
            "pre_contact_start", "CollocatedImpactBranch", "CollocatedImpactPoint",
            "CollocationImpactSettings", "impacting_collocation_branch",
-           "impacting_collocation_problem", "CurveMap", "CurvePoint", "CurveSettings",
+           "impacting_collocation_problem", "period_doubled_branch", "CurveMap", "CurvePoint", "CurveSettings",
            "CycleCurve", "cycle_curves", "curve_seeds", "fold_curves", "grazing_curve"]

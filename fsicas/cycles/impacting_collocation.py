@@ -19,15 +19,23 @@ step.
 
 Per point the same measures as the shooting route (:class:`ImpactPoint`: U*, Δp,
 period, tip half-amplitude, min gap and its ratio to eps, contact intervals per period,
-Floquet multipliers and stability, wall time), plus NTST and the library's a-posteriori
-error indicator. Extrema are those of the collocation polynomial, exact in t
+peak impact force, flow-rate reduction, Floquet multipliers and stability, wall time),
+plus NTST and the library's a-posteriori error indicator.
+
+Special cycles (``detect``): folds of cycles, period doublings and Neimark-Sacker
+points, detected from the tangent and the multipliers, located on the arclength by the
+library and refined by Newton on their minimally extended systems
+(``continuation.CycleFold``, ``PeriodDoubling``, ``NeimarkSacker``: the critical
+multiplier at +1, -1 or on the unit circle). :func:`period_doubled_branch` switches at
+a period doubling onto the branch of cycles of twice the period. Extrema are those of the collocation polynomial, exact in t
 (:class:`fsicas.cycles.gauge.PolynomialExtrema`); the contact intervals are counted on
 ``samples`` points per mesh interval (dense at the impacts).
 """
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, field
+from typing import Literal
 
 import numpy as np
 import scipy.interpolate
@@ -43,7 +51,15 @@ from .impacting import ImpactBranch, ImpactPoint, shooting_points
 from .records import check_settings
 
 __all__ = ["CollocationImpactSettings", "CollocatedImpactPoint", "CollocatedImpactBranch",
-           "impacting_collocation_branch", "impacting_collocation_problem", "field_parameters"]
+           "impacting_collocation_branch", "impacting_collocation_problem", "field_parameters",
+           "period_doubled_branch", "ImpactKind"]
+
+ImpactKind = Literal["regular", "fold", "pd", "ns"]
+"""A branch point ("regular") or a special cycle: "fold" (a second multiplier at +1),
+"pd" (a multiplier at -1), "ns" (a complex pair on the unit circle)."""
+
+#: the minimally extended system of each kind of special cycle
+_CONDITIONS = {"fold": C.CycleFold, "pd": C.PeriodDoubling, "ns": C.NeimarkSacker}
 
 
 @dataclass(frozen=True)
@@ -55,7 +71,8 @@ class CollocationImpactSettings:
     (Euclidean norm of all node values, 100 T and Π: scale by about √(NTST/20));
     ``max_points``: branch points; ``samples``: samples per mesh interval for the
     measurements; ``guess_samples``/``guess_tol``: outputs and CVODES tolerance of the
-    integrated start period."""
+    integrated start period; ``detect``: detect, locate and refine folds, period
+    doublings and Neimark-Sacker points (multipliers at every point)."""
 
     ntst: int = 200
     ncol: int = 4
@@ -68,11 +85,14 @@ class CollocationImpactSettings:
     samples: int = 16
     guess_samples: int = 20000
     guess_tol: float = 1e-10
+    detect: bool = True
 
     def __post_init__(self):
         check_settings(self, integers=("ntst", "ncol", "max_points", "samples", "guess_samples"),
                        positives=("tol", "ds", "ds_max", "guess_tol"),
                        nonnegative_integers=("adapt_every", "mesh_passes"))
+        if not isinstance(self.detect, bool):
+            raise ValueError(f"CollocationImpactSettings.detect must be a bool, got {self.detect!r}")
 
 
 @dataclass(frozen=True)
@@ -82,17 +102,29 @@ class CollocatedImpactPoint(ImpactPoint):
 
     ntst: int = 0
     error_estimate: float = 0.0
+    kind: ImpactKind = "regular"
+    #: a special cycle refined by Newton on its minimally extended system (False: where
+    #: that Newton failed, the location on the arclength)
+    located: bool = True
 
 
 @dataclass(frozen=True)
 class CollocatedImpactBranch(ImpactBranch):
-    """Collocation branch in U* from a start cycle; ``status`` as for the shooting route."""
+    """Collocation branch in U* from a start cycle; ``status`` as for the shooting route;
+    ``special``: its located special cycles (:class:`CollocatedImpactPoint` of kind
+    "fold", "pd" or "ns"), in the order met."""
+
+    special: list = field(default_factory=list)
+
+    def to_json(self) -> dict:
+        return {**super().to_json(), "special": [p.to_json() for p in self.special]}
 
     @classmethod
     def from_json(cls, d: dict) -> "CollocatedImpactBranch":
         return cls(Scene.from_dict(d["scene"]), d["eps"],
                    [CollocatedImpactPoint.from_json(p) for p in d["points"]], d["status"],
-                   d["message"], d["wall_time"])
+                   d["message"], d["wall_time"],
+                   [CollocatedImpactPoint.from_json(p) for p in d.get("special", [])])
 
 
 def impacting_collocation_problem(scene: Scene, state, period: float, pressure_drop: float,
@@ -127,23 +159,92 @@ def impacting_collocation_branch(scene: Scene, state, period: float, pressure_dr
     ``contact_smoothing`` > 0). ``direction`` = +1 continues towards larger Δp (U*).
     The arguments are those of :func:`fsicas.cycles.impacting.impacting_branch`."""
     start = time.perf_counter()
-    if not (scene.contact and scene.contact_smoothing > 0):
-        raise ValueError("impacting_collocation_branch needs scene.contact = True and "
-                         "scene.contact_smoothing > 0 (a smooth contact law)")
+    _check_smooth(scene)
     model = model or build_model(scene)
-    eps = model.scene.contact_gap
     try:
         problem = impacting_collocation_problem(scene, state, period, pressure_drop,
                                                 model=model, settings=settings)
     except RuntimeError as err:                  # CVODES failure, e.g. a gap closing
-        return CollocatedImpactBranch(scene, eps, [], "failed", "the start cycle could not "
-                                      f"be integrated over one period: {err}",
-                                      time.perf_counter() - start)
+        return _failed(scene, model, "the start cycle could not be integrated over one "
+                       f"period: {err}", start)
+    return _continued(scene, model, problem, (ustar_min, ustar_max), direction, settings, start)
+
+
+def period_doubled_branch(scene: Scene, point: "CollocatedImpactPoint", *,
+                          model: Model | None = None, amplitude: float = 1e-2,
+                          ustar_min: float = 0.0, ustar_max: float = 12.0,
+                          settings: CollocationImpactSettings = CollocationImpactSettings()
+                          ) -> CollocatedImpactBranch:
+    """The branch of cycles of twice the period born at the period doubling ``point`` (a
+    special point of kind "pd" of :func:`impacting_collocation_branch` on ``scene``).
+
+    The PD cycle is rebuilt from the point's state (one integrated period, the start mesh
+    equidistributed on it) and refined by Newton on its minimally extended system; the
+    doubled cycle starts from it plus ``amplitude`` times its Floquet solution of
+    multiplier -1 (``continuation.cycle_from_pd``: 2 NTST intervals, the PD cycle's mesh
+    run through twice) and is continued towards larger amplitude, in either direction
+    of U* as the branch bends (the PD is super- or subcritical)."""
+    start = time.perf_counter()
+    _check_smooth(scene)
+    if getattr(point, "kind", None) != "pd":
+        raise ValueError("point must be a special point of kind 'pd' of an impacting "
+                         f"collocation branch, got kind {getattr(point, 'kind', None)!r}")
+    model = model or build_model(scene)
+    try:
+        problem = impacting_collocation_problem(scene, point.state, point.period,
+                                                point.pressure_drop, model=model,
+                                                settings=settings)
+        square, result = C.locate_cycle(problem, problem.X0, C.PeriodDoubling(),
+                                        C.NewtonSettings(tol=settings.tol))
+    except (RuntimeError, ValueError, np.linalg.LinAlgError) as err:
+        return _failed(scene, model, f"the period doubling could not be rebuilt: {err}", start)
+    if not result.converged:
+        return _failed(scene, model, "the period doubling could not be refined: "
+                       f"{result.message}", start)
+    pd = C.SpecialPoint("pd", 0, square.state(result.X), square.par_dict(result.X),
+                        "converged", result.residual,
+                        {"X": list(result.X), "mesh": list(square.mesh)})
+    doubled = C.cycle_from_pd(problem, pd, amplitude=amplitude)
+    return _continued(scene, model, doubled, (ustar_min, ustar_max), 1, settings, start)
+
+
+def _check_smooth(scene: Scene) -> None:
+    if not (scene.contact and scene.contact_smoothing > 0):
+        raise ValueError("impacting cycles by collocation need scene.contact = True and "
+                         "scene.contact_smoothing > 0 (a smooth contact law)")
+
+
+def _failed(scene, model, message, start) -> CollocatedImpactBranch:
+    return CollocatedImpactBranch(scene, model.scene.contact_gap, [], "failed", message,
+                                  time.perf_counter() - start)
+
+
+def _continued(scene, model, problem, ustar_range, direction, settings, start
+               ) -> CollocatedImpactBranch:
+    """The branch of ``problem`` in U* within ``ustar_range``, its special cycles refined."""
     gauge = _PolynomialGauge(model, steady_state(scene, model).x, settings.samples)
     once = (lambda problem, X: "reached max_points = 1") if settings.max_points == 1 else None
     branch = C.continuation(problem, record=gauge.record, stop=once, settings=_steps(
-        scene, model, ustar_min, ustar_max, direction, settings))
-    return _result(scene, eps, branch, settings, time.perf_counter() - start)
+        scene, model, *ustar_range, direction, settings))
+    special = [_refined(problem, sp, gauge, settings) for sp in branch.special_points
+               if sp.kind in _CONDITIONS]
+    return _result(scene, model.scene.contact_gap, branch, special, settings,
+                   time.perf_counter() - start)
+
+
+def _refined(problem, sp, gauge, settings) -> "CollocatedImpactPoint":
+    """A special cycle located on the arclength, refined by Newton on its minimally
+    extended system; the arclength location (``located=False``) where that fails."""
+    on_point, X = problem.at(sp)
+    try:
+        square, result = C.locate_cycle(on_point, X, _CONDITIONS[sp.kind](),
+                                        C.NewtonSettings(tol=settings.tol))
+    except (ValueError, np.linalg.LinAlgError):
+        result = None
+    if result is None or not result.converged:
+        return CollocatedImpactPoint.from_columns(sp.record, None, kind=sp.kind, located=False)
+    return CollocatedImpactPoint.from_columns(gauge.record(square, result.X), None,
+                                              kind=sp.kind)
 
 
 def field_parameters(vf, model: Model, scene: Scene, pressure_drop: float) -> dict:
@@ -171,16 +272,18 @@ def _steps(scene, model, ustar_min, ustar_max, direction, settings) -> C.Continu
         ds=settings.ds, ds_min=1e-8, ds_max=settings.ds_max, direction=direction,
         max_steps=max(settings.max_points - 1, 1),
         bounds={PI: (pi_lo, pi_of(scene, model, ustar_max))},
-        newton=C.NewtonSettings(tol=settings.tol), compute_eigenvalues=False, detect=False)
+        newton=C.NewtonSettings(tol=settings.tol), compute_eigenvalues=settings.detect,
+        detect=settings.detect)
 
 
-def _result(scene, eps, branch, settings, wall_time) -> CollocatedImpactBranch:
+def _result(scene, eps, branch, special, settings, wall_time) -> CollocatedImpactBranch:
     """The branch's points as :class:`CollocatedImpactPoint` records, with the status."""
     points = [CollocatedImpactPoint.from_columns(branch.columns, k) for k in range(len(branch.s))]
     points = points[:settings.max_points]
     status = "max_points" if len(points) == settings.max_points else \
         {"bound": "bound", "max_steps": "max_points"}.get(branch.status, "failed")
-    return CollocatedImpactBranch(scene, eps, points, status, branch.message, wall_time)
+    return CollocatedImpactBranch(scene, eps, points, status, branch.message, wall_time,
+                                  special)
 
 
 class _PolynomialGauge(Gauge):
