@@ -110,6 +110,8 @@ def _lco(out: dict, scene: Scene, sc: Scales) -> dict:
               "contact": _opt(lambda p: _lco_point(sc, p), out.get("contact"))}
     if "impacting" in out:
         result["impacting"] = [_impact_point(sc, p) for p in out["impacting"]["points"]]
+        result["impacting_special"] = [{"kind": p["kind"], **_impact_point(sc, p)}
+                                       for p in out["impacting"].get("special", [])]
     return result
 
 

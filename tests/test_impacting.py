@@ -180,17 +180,31 @@ def test_peak_force_and_flow_reduction_against_a_time_integration(through_contac
 
 def test_cli_lco_through_contact(capsys):
     """``fsicas lco --through-contact``: the collocation branch to the wall, then the
-    shooting branch on the contact model from 3 eps before it (plumbing: one point)."""
+    impacting branch on the contact model from 3 eps before it: by collocation (default)
+    with its special cycles, at N = 4 the Neimark-Sacker point past the first contact;
+    by shooting (plumbing: one point)."""
     import json
     from fsicas.cli import main
-    code = main(["lco", "--mstar", "1", "--zeta", "0.01", "--modes", "4", "--ustar-max", "8",
-                 "--through-contact", "--impact-points", "1", "--json"])
+    keys = {"ustar", "period", "tip_amplitude", "min_gap", "gap_ratio", "impacts",
+            "peak_force", "flow_reduction", "stable"}
+    code = main(["lco", "--mstar", "1", "--zeta", "0.01", "--modes", "4", "--ustar-max", "6.7",
+                 "--through-contact", "--impact-points", "12", "--impact-ntst", "100",
+                 "--json"])
     out = json.loads(capsys.readouterr().out)
     imp = out["impacting"]
-    assert code == 0 and out["status"] == "contact" and imp["status"] == "max_points"
+    assert code == 0 and out["status"] == "contact" and imp["route"] == "collocation"
+    assert imp["status"] == "bound" and set(imp["points"][0]) == keys
+    (ns,) = imp["special"]
+    assert ns["kind"] == "ns" and ns["located"] and set(ns) == keys | {"kind", "located",
+                                                                      "multiplier"}
+    assert abs(np.hypot(*ns["multiplier"]) - 1) < 1e-9 and 6.59 < ns["ustar"] < 6.62
+    code = main(["lco", "--mstar", "1", "--zeta", "0.01", "--modes", "4", "--ustar-max", "8",
+                 "--through-contact", "--impact-route", "shooting", "--impact-points", "1",
+                 "--json"])
+    imp = json.loads(capsys.readouterr().out)["impacting"]
+    assert code == 0 and imp["status"] == "max_points" and imp["route"] == "shooting"
     point = imp["points"][0]
-    assert set(point) == {"ustar", "period", "tip_amplitude", "min_gap", "gap_ratio", "impacts",
-                          "peak_force", "flow_reduction", "stable"}
+    assert set(point) == keys and imp["special"] == []
     assert point["gap_ratio"] == pytest.approx(3.0, abs=1.0) and imp["eps"] > 0
-    assert main(["lco", "--modes", "4", "--through-contact", "--impact-points", "0",
-                 "--json"]) == 2
+    for bad in (["--impact-points", "0"], ["--impact-ntst", "0"]):
+        assert main(["lco", "--modes", "4", "--through-contact", *bad, "--json"]) == 2

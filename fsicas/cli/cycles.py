@@ -7,8 +7,12 @@ time integration commands of :mod:`fsicas.cli.timedomain`.
 """
 from __future__ import annotations
 
+import numpy as np
+
 from ..cycles.collocation import CycleSettings, cycle_branch
 from ..cycles.impacting import ImpactSettings, impacting_branch, pre_contact_start
+from ..cycles.impacting_collocation import (CollocationImpactSettings,
+                                            impacting_collocation_branch)
 from ..model.accuracy import QUADRATURE_TOL
 from ..physical_report import add_physical
 from ..plots.cycles import plot_branch
@@ -22,6 +26,8 @@ _POINT_KEYS = ("kind", "ustar", "period", "frequency", "tip_amplitude", "gap_rat
                "quadrature_error", "quadrature_nodes")
 _IMPACT_KEYS = ("ustar", "period", "tip_amplitude", "min_gap", "gap_ratio", "impacts",
                 "peak_force", "flow_reduction", "stable")
+#: the multiplier each kind of special cycle puts on the unit circle
+_CRITICAL = {"fold": 1.0, "pd": -1.0, "ns": None}
 #: The contact law of ``--through-contact`` where none is given: that of Figs. 6-9
 #: (docs/simulate.md), smoothed (docs/cycles.md).
 THROUGH_STIFFNESS, THROUGH_EPS, THROUGH_SMOOTHING = 1e8, 1e-2, 0.1
@@ -45,10 +51,16 @@ def add_cycle_commands(sub) -> None:
     p.add_argument("--through-contact", action="store_true",
                    help="go on past the first contact on the model with the wall-contact law "
                    f"(k* = --contact-stiffness, default {THROUGH_STIFFNESS:g}; eps/H = "
-                   f"--contact-eps, default {THROUGH_EPS:g}; smoothed) by multiple shooting: "
-                   "per point impacts, peak force, flow reduction, Floquet stability")
+                   f"--contact-eps, default {THROUGH_EPS:g}; smoothed): per point impacts, "
+                   "peak force, flow reduction, Floquet stability; with the collocation "
+                   "route also its folds, period doublings and Neimark-Sacker points")
     p.add_argument("--impact-points", type=int, default=10,
                    help="points of the impacting branch at most (with --through-contact)")
+    p.add_argument("--impact-route", choices=("collocation", "shooting"), default="collocation",
+                   help="the impacting branch by adaptive collocation (NTST = --impact-ntst; "
+                        "special cycles located) or by multiple shooting (12 segments)")
+    p.add_argument("--impact-ntst", type=int, default=200,
+                   help="collocation intervals of the impacting branch (adapted to the impacts)")
     p.set_defaults(run=_cmd_cycles)
 
 
@@ -57,8 +69,9 @@ def _cmd_cycles(args) -> dict:
     if scene.contact:
         raise ValueError("cycles are continued on the contact-free model: drop --contact "
                          "(--through-contact turns the contact law on past the first contact)")
-    if args.impact_points < 1:
-        raise ValueError(f"--impact-points must be >= 1, got {args.impact_points}")
+    for name in ("impact_points", "impact_ntst"):
+        if getattr(args, name) < 1:
+            raise ValueError(f"--{name.replace('_', '-')} must be >= 1, got {getattr(args, name)}")
     if args.through_contact:
         scene = scene.replace(contact_stiffness=args.contact_stiffness or THROUGH_STIFFNESS,
                               contact_eps=args.contact_eps or THROUGH_EPS,
@@ -91,16 +104,39 @@ def _through_contact(scene, branch, args, say) -> dict:
         return {"status": "not_reached", "message": "the contact-free branch did not reach "
                 "the wall below --ustar-max", "points": []}
     start = pre_contact_start(branch)
-    settings = ImpactSettings(max_points=args.impact_points)
-    say.stage(f"through contact from U* = {start.ustar:.5g} by multiple shooting "
-              f"({settings.segments} segments, k* = {scene.contact_stiffness:g}, eps/H = "
-              f"{scene.contact_eps:g})")
-    imp = impacting_branch(scene.replace(ustar=start.ustar, contact=True), start.state,
-                           start.period, start.pressure_drop, ustar_max=args.ustar_max,
-                           settings=settings)
+    scene = scene.replace(ustar=start.ustar, contact=True)
+    law = f"k* = {scene.contact_stiffness:g}, eps/H = {scene.contact_eps:g}"
+    if args.impact_route == "shooting":
+        settings = ImpactSettings(max_points=args.impact_points)
+        say.stage(f"through contact from U* = {start.ustar:.5g} by multiple shooting "
+                  f"({settings.segments} segments, {law})")
+        imp = impacting_branch(scene, start.state, start.period, start.pressure_drop,
+                               ustar_max=args.ustar_max, settings=settings)
+    else:
+        settings = CollocationImpactSettings(ntst=args.impact_ntst, max_points=args.impact_points)
+        say.stage(f"through contact from U* = {start.ustar:.5g} by adaptive collocation "
+                  f"(NTST = {settings.ntst}, {law})")
+        imp = impacting_collocation_branch(scene, start.state, start.period,
+                                           start.pressure_drop, ustar_max=args.ustar_max,
+                                           settings=settings)
+    special = getattr(imp, "special", [])
+    say.stats(f"{len(imp.points)} impacting cycles, {len(special)} special, status {imp.status}")
     return {"status": imp.status, "message": imp.message, "eps": imp.eps,
-            "start_ustar": start.ustar, "wall_time": imp.wall_time,
-            "points": [{k: getattr(p, k) for k in _IMPACT_KEYS} for p in imp.points]}
+            "route": args.impact_route, "start_ustar": start.ustar, "wall_time": imp.wall_time,
+            "points": [{k: getattr(p, k) for k in _IMPACT_KEYS} for p in imp.points],
+            "special": [_special_summary(p) for p in special]}
+
+
+def _special_summary(point) -> dict:
+    """A special impacting cycle: its kind, whether Newton refined it, the measures and
+    its critical multiplier [re, im] (nearest +1, -1 or the unit circle by kind)."""
+    mu = point.nontrivial_multipliers
+    target = _CRITICAL[point.kind]
+    distance = np.abs(np.abs(mu) - 1) + (mu.imag == 0) if target is None else np.abs(mu - target)
+    m = mu[np.argmin(distance)]
+    return {"kind": point.kind, "located": point.located,
+            **{k: getattr(point, k) for k in _IMPACT_KEYS},
+            "multiplier": [float(m.real), float(m.imag)]}
 
 
 def _tolerance(text: str) -> float | None:
