@@ -14,6 +14,7 @@ from fsicas.linear.steady import steady_state
 from fsicas.model import build_model
 from fsicas.model.contact import gaps
 from fsicas.timedomain.integrators import Settings, simulate
+from fsicas.timedomain.settled import settled_cycle
 
 #: the start cycle on the scene's nodes, those of the impacting branch
 SCENE_NODES = CycleSettings(quadrature_tol=None)
@@ -182,3 +183,33 @@ def test_neimark_sacker_located_where_shooting_multipliers_cross_the_circle(n4_t
     mu = point.multipliers
     complex_pair = mu[np.abs(mu.imag) > 1e-3]
     assert complex_pair.size >= 2 and np.min(np.abs(np.abs(complex_pair) - 1)) < 1e-3
+
+
+def test_settled_cycle_of_stable_and_unstable_impacting_cycles(n4_torus):
+    """The time-integration check (``settled_cycle``: IDAS 1e-10, dense-output returns)
+    from the branch's states: a run from the last stable cycle before the Neimark-Sacker
+    point stays on it for 30 periods; one from the first impacting cycle past it
+    (|mu| = 1.47) follows it over 3 periods (period, amplitude, peak force) and has left
+    it by 30; from the last point (|mu| > 3) it is gone."""
+    scene, model, br = n4_torus
+    (ns,) = br.special
+    p = max((p for p in br.points if p.stable), key=lambda p: p.ustar)
+    run = settled_cycle(model, scene.replace(ustar=p.ustar), p.state, p.period)
+    assert p.ustar < ns.ustar and run.status == "settled" and run.drift < 1e-8
+    assert abs(run.period / p.period - 1) < 1e-8 and run.swings == 1
+    assert abs(run.tip_amplitude / p.tip_amplitude - 1) < 1e-6
+    q = min((q for q in br.points if q.ustar > ns.ustar), key=lambda q: q.ustar)
+    assert q.impacts == 2 and q.peak_force > 0 and not q.stable
+    short = settled_cycle(model, scene.replace(ustar=q.ustar), q.state, q.period, periods=3)
+    assert abs(short.period / q.period - 1) < 1e-7
+    assert abs(short.tip_amplitude / q.tip_amplitude - 1) < 1e-6
+    assert short.peak_force == pytest.approx(q.peak_force, rel=1e-2)
+    long = settled_cycle(model, scene.replace(ustar=q.ustar), q.state, q.period)
+    assert long.drift > 100 * short.drift
+    far = br.points[-1]
+    run = settled_cycle(model, scene.replace(ustar=far.ustar), far.state, far.period)
+    assert far.ustar > ns.ustar + 0.05 and run.status == "unsettled" and run.drift > 1e-3
+    with pytest.raises(ValueError, match="period"):
+        settled_cycle(model, scene, far.state, -1.0)
+    with pytest.raises(ValueError, match="periods"):
+        settled_cycle(model, scene, far.state, far.period, periods=1)
