@@ -35,18 +35,23 @@ def _one_period(model, scene, point, method="radau", rtol=1e-11):
     return miss, (y.max() - y.min()) / 2, gaps(model, x).min()
 
 
-@pytest.fixture(scope="module")
-def n3_branch():
-    """M* = 1, N = 3, k* = 1e8, eps/H = 1e-2, smoothing 0.1: from the contact-free
-    collocation cycle at gap >= 3 eps, five points through the first contact."""
-    base = Scene(mstar=1.0, zeta=0.01, modes=3, contact_eps=1e-2)
+def _through_contact(modes, ustar_max, settings):
+    """M* = 1, k* = 1e8, eps/H = 1e-2, smoothing 0.1: the impacting branch by collocation
+    from the contact-free collocation cycle at gap >= 3 eps; (start, scene, model, branch)."""
+    base = Scene(mstar=1.0, zeta=0.01, modes=modes, contact_eps=1e-2)
     start = pre_contact_start(cycle_branch(base, ustar_max=10.0, settings=SCENE_NODES))
     scene = base.replace(ustar=start.ustar, **IMPACT)
     model = build_model(scene)
-    br = impacting_collocation_branch(scene, start.state, start.period, start.pressure_drop,
-                                      model=model, settings=CollocationImpactSettings(
-                                          ntst=100, max_points=5, ds=0.1, ds_max=1.0))
-    return start, scene, model, br
+    return start, scene, model, impacting_collocation_branch(
+        scene, start.state, start.period, start.pressure_drop, model=model,
+        ustar_max=ustar_max, settings=settings)
+
+
+@pytest.fixture(scope="module")
+def n3_branch():
+    """N = 3: five points through the first contact."""
+    return _through_contact(3, 12.0, CollocationImpactSettings(ntst=100, max_points=5, ds=0.1,
+                                                               ds_max=1.0))
 
 
 def test_collocation_passes_first_contact_and_matches_time_integration(n3_branch):
@@ -94,13 +99,8 @@ def test_collocation_equals_shooting_at_the_same_ustar():
     the same pressure drop agree in period, amplitude, min gap and multipliers (those of
     collocation converge at the stage order only: measured 1.3e-5 relative at NTST = 300,
     2e-6 at 400; the period to 1e-11)."""
-    base = Scene(mstar=1.0, zeta=0.01, modes=4, contact_eps=1e-2)
-    start = pre_contact_start(cycle_branch(base, ustar_max=10.0, settings=SCENE_NODES))
-    scene = base.replace(ustar=start.ustar, **IMPACT)
-    model = build_model(scene)
-    br = impacting_collocation_branch(scene, start.state, start.period, start.pressure_drop,
-                                      model=model, ustar_max=6.9, settings=CollocationImpactSettings(
-                                          ntst=200, max_points=40, ds=0.2, ds_max=1.0))
+    _, scene, model, br = _through_contact(4, 6.9, CollocationImpactSettings(
+        ntst=200, max_points=40, ds=0.2, ds_max=1.0))
     near = min(br.points, key=lambda p: abs(p.ustar - 6.8))
     target = scene.replace(ustar=6.8)
     dp = steady_state(target, model).pressure_drop
@@ -148,13 +148,8 @@ def test_subharmonic_cycle_from_time_integration(period3_impacting_run):
 def n4_torus():
     """M* = 1, N = 4, same law, NTST = 100: the period-1 impacting cycle loses stability
     shortly past the first contact through a complex pair of multipliers."""
-    base = Scene(mstar=1.0, zeta=0.01, modes=4, contact_eps=1e-2)
-    start = pre_contact_start(cycle_branch(base, ustar_max=10.0, settings=SCENE_NODES))
-    scene = base.replace(ustar=start.ustar, **IMPACT)
-    model = build_model(scene)
-    br = impacting_collocation_branch(scene, start.state, start.period, start.pressure_drop,
-                                      model=model, ustar_max=6.7, settings=CollocationImpactSettings(
-                                          ntst=100, max_points=12))
+    _, scene, model, br = _through_contact(4, 6.7, CollocationImpactSettings(ntst=100,
+                                                                              max_points=12))
     return scene, model, br
 
 
