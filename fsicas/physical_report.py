@@ -94,12 +94,14 @@ def _lco_point(sc: Scales, p: dict) -> dict:
     return {**flow_json(sc, p["ustar"]), **_cycle(sc, p)}
 
 
-def _impact_point(sc: Scales, p: dict) -> dict:
-    """An impacting cycle: as a limit cycle, plus the least gap (impacts per cycle, peak
-    force in F0 and the flow reduction stay dimensionless)."""
+def _impact_point(sc: Scales, p: dict, reference_force: float) -> dict:
+    """An impacting cycle: as a limit cycle, plus the least gap and the peak impact force
+    in N (``reference_force``: F0, nondimensional; impacts per cycle and the flow
+    reduction stay dimensionless)."""
     frequency = 2 * math.pi / p["period"] if p.get("period") else None
     return {**flow_json(sc, p["ustar"]), **_cycle(sc, {**p, "frequency": frequency}),
-            "min_gap_mm": _opt(sc.mm, p.get("min_gap"))}
+            "min_gap_mm": _opt(sc.mm, p.get("min_gap")),
+            "peak_force_n": _opt(sc.newtons, p["peak_force"] * reference_force)}
 
 
 def _lco(out: dict, scene: Scene, sc: Scales) -> dict:
@@ -109,9 +111,11 @@ def _lco(out: dict, scene: Scene, sc: Scales) -> dict:
               "folds": [_lco_point(sc, p) for p in out["folds"]],
               "contact": _opt(lambda p: _lco_point(sc, p), out.get("contact"))}
     if "impacting" in out:
-        result["impacting"] = [_impact_point(sc, p) for p in out["impacting"]["points"]]
-        result["impacting_special"] = [{"kind": p["kind"], **_impact_point(sc, p)}
-                                       for p in out["impacting"].get("special", [])]
+        imp = out["impacting"]
+        force = imp.get("reference_force", float("nan"))
+        result["impacting"] = [_impact_point(sc, p, force) for p in imp["points"]]
+        result["impacting_special"] = [{"kind": p["kind"], **_impact_point(sc, p, force)}
+                                       for p in imp.get("special", [])]
     return result
 
 

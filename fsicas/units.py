@@ -71,6 +71,11 @@ class Scales:
     def mm(self, y: float) -> float:
         return y * self.length * 1e3
 
+    def newtons(self, load: float) -> float:
+        """A total load over the beam (a nondimensional pressure integrated along it) in
+        N over the width: ``load (D / L^3) L b``."""
+        return load * self.pressure * self.length * self.width
+
     def seconds(self, t: float) -> float:
         return t * self.time
 

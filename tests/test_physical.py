@@ -256,8 +256,8 @@ def test_boundary_defaults_to_the_physical_mass_ratio(capsys):
 
 def test_impacting_cycles_and_curves_in_physical_units():
     """The impacting part of ``lco`` and the curves of ``grazing`` in SI units from the
-    palate's scales: period T t, frequency 1/(T t), gap L y in mm, the velocity U* L / T
-    and, on a curve, the fluid density M* rho_s e / L of each point."""
+    palate's scales: period T t, frequency 1/(T t), gap L y in mm, the velocity U* L / T,
+    the peak force (in F0, nondimensional) F0 D b / L^2 in N and, on a curve, the fluid density M* rho_s e / L of each point."""
     from fsicas.physical_report import add_physical
     palate = load_physical("soft_palate")
     scene = palate.scene()
@@ -265,8 +265,14 @@ def test_impacting_cycles_and_curves_in_physical_units():
     impact = {"ustar": 7.0, "period": 0.127, "tip_amplitude": 0.0496, "min_gap": 3e-4,
               "impacts": 2, "peak_force": 5e3, "flow_reduction": 0.058, "stable": True}
     lco = {"hopf": None, "points": [], "folds": [], "contact": None,
-           "impacting": {"points": [impact]}}
-    (p,) = add_physical(lco, scene, "lco")["physical"]["impacting"]
+           "impacting": {"points": [impact], "reference_force": 0.3,
+                         "special": [{**impact, "kind": "ns"}]}}
+    physical = add_physical(lco, scene, "lco")["physical"]
+    (p,) = physical["impacting"]
+    v = palate.values                                  # the peak force from the SI inputs
+    D = v["E"] * v["e"] ** 3 / (12 * (1 - v["nu"] ** 2))
+    assert p["peak_force_n"] == pytest.approx(5e3 * 0.3 * D * v["b"] / v["L"] ** 2, rel=1e-12)
+    assert physical["impacting_special"] == [{**p, "kind": "ns"}]
     assert p["period_s"] == pytest.approx(0.127 * sc.time, rel=1e-12)
     assert p["frequency_hz"] == pytest.approx(1 / (0.127 * sc.time), rel=1e-12)
     assert p["min_gap_mm"] == pytest.approx(3e-4 * sc.length * 1e3, rel=1e-12)

@@ -13,7 +13,9 @@ from ..cycles.collocation import CycleSettings, cycle_branch
 from ..cycles.impacting import ImpactSettings, impacting_branch, pre_contact_start
 from ..cycles.impacting_collocation import (CollocationImpactSettings,
                                             impacting_collocation_branch)
+from ..model import build_model
 from ..model.accuracy import QUADRATURE_TOL
+from ..model.contact import reference_force
 from ..physical_report import add_physical
 from ..plots.cycles import plot_branch
 from .meta import record, write_json
@@ -122,7 +124,7 @@ def _through_contact(scene, branch, args, say) -> dict:
     special = getattr(imp, "special", [])
     say.stats(f"{len(imp.points)} impacting cycles, {len(special)} special, status {imp.status}")
     return {"status": imp.status, "message": imp.message, "eps": imp.eps,
-            "route": args.impact_route, "start_ustar": start.ustar, "wall_time": imp.wall_time,
+            "reference_force": reference_force(build_model(scene)), "route": args.impact_route, "start_ustar": start.ustar, "wall_time": imp.wall_time,
             "points": [{k: getattr(p, k) for k in _IMPACT_KEYS} for p in imp.points],
             "special": [_special_summary(p) for p in special]}
 
