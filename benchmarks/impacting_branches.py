@@ -48,7 +48,8 @@ def branches(modes, args):
     out = Path(args.out)
     base = Scene(mstar=1.0, zeta=0.01, modes=modes, contact_eps=1e-2)
     settings = CollocationImpactSettings(ntst=args.ntst, max_points=args.max_points,
-                                         ds=args.ds, ds_max=args.ds_max)
+                                         ds=args.ds, ds_max=args.ds_max,
+                                         max_turn=args.max_turn)
     main_path = out / f"impacting_N{modes}.json"
     if main_path.exists():
         main = CollocatedImpactBranch.load(main_path)
@@ -123,7 +124,8 @@ def main(argv=None) -> int:
     ap.add_argument("--ustar-max", type=float, default=10.5)
     ap.add_argument("--ntst", type=int, default=200)
     ap.add_argument("--ds", type=float, default=0.05)
-    ap.add_argument("--ds-max", type=float, default=5.0)
+    ap.add_argument("--ds-max", type=float, default=1.0)
+    ap.add_argument("--max-turn", type=float, default=0.3)
     ap.add_argument("--max-points", type=int, default=400)
     ap.add_argument("--periods", type=int, default=40)
     ap.add_argument("--out", default="runs/impacting")

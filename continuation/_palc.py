@@ -66,6 +66,11 @@ def tangent(problem, X: np.ndarray, tau_ref: np.ndarray, lu=None):
     return t / np.linalg.norm(t), lu
 
 
+def _turn(a, b) -> float:
+    """The angle between two unit tangents."""
+    return float(np.arccos(np.clip(np.dot(a, b), -1.0, 1.0)))
+
+
 class ContinuationIterator:
     """Iterate PALC steps; ``status``/``message`` tell why it stopped.
 
@@ -132,12 +137,15 @@ class ContinuationIterator:
             res = correct(self.problem, step.X + ds * step.tau, step.tau, s.newton)
             self.stats["newton_iterations"] += res.iterations
             new = self._accept(step, res, ds) if res.converged else None
-            if new is not None:
+            turn = _turn(step.tau, new.tau) if new is not None else 0.0
+            if new is not None and not (s.max_turn and turn > s.max_turn):
                 break
             self.stats["rejected_steps"] += 1
+            why = res.message if new is None else \
+                f"the tangent turned by {turn:.3g} rad > max_turn = {s.max_turn:.3g}"
             if ds * s.step_shrink < s.ds_min:
                 return self._fail(f"corrector failed at ds = {ds:.3e} (ds_min = "
-                                  f"{s.ds_min:.1e}): {res.message}", res, ds)
+                                  f"{s.ds_min:.1e}): {why}", res, ds)
             self.ds = cap = ds * s.step_shrink
         if self._out_of_bounds(new.X):
             return None

@@ -111,6 +111,11 @@ class ContinuationSettings:
         (``_eigen.step_limit``): a pair that crosses and crosses back within what would
         be one step (a narrow window) is met inside the window, not jumped over, while
         a pair that keeps its course is crossed in one step. 0 turns the limit off.
+    max_turn : largest angle (radians) between the tangents of two successive points;
+        a step turning more is rejected and retried shorter (0: off, the default). A
+        step that jumps over a sharp fold lands on the far side with a tangent oriented
+        by the old one, i.e. backwards, and the branch then retraces itself; the
+        turn of the tangent gives it away.
     progress : show a tqdm progress bar (off by default).
     """
 
@@ -131,6 +136,7 @@ class ContinuationSettings:
     locate_tol: float = 1e-10
     locate_max_iter: int = 60
     eigen_step: float = 0.1
+    max_turn: float = 0.0
     progress: bool = False
 
     def __post_init__(self):
@@ -146,6 +152,9 @@ class ContinuationSettings:
         if not (isinstance(self.eigen_step, (int, float)) and 0 <= self.eigen_step <= 1):
             raise ValueError("ContinuationSettings.eigen_step must be in [0, 1] (0: off), got "
                              f"{self.eigen_step!r}")
+        if not (isinstance(self.max_turn, (int, float)) and 0 <= self.max_turn <= math.pi):
+            raise ValueError("ContinuationSettings.max_turn must be an angle in [0, pi] "
+                             f"(0: off), got {self.max_turn!r}")
         if not 0 < self.step_shrink < 1 or self.step_grow < 1:
             raise ValueError("ContinuationSettings.step_shrink must be in (0, 1) and "
                              f"step_grow >= 1, got {self.step_shrink}, {self.step_grow}")

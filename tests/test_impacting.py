@@ -188,7 +188,7 @@ def test_cli_lco_through_contact(capsys):
     keys = {"ustar", "period", "tip_amplitude", "min_gap", "gap_ratio", "impacts",
             "peak_force", "flow_reduction", "stable"}
     code = main(["lco", "--mstar", "1", "--zeta", "0.01", "--modes", "4", "--ustar-max", "6.7",
-                 "--through-contact", "--impact-points", "12", "--impact-ntst", "100",
+                 "--through-contact", "--impact-points", "16", "--impact-ntst", "100",
                  "--json"])
     out = json.loads(capsys.readouterr().out)
     imp = out["impacting"]

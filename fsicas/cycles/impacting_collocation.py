@@ -72,7 +72,10 @@ class CollocationImpactSettings:
     ``max_points``: branch points; ``samples``: samples per mesh interval for the
     measurements; ``guess_samples``/``guess_tol``: outputs and CVODES tolerance of the
     integrated start period; ``detect``: detect, locate and refine folds, period
-    doublings and Neimark-Sacker points (multipliers at every point)."""
+    doublings and Neimark-Sacker points (multipliers at every point); ``max_turn``:
+    largest angle (rad) between successive tangents, else the step is retried shorter
+    (``continuation.ContinuationSettings.max_turn``: past the contacts the branch folds
+    sharply, and a step over such a fold came back oriented backwards)."""
 
     ntst: int = 200
     ncol: int = 4
@@ -86,10 +89,11 @@ class CollocationImpactSettings:
     guess_samples: int = 20000
     guess_tol: float = 1e-10
     detect: bool = True
+    max_turn: float = 0.3
 
     def __post_init__(self):
         check_settings(self, integers=("ntst", "ncol", "max_points", "samples", "guess_samples"),
-                       positives=("tol", "ds", "ds_max", "guess_tol"),
+                       positives=("tol", "ds", "ds_max", "guess_tol", "max_turn"),
                        nonnegative_integers=("adapt_every", "mesh_passes"))
         if not isinstance(self.detect, bool):
             raise ValueError(f"CollocationImpactSettings.detect must be a bool, got {self.detect!r}")
@@ -273,7 +277,7 @@ def _steps(scene, model, ustar_min, ustar_max, direction, settings) -> C.Continu
         max_steps=max(settings.max_points - 1, 1),
         bounds={PI: (pi_lo, pi_of(scene, model, ustar_max))},
         newton=C.NewtonSettings(tol=settings.tol), compute_eigenvalues=settings.detect,
-        detect=settings.detect)
+        detect=settings.detect, max_turn=settings.max_turn)
 
 
 def _result(scene, eps, branch, special, settings, wall_time) -> CollocatedImpactBranch:

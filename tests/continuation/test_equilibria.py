@@ -351,3 +351,27 @@ def test_eigenvalue_step_limit_leaves_cycle_branches_alone(monkeypatch):
                                                      {"mu": 0.0}, "mu"),
                                 settings=settings(ds=0.3, ds_max=0.3, max_steps=5))
     assert len(calls) == len(equilibria.s) - 1
+
+
+def test_max_turn_bounds_the_angle_between_successive_tangents():
+    """The narrow fold p = -1 + (x/0.1)^2: its tangent turns by pi within |x| < 0.1. With
+    steps of 0.5 the branch turns by up to about 1 rad from one point to the next;
+    with ``max_turn`` = 0.2 every turn, measured on the exact tangent (1, 200 x) of the
+    curve at the points, is at most 0.2 (and steps were rejected to make it so)."""
+    x, p = ca.SX.sym("x"), ca.SX.sym("p")
+    F = ca.Function("F", [x, p], [p + 1 - (x / 0.1) ** 2])
+
+    def turns(max_turn):
+        prob = C.EquilibriumProblem(F, np.array([-0.2]), {"p": 3.0}, "p")
+        br = C.continuation(prob, settings=C.ContinuationSettings(
+            ds=0.5, ds_max=0.5, direction=-1, max_steps=60, bounds={"p": (-2.0, 3.5)},
+            max_turn=max_turn, compute_eigenvalues=False))
+        t = np.c_[np.ones(len(br)), 200 * br.x[:, 0]]
+        t /= np.linalg.norm(t, axis=1)[:, None]
+        assert len(br.special("fold")) == 1 and br.x[-1, 0] > 0
+        return np.arccos(np.clip(np.abs(np.sum(t[1:] * t[:-1], axis=1)), 0, 1)), br
+
+    free, _ = turns(0.0)
+    bounded, br = turns(0.2)
+    assert free.max() > 0.5
+    assert bounded.max() <= 0.2 + 1e-9 and br.stats["rejected_steps"] > 0

@@ -77,6 +77,8 @@ def test_mx_functions_are_accepted(models):
     (dict(bounds={"mu": (1.0, 0.0)}), "bounds"),
     (dict(ds_min=-1.0), "ds_min"),
     (dict(step_shrink=1.5), "step_shrink"),
+    (dict(max_turn=-0.1), "max_turn"),
+    (dict(max_turn=4.0), "max_turn"),
 ])
 def test_settings_validation(kwargs, field):
     with pytest.raises(ValueError, match=field):
