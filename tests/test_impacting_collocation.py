@@ -208,3 +208,38 @@ def test_settled_cycle_of_stable_and_unstable_impacting_cycles(n4_torus):
         settled_cycle(model, scene, far.state, -1.0)
     with pytest.raises(ValueError, match="periods"):
         settled_cycle(model, scene, far.state, far.period, periods=1)
+
+
+@pytest.mark.slow
+def test_case_1a_at_n10_matches_time_integration():
+    """N = 10, NTST = 200 (about 2 min): the period-1 branch through the first contact to
+    the paper's case (1a), U* = 7. The cycle at U* = 7 (one collocation point at its
+    pressure drop) is stable with 2 contact intervals, and a run from its state
+    (``settled_cycle``: IDAS 1e-10, 40 periods) settles on it: period 1e-5, amplitude
+    1e-4, peak force 1e-2 (measured 7e-9, 3e-6, 1e-3). On the way the branch loses and
+    regains stability at two located Neimark-Sacker points (pair on the circle to 1e-9),
+    as its points show."""
+    _, scene, model, br = _through_contact(10, 7.05, CollocationImpactSettings(
+        ntst=200, max_points=150))
+    near = min(br.points, key=lambda p: abs(p.ustar - 7.0))
+    at = scene.replace(ustar=7.0)
+    one = impacting_collocation_branch(at, near.state, near.period,
+                                       steady_state(at, model).pressure_drop, model=model,
+                                       settings=CollocationImpactSettings(ntst=200, max_points=1,
+                                                                          detect=False))
+    (p,) = one.points
+    assert abs(p.ustar - 7.0) < 1e-9 and p.stable and p.impacts == 2 and p.gap_ratio < 1
+    run = settled_cycle(model, at, p.state, p.period, periods=40)
+    assert run.status == "settled" and run.swings == 1
+    assert abs(run.period / p.period - 1) < 1e-5
+    assert abs(run.tip_amplitude / p.tip_amplitude - 1) < 1e-4
+    assert run.peak_force == pytest.approx(p.peak_force, rel=1e-2)
+    ns = [s for s in br.special if s.kind == "ns"]
+    assert len(ns) == 2 and all(s.located for s in ns)
+    for s in ns:
+        rest = s.nontrivial_multipliers
+        assert abs(abs(rest[0]) - 1) < 1e-9 and rest[0].imag != 0
+    lo, hi = sorted(s.ustar for s in ns)
+    assert all(q.stable for q in br.points if q.ustar < lo - 1e-3)
+    assert not any(q.stable for q in br.points if lo + 1e-3 < q.ustar < hi - 1e-3)
+    assert all(q.stable for q in br.points if q.ustar > hi + 1e-3)
