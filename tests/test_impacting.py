@@ -181,8 +181,9 @@ def test_peak_force_and_flow_reduction_against_a_time_integration(through_contac
 def test_cli_lco_through_contact(capsys):
     """``fsicas lco --through-contact``: the collocation branch to the wall, then the
     impacting branch on the contact model from 3 eps before it: by collocation (default)
-    with its special cycles, at N = 4 the Neimark-Sacker point past the first contact;
-    by shooting (plumbing: one point)."""
+    with its special cycles, at N = 4 the Neimark-Sacker point past the first contact,
+    and a warning when the mesh is too coarse (NTST = 10); by shooting (plumbing: one
+    point)."""
     import json
     from fsicas.cli import main
     keys = {"ustar", "period", "tip_amplitude", "min_gap", "gap_ratio", "impacts",
@@ -194,6 +195,7 @@ def test_cli_lco_through_contact(capsys):
     imp = out["impacting"]
     assert code == 0 and out["status"] == "contact" and imp["route"] == "collocation"
     assert imp["status"] == "bound" and set(imp["points"][0]) == keys
+    assert 0 < imp["max_error_estimate"] < 0.1          # no coarse-mesh warning here
     (ns,) = imp["special"]
     assert ns["kind"] == "ns" and ns["located"] and set(ns) == keys | {"kind", "located",
                                                                       "multiplier"}
@@ -206,5 +208,12 @@ def test_cli_lco_through_contact(capsys):
     point = imp["points"][0]
     assert set(point) == keys and imp["special"] == []
     assert point["gap_ratio"] == pytest.approx(3.0, abs=1.0) and imp["eps"] > 0
+    capsys.readouterr()
+    assert main(["lco", "--mstar", "1", "--zeta", "0.01", "--modes", "4", "--ustar-max", "6.7",
+                 "--through-contact", "--impact-points", "10", "--impact-ntst", "10",
+                 "--json"]) == 0
+    coarse = capsys.readouterr()
+    assert json.loads(coarse.out)["impacting"]["max_error_estimate"] > 0.1
+    assert "mesh is too coarse" in coarse.err and "--impact-ntst" in coarse.err
     for bad in (["--impact-points", "0"], ["--impact-ntst", "0"]):
         assert main(["lco", "--modes", "4", "--through-contact", *bad, "--json"]) == 2

@@ -28,6 +28,10 @@ _POINT_KEYS = ("kind", "ustar", "period", "frequency", "tip_amplitude", "gap_rat
                "quadrature_error", "quadrature_nodes")
 _IMPACT_KEYS = ("ustar", "period", "tip_amplitude", "min_gap", "gap_ratio", "impacts",
                 "peak_force", "flow_reduction", "stable")
+#: the collocation error indicator above which the impacting mesh is reported too coarse
+#: (at N = 20 NTST = 200 reached 1-2 and its branch was not trusted; NTST = 400 kept
+#: 1e-2-4e-2 and agreed with time integration to 1e-7, docs/cycles.md)
+COARSE_MESH = 0.1
 #: the multiplier each kind of special cycle puts on the unit circle
 _CRITICAL = {"fold": 1.0, "pd": -1.0, "ns": None}
 #: The contact law of ``--through-contact`` where none is given: that of Figs. 6-9
@@ -123,7 +127,13 @@ def _through_contact(scene, branch, args, say) -> dict:
                                            settings=settings)
     special = getattr(imp, "special", [])
     say.stats(f"{len(imp.points)} impacting cycles, {len(special)} special, status {imp.status}")
+    worst = max((getattr(p, "error_estimate", 0.0) for p in imp.points), default=0.0)
+    if worst > COARSE_MESH:
+        say.stage(f"warning: the collocation error indicator reached {worst:.2g} (> "
+                  f"{COARSE_MESH:g}): the mesh is too coarse for these cycles; raise "
+                  "--impact-ntst", always=True)
     return {"status": imp.status, "message": imp.message, "eps": imp.eps,
+            "max_error_estimate": worst,
             "reference_force": reference_force(build_model(scene)), "route": args.impact_route, "start_ustar": start.ustar, "wall_time": imp.wall_time,
             "points": [{k: getattr(p, k) for k in _IMPACT_KEYS} for p in imp.points],
             "special": [_special_summary(p) for p in special]}
