@@ -10,8 +10,11 @@ M* = 1, zeta = 0.01, H* = 1/10, f = 0.14, contact k* = 1e8, eps/H = 1e-2, smooth
    impacting branch by adaptive collocation (``impacting_collocation_branch``, NTST fixed,
    special cycles detected and refined by Newton on their minimally extended systems) up
    to ``--ustar-max``;
-2. at every period doubling met, the doubled branch (``period_doubled_branch``), once
-   (doublings on the doubled branch are listed, not followed);
+2. where that branch fails before ``--ustar-max`` (a re-meshed restart that does not
+   converge once the contacts multiply), its continuation on ``--fine-ntst`` intervals
+   from its last point at least 0.05 below the U* where it failed; at every period doubling met, the doubled branch
+   (``period_doubled_branch``), once (doublings on the doubled branch are listed, not
+   followed);
 3. at each ``--ustar`` and each pass of a branch through it, the cycle *at* that U* (one
    collocation point at its pressure drop from the nearest branch point) and a time
    integration from its state (``settled_cycle``: IDAS 1e-10, ``--periods`` periods):
@@ -27,6 +30,7 @@ import argparse
 import os
 import sys
 import time
+from dataclasses import replace
 from pathlib import Path
 
 os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")   # before NumPy: see docs/continuation.md
@@ -61,13 +65,25 @@ def branches(modes, args):
                                             settings=settings)
         main.save(main_path)
     found = [("period-1", main)]
-    for j, pd in enumerate(p for p in main.special if p.kind == "pd"):
+    before = [p for p in main.points if p.ustar < main.points[-1].ustar - 0.05]
+    if main.status == "failed" and before and args.fine_ntst:
+        path = out / f"impacting_N{modes}_fine.json"
+        if path.exists():
+            fine = CollocatedImpactBranch.load(path)
+        else:
+            p = before[-1]
+            fine = impacting_collocation_branch(
+                main.scene, p.state, p.period, p.pressure_drop, ustar_max=args.ustar_max,
+                settings=replace(settings, ntst=args.fine_ntst))
+            fine.save(path)
+        found.append((f"period-1, NTST = {args.fine_ntst}", fine))
+    for j, pd in enumerate(p for _, b in list(found) for p in b.special if p.kind == "pd"):
         path = out / f"impacting_N{modes}_doubled{j}.json"
         if path.exists():
             doubled = CollocatedImpactBranch.load(path)
         else:
             doubled = period_doubled_branch(main.scene, pd, ustar_max=args.ustar_max,
-                                            settings=settings)
+                                            settings=replace(settings, ntst=pd.ntst))
             doubled.save(path)
         found.append((f"doubled at U* = {pd.ustar:.5f}", doubled))
     return found
@@ -80,7 +96,8 @@ def at_ustar(branch, target, model, args):
     passes = np.flatnonzero((u[:-1] - target) * (u[1:] - target) <= 0)
     scene = branch.scene.replace(ustar=target)
     dp = steady_state(scene, model).pressure_drop
-    one = CollocationImpactSettings(ntst=args.ntst, max_points=1, detect=False)
+    ntst = branch.points[0].ntst or args.ntst
+    one = CollocationImpactSettings(ntst=ntst, max_points=1, detect=False)
     cycles = []
     for i in passes:
         near = branch.points[i if abs(u[i] - target) < abs(u[i + 1] - target) else i + 1]
@@ -123,6 +140,7 @@ def main(argv=None) -> int:
     ap.add_argument("--ustar", type=float, nargs="+", default=[7.0, 8.5, 10.0])
     ap.add_argument("--ustar-max", type=float, default=10.5)
     ap.add_argument("--ntst", type=int, default=200)
+    ap.add_argument("--fine-ntst", type=int, default=400)
     ap.add_argument("--ds", type=float, default=0.05)
     ap.add_argument("--ds-max", type=float, default=1.0)
     ap.add_argument("--max-turn", type=float, default=0.3)
