@@ -86,6 +86,10 @@ def test_save_load_and_validation(n3_branch, tmp_path):
         CollocationImpactSettings(ntst=0)
     with pytest.raises(ValueError, match="mesh_passes"):
         CollocationImpactSettings(mesh_passes=-1)
+    with pytest.raises(ValueError, match="max_turn"):
+        CollocationImpactSettings(max_turn=-0.1)
+    with pytest.raises(ValueError, match="detect"):
+        CollocationImpactSettings(detect="yes")
     with pytest.raises(ValueError, match="contact_smoothing"):
         impacting_collocation_branch(scene.replace(contact_smoothing=0.0), np.zeros(8), 0.1, 1.0)
     with pytest.raises(ValueError, match="kind 'pd'"):

@@ -41,8 +41,9 @@ THROUGH_STIFFNESS, THROUGH_EPS, THROUGH_SMOOTHING = 1e8, 1e-2, 0.1
 
 def add_cycle_commands(sub) -> None:
     """Add the ``lco`` subcommand (alias ``cycles``)."""
-    p = sub.add_parser("lco", aliases=["cycles"], help="limit cycles vs U* by collocation continuation from the "
-                                      "first Hopf point, up to the first contact")
+    p = sub.add_parser("lco", aliases=["cycles"],
+                       help="limit cycles vs U* by collocation continuation from the first Hopf "
+                            "point, up to the first contact")
     add_scene_options(p)
     p.add_argument("--ustar-max", type=float, default=20.0, help="stop beyond this U*")
     p.add_argument("--ntst", type=int, default=20, help="collocation mesh intervals")
@@ -111,20 +112,21 @@ def _through_contact(scene, branch, args, say) -> dict:
                 "the wall below --ustar-max", "points": []}
     start = pre_contact_start(branch)
     scene = scene.replace(ustar=start.ustar, contact=True)
+    model = build_model(scene)
     law = f"k* = {scene.contact_stiffness:g}, eps/H = {scene.contact_eps:g}"
     if args.impact_route == "shooting":
         settings = ImpactSettings(max_points=args.impact_points)
         say.stage(f"through contact from U* = {start.ustar:.5g} by multiple shooting "
                   f"({settings.segments} segments, {law})")
         imp = impacting_branch(scene, start.state, start.period, start.pressure_drop,
-                               ustar_max=args.ustar_max, settings=settings)
+                               model=model, ustar_max=args.ustar_max, settings=settings)
     else:
         settings = CollocationImpactSettings(ntst=args.impact_ntst, max_points=args.impact_points)
         say.stage(f"through contact from U* = {start.ustar:.5g} by adaptive collocation "
                   f"(NTST = {settings.ntst}, {law})")
         imp = impacting_collocation_branch(scene, start.state, start.period,
-                                           start.pressure_drop, ustar_max=args.ustar_max,
-                                           settings=settings)
+                                           start.pressure_drop, model=model,
+                                           ustar_max=args.ustar_max, settings=settings)
     special = getattr(imp, "special", [])
     say.stats(f"{len(imp.points)} impacting cycles, {len(special)} special, status {imp.status}")
     worst = max((getattr(p, "error_estimate", 0.0) for p in imp.points), default=0.0)
@@ -134,7 +136,8 @@ def _through_contact(scene, branch, args, say) -> dict:
                   "--impact-ntst", always=True)
     return {"status": imp.status, "message": imp.message, "eps": imp.eps,
             "max_error_estimate": worst,
-            "reference_force": reference_force(build_model(scene)), "route": args.impact_route, "start_ustar": start.ustar, "wall_time": imp.wall_time,
+            "reference_force": reference_force(model), "route": args.impact_route,
+            "start_ustar": start.ustar, "wall_time": imp.wall_time,
             "points": [{k: getattr(p, k) for k in _IMPACT_KEYS} for p in imp.points],
             "special": [_special_summary(p) for p in special]}
 

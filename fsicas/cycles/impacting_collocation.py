@@ -27,7 +27,9 @@ points, detected from the tangent and the multipliers, located on the arclength 
 library and refined by Newton on their minimally extended systems
 (``continuation.CycleFold``, ``PeriodDoubling``, ``NeimarkSacker``: the critical
 multiplier at +1, -1 or on the unit circle). :func:`period_doubled_branch` switches at
-a period doubling onto the branch of cycles of twice the period. Extrema are those of the collocation polynomial, exact in t
+a period doubling onto the branch of cycles of twice the period.
+
+Extrema are those of the collocation polynomial, exact in t
 (:class:`fsicas.cycles.gauge.PolynomialExtrema`); the contact intervals are counted on
 ``samples`` points per mesh interval (dense at the impacts).
 """
@@ -74,8 +76,8 @@ class CollocationImpactSettings:
     integrated start period; ``detect``: detect, locate and refine folds, period
     doublings and Neimark-Sacker points (multipliers at every point); ``max_turn``:
     largest angle (rad) between successive tangents, else the step is retried shorter
-    (``continuation.ContinuationSettings.max_turn``: past the contacts the branch folds
-    sharply, and a step over such a fold came back oriented backwards)."""
+    (``continuation.ContinuationSettings.max_turn``, 0 = off: past the contacts the
+    branch folds sharply, and a step over such a fold came back oriented backwards)."""
 
     ntst: int = 200
     ncol: int = 4
@@ -93,10 +95,14 @@ class CollocationImpactSettings:
 
     def __post_init__(self):
         check_settings(self, integers=("ntst", "ncol", "max_points", "samples", "guess_samples"),
-                       positives=("tol", "ds", "ds_max", "guess_tol", "max_turn"),
+                       positives=("tol", "ds", "ds_max", "guess_tol"),
                        nonnegative_integers=("adapt_every", "mesh_passes"))
         if not isinstance(self.detect, bool):
-            raise ValueError(f"CollocationImpactSettings.detect must be a bool, got {self.detect!r}")
+            raise ValueError("CollocationImpactSettings.detect must be a bool, got "
+                             f"{self.detect!r}")
+        if not (isinstance(self.max_turn, (int, float)) and 0 <= self.max_turn <= np.pi):
+            raise ValueError("CollocationImpactSettings.max_turn must be an angle in [0, pi] "
+                             f"(0: off), got {self.max_turn!r}")
 
 
 @dataclass(frozen=True)
