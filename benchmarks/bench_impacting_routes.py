@@ -13,7 +13,8 @@ point is the cycle *at* the target (the error: period, tip half-amplitude and th
 largest non-trivial |mu|, relative to the reference: collocation on ``--ref-ntst``
 intervals for period and amplitude, shooting at ``--ref-shoot`` for |mu|, both printed); the time per point is the mean
 wall time of the continuation points after the first (corrector, tangent, multipliers,
-measurements), with the mean step in U*. A time integration (IDAS, rtol 1e-10) over
+measurements; as for shooting, no special cycles detected and no turn limit), with the
+mean step in U*. A time integration (IDAS, rtol 1e-10) over
 ``--ti-periods`` periods from the reference cycle's state is the third check: the state's
 return after each period and the amplitude over the first.
 """
@@ -48,7 +49,8 @@ def target_guess(modes: int, ustar: float, ntst: int = 200):
     model = build_model(scene)
     br = impacting_collocation_branch(
         scene, start.state, start.period, start.pressure_drop, model=model, ustar_max=ustar + 0.1,
-        settings=CollocationImpactSettings(ntst=ntst, max_points=80, ds=0.05, ds_max=0.6))
+        settings=CollocationImpactSettings(ntst=ntst, max_points=80, ds=0.05, ds_max=0.6,
+                                           detect=False))
     near = min(br.points, key=lambda p: abs(p.ustar - ustar))
     target = scene.replace(ustar=ustar)
     return target, model, near.state, near.period, steady_state(target, model).pressure_drop
@@ -57,7 +59,7 @@ def target_guess(modes: int, ustar: float, ntst: int = 200):
 def colloc_run(case, ntst: int, points: int, ds: float):
     scene, model, state, period, dp = case
     s = CollocationImpactSettings(ntst=ntst, max_points=points, ds=ds * np.sqrt(ntst / 20),
-                                  ds_max=ds * np.sqrt(ntst / 20))
+                                  ds_max=ds * np.sqrt(ntst / 20), detect=False, max_turn=0.0)
     return impacting_collocation_branch(scene, state, period, dp, model=model, settings=s)
 
 
