@@ -110,12 +110,10 @@ def at_ustar(branch, target, model, args):
 
 def special_rows(name, modes, branch):
     for p in branch.special:
-        mu = p.nontrivial_multipliers
-        critical = {"fold": np.min(np.abs(mu - 1)), "pd": np.min(np.abs(mu + 1)),
-                    "ns": np.min(np.abs(np.abs(mu[mu.imag != 0]) - 1)) if np.any(mu.imag != 0)
-                    else np.nan}[p.kind]
+        m = p.critical_multiplier
+        error = abs(abs(m) - 1) if p.kind == "ns" else abs(m - (1 if p.kind == "fold" else -1))
         print(f"| {modes} | {name} | {p.kind} | {p.ustar:.6f} | {p.period:.7f} | "
-              f"{p.tip_amplitude:.6f} | {p.impacts} | {critical:.1e} | {p.located} |")
+              f"{p.tip_amplitude:.6f} | {p.impacts} | {error:.1e} | {p.located} |")
 
 
 def check_rows(name, modes, branch, model, args):

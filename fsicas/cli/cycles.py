@@ -7,7 +7,6 @@ time integration commands of :mod:`fsicas.cli.timedomain`.
 """
 from __future__ import annotations
 
-import numpy as np
 
 from ..cycles.collocation import CycleSettings, cycle_branch
 from ..cycles.impacting import ImpactSettings, impacting_branch, pre_contact_start
@@ -32,8 +31,7 @@ _IMPACT_KEYS = ("ustar", "period", "tip_amplitude", "min_gap", "gap_ratio", "imp
 #: (at N = 20 NTST = 200 reached 1-2 and its branch was not trusted; NTST = 400 kept
 #: 1e-2-4e-2 and agreed with time integration to 1e-7, docs/cycles.md)
 COARSE_MESH = 0.1
-#: the multiplier each kind of special cycle puts on the unit circle
-_CRITICAL = {"fold": 1.0, "pd": -1.0, "ns": None}
+
 #: The contact law of ``--through-contact`` where none is given: that of Figs. 6-9
 #: (docs/simulate.md), smoothed (docs/cycles.md).
 THROUGH_STIFFNESS, THROUGH_EPS, THROUGH_SMOOTHING = 1e8, 1e-2, 0.1
@@ -144,11 +142,8 @@ def _through_contact(scene, branch, args, say) -> dict:
 
 def _special_summary(point) -> dict:
     """A special impacting cycle: its kind, whether Newton refined it, the measures and
-    its critical multiplier [re, im] (nearest +1, -1 or the unit circle by kind)."""
-    mu = point.nontrivial_multipliers
-    target = _CRITICAL[point.kind]
-    distance = np.abs(np.abs(mu) - 1) + (mu.imag == 0) if target is None else np.abs(mu - target)
-    m = mu[np.argmin(distance)]
+    its critical multiplier [re, im]."""
+    m = point.critical_multiplier
     return {"kind": point.kind, "located": point.located,
             **{k: getattr(point, k) for k in _IMPACT_KEYS},
             "multiplier": [float(m.real), float(m.imag)]}

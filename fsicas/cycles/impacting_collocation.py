@@ -60,6 +60,8 @@ ImpactKind = Literal["regular", "fold", "pd", "ns"]
 """A branch point ("regular") or a special cycle: "fold" (a second multiplier at +1),
 "pd" (a multiplier at -1), "ns" (a complex pair on the unit circle)."""
 
+#: the multiplier each kind of special cycle puts on the unit circle (None: a complex one)
+_CRITICAL = {"fold": 1.0, "pd": -1.0, "ns": None}
 #: the minimally extended system of each kind of special cycle
 _CONDITIONS = {"fold": C.CycleFold, "pd": C.PeriodDoubling, "ns": C.NeimarkSacker}
 
@@ -116,6 +118,18 @@ class CollocatedImpactPoint(ImpactPoint):
     #: a special cycle refined by Newton on its minimally extended system (False: where
     #: that Newton failed, the location on the arclength)
     located: bool = True
+
+    @property
+    def critical_multiplier(self) -> complex | None:
+        """A special cycle's critical multiplier: the non-trivial one nearest +1 (fold),
+        -1 (period doubling) or, among the complex ones, the unit circle (Neimark-Sacker);
+        None for a regular point."""
+        if self.kind not in _CRITICAL:
+            return None
+        mu, target = self.nontrivial_multipliers, _CRITICAL[self.kind]
+        distance = np.abs(np.abs(mu) - 1) + (mu.imag == 0) if target is None else \
+            np.abs(mu - target)
+        return complex(mu[np.argmin(distance)])
 
 
 @dataclass(frozen=True)
