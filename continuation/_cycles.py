@@ -25,6 +25,7 @@ from dataclasses import replace
 from typing import Mapping
 
 import numpy as np
+import scipy.sparse.linalg as spla
 
 from . import _blocks
 from . import _condensed
@@ -42,7 +43,8 @@ from ._vectorfield import VectorField
 class PeriodicProblem(Problem):
     """Shared detection hooks of periodic-orbit problems (collocation, shooting).
 
-    Subclasses provide ``period(X)``, ``multipliers(X)`` and ``settings.unstable_tol``.
+    Subclasses provide ``period(X)``, ``state(X)``, ``transfer_matrices(X)``,
+    ``multipliers(X)`` and ``settings.unstable_tol``.
     """
 
     kind = "cycle"
@@ -70,6 +72,14 @@ class PeriodicProblem(Problem):
 
     def frame(self, X) -> np.ndarray:
         return np.arange(len(X))
+
+    def section_multipliers(self, X) -> np.ndarray:
+        """The non-trivial multipliers, of the Poincare map on the section normal to
+        the flow ``M(u0)^-1 F(u0)`` at ``u0 = state(X)`` (``_floquet``): a fold's
+        multiplier at +1 as accurate as the others (the monodromy's pair is not)."""
+        u0, p = self.state(X), self.params(X)
+        f = spla.spsolve(self.vf.mass(u0, p).tocsc(), self.vf.rhs(u0, p))
+        return _floquet.section_multipliers(self.transfer_matrices(X), np.atleast_1d(f))
 
     def start_row(self) -> np.ndarray:
         if self.start_direction is None:
@@ -364,9 +374,7 @@ def _nearest_real(mu, target) -> float:
 
 def _nearest_complex_modulus(mu) -> float:
     cplx = mu[mu.imag > 0]
-    if not cplx.size:
-        return 1.0
-    return float(np.abs(cplx[np.argmin(np.abs(np.abs(cplx) - 1.0))]))
+    return float(np.abs(cplx[np.argmin(np.abs(np.abs(cplx) - 1.0))])) if cplx.size else 1.0
 
 
 def sample_orbit(orbit, t, n) -> np.ndarray:

@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 
 import continuation as C
+from continuation._floquet import section_multipliers
 
 SETTINGS = C.CollocationSettings(ntst=20, ncol=4)
 
@@ -27,6 +28,17 @@ def _bautin():
     r2 = x[0] ** 2 + x[1] ** 2
     g = p[0] + p[1] * r2 - r2 ** 2
     return ca.Function("F", [x, p], [ca.vertcat(g * x[0] - x[1], x[0] + g * x[1])])
+
+
+def _bautin_ring(e=0.5):
+    """The Bautin normal form with the angular speed 1 + e cos(theta): the same cycles
+    and fold, period 2 pi / sqrt(1 - e^2), and a non-uniform flow along them that
+    collocation discretizes with an error (the trivial multiplier is not exactly 1)."""
+    x, p = ca.SX.sym("x", 2), ca.SX.sym("p", 2)
+    r2 = x[0] ** 2 + x[1] ** 2
+    g = p[0] + p[1] * r2 - r2 ** 2
+    w = 1 + e * x[0] / ca.sqrt(r2)
+    return ca.Function("F", [x, p], [ca.vertcat(g * x[0] - w * x[1], g * x[1] + w * x[0])])
 
 
 def _torus(omega=0.3, a=0.7):
@@ -55,8 +67,8 @@ def _circle(radius=1.0, centre=0.0, z=0, phase=0.013):
     return orbit
 
 
-def _cycle(F, orbit, params, active):
-    prob = C.CycleProblem(F, orbit, 2 * np.pi, params, active, settings=SETTINGS)
+def _cycle(F, orbit, params, active, period=2 * np.pi):
+    prob = C.CycleProblem(F, orbit, period, params, active, settings=SETTINGS)
     step = C.ContinuationIterator(prob, C.PALC(), C.ContinuationSettings()).start()
     assert step is not None
     return prob, step.X
@@ -107,6 +119,36 @@ def test_lpc_located_by_newton_and_continued_on_the_bautin_fold_curve():
     assert branch.status == "bound" and b2.max() > 1.45
     assert np.max(np.abs(b1 + b2 ** 2 / 4)) < 1e-8
     assert _fd_gradient_error(curve, curve.X0) < 1e-5
+
+
+def test_section_multiplier_of_a_fold_is_not_split_from_the_trivial_one():
+    """At a fold the monodromy has a Jordan block at +1: a discretization error e of
+    the trivial multiplier splits the pair by O(sqrt e). The Poincare section's
+    multiplier (no trivial one) is off by O(e) only. Bautin ring on a coarse mesh
+    (NTST = 8, NCOL = 3): pair off by 1.7e-6, section by 5e-11. Away from the fold
+    (rho = 0.6), the section multiplier is the closed form
+    exp(2 rho (b2 - 2 rho) T), T = 2 pi / sqrt(1 - e^2), by collocation and by shooting."""
+    T = 2 * np.pi / np.sqrt(0.75)
+    coarse = C.CollocationSettings(ntst=8, ncol=3)
+    cycle = C.CycleProblem(_bautin_ring(), _circle(np.sqrt(0.55)), T,
+                           {"b1": -0.24, "b2": 1.0}, "b1", settings=coarse)
+    X = C.ContinuationIterator(cycle, C.PALC(), C.ContinuationSettings()).start().X
+    square, result = C.locate_cycle(cycle, X, C.CycleFold())
+    assert result.converged
+    pair = np.sort(np.abs(square.multipliers(result.X) - 1))
+    (nu,) = square.section_multipliers(result.X)
+    assert abs(nu - 1) < 1e-9 and pair[0] > 100 * abs(nu - 1)
+    exact = np.exp(2 * 0.6 * (1.0 - 2 * 0.6) * T)
+    params = {"b1": 0.6 ** 2 - 0.6, "b2": 1.0}
+    fine, X = _cycle(_bautin_ring(), _circle(np.sqrt(0.6)), params, "b1", period=T)
+    shooting = C.ShootingProblem(_bautin_ring(), _circle(np.sqrt(0.6)), T, params, "b1",
+                                 settings=C.ShootingSettings(segments=4))
+    Y = C.ContinuationIterator(shooting, C.PALC(), C.ContinuationSettings()).start().X
+    for problem, Z in ((fine, X), (shooting, Y)):
+        (nu,) = problem.section_multipliers(Z)
+        assert abs(nu / exact - 1) < 1e-7
+    with pytest.raises(ValueError, match="flow direction"):
+        section_multipliers(np.eye(2)[None], np.zeros(2))     # at an equilibrium
 
 
 def test_period_doubling_located_and_continued_on_mu_equal_nu_squared(models):
