@@ -181,8 +181,8 @@ def test_peak_force_and_flow_reduction_against_a_time_integration(through_contac
 def test_cli_lco_through_contact(capsys):
     """``fsicas lco --through-contact``: the collocation branch to the wall, then the
     impacting branch on the contact model from 3 eps before it: by collocation (default)
-    with its special cycles, at N = 4 the Neimark-Sacker point past the first contact,
-    and a warning when the mesh is too coarse (NTST = 10); by shooting (plumbing: one
+    with its special cycles, at N = 4 the Neimark-Sacker point past the first contact
+    (located once more on NTST = 200, ``--special-ntst``), and a warning when the mesh is too coarse (NTST = 10); by shooting (plumbing: one
     point)."""
     import json
     from fsicas.cli import main
@@ -190,15 +190,15 @@ def test_cli_lco_through_contact(capsys):
             "peak_force", "flow_reduction", "stable"}
     code = main(["lco", "--mstar", "1", "--zeta", "0.01", "--modes", "4", "--ustar-max", "6.7",
                  "--through-contact", "--impact-points", "16", "--impact-ntst", "100",
-                 "--json"])
+                 "--special-ntst", "200", "--json"])
     out = json.loads(capsys.readouterr().out)
     imp = out["impacting"]
     assert code == 0 and out["status"] == "contact" and imp["route"] == "collocation"
     assert imp["status"] == "bound" and set(imp["points"][0]) == keys
     assert 0 < imp["max_error_estimate"] < 0.1          # no coarse-mesh warning here
     (ns,) = imp["special"]
-    assert ns["kind"] == "ns" and ns["located"] and set(ns) == keys | {"kind", "located",
-                                                                      "multiplier"}
+    assert ns["kind"] == "ns" and ns["located"] and ns["ntst"] == 200
+    assert set(ns) == keys | {"kind", "located", "ntst", "multiplier"}
     assert abs(np.hypot(*ns["multiplier"]) - 1) < 1e-9 and 6.59 < ns["ustar"] < 6.62
     code = main(["lco", "--mstar", "1", "--zeta", "0.01", "--modes", "4", "--ustar-max", "8",
                  "--through-contact", "--impact-route", "shooting", "--impact-points", "1",
@@ -215,5 +215,5 @@ def test_cli_lco_through_contact(capsys):
     coarse = capsys.readouterr()
     assert json.loads(coarse.out)["impacting"]["max_error_estimate"] > 0.1
     assert "mesh is too coarse" in coarse.err and "--impact-ntst" in coarse.err
-    for bad in (["--impact-points", "0"], ["--impact-ntst", "0"]):
+    for bad in (["--impact-points", "0"], ["--impact-ntst", "0"], ["--special-ntst", "-1"]):
         assert main(["lco", "--modes", "4", "--through-contact", *bad, "--json"]) == 2

@@ -148,6 +148,34 @@ def test_subharmonic_cycle_from_time_integration(period3_impacting_run):
     assert miss < 1e-5 and abs(amplitude / p.tip_amplitude - 1) < 1e-6
 
 
+@pytest.mark.slow
+def test_fold_of_the_period3_isola_by_its_poincare_multiplier(period3_impacting_run):
+    """N = 4, from the period-3 cycle at U* = 7 (about 2 min): the branch turns at the
+    upper fold of the period-3 isola, U* = 7.6521. There the monodromy has a Jordan
+    block at +1, split by the trivial multiplier's discretization error into
+    1 +- 0.04i on NTST = 300; the Poincare section's multiplier is 8.6e-4 from +1 on
+    that mesh, and 1.7e-5 once the fold is rebuilt on NTST = 600 and located again
+    (``refine_ntst``; 1.2e-6 from another start's mesh: the stiff cycle's conditioning,
+    not the order, limits it), with the monodromy's pair still split by 1e-2. The
+    located fold bounds the branch's own points (the turn)."""
+    r = period3_impacting_run
+    br = impacting_collocation_branch(r.scene, r.state, r.period, r.run.steady.pressure_drop,
+                                      model=r.model, ustar_max=7.7,
+                                      settings=CollocationImpactSettings(
+                                          ntst=300, max_points=60, ds=0.1, refine_ntst=600))
+    (fold,) = [p for p in br.special if p.kind == "fold"]
+    assert fold.located and fold.ntst == 600 and abs(fold.ustar - 7.6521) < 1e-4
+    assert len(fold.section_multipliers) == len(fold.multipliers) - 1
+    assert abs(fold.critical_multiplier - 1) < 1e-4
+    pair = np.sort(np.abs(fold.multipliers - 1))[:2]
+    assert pair[1] > 100 * abs(fold.critical_multiplier - 1)
+    ustar = br.column("ustar")
+    assert ustar.max() <= fold.ustar + 1e-6 and ustar.max() > fold.ustar - 1e-3
+    assert ustar[-1] < ustar.max() - 0.01                  # the branch came back
+    back = CollocatedImpactBranch.from_json(br.to_json()).special
+    assert [p.critical_multiplier for p in back] == [p.critical_multiplier for p in br.special]
+
+
 @pytest.fixture(scope="module")
 def n4_torus():
     """M* = 1, N = 4, same law, NTST = 100: the period-1 impacting cycle loses stability

@@ -66,6 +66,9 @@ def add_cycle_commands(sub) -> None:
                         "special cycles located) or by multiple shooting (12 segments)")
     p.add_argument("--impact-ntst", type=int, default=200,
                    help="collocation intervals of the impacting branch (adapted to the impacts)")
+    p.add_argument("--special-ntst", type=int, default=0,
+                   help="locate each special cycle once more on this many intervals (its "
+                        "critical multiplier nearer the unit circle; 0: on the branch's mesh)")
     p.set_defaults(run=_cmd_cycles)
 
 
@@ -77,6 +80,8 @@ def _cmd_cycles(args) -> dict:
     for name in ("impact_points", "impact_ntst"):
         if getattr(args, name) < 1:
             raise ValueError(f"--{name.replace('_', '-')} must be >= 1, got {getattr(args, name)}")
+    if args.special_ntst < 0:
+        raise ValueError(f"--special-ntst must be >= 0 (0: off), got {args.special_ntst}")
     if args.through_contact:
         scene = scene.replace(contact_stiffness=args.contact_stiffness or THROUGH_STIFFNESS,
                               contact_eps=args.contact_eps or THROUGH_EPS,
@@ -119,7 +124,8 @@ def _through_contact(scene, branch, args, say) -> dict:
         imp = impacting_branch(scene, start.state, start.period, start.pressure_drop,
                                model=model, ustar_max=args.ustar_max, settings=settings)
     else:
-        settings = CollocationImpactSettings(ntst=args.impact_ntst, max_points=args.impact_points)
+        settings = CollocationImpactSettings(ntst=args.impact_ntst, max_points=args.impact_points,
+                                             refine_ntst=args.special_ntst)
         say.stage(f"through contact from U* = {start.ustar:.5g} by adaptive collocation "
                   f"(NTST = {settings.ntst}, {law})")
         imp = impacting_collocation_branch(scene, start.state, start.period,
@@ -141,10 +147,10 @@ def _through_contact(scene, branch, args, say) -> dict:
 
 
 def _special_summary(point) -> dict:
-    """A special impacting cycle: its kind, whether Newton refined it, the measures and
-    its critical multiplier [re, im]."""
+    """A special impacting cycle: its kind, whether Newton refined it (and on which
+    NTST), the measures and its critical multiplier [re, im] (of the Poincare map)."""
     m = point.critical_multiplier
-    return {"kind": point.kind, "located": point.located,
+    return {"kind": point.kind, "located": point.located, "ntst": point.ntst,
             **{k: getattr(point, k) for k in _IMPACT_KEYS},
             "multiplier": [float(m.real), float(m.imag)]}
 

@@ -36,7 +36,7 @@ Extrema are those of the collocation polynomial, exact in t
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Literal
 
 import numpy as np
@@ -79,7 +79,11 @@ class CollocationImpactSettings:
     doublings and Neimark-Sacker points (multipliers at every point); ``max_turn``:
     largest angle (rad) between successive tangents, else the step is retried shorter
     (``continuation.ContinuationSettings.max_turn``, 0 = off: past the contacts the
-    branch folds sharply, and a step over such a fold came back oriented backwards)."""
+    branch folds sharply, and a step over such a fold came back oriented backwards);
+    ``refine_ntst``: special cycles, once located, are rebuilt on a mesh of this many
+    intervals (equidistributed on one integrated period of the located cycle) and
+    located again, for critical multipliers of a smaller discretization error (0: on
+    the branch's mesh)."""
 
     ntst: int = 200
     ncol: int = 4
@@ -94,11 +98,12 @@ class CollocationImpactSettings:
     guess_tol: float = 1e-10
     detect: bool = True
     max_turn: float = 0.3
+    refine_ntst: int = 0
 
     def __post_init__(self):
         check_settings(self, integers=("ntst", "ncol", "max_points", "samples", "guess_samples"),
                        positives=("tol", "ds", "ds_max", "guess_tol"),
-                       nonnegative_integers=("adapt_every", "mesh_passes"))
+                       nonnegative_integers=("adapt_every", "mesh_passes", "refine_ntst"))
         if not isinstance(self.detect, bool):
             raise ValueError("CollocationImpactSettings.detect must be a bool, got "
                              f"{self.detect!r}")
@@ -112,21 +117,30 @@ class CollocatedImpactPoint(ImpactPoint):
     """An impacting cycle by collocation: the shooting route's measures, plus ``ntst``
     and ``error_estimate`` (the library's indicator max_i h_i^(NCOL+1) |u^(NCOL+1)|_i)."""
 
+    _complex = ("multipliers", "section_multipliers")
+
     ntst: int = 0
     error_estimate: float = 0.0
     kind: ImpactKind = "regular"
     #: a special cycle refined by Newton on its minimally extended system (False: where
     #: that Newton failed, the location on the arclength)
     located: bool = True
+    #: of a located special cycle: the n - 1 non-trivial multipliers of the Poincare map
+    #: (``continuation``'s ``section_multipliers``; a fold's multiplier at +1 is not split
+    #: from the trivial one there); empty elsewhere
+    section_multipliers: np.ndarray = field(repr=False,
+                                            default_factory=lambda: np.zeros(0, complex))
 
     @property
     def critical_multiplier(self) -> complex | None:
         """A special cycle's critical multiplier: the non-trivial one nearest +1 (fold),
-        -1 (period doubling) or, among the complex ones, the unit circle (Neimark-Sacker);
-        None for a regular point."""
+        -1 (period doubling) or, among the complex ones, the unit circle (Neimark-Sacker),
+        of the Poincare map where it was computed; None for a regular point."""
         if self.kind not in _CRITICAL:
             return None
-        mu, target = self.nontrivial_multipliers, _CRITICAL[self.kind]
+        mu = self.section_multipliers if len(self.section_multipliers) else \
+            self.nontrivial_multipliers
+        target = _CRITICAL[self.kind]
         distance = np.abs(np.abs(mu) - 1) + (mu.imag == 0) if target is None else \
             np.abs(mu - target)
         return complex(mu[np.argmin(distance)])
@@ -250,25 +264,45 @@ def _continued(scene, model, problem, ustar_range, direction, settings, start
     once = (lambda problem, X: "reached max_points = 1") if settings.max_points == 1 else None
     branch = C.continuation(problem, record=gauge.record, stop=once, settings=_steps(
         scene, model, *ustar_range, direction, settings))
-    special = [_refined(problem, sp, gauge, settings) for sp in branch.special_points
+    finer = lambda point: impacting_collocation_problem(         # noqa: E731
+        scene, point.state, point.period, point.pressure_drop, model=model,
+        settings=replace(settings, ntst=settings.refine_ntst))
+    special = [_refined(problem, sp, gauge, settings, finer) for sp in branch.special_points
                if sp.kind in _CONDITIONS]
     return _result(scene, model.scene.contact_gap, branch, special, settings,
                    time.perf_counter() - start)
 
 
-def _refined(problem, sp, gauge, settings) -> "CollocatedImpactPoint":
+def _refined(problem, sp, gauge, settings, finer) -> "CollocatedImpactPoint":
     """A special cycle located on the arclength, refined by Newton on its minimally
-    extended system; the arclength location (``located=False``) where that fails."""
-    on_point, X = problem.at(sp)
+    extended system, then (``settings.refine_ntst``) once more on the finer mesh of
+    ``finer(point)``; the arclength location (``located=False``) where the first fails,
+    the branch mesh's where the second does."""
+    point = _located(*problem.at(sp), sp.kind, gauge, settings)
+    if point is None:
+        return CollocatedImpactPoint.from_columns(sp.record, None, kind=sp.kind, located=False)
+    if settings.refine_ntst:
+        try:
+            fine = finer(point)
+        except RuntimeError:                     # the integrated guess failed
+            return point
+        point = _located(fine, fine.X0, sp.kind, gauge, settings) or point
+    return point
+
+
+def _located(problem, X, kind, gauge, settings) -> "CollocatedImpactPoint | None":
+    """The special cycle of ``kind`` by Newton from ``X`` on its minimally extended
+    system, with its section multipliers; None where that Newton fails."""
     try:
-        square, result = C.locate_cycle(on_point, X, _CONDITIONS[sp.kind](),
+        square, result = C.locate_cycle(problem, X, _CONDITIONS[kind](),
                                         C.NewtonSettings(tol=settings.tol))
     except (ValueError, np.linalg.LinAlgError):
-        result = None
-    if result is None or not result.converged:
-        return CollocatedImpactPoint.from_columns(sp.record, None, kind=sp.kind, located=False)
-    return CollocatedImpactPoint.from_columns(gauge.record(square, result.X), None,
-                                              kind=sp.kind)
+        return None
+    if not result.converged:
+        return None
+    return CollocatedImpactPoint.from_columns(
+        gauge.record(square, result.X), None, kind=kind,
+        section_multipliers=square.section_multipliers(result.X))
 
 
 def field_parameters(vf, model: Model, scene: Scene, pressure_drop: float) -> dict:

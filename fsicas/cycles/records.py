@@ -16,8 +16,9 @@ __all__ = ["CycleRecord", "CycleMeasures", "BranchRecord", "plain_value", "check
 
 
 class CycleRecord:
-    """JSON of a frozen cycle dataclass with array fields ``multipliers`` (complex) and
-    ``state``; ``_derived`` names properties written for readers and skipped on reading."""
+    """JSON of a frozen cycle dataclass with complex array fields (``_complex``:
+    ``multipliers``) and ``state``; ``_derived`` names properties written for readers
+    and skipped on reading."""
 
     _derived: tuple = ()
 
@@ -27,11 +28,15 @@ class CycleRecord:
         mu = np.asarray(self.multipliers)
         return np.delete(mu, np.argmin(np.abs(mu - 1.0)))
 
+    #: complex array fields, written as [re, im] pairs
+    _complex: tuple = ("multipliers",)
+
     def to_json(self) -> dict:
-        d = {k: v for k, v in asdict(self).items() if k not in ("multipliers", "state")}
+        d = {k: v for k, v in asdict(self).items() if k not in ("state",) + self._complex}
         d.update({k: getattr(self, k) for k in self._derived})
         d["state"] = [float(v) for v in self.state]
-        d["multipliers"] = [[float(m.real), float(m.imag)] for m in np.asarray(self.multipliers)]
+        d.update({k: [[float(m.real), float(m.imag)] for m in np.asarray(getattr(self, k))]
+                  for k in self._complex})
         return d
 
     @classmethod
@@ -46,7 +51,8 @@ class CycleRecord:
     @classmethod
     def from_json(cls, d: dict):
         d = {k: v for k, v in d.items() if k not in cls._derived}
-        d["multipliers"] = np.array([complex(a, b) for a, b in d["multipliers"]])
+        d.update({k: np.array([complex(a, b) for a, b in d[k]], dtype=complex)
+                  for k in cls._complex if k in d})
         d["state"] = np.array(d["state"], dtype=float)
         return cls(**d)
 
