@@ -9,9 +9,11 @@ by pointwise blocks (``_blocks``, ``CollocationSettings.jacobian = 'blocks'``) o
 CasADi AD of the whole discretised residual (``'graph'``). Along the branch:
 
 * Floquet multipliers (``_floquet``) replace eigenvalues; the trivial
-  multiplier's distance to 1 is recorded in ``tests['trivial_error']`` and the
-  number of non-trivial multipliers outside the unit circle in
-  ``tests['n_unstable']`` (``Branch.stable``);
+  multiplier's distance to 1 is recorded in ``tests['trivial_error']``; the tests
+  below count the non-trivial ones as those of the Poincare map
+  (``section_multipliers``: a fold's Jordan pair at +1, split by the discretization,
+  is not mistaken for a complex pair), ``tests['n_unstable']`` those outside the unit
+  circle (``Branch.stable``);
 * fold of cycles: ``tau_p`` changes sign (located by Illinois on ``tau_p``);
 * period doubling: the number of real multipliers ``< -1`` changes (located
   on ``mu + 1`` of the real multiplier nearest -1);
@@ -91,11 +93,9 @@ class PeriodicProblem(Problem):
         tests = {"fold": float(tau[-1])}
         if not settings.compute_eigenvalues:
             return PointInfo(np.zeros(0, dtype=complex), tests)
-        mu = self.multipliers(X)
-        tol = self.settings.unstable_tol
-        rest = np.delete(mu, _floquet.trivial_index(mu))
+        mu, rest = self.multipliers(X), self.section_multipliers(X)
         tests["trivial_error"] = float(np.min(np.abs(mu - 1.0)))
-        tests["n_unstable"] = float(_floquet.count_unstable(mu, tol))
+        tests["n_unstable"] = float(np.sum(np.abs(rest) > 1.0 + self.settings.unstable_tol))
         counts = {"pd": int(np.sum((rest.imag == 0) & (rest.real < -1.0))),
                   "ns": int(np.sum((rest.imag != 0) & (np.abs(rest) > 1.0)))}
         return PointInfo(mu, tests, counts)
@@ -109,15 +109,16 @@ class PeriodicProblem(Problem):
         if kind == "fold":
             return lambda X, tau, lu: float(tau[-1])
         if kind == "pd":
-            return lambda X, tau, lu: float(_nearest_real(self.multipliers(X), -1.0) + 1.0)
+            return lambda X, tau, lu: float(_nearest_real(self.section_multipliers(X), -1) + 1)
         if kind == "ns":
-            return lambda X, tau, lu: float(_nearest_complex_modulus(self.multipliers(X)) - 1)
+            return lambda X, tau, lu: float(
+                _nearest_complex_modulus(self.section_multipliers(X)) - 1)
         return None
 
     def describe(self, kind, X, tau, settings) -> Description:
         data = {"period": self.period(X), "X": [float(v) for v in X]}
         if kind in ("pd", "ns"):
-            mu = self.multipliers(X)
+            mu = self.section_multipliers(X)
             m = _nearest_real(mu, -1.0) if kind == "pd" else \
                 mu[np.argmin(np.abs(np.abs(mu) - 1) + (mu.imag == 0))]
             data.update({"multiplier_re": float(np.real(m)), "multiplier_im": float(np.imag(m))})

@@ -143,13 +143,3 @@ def _pencil_multipliers(A: np.ndarray) -> np.ndarray:
     keep = np.argsort(-scale)[:n]
     return alpha[keep] / beta[keep]
 
-
-def trivial_index(mu: np.ndarray) -> int:
-    """Index of the multiplier closest to 1 (the trivial one of an autonomous cycle)."""
-    return int(np.argmin(np.abs(mu - 1.0)))
-
-
-def count_unstable(mu: np.ndarray, tol: float) -> int:
-    """Non-trivial multipliers with ``|mu| > 1 + tol``."""
-    rest = np.delete(mu, trivial_index(mu))
-    return int(np.sum(np.abs(rest) > 1.0 + tol))

@@ -7,7 +7,8 @@ A cycle problem of :mod:`continuation` on ``flutter_field`` has unknowns
   integration holds Δp at the steady value of the requested U*, so a cycle "at U*" is
   the cycle at that Δp), by Newton warm-started from the last point;
 - ``pressure_drop`` Δp = 100 M* Π, the period in units of T, the Floquet multipliers and
-  stability (all non-trivial multipliers inside the unit circle), the state at phase 0;
+  stability (all non-trivial multipliers, those of the Poincare map, inside the unit
+  circle), the state at phase 0;
 - from the profile, by the route: the tip half-amplitude (max − min of y(1, t))/2 and
   the minimal gap min_{x,t} h_c(x, t) with its ratio to eps (:mod:`fsicas.model.contact`);
 - ``quadrature_error``: the relative error of the equations over the cycle from the flow
@@ -42,8 +43,7 @@ class Gauge:
     def common(self, problem, X) -> dict:
         """U*, Δp, period, multipliers, stability and state at X."""
         p = problem.params(X)
-        mu = problem.multipliers(X)
-        rest = np.delete(mu, np.argmin(np.abs(mu - 1.0)))
+        mu, rest = problem.multipliers(X), problem.section_multipliers(X)
         mstar = 10 ** p[problem.vf.par_index(LOG_M)]
         ustar, self.x_eq = steady_ustar(problem.vf, p, self.x_eq, self.model.scene.hstar)
         return {"ustar": ustar, "mstar": float(mstar),
