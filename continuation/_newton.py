@@ -151,14 +151,23 @@ def newton(residual: Callable, jacobian: Callable, X0: np.ndarray,
 
     Converged when ``||H(X)||_inf <= tol`` or when an update was at round-off
     level (``||dX||_inf <= xtol (1 + ||X||_inf)``). Stops on a singular Jacobian, a
-    non-finite or diverging residual, or after ``max_iter`` iterations; the
-    last residual is always reported. From the second iteration on, the step is
-    solved by refinement on the previous factors when that converges to round-off
-    (``solve``), saving a factorization. ``polish`` extra iterations after
+    non-finite or diverging residual, a residual or Jacobian that cannot be evaluated
+    there (``LinAlgError``, e.g. an extended system's inner solve failing away from its
+    point: a continuation step there is rejected and retried shorter), or after
+    ``max_iter`` iterations; the last residual is always reported. From the second
+    iteration on, the step is solved by refinement on the previous factors when that
+    converges to round-off (``solve``), saving a factorization. ``polish`` extra iterations after
     convergence are kept while they decrease the residual (used to refine
     special points to round-off).
     """
     X = np.array(X0, dtype=float)
+    try:
+        return _iterate(residual, jacobian, X, settings, polish)
+    except np.linalg.LinAlgError as err:
+        return NewtonResult(X, False, 0, np.inf, f"the system could not be evaluated: {err}")
+
+
+def _iterate(residual, jacobian, X, settings, polish) -> NewtonResult:
     r = residual(X)
     res = res0 = _norm(r)
     lu = None

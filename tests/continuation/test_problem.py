@@ -165,6 +165,32 @@ def test_round_off_floor_handled_by_step_criterion():
     assert f"{bad.residual:.3e}" in bad.message
 
 
+def test_system_that_cannot_be_evaluated_is_a_failed_newton():
+    """A residual that raises LinAlgError beyond X = 2 (as an extended system's inner
+    solve does away from its point): Newton reports a failure naming it, and a
+    continuation into that region shortens its steps up to the edge p = 1 and stops
+    there with a status instead of raising."""
+    import scipy.sparse as sp
+    from continuation._newton import newton
+
+    def residual(X):
+        if X[0] > 2.0:
+            raise np.linalg.LinAlgError("no root here")
+        return np.array([X[0] ** 2 - 9.0])
+
+    bad = newton(residual, lambda X: sp.csc_matrix([[2 * X[0]]]), np.array([1.0]),
+                 C.NewtonSettings())
+    assert not bad.converged and "could not be evaluated: no root here" in bad.message
+    F = ca.Function("F", [x := ca.SX.sym("x"), p := ca.SX.sym("p")], [x - p])
+    prob = C.EquilibriumProblem(F, [0.0], {"p": 0.0}, "p")
+    plain = prob.residual
+    prob.residual = lambda X: residual(X[-1:] + 1.0) if X[-1] > 1.0 else plain(X)
+    branch = C.continuation(prob, settings=C.ContinuationSettings(ds=0.1, ds_max=0.5,
+                                                                 max_steps=50))
+    assert branch.status == "failed" and 0.999 < branch.par("p").max() <= 1.0
+    assert "could not be evaluated" in branch.message
+
+
 def test_sparse_bordering_helpers_match_dense():
     import scipy.sparse as sp
     from continuation._sparse import append_columns, append_row
