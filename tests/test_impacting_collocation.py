@@ -2,6 +2,8 @@
 against independent routes: collocation of the contact-free model before contact, time
 integration (SciPy Radau, IDAS) and multiple shooting (CVODES) after it."""
 
+from dataclasses import replace
+
 import numpy as np
 import pytest
 
@@ -212,6 +214,25 @@ def test_neimark_sacker_located_where_shooting_multipliers_cross_the_circle(n4_t
     assert complex_pair.size >= 2 and np.min(np.abs(np.abs(complex_pair) - 1)) < 1e-3
 
 
+def test_period1_impacting_cycles_are_symmetric(n4_torus):
+    """The channel is symmetric, and so is the period-1 impacting cycle: half a period
+    after its state, an independent integration (IDAS 1e-11) is at its mirror image
+    R x = (-r, -r', Q2, Q1), to 1e-8 relative (measured 2.5e-10; not at the state
+    itself). Its multipliers are squares of those of the half-period map, so a single
+    real multiplier cannot cross -1: such cycles do not period-double (docs/cycles.md)."""
+    scene, model, br = n4_torus
+    (ns,) = br.special
+    n = model.scene.modes
+    mirror = np.r_[-ns.state[:2 * n], ns.state[-1], ns.state[-2]]
+    traj = simulate(model, steady_state(scene.replace(ustar=ns.ustar), model), ns.period / 2,
+                    x0=ns.state, settings=Settings(method="idas", rtol=1e-11, atol=1e-13,
+                                                   dt_out=ns.period / 2000))
+    assert traj.status == "success"
+    size = np.max(np.abs(ns.state))
+    assert np.max(np.abs(traj.x[-1] - mirror)) < 1e-8 * size
+    assert np.max(np.abs(traj.x[-1] - ns.state)) > 0.1 * size
+
+
 def test_settled_cycle_of_stable_and_unstable_impacting_cycles(n4_torus):
     """The time-integration check (``settled_cycle``: IDAS 1e-10, dense-output returns)
     from the branch's states: a run from the last stable cycle before the Neimark-Sacker
@@ -275,3 +296,40 @@ def test_case_1a_at_n10_matches_time_integration():
     assert all(q.stable for q in br.points if q.ustar < lo - 1e-3)
     assert not any(q.stable for q in br.points if lo + 1e-3 < q.ustar < hi - 1e-3)
     assert all(q.stable for q in br.points if q.ustar > hi + 1e-3)
+
+
+@pytest.mark.slow
+def test_period_doubling_of_an_asymmetric_cycle_and_its_doubled_branch():
+    """With the walls 2 % off centre (H1 = 0.051, H2 = 0.049; N = 4, M* = 0.287, about
+    1 min) the cycles are no longer symmetric, and the period-1 impacting cycle (one
+    contact per period) period-doubles just past contact: located at U* = 9.2004 with
+    its multiplier at -1 to 1e-8, stable before and unstable after. The doubled branch
+    (``period_doubled_branch``) leaves it towards larger U* with T = 2 T1 at the
+    doubling, stable; a time integration from its last cycle (``settled_cycle``, IDAS
+    1e-10) settles on it with two tip swings per period: period 1e-8, amplitude 1e-4,
+    peak force 1e-2 (measured 3e-10, 7e-6, 2e-3)."""
+    from fsicas.scene import Profile
+    base = Scene(mstar=0.287, zeta=0.01, modes=4, contact_eps=1e-2,
+                 channel1=Profile.constant(0.051), channel2=Profile.constant(0.049))
+    start = pre_contact_start(cycle_branch(base, ustar_max=11.0, settings=SCENE_NODES))
+    scene = base.replace(ustar=start.ustar, **IMPACT)
+    model = build_model(scene)
+    settings = CollocationImpactSettings(ntst=200, max_points=20, ds=0.1)
+    br = impacting_collocation_branch(scene, start.state, start.period, start.pressure_drop,
+                                      model=model, ustar_max=9.25, settings=settings)
+    pd = next(p for p in br.special if p.kind == "pd")
+    assert pd.located and abs(pd.ustar - 9.2004) < 1e-3 and pd.impacts == 1
+    assert abs(pd.critical_multiplier + 1) < 1e-8
+    assert all(p.stable for p in br.points if p.ustar < pd.ustar - 1e-4)
+    assert not any(p.stable for p in br.points if pd.ustar + 1e-4 < p.ustar)
+    doubled = period_doubled_branch(scene, pd, model=model, ustar_max=9.25,
+                                    settings=replace(settings, max_points=25, ds=0.05))
+    first, last = doubled.points[0], doubled.points[-1]
+    assert abs(first.period / (2 * pd.period) - 1) < 1e-3
+    assert all(p.stable and p.ustar > pd.ustar for p in doubled.points)
+    assert last.ustar > pd.ustar + 0.03
+    run = settled_cycle(model, scene.replace(ustar=last.ustar), last.state, last.period)
+    assert run.status == "settled" and run.swings == 2
+    assert abs(run.period / last.period - 1) < 1e-8
+    assert abs(run.tip_amplitude / last.tip_amplitude - 1) < 1e-4
+    assert run.peak_force == pytest.approx(last.peak_force, rel=1e-2)
