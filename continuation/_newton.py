@@ -156,9 +156,9 @@ def newton(residual: Callable, jacobian: Callable, X0: np.ndarray,
     point: a continuation step there is rejected and retried shorter), or after
     ``max_iter`` iterations; the last residual is always reported. From the second
     iteration on, the step is solved by refinement on the previous factors when that
-    converges to round-off (``solve``), saving a factorization. ``polish`` extra iterations after
-    convergence are kept while they decrease the residual (used to refine
-    special points to round-off).
+    converges to round-off (``solve``), saving a factorization. ``polish`` extra
+    iterations after convergence are kept while they decrease the residual (used to
+    refine special points to round-off).
     """
     X = np.array(X0, dtype=float)
     try:
