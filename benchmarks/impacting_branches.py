@@ -20,6 +20,11 @@ M* = 1, zeta = 0.01, H* = 1/10, f = 0.14, contact k* = 1e8, eps/H = 1e-2, smooth
    integration from its state (``settled_cycle``: IDAS 1e-10, ``--periods`` periods):
    where it settles, its period, tip amplitude and peak force against the cycle's.
 
+With ``--from-integration`` no branch is computed: at each ``--ustar`` a time integration
+from the perturbed steady state (IDAS 1e-9, ``--t-end``) gives the settled cycle
+(``cycle_from_trajectory``), one collocation point on ``--ntst`` intervals is started from
+it and checked as in 3 (the route where a branch from contact costs too much, N = 40).
+
 Branches are saved to ``--out`` as they are computed (JSON) and read back on a rerun,
 so an interrupted run resumes. Prints the special cycles, the checks and the cost.
 Single-threaded BLAS (``OPENBLAS_NUM_THREADS=1`` unless set).
@@ -40,8 +45,11 @@ from fsicas import Scene  # noqa: E402
 from fsicas.cycles import (CollocatedImpactBranch, CollocationImpactSettings,  # noqa: E402
                            cycle_branch, impacting_collocation_branch, period_doubled_branch,
                            pre_contact_start)
+from fsicas.cycles.impacting import cycle_from_trajectory  # noqa: E402
 from fsicas.linear.steady import steady_state  # noqa: E402
 from fsicas.model import build_model  # noqa: E402
+from fsicas.timedomain.integrators import Settings  # noqa: E402
+from fsicas.timedomain.run import run_case  # noqa: E402
 from fsicas.timedomain.settled import settled_cycle  # noqa: E402
 
 IMPACT = dict(contact=True, contact_stiffness=1e8, contact_eps=1e-2, contact_smoothing=0.1)
@@ -116,20 +124,45 @@ def special_rows(name, modes, branch):
               f"{p.tip_amplitude:.6f} | {p.impacts} | {error:.1e} | {p.located} |")
 
 
+def from_integration(modes, target, args):
+    """(model, cycle): one collocation point started from the settled cycle of a time
+    integration at U* = ``target``, with its cost in the point's ``wall_time``."""
+    scene = Scene(mstar=1.0, ustar=target, zeta=0.01, modes=modes, **IMPACT)
+    model = build_model(scene)
+    run = run_case(scene, t_end=args.t_end, model=model, perturbation=0.3,
+                   settings=Settings(method="idas", rtol=1e-9, atol=1e-11, dt_out=2e-5))
+    state, period, _ = cycle_from_trajectory(model, run.trajectory.t, run.trajectory.x)
+    cyc = impacting_collocation_branch(scene, state, period, run.steady.pressure_drop,
+                                       model=model, settings=CollocationImpactSettings(
+                                           ntst=args.ntst, max_points=1, detect=False))
+    return model, cyc.points
+
+
 def check_rows(name, modes, branch, model, args):
     for target in args.ustar:
         for p in at_ustar(branch, target, model, args):
-            t0 = time.perf_counter()
-            run = settled_cycle(model, branch.scene.replace(ustar=target), p.state, p.period,
-                                periods=args.periods)
-            mu = np.max(np.abs(p.nontrivial_multipliers))
-            rel = lambda a, b: f"{a / b - 1:.1e}" if b else f"{a - b:.1e}"  # noqa: E731
-            print(f"| {modes} | {name} | {target:g} | {p.period:.7f} | {p.tip_amplitude:.6f} | "
-                  f"{p.gap_ratio:.4f} | {p.impacts} | {p.peak_force:.4g} | "
-                  f"{p.flow_reduction:.4f} | {'stable' if p.stable else 'unstable'} | {mu:.3f} | "
-                  f"{run.status} ({run.drift:.0e}) | {rel(run.period, p.period)} | "
-                  f"{rel(run.tip_amplitude, p.tip_amplitude)} | {rel(run.peak_force, p.peak_force)} "
-                  f"| {time.perf_counter() - t0:.0f} |")
+            check_row(name, modes, target, p, model, branch.scene.replace(ustar=target), args)
+
+
+def integration_rows(modes, args):
+    for target in args.ustar:
+        model, cycles = from_integration(modes, target, args)
+        for p in cycles:
+            check_row("integration", modes, target, p, model, model.scene, args)
+
+
+def check_row(name, modes, target, p, model, scene, args):
+    """A cycle at U* = ``target`` against a time integration from its state."""
+    t0 = time.perf_counter()
+    run = settled_cycle(model, scene, p.state, p.period, periods=args.periods)
+    mu = np.max(np.abs(p.nontrivial_multipliers))
+    rel = lambda a, b: f"{a / b - 1:.1e}" if b else f"{a - b:.1e}"  # noqa: E731
+    print(f"| {modes} | {name} | {target:g} | {p.period:.7f} | {p.tip_amplitude:.6f} | "
+          f"{p.gap_ratio:.4f} | {p.impacts} | {p.peak_force:.4g} | "
+          f"{p.flow_reduction:.4f} | {'stable' if p.stable else 'unstable'} | {mu:.3f} | "
+          f"{run.status} ({run.drift:.0e}) | {rel(run.period, p.period)} | "
+          f"{rel(run.tip_amplitude, p.tip_amplitude)} | {rel(run.peak_force, p.peak_force)} "
+          f"| {p.wall_time:.0f} + {time.perf_counter() - t0:.0f} |", flush=True)
 
 
 def main(argv=None) -> int:
@@ -145,7 +178,17 @@ def main(argv=None) -> int:
     ap.add_argument("--max-points", type=int, default=400)
     ap.add_argument("--periods", type=int, default=40)
     ap.add_argument("--out", default="runs/impacting")
+    ap.add_argument("--from-integration", action="store_true",
+                    help="no branches: one cycle per --ustar from a time integration")
+    ap.add_argument("--t-end", type=float, default=6.0)
     args = ap.parse_args(argv)
+    if args.from_integration:
+        print("| N | start | U* | T | tip half-ampl. | gap/eps | impacts | peak F/F0 | flow red. | "
+              "stability | max \\|mu\\| | integration (drift) | dT | dA | dF | point + check [s] |\n"
+              "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|")
+        for modes in args.modes:
+            integration_rows(modes, args)
+        return 0
     Path(args.out).mkdir(parents=True, exist_ok=True)
     found = {}
     for modes in args.modes:
@@ -162,7 +205,7 @@ def main(argv=None) -> int:
         for name, br in runs:
             special_rows(name, modes, br)
     print("\n| N | branch | U* | T | tip half-ampl. | gap/eps | impacts | peak F/F0 | flow red. | "
-          "stability | max \\|mu\\| | integration (drift) | dT | dA | dF | s |\n"
+          "stability | max \\|mu\\| | integration (drift) | dT | dA | dF | point + check [s] |\n"
           "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|")
     for modes, runs in found.items():
         model = build_model(runs[0][1].scene)
