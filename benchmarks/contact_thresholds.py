@@ -11,12 +11,18 @@ and 100 show how the settled motion depends on k* above the threshold. The paper
 own law (k* = 1e6, eps/H = 1e-3) is reported against it.
 
     python benchmarks/contact_thresholds.py [--modes 10 20] [--steps 4] [--workers 2]
+        [--out thresholds.jsonl]
+
+Each finished cell is appended to ``--out`` (one JSON line) as soon as it is done, and a
+rerun with the same file computes only the cells not in it (same steps and t_end).
 """
 from __future__ import annotations
 
 import argparse
+import json
 import os
-from concurrent.futures import ProcessPoolExecutor
+from concurrent.futures import ProcessPoolExecutor, as_completed
+from pathlib import Path
 
 for _var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS"):
     os.environ.setdefault(_var, "1")
@@ -52,6 +58,23 @@ def threshold(job) -> dict:
     return {"ustar": ustar, "modes": modes, "eps": eps, "bracket": (low, high), "above": above}
 
 
+def key(job) -> tuple:
+    """A cell's identity in the results file: (U*, N, eps/H, steps, t_end)."""
+    return tuple(float(v) for v in job)
+
+
+def saved(path: Path) -> dict:
+    """The cells already in ``path``; a torn last line (a killed run) is cut off first,
+    so that the next cell is appended on a line of its own."""
+    if not path.exists():
+        return {}
+    text = path.read_text()
+    if text and not text.endswith("\n"):
+        text = text[:text.rfind("\n") + 1]
+        path.write_text(text)
+    return {tuple(d.pop("key")): d for d in map(json.loads, text.splitlines())}
+
+
 def cell(r) -> str:
     low, high = r["bracket"]
     if high is None and low is not None:
@@ -67,10 +90,18 @@ def main(argv=None) -> None:
     ap.add_argument("--steps", type=int, default=4, help="bisection steps (0.25 decade at 4)")
     ap.add_argument("--t-end", type=float, default=4.0)
     ap.add_argument("--workers", type=int, default=2)
+    ap.add_argument("--out", default="contact_thresholds.jsonl",
+                    help="cells saved as they finish; a rerun skips those in it")
     args = ap.parse_args(argv)
     jobs = [(u, n, e, args.steps, args.t_end) for n in args.modes for e in EPS for u in USTARS]
-    with ProcessPoolExecutor(args.workers) as pool:
-        results = list(pool.map(threshold, jobs))
+    done = saved(Path(args.out))
+    with ProcessPoolExecutor(args.workers) as pool, open(args.out, "a") as out:
+        futures = {pool.submit(threshold, job): job for job in jobs if key(job) not in done}
+        for future in as_completed(futures):
+            done[key(futures[future])] = result = future.result()
+            out.write(json.dumps({"key": list(key(futures[future])), **result}) + "\n")
+            out.flush()
+    results = [done[key(job)] for job in jobs]
     print(f"{'N':>3} {'eps/H':>6} {'U*':>5}  {'k* threshold (fails - holds)':30} "
           f"k*: period, impacts/cycle, peak force/F0, outcome")
     for r in results:
