@@ -58,9 +58,11 @@ def nearest_real_to_minus_one(branch) -> tuple[float, float]:
     """(U*, multiplier) of the real non-trivial multiplier nearest -1 along the branch."""
     best = (np.nan, np.inf)
     for p in branch.points:
-        real = p.nontrivial_multipliers[p.nontrivial_multipliers.imag == 0].real
-        if real.size and abs(real[np.argmin(abs(real + 1))] + 1) < abs(best[1] + 1):
-            best = (p.ustar, float(real[np.argmin(abs(real + 1))]))
+        mu = p.nontrivial_multipliers
+        real = mu.real[mu.imag == 0]
+        m = real[np.argmin(abs(real + 1))] if real.size else np.inf
+        if abs(m + 1) < abs(best[1] + 1):
+            best = (p.ustar, float(m))
     return best
 
 

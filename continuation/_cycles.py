@@ -70,7 +70,16 @@ class PeriodicProblem(Problem):
         self.free = (active,) if isinstance(active, str) else tuple(active)
         self.active = self.free[-1]
         self.free_idx = tuple(self.vf.par_index(name) for name in self.free)
+        self._kept = {}                          # name -> (X, value) of the last point
         return param_vector(self.vf, params)
+
+    def kept(self, name: str, X, compute) -> np.ndarray:
+        """``compute()``, kept for the last ``X`` under ``name`` (the monitor and a
+        ``record`` callback ask at the same point); a copy."""
+        last = self._kept.get(name)
+        if last is None or not np.array_equal(last[0], X):
+            last = self._kept[name] = (np.array(X), compute())
+        return last[1].copy()
 
     def frame(self, X) -> np.ndarray:
         return np.arange(len(X))
@@ -79,9 +88,13 @@ class PeriodicProblem(Problem):
         """The non-trivial multipliers, of the Poincare map on the section normal to
         the flow ``M(u0)^-1 F(u0)`` at ``u0 = state(X)`` (``_floquet``): a fold's
         multiplier at +1 as accurate as the others (the monodromy's pair is not)."""
+        return self.kept("section_multipliers", X, lambda: _floquet.section_multipliers(
+            self.transfer_matrices(X), self.flow(X)))
+
+    def flow(self, X) -> np.ndarray:
+        """``u'(0) = M(u0)^-1 F(u0)`` (time in units of T), ``u0 = state(X)``."""
         u0, p = self.state(X), self.params(X)
-        f = spla.spsolve(self.vf.mass(u0, p).tocsc(), self.vf.rhs(u0, p))
-        return _floquet.section_multipliers(self.transfer_matrices(X), np.atleast_1d(f))
+        return np.atleast_1d(spla.spsolve(self.vf.mass(u0, p).tocsc(), self.vf.rhs(u0, p)))
 
     def start_row(self) -> np.ndarray:
         if self.start_direction is None:
@@ -109,17 +122,18 @@ class PeriodicProblem(Problem):
         if kind == "fold":
             return lambda X, tau, lu: float(tau[-1])
         if kind == "pd":
-            return lambda X, tau, lu: float(_nearest_real(self.section_multipliers(X), -1) + 1)
+            return lambda X, tau, lu: float(
+                _floquet.nearest_real(self.section_multipliers(X), -1) + 1)
         if kind == "ns":
             return lambda X, tau, lu: float(
-                _nearest_complex_modulus(self.section_multipliers(X)) - 1)
+                _floquet.nearest_complex_modulus(self.section_multipliers(X)) - 1)
         return None
 
     def describe(self, kind, X, tau, settings) -> Description:
         data = {"period": self.period(X), "X": [float(v) for v in X]}
         if kind in ("pd", "ns"):
             mu = self.section_multipliers(X)
-            m = _nearest_real(mu, -1.0) if kind == "pd" else \
+            m = _floquet.nearest_real(mu, -1.0) if kind == "pd" else \
                 mu[np.argmin(np.abs(np.abs(mu) - 1) + (mu.imag == 0))]
             data.update({"multiplier_re": float(np.real(m)), "multiplier_im": float(np.imag(m))})
         return Description(X, "converged", 0.0, data)
@@ -158,7 +172,6 @@ class CycleProblem(PeriodicProblem):
         self.mesh = _check_mesh(mesh, self.ntst)
         self._accepted = 0
         self._last_jacobian = None
-        self._last_multipliers = None          # (X, multipliers) of the last point
         U = sample_orbit(orbit, colloc.node_times(self.mesh, self.ncol), vf.n)
         self.X0 = np.concatenate([U, [float(period)], p0[list(self.free_idx)]])
         D = np.concatenate([np.diff(self.mesh), self._phase(U)])
@@ -326,17 +339,12 @@ class CycleProblem(PeriodicProblem):
                               self.vf.n, np.atleast_2d(A))
 
     def multipliers(self, X) -> np.ndarray:
-        """Floquet multipliers sorted by decreasing modulus (kept for the last ``X``:
-        the monitor and a ``record`` callback ask at the same point)."""
-        last = self._last_multipliers
-        if last is not None and np.array_equal(last[0], X):
-            return last[1].copy()
+        """Floquet multipliers sorted by decreasing modulus (kept for the last ``X``)."""
         s = self.settings
         method = s.floquet if s.floquet != "auto" else \
             ("pencil" if self.vf.n * self.ntst <= s.pencil_max else "product")
-        mu = _floquet.multipliers(self.transfer_matrices(X), method)
-        self._last_multipliers = (np.array(X), mu)
-        return mu.copy()
+        return self.kept("multipliers", X, lambda: _floquet.multipliers(
+            self.transfer_matrices(X), method))
 
 
 def _collocation_system(settings: CollocationSettings) -> tuple:
@@ -365,17 +373,6 @@ def _check_mesh(mesh, ntst) -> np.ndarray:
     if m.size != ntst + 1 or m[0] != 0.0 or m[-1] != 1.0 or not np.all(np.diff(m) > 0):
         raise ValueError(f"mesh must be {ntst + 1} increasing times from 0 to 1, got {mesh!r}")
     return m
-
-
-def _nearest_real(mu, target) -> float:
-    real = mu[mu.imag == 0]
-    pool = real if real.size else mu.real
-    return float(np.real(pool[np.argmin(np.abs(pool - target))]))
-
-
-def _nearest_complex_modulus(mu) -> float:
-    cplx = mu[mu.imag > 0]
-    return float(np.abs(cplx[np.argmin(np.abs(np.abs(cplx) - 1.0))])) if cplx.size else 1.0
 
 
 def sample_orbit(orbit, t, n) -> np.ndarray:

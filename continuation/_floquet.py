@@ -143,3 +143,15 @@ def _pencil_multipliers(A: np.ndarray) -> np.ndarray:
     keep = np.argsort(-scale)[:n]
     return alpha[keep] / beta[keep]
 
+
+def nearest_real(mu: np.ndarray, target: float) -> float:
+    """The real multiplier nearest ``target`` (the real part nearest, if none is real)."""
+    real = mu[mu.imag == 0]
+    pool = real if real.size else mu.real
+    return float(np.real(pool[np.argmin(np.abs(pool - target))]))
+
+
+def nearest_complex_modulus(mu: np.ndarray) -> float:
+    """The modulus, nearest 1, of the complex multipliers (1 if there are none)."""
+    cplx = mu[mu.imag > 0]
+    return float(np.abs(cplx[np.argmin(np.abs(np.abs(cplx) - 1.0))])) if cplx.size else 1.0

@@ -321,5 +321,6 @@ class ShootingProblem(PeriodicProblem):
         return np.array([J[i * n:(i + 1) * n, i * n:(i + 1) * n].toarray() for i in range(m)])
 
     def multipliers(self, X) -> np.ndarray:
-        """Floquet multipliers sorted by decreasing modulus."""
-        return _floquet.multipliers(self.transfer_matrices(X), self.settings.floquet)
+        """Floquet multipliers sorted by decreasing modulus (kept for the last ``X``)."""
+        return self.kept("multipliers", X, lambda: _floquet.multipliers(
+            self.transfer_matrices(X), self.settings.floquet))
