@@ -44,7 +44,8 @@ import numpy as np
 import scipy.sparse as sp
 
 from . import _floquet
-from ._cycles import PeriodicProblem, sample_orbit
+from ._cycles import sample_orbit
+from ._periodic import PeriodicProblem
 from ._settings import ShootingSettings
 from ._symbolic import CompiledSystem
 from ._systems import bound

@@ -1,0 +1,121 @@
+"""Periodic orbits, whatever their discretization (collocation, shooting): the
+shared unknowns' checks and the detection of their special cycles.
+
+Along a branch, Floquet multipliers replace eigenvalues; the trivial multiplier's
+distance to 1 is recorded in ``tests['trivial_error']``; the tests below count the
+non-trivial ones as those of the Poincare map (``section_multipliers``: a fold's
+Jordan pair at +1, split by the discretization, is not mistaken for a complex pair),
+``tests['n_unstable']`` those outside the unit circle (``Branch.stable``):
+
+* fold of cycles: ``tau_p`` changes sign (located by Illinois on ``tau_p``);
+* period doubling: the number of real multipliers ``< -1`` changes (located
+  on ``mu + 1`` of the real multiplier nearest -1);
+* Neimark-Sacker: the number of complex multipliers with ``|mu| > 1``
+  changes (located on ``|mu| - 1``).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import scipy.sparse.linalg as spla
+
+from . import _floquet
+from ._equilibrium import make_field, param_vector
+from ._problem import Description, PointInfo, Problem
+
+
+class PeriodicProblem(Problem):
+    """Shared detection hooks of periodic-orbit problems (collocation, shooting).
+
+    Subclasses provide ``period(X)``, ``state(X)``, ``transfer_matrices(X)``,
+    ``multipliers(X)`` and ``settings.unstable_tol``.
+    """
+
+    kind = "cycle"
+    verified_kinds = ("pd", "ns")
+    monitor_uses_lu = False
+    steps_by_eigenvalues = False
+
+    #: unit row fixing the start amplitude along a critical direction (branch
+    #: switching); None keeps the parameter fixed at the start
+    start_direction = None
+
+    def _setup(self, F, M, params, active, period, settings, settings_type) -> np.ndarray:
+        """Check ``settings`` and ``period``; set the field, the settings and the active
+        parameter; return the parameter vector."""
+        if not isinstance(settings, settings_type):
+            raise ValueError(f"settings must be a {settings_type.__name__}")
+        if not (np.isfinite(period) and period > 0):
+            raise ValueError(f"period must be a positive finite number, got {period!r}")
+        self.vf = make_field(F, M, params)
+        self.settings = settings
+        self.free = (active,) if isinstance(active, str) else tuple(active)
+        self.active = self.free[-1]
+        self.free_idx = tuple(self.vf.par_index(name) for name in self.free)
+        self._kept = {}                          # name -> (X, value) of the last point
+        return param_vector(self.vf, params)
+
+    def kept(self, name: str, X, compute) -> np.ndarray:
+        """``compute()``, kept for the last ``X`` under ``name`` (the monitor and a
+        ``record`` callback ask at the same point); a copy."""
+        last = self._kept.get(name)
+        if last is None or not np.array_equal(last[0], X):
+            last = self._kept[name] = (np.array(X), compute())
+        return last[1].copy()
+
+    def frame(self, X) -> np.ndarray:
+        return np.arange(len(X))
+
+    def section_multipliers(self, X) -> np.ndarray:
+        """The non-trivial multipliers, of the Poincare map on the section normal to
+        the flow ``M(u0)^-1 F(u0)`` at ``u0 = state(X)`` (``_floquet``): a fold's
+        multiplier at +1 as accurate as the others (the monodromy's pair is not)."""
+        return self.kept("section_multipliers", X, lambda: _floquet.section_multipliers(
+            self.transfer_matrices(X), self.flow(X)))
+
+    def flow(self, X) -> np.ndarray:
+        """``u'(0) = M(u0)^-1 F(u0)`` (time in units of T), ``u0 = state(X)``."""
+        u0, p = self.state(X), self.params(X)
+        return np.atleast_1d(spla.spsolve(self.vf.mass(u0, p).tocsc(), self.vf.rhs(u0, p)))
+
+    def start_row(self) -> np.ndarray:
+        if self.start_direction is None:
+            return super().start_row()
+        return np.asarray(self.start_direction, dtype=float)
+
+    # -- detection hooks ---------------------------------------------------------------
+    def monitor(self, X, tau, lu, settings) -> PointInfo:
+        tests = {"fold": float(tau[-1])}
+        if not settings.compute_eigenvalues:
+            return PointInfo(np.zeros(0, dtype=complex), tests)
+        mu, rest = self.multipliers(X), self.section_multipliers(X)
+        tests["trivial_error"] = float(np.min(np.abs(mu - 1.0)))
+        tests["n_unstable"] = float(np.sum(np.abs(rest) > 1.0 + self.settings.unstable_tol))
+        counts = {"pd": int(np.sum((rest.imag == 0) & (rest.real < -1.0))),
+                  "ns": int(np.sum((rest.imag != 0) & (np.abs(rest) > 1.0)))}
+        return PointInfo(mu, tests, counts)
+
+    def events(self, a: PointInfo, b: PointInfo) -> list:
+        kinds = ["fold"] if a.tests["fold"] * b.tests["fold"] < 0 else []
+        return kinds + [k for k in ("pd", "ns")
+                        if k in a.counts and k in b.counts and a.counts[k] != b.counts[k]]
+
+    def test_function(self, kind, X_a, info_a, X_b, info_b, settings):
+        if kind == "fold":
+            return lambda X, tau, lu: float(tau[-1])
+        if kind == "pd":
+            return lambda X, tau, lu: float(
+                _floquet.nearest_real(self.section_multipliers(X), -1) + 1)
+        if kind == "ns":
+            return lambda X, tau, lu: float(
+                _floquet.nearest_complex_modulus(self.section_multipliers(X)) - 1)
+        return None
+
+    def describe(self, kind, X, tau, settings) -> Description:
+        data = {"period": self.period(X), "X": [float(v) for v in X]}
+        if kind in ("pd", "ns"):
+            mu = self.section_multipliers(X)
+            m = _floquet.nearest_real(mu, -1.0) if kind == "pd" else \
+                mu[np.argmin(np.abs(np.abs(mu) - 1) + (mu.imag == 0))]
+            data.update({"multiplier_re": float(np.real(m)), "multiplier_im": float(np.imag(m))})
+        return Description(X, "converged", 0.0, data)
