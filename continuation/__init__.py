@@ -15,6 +15,7 @@ Public API (everything else is private)::
     CycleProblem(F, orbit, period, params, active, *, M=None, settings=CollocationSettings())
     cycle_from_hopf(problem, hopf_point, *, dp=1e-3, settings=None) -> CycleProblem
     cycle_from_pd(cycle_problem, pd_point, *, amplitude=1e-2, settings=None) -> CycleProblem
+    cycle_from_bp(cycle_problem, bp_point, *, amplitude=1e-2) -> CycleProblem   # pitchfork
     CycleCurveProblem(cycle_problem, X, free, condition)   # a cycle with one more equation:
     locate_cycle(cycle_problem, X, condition) -> (problem, NewtonResult)   # curve / located
     Extremum(rows, offset, level), CycleFold(), PeriodDoubling(), NeimarkSacker()   # conditions
@@ -40,14 +41,14 @@ from ._problem import Problem
 from ._settings import (CollocationSettings, ContinuationSettings, EigenSettings,
                         NewtonSettings, PALC, ShootingSettings)
 from ._shooting import ShootingProblem
-from ._switching import cycle_from_hopf, cycle_from_pd
+from ._switching import cycle_from_bp, cycle_from_hopf, cycle_from_pd
 from ._vectorfield import VectorField
 
 __all__ = [
     "Branch", "Event", "Status", "CollocationSettings", "Condition", "CycleCurveProblem",
     "CycleFold", "Extremum", "NeimarkSacker", "PeriodDoubling", "locate_cycle", "ContinuationIterator", "ContinuationSettings",
     "CycleProblem", "EigenSettings", "ShootingProblem", "ShootingSettings", "cycle_from_hopf",
-    "cycle_from_pd",
+    "cycle_from_bp", "cycle_from_pd",
     "EquilibriumProblem", "FoldCurveProblem", "HopfCurveProblem", "Lifted", "NewtonSettings",
     "PALC", "Problem", "SpecialPoint", "Step", "VectorField", "continuation", "correct", "observing",
     "first_lyapunov", "hopf_point",

@@ -11,7 +11,12 @@ Jordan pair at +1, split by the discretization, is not mistaken for a complex pa
 * period doubling: the number of real multipliers ``< -1`` changes (located
   on ``mu + 1`` of the real multiplier nearest -1);
 * Neimark-Sacker: the number of complex multipliers with ``|mu| > 1``
-  changes (located on ``|mu| - 1``).
+  changes (located on ``|mu| - 1``);
+* branch point ("bp"): a real multiplier crosses +1 where the branch does not turn
+  (the number of real multipliers ``> 1`` changes parity, ``tau_p`` keeps its sign;
+  located on ``mu - 1`` of the real multiplier nearest +1). In a system with a
+  symmetry, this is where cycles that break it branch off (a pitchfork of cycles);
+  ``cycle_from_bp`` switches onto them.
 """
 
 from __future__ import annotations
@@ -32,7 +37,7 @@ class PeriodicProblem(Problem):
     """
 
     kind = "cycle"
-    verified_kinds = ("pd", "ns")
+    verified_kinds = ("pd", "ns", "bp")
     monitor_uses_lu = False
     steps_by_eigenvalues = False
 
@@ -91,21 +96,27 @@ class PeriodicProblem(Problem):
         mu, rest = self.multipliers(X), self.section_multipliers(X)
         tests["trivial_error"] = float(np.min(np.abs(mu - 1.0)))
         tests["n_unstable"] = float(np.sum(np.abs(rest) > 1.0 + self.settings.unstable_tol))
-        counts = {"pd": int(np.sum((rest.imag == 0) & (rest.real < -1.0))),
-                  "ns": int(np.sum((rest.imag != 0) & (np.abs(rest) > 1.0)))}
+        real = rest.imag == 0
+        counts = {"pd": int(np.sum(real & (rest.real < -1.0))),
+                  "ns": int(np.sum(~real & (np.abs(rest) > 1.0))),
+                  "bp": int(np.sum(real & (rest.real > 1.0)))}
         return PointInfo(mu, tests, counts)
 
     def events(self, a: PointInfo, b: PointInfo) -> list:
         kinds = ["fold"] if a.tests["fold"] * b.tests["fold"] < 0 else []
+        if not kinds and "bp" in a.counts and "bp" in b.counts \
+                and (a.counts["bp"] - b.counts["bp"]) % 2:
+            kinds.append("bp")              # a real multiplier through +1, no turn
         return kinds + [k for k in ("pd", "ns")
                         if k in a.counts and k in b.counts and a.counts[k] != b.counts[k]]
 
     def test_function(self, kind, X_a, info_a, X_b, info_b, settings):
         if kind == "fold":
             return lambda X, tau, lu: float(tau[-1])
-        if kind == "pd":
+        if kind in ("pd", "bp"):
+            target = -1.0 if kind == "pd" else 1.0
             return lambda X, tau, lu: float(
-                _floquet.nearest_real(self.section_multipliers(X), -1) + 1)
+                _floquet.nearest_real(self.section_multipliers(X), target) - target)
         if kind == "ns":
             return lambda X, tau, lu: float(
                 _floquet.nearest_complex_modulus(self.section_multipliers(X)) - 1)
@@ -113,9 +124,9 @@ class PeriodicProblem(Problem):
 
     def describe(self, kind, X, tau, settings) -> Description:
         data = {"period": self.period(X), "X": [float(v) for v in X]}
-        if kind in ("pd", "ns"):
+        if kind in ("pd", "ns", "bp"):
             mu = self.section_multipliers(X)
-            m = _floquet.nearest_real(mu, -1.0) if kind == "pd" else \
-                mu[np.argmin(np.abs(np.abs(mu) - 1) + (mu.imag == 0))]
+            m = mu[np.argmin(np.abs(np.abs(mu) - 1) + (mu.imag == 0))] if kind == "ns" else \
+                _floquet.nearest_real(mu, -1.0 if kind == "pd" else 1.0)
             data.update({"multiplier_re": float(np.real(m)), "multiplier_im": float(np.imag(m))})
         return Description(X, "converged", 0.0, data)

@@ -1,4 +1,5 @@
-"""Branch switching onto cycles: from a Hopf point of an equilibrium branch.
+"""Branch switching onto cycles: from a Hopf point of an equilibrium branch, and
+from the period doublings and branch points of a cycle branch.
 
 At a Hopf point ``(x_H, p_H)`` with ``J q = i omega M q`` (``|q| = 1``) and
 first Lyapunov coefficient ``l1`` (normalization of ``_lyapunov``), the
@@ -21,6 +22,7 @@ from dataclasses import replace
 
 import numpy as np
 import scipy.sparse as sp
+import scipy.sparse.linalg as spla
 
 from . import _eigen
 from ._branch import SpecialPoint
@@ -153,3 +155,53 @@ def cycle_from_pd(problem: CycleProblem, point: SpecialPoint, *, amplitude: floa
     w = doubled(new.times(), "w").ravel()
     new.start_direction = np.concatenate([w / np.linalg.norm(w), [0.0, 0.0]])
     return new
+
+
+def cycle_from_bp(problem: CycleProblem, point: SpecialPoint, *,
+                  amplitude: float = 1e-2) -> CycleProblem:
+    """The branch of cycles born at the branch point ``point`` of a cycle branch (a
+    pitchfork: in a system with a symmetry, the cycles that break it).
+
+    At a branch point ``G_X`` (``X = (U, T, p)``) has two null vectors: the branch's
+    own tangent and the new branch's. A pitchfork's new branch leaves at fixed ``p``,
+    so its direction ``phi`` is the combination of the two with no parameter part.
+    Both come from :func:`_null_pair` (``G_X`` bordered by two random rows); the guess
+    is ``X + a phi / max |phi_U|`` on the point's mesh, and the start corrector fixes
+    the amplitude along ``phi`` instead of the parameter (``direction=+1`` continues
+    towards larger ``a``; ``-a`` is the mirror branch).
+    """
+    if not isinstance(problem, CycleProblem):
+        raise ValueError("problem must be the CycleProblem whose branch holds the point")
+    if not isinstance(point, SpecialPoint) or point.kind != "bp" or "X" not in point.data:
+        raise ValueError("point must be a 'bp' SpecialPoint of a cycle branch")
+    if not (np.isfinite(amplitude) and amplitude > 0):
+        raise ValueError(f"amplitude must be a positive finite number, got {amplitude!r}")
+    problem, X = problem.at(point)
+    w1, w2 = _null_pair(problem.jacobian(X))
+    phi = w1 * w2[-1] - w2 * w1[-1]                # no part in the active parameter
+    rows = problem.n_nodes * problem.vf.n
+    phi /= np.max(np.abs(phi[:rows]))
+    Y = X + amplitude * phi
+    new = CycleProblem(problem.vf, lambda t: problem.evaluate(Y, t), problem.period(Y),
+                       problem.par_dict(Y), problem.free, settings=problem.settings,
+                       mesh=problem.mesh)
+    new.start_direction = np.concatenate([phi[:rows] / np.linalg.norm(phi[:rows]),
+                                          np.zeros(len(X) - rows)])
+    return new
+
+
+def _null_pair(J) -> tuple[np.ndarray, np.ndarray]:
+    """Two independent vectors of the (near) two-dimensional null space of ``J`` (``m``
+    x ``m + 1``, rank ``m - 1`` at a branch point): for random rows ``r``, the bordered
+    ``[J; r^T]`` is (nearly) singular, and one inverse iteration with it returns its
+    null vector, the element of ``null(J)`` with ``r^T w = 0``."""
+    rng = np.random.default_rng(0)
+    J = sp.csc_matrix(J)
+    out = []
+    for _ in range(2):
+        A = sp.vstack([J, sp.csr_matrix(rng.standard_normal(J.shape[1]))]).tocsc()
+        lu = spla.splu(A)
+        w = lu.solve(rng.standard_normal(J.shape[1]))
+        w = lu.solve(w / np.linalg.norm(w))
+        out.append(w / np.linalg.norm(w))
+    return out[0], out[1]
