@@ -144,6 +144,14 @@ def _pencil_multipliers(A: np.ndarray) -> np.ndarray:
     return alpha[keep] / beta[keep]
 
 
+def crossing(mu: np.ndarray, target: float) -> float:
+    """``prod_k (mu_k - target) / (1 + |mu_k|)``: real (a complex pair contributes
+    ``|mu - target|^2 / (1 + |mu|)^2 > 0``), continuous, and of changing sign exactly
+    where a real multiplier passes ``target`` (+1 or -1), whichever one it is (the real
+    multiplier *nearest* the target may be another one on either side of a step)."""
+    return float(np.real(np.prod((mu - target) / (1.0 + np.abs(mu)))))
+
+
 def nearest_real(mu: np.ndarray, target: float) -> float:
     """The real multiplier nearest ``target`` (the real part nearest, if none is real)."""
     real = mu[mu.imag == 0]

@@ -9,12 +9,13 @@ Jordan pair at +1, split by the discretization, is not mistaken for a complex pa
 
 * fold of cycles: ``tau_p`` changes sign (located by Illinois on ``tau_p``);
 * period doubling: the number of real multipliers ``< -1`` changes (located
-  on ``mu + 1`` of the real multiplier nearest -1);
+  on ``_floquet.crossing(mu, -1)``, which changes sign with the multiplier that
+  crosses);
 * Neimark-Sacker: the number of complex multipliers with ``|mu| > 1``
   changes (located on ``|mu| - 1``);
 * branch point ("bp"): a real multiplier crosses +1 where the branch does not turn
   (the number of real multipliers ``> 1`` changes parity, ``tau_p`` keeps its sign;
-  located on ``mu - 1`` of the real multiplier nearest +1). In a system with a
+  located on ``_floquet.crossing(mu, +1)``). In a system with a
   symmetry, this is where cycles that break it branch off (a pitchfork of cycles);
   ``cycle_from_bp`` switches onto them.
 """
@@ -115,8 +116,7 @@ class PeriodicProblem(Problem):
             return lambda X, tau, lu: float(tau[-1])
         if kind in ("pd", "bp"):
             target = -1.0 if kind == "pd" else 1.0
-            return lambda X, tau, lu: float(
-                _floquet.nearest_real(self.section_multipliers(X), target) - target)
+            return lambda X, tau, lu: _floquet.crossing(self.section_multipliers(X), target)
         if kind == "ns":
             return lambda X, tau, lu: float(
                 _floquet.nearest_complex_modulus(self.section_multipliers(X)) - 1)

@@ -97,3 +97,17 @@ def _mean_square_growth(theta0) -> float:
         return [1 + E * np.cos(theta), (MU_BP + A * np.cos(theta)) * c, c ** 2]
     sol = solve_ivp(rhs, (0, T), [theta0, 1.0, 0.0], rtol=1e-11, atol=1e-12)
     return sol.y[2, -1] / T
+
+
+def test_crossing_changes_sign_with_the_multiplier_that_crosses():
+    """Seen on an impacting branch: in one step a real multiplier went from 0.92 to 1.89
+    while 0.79 stayed; the real multiplier nearest +1 (0.92, then 0.79) stays below 1,
+    the crossing function changes sign; a complex pair never changes its sign."""
+    from continuation._floquet import crossing, nearest_real
+    before = np.array([0.92, 0.79, 0.3 + 0.5j, 0.3 - 0.5j])
+    after = np.array([1.89, 0.79, 0.3 + 0.5j, 0.3 - 0.5j])
+    assert nearest_real(before, 1.0) < 1 and nearest_real(after, 1.0) < 1
+    assert crossing(before, 1.0) * crossing(after, 1.0) < 0
+    pair = np.array([0.5, 1.2 + 0.1j, 1.2 - 0.1j])
+    assert crossing(pair, 1.0) < 0 and crossing(pair, -1.0) > 0
+    assert crossing(np.array([-1.5, 0.2]), -1.0) < 0 < crossing(np.array([-0.5, 0.2]), -1.0)
