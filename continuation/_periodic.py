@@ -12,7 +12,8 @@ Jordan pair at +1, split by the discretization, is not mistaken for a complex pa
   on ``_floquet.crossing(mu, -1)``, which changes sign with the multiplier that
   crosses);
 * Neimark-Sacker: the number of complex multipliers with ``|mu| > 1``
-  changes (located on ``|mu| - 1``);
+  changes, and with it the number outside the circle (a complex pair that meets on
+  the real axis outside the circle is none; located on ``|mu| - 1``);
 * branch point ("bp"): a real multiplier crosses +1 where the branch does not turn
   (the number of real multipliers ``> 1`` changes parity, ``tau_p`` keeps its sign;
   located on ``_floquet.crossing(mu, +1)``). In a system with a
@@ -108,8 +109,11 @@ class PeriodicProblem(Problem):
         if not kinds and "bp" in a.counts and "bp" in b.counts \
                 and (a.counts["bp"] - b.counts["bp"]) % 2:
             kinds.append("bp")              # a real multiplier through +1, no turn
-        return kinds + [k for k in ("pd", "ns")
-                        if k in a.counts and k in b.counts and a.counts[k] != b.counts[k]]
+        changed = [k for k in ("pd", "ns")
+                   if k in a.counts and k in b.counts and a.counts[k] != b.counts[k]]
+        if "ns" in changed and sum(a.counts.values()) == sum(b.counts.values()):
+            changed.remove("ns")            # a pair met on the real axis outside the circle
+        return kinds + changed
 
     def test_function(self, kind, X_a, info_a, X_b, info_b, settings):
         if kind == "fold":

@@ -111,3 +111,18 @@ def test_crossing_changes_sign_with_the_multiplier_that_crosses():
     pair = np.array([0.5, 1.2 + 0.1j, 1.2 - 0.1j])
     assert crossing(pair, 1.0) < 0 and crossing(pair, -1.0) > 0
     assert crossing(np.array([-1.5, 0.2]), -1.0) < 0 < crossing(np.array([-0.5, 0.2]), -1.0)
+
+
+def test_events_of_multipliers_that_meet_on_the_real_axis(symmetric_branch):
+    """Seen past a branch point at N = 4: a complex pair outside the circle met on the
+    real axis below -1 (no Neimark-Sacker point: as many multipliers outside as before);
+    a real multiplier through +1 is a branch point unless the branch turns (a fold)."""
+    from continuation._problem import PointInfo
+    problem, _ = symmetric_branch
+    info = lambda fold, pd, ns, bp: PointInfo(np.zeros(0), {"fold": fold},  # noqa: E731
+                                              {"pd": pd, "ns": ns, "bp": bp})
+    assert problem.events(info(1, 0, 2, 0), info(1, 2, 0, 0)) == ["pd"]
+    assert problem.events(info(1, 0, 2, 0), info(1, 0, 0, 0)) == ["ns"]
+    assert problem.events(info(1, 0, 0, 0), info(1, 0, 0, 1)) == ["bp"]
+    assert problem.events(info(1, 0, 0, 0), info(-1, 0, 0, 1)) == ["fold"]
+    assert problem.events(info(1, 0, 0, 1), info(1, 0, 0, 2)) == ["bp"]
