@@ -11,7 +11,7 @@ from fsicas import Scene
 from fsicas.cycles import (CollocatedImpactBranch, CollocationImpactSettings, CycleSettings,
                            ImpactSettings, cycle_branch, impacting_branch,
                            impacting_collocation_branch, period_doubled_branch,
-                           pre_contact_start)
+                           pre_contact_start, symmetry_broken_branch)
 from fsicas.linear.steady import steady_state
 from fsicas.model import build_model
 from fsicas.model.contact import gaps
@@ -37,10 +37,10 @@ def _one_period(model, scene, point, method="radau", rtol=1e-11):
     return miss, (y.max() - y.min()) / 2, gaps(model, x).min()
 
 
-def _through_contact(modes, ustar_max, settings):
-    """M* = 1, k* = 1e8, eps/H = 1e-2, smoothing 0.1: the impacting branch by collocation
-    from the contact-free collocation cycle at gap >= 3 eps; (start, scene, model, branch)."""
-    base = Scene(mstar=1.0, zeta=0.01, modes=modes, contact_eps=1e-2)
+def _through_contact(modes, ustar_max, settings, mstar=1.0):
+    """k* = 1e8, eps/H = 1e-2, smoothing 0.1: the impacting branch by collocation from the
+    contact-free collocation cycle at gap >= 3 eps; (start, scene, model, branch)."""
+    base = Scene(mstar=mstar, zeta=0.01, modes=modes, contact_eps=1e-2)
     start = pre_contact_start(cycle_branch(base, ustar_max=10.0, settings=SCENE_NODES))
     scene = base.replace(ustar=start.ustar, **IMPACT)
     model = build_model(scene)
@@ -333,3 +333,43 @@ def test_period_doubling_of_an_asymmetric_cycle_and_its_doubled_branch():
     assert abs(run.period / last.period - 1) < 1e-8
     assert abs(run.tip_amplitude / last.tip_amplitude - 1) < 1e-4
     assert run.peak_force == pytest.approx(last.peak_force, rel=1e-2)
+
+
+def _mirror_miss(model, scene, point) -> float:
+    """Half a period after the point's state, the distance of an independent integration
+    (IDAS 1e-11) from the state's mirror image R x = (-r, -r', Q2, Q1), relative."""
+    n = model.scene.modes
+    mirror = np.r_[-point.state[:2 * n], point.state[-1], point.state[-2]]
+    traj = simulate(model, steady_state(scene.replace(ustar=point.ustar), model),
+                    point.period / 2, x0=point.state,
+                    settings=Settings(method="idas", rtol=1e-11, atol=1e-13,
+                                      dt_out=point.period / 2000))
+    assert traj.status == "success"
+    return np.max(np.abs(traj.x[-1] - mirror)) / np.max(np.abs(point.state))
+
+
+@pytest.mark.slow
+def test_symmetry_breaking_and_period_doubling_in_the_symmetric_channel():
+    """N = 4, M* = 3 (about 3 min): past contact a real multiplier of the symmetric cycle
+    crosses +1 with no turn, a branch point; the switch reaches cycles that are not their
+    own mirror image half a period on (the symmetric one is, to 1e-5), stable, and
+    checked by time integration; on them a period doubling is located (in the symmetric
+    channel, only such cycles can period-double)."""
+    _, scene, model, br = _through_contact(4, 8.7, CollocationImpactSettings(
+        ntst=200, max_points=30, ds=0.05, max_turn=0.3), mstar=3.0)
+    (bp,) = [p for p in br.special if p.kind == "bp"]
+    assert not [p for p in br.special if p.kind == "fold"]
+    assert abs(bp.critical_multiplier - 1) < 1e-6 and abs(bp.ustar - 8.6377) < 1e-3
+    before = [p for p in br.points if p.ustar < bp.ustar]
+    assert before[-1].stable and not [p for p in br.points if p.ustar > bp.ustar][0].stable
+    assert _mirror_miss(model, scene, bp) < 1e-5                    # measured 2.6e-7
+    sb = symmetry_broken_branch(scene, bp, model=model, ustar_max=8.7, settings=
+                                CollocationImpactSettings(ntst=200, max_points=8, ds=0.05,
+                                                          max_turn=0.3))
+    p = sb.points[1]
+    assert p.stable and p.ustar > bp.ustar and _mirror_miss(model, scene, p) > 1e-3
+    run = settled_cycle(model, scene.replace(ustar=p.ustar), p.state, p.period)
+    assert run.status == "settled" and abs(run.period / p.period - 1) < 1e-8
+    assert abs(run.tip_amplitude / p.tip_amplitude - 1) < 1e-5
+    (pd,) = [q for q in sb.special if q.kind == "pd"]
+    assert pd.located and abs(pd.critical_multiplier + 1) < 1e-4

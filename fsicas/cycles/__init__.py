@@ -11,11 +11,13 @@ from .impacting import (ImpactBranch, ImpactPoint, ImpactSettings, cycle_from_tr
                         impacting_branch, pre_contact_start)
 from .impacting_collocation import (CollocatedImpactBranch, CollocatedImpactPoint,
                                     CollocationImpactSettings, impacting_collocation_branch,
-                                    impacting_collocation_problem, period_doubled_branch)
+                                    impacting_collocation_problem, period_doubled_branch,
+                                    symmetry_broken_branch)
 
 __all__ = ["CycleBranch", "CyclePoint", "CycleSettings", "cycle_branch", "ImpactBranch",
            "ImpactPoint", "ImpactSettings", "cycle_from_trajectory", "impacting_branch",
            "pre_contact_start", "CollocatedImpactBranch", "CollocatedImpactPoint",
            "CollocationImpactSettings", "impacting_collocation_branch",
-           "impacting_collocation_problem", "period_doubled_branch", "CurveMap", "CurvePoint", "CurveSettings",
+           "impacting_collocation_problem", "period_doubled_branch", "symmetry_broken_branch",
+           "CurveMap", "CurvePoint", "CurveSettings",
            "CycleCurve", "cycle_curves", "curve_seeds", "fold_curves", "grazing_curve"]

@@ -14,8 +14,12 @@ A cycle problem of :mod:`continuation` on ``flutter_field`` has unknowns
 - ``quadrature_error``: the relative error of the equations over the cycle from the flow
   quadrature, against a rule of twice the nodes (:mod:`fsicas.model.accuracy`), and
   ``quadrature_nodes``, the nodes of the model it was computed on (``scene.n_quad``).
+
+:class:`PolynomialGauge` measures a collocated cycle on its polynomial.
 """
 from __future__ import annotations
+
+import time
 
 import numpy as np
 
@@ -25,7 +29,7 @@ from ..linear.adapter import LOG_M, PI, PI_SCALE, TIME_SCALE, steady_ustar
 from ..model import contact
 from ..model.accuracy import quadrature_error
 
-__all__ = ["Gauge", "PolynomialExtrema", "PERIOD_COLUMN", "model_parameters"]
+__all__ = ["Gauge", "PolynomialExtrema", "PolynomialGauge", "PERIOD_COLUMN", "model_parameters"]
 
 PERIOD_COLUMN = "cycle_period"
 """Branch column of the period in units of T (the library's ``period`` is in T/100)."""
@@ -128,3 +132,32 @@ class PolynomialExtrema:
     def min_gap(self, problem, X) -> float:
         """``min_{t, x_j, c} h_c(x_j, t)``."""
         return float(np.min(self._walls + problem.extrema(X, self._gap_rows)[0]))
+
+
+class PolynomialGauge(Gauge):
+    """Measures of collocation unknowns X = (nodes, 100 T, Π) on the polynomial: the
+    extrema exact (:class:`fsicas.cycles.gauge.PolynomialExtrema`), the contact
+    intervals counted on ``samples`` points per mesh interval (dense at the impacts)."""
+
+    def __init__(self, model, x_eq, samples: int):
+        super().__init__(model, x_eq)
+        self.samples, self.t_last = samples, time.perf_counter()
+        self._extrema = PolynomialExtrema(model)
+
+    def record(self, problem, X) -> dict:
+        """The columns of one branch point (the fields of :class:`CollocatedImpactPoint`)."""
+        mesh = problem.mesh
+        t = (mesh[:-1, None] + np.diff(mesh)[:, None] * np.arange(self.samples)
+             / self.samples).ravel()
+        x = problem.evaluate(X, t)
+        inside = self.min_gap(x) < self.eps
+        impacts = int(np.sum(inside & ~np.roll(inside, 1))) if not inside.all() else 1
+        y_min, y_max = self._extrema.tip(problem, X)
+        lowest = self._extrema.min_gap(problem, X)
+        common = self.common(problem, X)
+        now = time.perf_counter()
+        wall, self.t_last = now - self.t_last, now
+        weights = np.repeat(np.diff(mesh), self.samples)          # the samples' time steps
+        return {**common, "tip_amplitude": (y_max - y_min) / 2,
+                "min_gap": lowest, "gap_ratio": lowest / self.eps, "impacts": impacts,
+                "ntst": problem.ntst, "wall_time": wall, **self.impact_measures(x, weights)}

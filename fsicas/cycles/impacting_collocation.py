@@ -26,8 +26,11 @@ Special cycles (``detect``): folds of cycles, period doublings and Neimark-Sacke
 points, detected from the tangent and the multipliers, located on the arclength by the
 library and refined by Newton on their minimally extended systems
 (``continuation.CycleFold``, ``PeriodDoubling``, ``NeimarkSacker``: the critical
-multiplier at +1, -1 or on the unit circle). :func:`period_doubled_branch` switches at
-a period doubling onto the branch of cycles of twice the period.
+multiplier at +1, -1 or on the unit circle); branch points (a multiplier through +1
+where the branch does not turn: the symmetric cycle of the symmetric channel gives way
+to a pair of asymmetric ones), located on the arclength. :func:`period_doubled_branch`
+switches at a period doubling onto the branch of cycles of twice the period,
+:func:`symmetry_broken_branch` at a branch point onto the asymmetric cycles.
 
 Extrema are those of the collocation polynomial, exact in t
 (:class:`fsicas.cycles.gauge.PolynomialExtrema`); the contact intervals are counted on
@@ -48,20 +51,22 @@ from ..linear.adapter import LOG_M, PI, PI_SCALE, TIME_SCALE, flutter_field, pi_
 from ..linear.steady import steady_state
 from ..model.assembly import Model, build_model
 from ..scene import Scene
-from .gauge import Gauge, PolynomialExtrema
+from .gauge import PolynomialGauge
 from .impacting import ImpactBranch, ImpactPoint, shooting_points
 from .records import check_settings
 
 __all__ = ["CollocationImpactSettings", "CollocatedImpactPoint", "CollocatedImpactBranch",
            "impacting_collocation_branch", "impacting_collocation_problem", "field_parameters",
-           "period_doubled_branch", "ImpactKind"]
+           "period_doubled_branch", "symmetry_broken_branch", "ImpactKind"]
 
-ImpactKind = Literal["regular", "fold", "pd", "ns"]
+ImpactKind = Literal["regular", "fold", "pd", "ns", "bp"]
 """A branch point ("regular") or a special cycle: "fold" (a second multiplier at +1),
-"pd" (a multiplier at -1), "ns" (a complex pair on the unit circle)."""
+"pd" (a multiplier at -1), "ns" (a complex pair on the unit circle), "bp" (a second
+multiplier at +1 where the branch does not turn: cycles that break the channel's
+symmetry branch off)."""
 
 #: the multiplier each kind of special cycle puts on the unit circle (None: a complex one)
-_CRITICAL = {"fold": 1.0, "pd": -1.0, "ns": None}
+_CRITICAL = {"fold": 1.0, "pd": -1.0, "ns": None, "bp": 1.0}
 #: the minimally extended system of each kind of special cycle
 _CONDITIONS = {"fold": C.CycleFold, "pd": C.PeriodDoubling, "ns": C.NeimarkSacker}
 
@@ -150,7 +155,7 @@ class CollocatedImpactPoint(ImpactPoint):
 class CollocatedImpactBranch(ImpactBranch):
     """Collocation branch in U* from a start cycle; ``status`` as for the shooting route;
     ``special``: its located special cycles (:class:`CollocatedImpactPoint` of kind
-    "fold", "pd" or "ns"), in the order met."""
+    "fold", "pd", "ns" or "bp"), in the order met."""
 
     special: list = field(default_factory=list)
 
@@ -222,28 +227,62 @@ def period_doubled_branch(scene: Scene, point: "CollocatedImpactPoint", *,
     multiplier -1 (``continuation.cycle_from_pd``: 2 NTST intervals, the PD cycle's mesh
     run through twice) and is continued towards larger amplitude, in either direction
     of U* as the branch bends (the PD is super- or subcritical)."""
+    return _switched(scene, point, "pd", model, amplitude, (ustar_min, ustar_max), settings)
+
+
+def symmetry_broken_branch(scene: Scene, point: "CollocatedImpactPoint", *,
+                           model: Model | None = None, amplitude: float = 1e-3,
+                           ustar_min: float = 0.0, ustar_max: float = 12.0,
+                           settings: CollocationImpactSettings = CollocationImpactSettings()
+                           ) -> CollocatedImpactBranch:
+    """The branch of cycles that break the channel's symmetry, born at the branch point
+    ``point`` (kind "bp" of :func:`impacting_collocation_branch` on ``scene``).
+
+    The cycle is rebuilt from the point's state (as for :func:`period_doubled_branch`)
+    and corrected at the point's U*; the new branch starts from it plus ``amplitude``
+    times the null direction of its Jacobian that keeps U* (``continuation.cycle_from_bp``,
+    scaled to a largest nodal change of ``amplitude``; at 1e-2 the stiff contact law
+    already throws the guess out of Newton's reach) and is continued towards larger
+    amplitude."""
+    return _switched(scene, point, "bp", model, amplitude, (ustar_min, ustar_max), settings)
+
+
+def _switched(scene, point, kind, model, amplitude, ustar_range, settings
+              ) -> CollocatedImpactBranch:
+    """The branch born at the special cycle ``point`` of ``kind`` ("pd", "bp")."""
     start = time.perf_counter()
     _check_smooth(scene)
-    if getattr(point, "kind", None) != "pd":
-        raise ValueError("point must be a special point of kind 'pd' of an impacting "
+    if getattr(point, "kind", None) != kind:
+        raise ValueError(f"point must be a special point of kind {kind!r} of an impacting "
                          f"collocation branch, got kind {getattr(point, 'kind', None)!r}")
     model = model or build_model(scene)
     try:
         problem = impacting_collocation_problem(scene, point.state, point.period,
                                                 point.pressure_drop, model=model,
                                                 settings=settings)
-        square, result = C.locate_cycle(problem, problem.X0, C.PeriodDoubling(),
-                                        C.NewtonSettings(tol=settings.tol))
+        square, X, residual = _rebuilt_special(problem, kind, settings)
     except (RuntimeError, ValueError, np.linalg.LinAlgError) as err:
-        return _failed(scene, model, f"the period doubling could not be rebuilt: {err}", start)
+        return _failed(scene, model, f"the special cycle could not be rebuilt: {err}", start)
+    special = C.SpecialPoint(kind, 0, square.state(X), square.par_dict(X), "converged",
+                             residual, {"X": list(X), "mesh": list(square.mesh)})
+    switch = C.cycle_from_pd if kind == "pd" else C.cycle_from_bp
+    return _continued(scene, model, switch(problem, special, amplitude=amplitude),
+                      ustar_range, 1, settings, start)
+
+
+def _rebuilt_special(problem, kind, settings) -> tuple:
+    """``(problem, X, residual)``: a period doubling by Newton on its minimally extended
+    system (RuntimeError if that fails). A branch point has none, and Newton at fixed U*
+    is singular there (two null vectors): the rebuilt cycle stays the guess, and the new
+    branch's start corrector, off the branch point by the switch's amplitude, corrects
+    it."""
+    if kind == "bp":
+        return problem, problem.X0, float("nan")
+    square, result = C.locate_cycle(problem, problem.X0, C.PeriodDoubling(),
+                                    C.NewtonSettings(tol=settings.tol))
     if not result.converged:
-        return _failed(scene, model, "the period doubling could not be refined: "
-                       f"{result.message}", start)
-    pd = C.SpecialPoint("pd", 0, square.state(result.X), square.par_dict(result.X),
-                        "converged", result.residual,
-                        {"X": list(result.X), "mesh": list(square.mesh)})
-    doubled = C.cycle_from_pd(problem, pd, amplitude=amplitude)
-    return _continued(scene, model, doubled, (ustar_min, ustar_max), 1, settings, start)
+        raise RuntimeError(f"Newton on its extended system failed: {result.message}")
+    return square, result.X, result.residual
 
 
 def _check_smooth(scene: Scene) -> None:
@@ -260,7 +299,7 @@ def _failed(scene, model, message, start) -> CollocatedImpactBranch:
 def _continued(scene, model, problem, ustar_range, direction, settings, start
                ) -> CollocatedImpactBranch:
     """The branch of ``problem`` in U* within ``ustar_range``, its special cycles refined."""
-    gauge = _PolynomialGauge(model, steady_state(scene, model).x, settings.samples)
+    gauge = PolynomialGauge(model, steady_state(scene, model).x, settings.samples)
     once = (lambda problem, X: "reached max_points = 1") if settings.max_points == 1 else None
     branch = C.continuation(problem, record=gauge.record, stop=once, settings=_steps(
         scene, model, *ustar_range, direction, settings))
@@ -268,7 +307,7 @@ def _continued(scene, model, problem, ustar_range, direction, settings, start
         scene, point.state, point.period, point.pressure_drop, model=model,
         settings=replace(settings, ntst=settings.refine_ntst))
     special = [_refined(problem, sp, gauge, settings, finer) for sp in branch.special_points
-               if sp.kind in _CONDITIONS]
+               if sp.kind in _CRITICAL]
     return _result(scene, model.scene.contact_gap, branch, special, settings,
                    time.perf_counter() - start)
 
@@ -277,7 +316,13 @@ def _refined(problem, sp, gauge, settings, finer) -> "CollocatedImpactPoint":
     """A special cycle located on the arclength, refined by Newton on its minimally
     extended system, then (``settings.refine_ntst``) once more on the finer mesh of
     ``finer(point)``; the arclength location (``located=False``) where the first fails,
-    the branch mesh's where the second does."""
+    the branch mesh's where the second does. A branch point has no such system: it is
+    kept where the arclength location put it (``located=False``)."""
+    if sp.kind not in _CONDITIONS:
+        square, X = problem.at(sp)
+        return CollocatedImpactPoint.from_columns(
+            sp.record, None, kind=sp.kind, located=False,
+            section_multipliers=square.section_multipliers(X))
     point = _located(*problem.at(sp), sp.kind, gauge, settings)
     if point is None:
         return CollocatedImpactPoint.from_columns(sp.record, None, kind=sp.kind, located=False)
@@ -342,32 +387,3 @@ def _result(scene, eps, branch, special, settings, wall_time) -> CollocatedImpac
         {"bound": "bound", "max_steps": "max_points"}.get(branch.status, "failed")
     return CollocatedImpactBranch(scene, eps, points, status, branch.message, wall_time,
                                   special)
-
-
-class _PolynomialGauge(Gauge):
-    """Measures of collocation unknowns X = (nodes, 100 T, Π) on the polynomial: the
-    extrema exact (:class:`fsicas.cycles.gauge.PolynomialExtrema`), the contact
-    intervals counted on ``samples`` points per mesh interval (dense at the impacts)."""
-
-    def __init__(self, model: Model, x_eq, samples: int):
-        super().__init__(model, x_eq)
-        self.samples, self.t_last = samples, time.perf_counter()
-        self._extrema = PolynomialExtrema(model)
-
-    def record(self, problem, X) -> dict:
-        """The columns of one branch point (the fields of :class:`CollocatedImpactPoint`)."""
-        mesh = problem.mesh
-        t = (mesh[:-1, None] + np.diff(mesh)[:, None] * np.arange(self.samples)
-             / self.samples).ravel()
-        x = problem.evaluate(X, t)
-        inside = self.min_gap(x) < self.eps
-        impacts = int(np.sum(inside & ~np.roll(inside, 1))) if not inside.all() else 1
-        y_min, y_max = self._extrema.tip(problem, X)
-        lowest = self._extrema.min_gap(problem, X)
-        common = self.common(problem, X)
-        now = time.perf_counter()
-        wall, self.t_last = now - self.t_last, now
-        weights = np.repeat(np.diff(mesh), self.samples)          # the samples' time steps
-        return {**common, "tip_amplitude": (y_max - y_min) / 2,
-                "min_gap": lowest, "gap_ratio": lowest / self.eps, "impacts": impacts,
-                "ntst": problem.ntst, "wall_time": wall, **self.impact_measures(x, weights)}
