@@ -126,3 +126,22 @@ def test_events_of_multipliers_that_meet_on_the_real_axis(symmetric_branch):
     assert problem.events(info(1, 0, 0, 0), info(1, 0, 0, 1)) == ["bp"]
     assert problem.events(info(1, 0, 0, 0), info(-1, 0, 0, 1)) == ["fold"]
     assert problem.events(info(1, 0, 0, 1), info(1, 0, 0, 2)) == ["bp"]
+
+
+def test_location_bisects_where_the_corrector_fails():
+    """Regula falsi on f(s) = s - 0.3 lands on the root at once; the corrector fails
+    there (a stiff branch did so): the location bisects instead and still converges."""
+    from types import SimpleNamespace
+
+    from continuation._locate import _illinois
+    failed = []
+
+    def evaluate(s):
+        if abs(s - 0.3) < 1e-12 and not failed:
+            failed.append(s)
+            return None
+        return (s, np.array([s]), np.array([1.0]), s - 0.3,
+                SimpleNamespace(iterations=1, residual=0.0))
+    found = _illinois(evaluate, evaluate(0.0), evaluate(1.0), True,
+                      C.ContinuationSettings(locate_tol=1e-12))
+    assert failed and found.converged and abs(found.s - 0.3) < 1e-12
