@@ -43,8 +43,8 @@ import numpy as np  # noqa: E402
 
 from fsicas import Scene  # noqa: E402
 from fsicas.cycles import (CollocatedImpactBranch, CollocationImpactSettings,  # noqa: E402
-                           cycle_branch, impacting_collocation_branch, period_doubled_branch,
-                           pre_contact_start)
+                           branch_through_contact, impacting_collocation_branch,
+                           period_doubled_branch)
 from fsicas.cycles.impacting import cycle_from_trajectory  # noqa: E402
 from fsicas.linear.steady import steady_state  # noqa: E402
 from fsicas.model import build_model  # noqa: E402
@@ -66,11 +66,8 @@ def branches(modes, args):
     if main_path.exists():
         main = CollocatedImpactBranch.load(main_path)
     else:
-        start = pre_contact_start(cycle_branch(base, ustar_max=args.ustar_max))
-        scene = base.replace(ustar=start.ustar, **IMPACT)
-        main = impacting_collocation_branch(scene, start.state, start.period,
-                                            start.pressure_drop, ustar_max=args.ustar_max,
-                                            settings=settings)
+        main = branch_through_contact(base.replace(**IMPACT), ustar_max=args.ustar_max,
+                                      settings=settings)
         main.save(main_path)
     found = [("period-1", main)]
     before = [p for p in main.points if p.ustar < main.points[-1].ustar - 0.05]

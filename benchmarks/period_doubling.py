@@ -30,9 +30,8 @@ import numpy as np  # noqa: E402
 
 import continuation as C  # noqa: E402
 from fsicas import Scene  # noqa: E402
-from fsicas.cycles import (CollocationImpactSettings, CycleSettings, cycle_branch,  # noqa: E402
-                           impacting_collocation_branch, period_doubled_branch,
-                           pre_contact_start)
+from fsicas.cycles import (CollocationImpactSettings, CycleSettings,  # noqa: E402
+                           branch_through_contact, period_doubled_branch)
 from fsicas.cycles.impacting_collocation import impacting_collocation_problem  # noqa: E402
 from fsicas.linear.adapter import LOG_M, PI  # noqa: E402
 from fsicas.model import build_model  # noqa: E402
@@ -44,14 +43,11 @@ IMPACT = dict(contact=True, contact_stiffness=1e8, contact_eps=1e-2, contact_smo
 
 def impacting(base: Scene, ustar_max: float, points: int, refine_ntst: int = 0):
     """(scene, model, branch): the period-1 impacting branch from 3 eps before contact."""
-    start = pre_contact_start(cycle_branch(base, ustar_max=ustar_max + 2,
-                                           settings=CycleSettings(quadrature_tol=None)))
-    scene = base.replace(ustar=start.ustar, **IMPACT)
-    model = build_model(scene)
-    return scene, model, impacting_collocation_branch(
-        scene, start.state, start.period, start.pressure_drop, model=model,
-        ustar_max=ustar_max, settings=CollocationImpactSettings(
+    branch = branch_through_contact(
+        base.replace(**IMPACT), ustar_max=ustar_max,
+        cycle_settings=CycleSettings(quadrature_tol=None), settings=CollocationImpactSettings(
             ntst=200, max_points=points, ds=0.1, refine_ntst=refine_ntst))
+    return branch.scene, build_model(branch.scene), branch
 
 
 def nearest_real_to_minus_one(branch) -> tuple[float, float]:

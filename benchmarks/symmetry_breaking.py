@@ -2,17 +2,18 @@
 doublings it opens.
 
     python benchmarks/symmetry_breaking.py [--modes 10] [--mstar 1] [--ustar-max 7.6]
-        [--points 60] [--checks 3] [--out runs/symmetry]
+        [--points 60] [--checks 3] [--doubled] [--out runs/symmetry]
 
 k* = 1e8, eps/H = 1e-2, smoothing 0.1, zeta = 0.01, NTST = 200. The period-1 impacting
 branch from the first contact (``impacting_collocation_branch``) to ``--ustar-max``, its
 branch points ("bp": a real multiplier through +1 where the branch does not turn), the
 branch of asymmetric cycles from the first (``symmetry_broken_branch``, ``--points``
-points) with its special cycles, and at ``--checks`` of its stable cycles a time
-integration (``settled_cycle``, IDAS 1e-10, 30 periods: period, amplitude, peak force
-against the cycle's) and the distance, half a period on, from the state's mirror image
-R x = (-r, -r', Q2, Q1) (zero for a symmetric cycle). Branches are saved to ``--out``
-(JSON) and read back on a rerun.
+points) with its special cycles, with ``--doubled`` the branch of twice the period from
+each of its period doublings (``period_doubled_branch``), and at ``--checks`` of the
+stable cycles of each a time integration (``settled_cycle``, IDAS 1e-10, 30 periods:
+period, amplitude, peak force against the cycle's) and the distance, half a period on,
+from the state's mirror image R x = (-r, -r', Q2, Q1) (zero for a symmetric cycle).
+Branches are saved to ``--out`` (JSON) and read back on a rerun.
 """
 from __future__ import annotations
 
@@ -22,16 +23,13 @@ import time
 from pathlib import Path
 
 os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")   # before NumPy: docs/continuation.md
-import numpy as np  # noqa: E402
 
 from fsicas import Scene  # noqa: E402
 from fsicas.cycles import (CollocatedImpactBranch, CollocationImpactSettings,  # noqa: E402
-                           cycle_branch, impacting_collocation_branch, pre_contact_start,
+                           branch_through_contact, period_doubled_branch,
                            symmetry_broken_branch)
-from fsicas.linear.steady import steady_state  # noqa: E402
 from fsicas.model import build_model  # noqa: E402
-from fsicas.timedomain.integrators import Settings, simulate  # noqa: E402
-from fsicas.timedomain.settled import settled_cycle  # noqa: E402
+from fsicas.timedomain.settled import mirror_distance, settled_cycle  # noqa: E402
 
 IMPACT = dict(contact=True, contact_stiffness=1e8, contact_eps=1e-2, contact_smoothing=0.1)
 
@@ -48,17 +46,6 @@ def computed(path: Path, compute) -> CollocatedImpactBranch:
     return branch
 
 
-def mirror_miss(model, scene, point) -> float:
-    """Half a period after the state, the distance from its mirror image (relative)."""
-    n = model.scene.modes
-    mirror = np.r_[-point.state[:2 * n], point.state[-1], point.state[-2]]
-    traj = simulate(model, steady_state(scene.replace(ustar=point.ustar), model),
-                    point.period / 2, x0=point.state,
-                    settings=Settings(method="idas", rtol=1e-11, atol=1e-13,
-                                      dt_out=point.period / 2000))
-    return float(np.max(np.abs(traj.x[-1] - mirror)) / np.max(np.abs(point.state)))
-
-
 def specials(name, branch) -> None:
     for p in branch.special:
         print(f"  {name}: {p.kind} at U* = {p.ustar:.6f}, critical multiplier "
@@ -72,21 +59,16 @@ def main(argv=None) -> None:
     ap.add_argument("--ustar-max", type=float, default=7.6)
     ap.add_argument("--points", type=int, default=60)
     ap.add_argument("--checks", type=int, default=3)
+    ap.add_argument("--doubled", action="store_true")
     ap.add_argument("--out", default="runs/symmetry")
     args = ap.parse_args(argv)
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     tag = f"N{args.modes}_M{args.mstar:g}"
-    base = Scene(mstar=args.mstar, zeta=0.01, modes=args.modes, contact_eps=1e-2)
+    scene = Scene(mstar=args.mstar, zeta=0.01, modes=args.modes, **IMPACT)
     settings = CollocationImpactSettings(ntst=200, max_points=400, ds=0.05, max_turn=0.3)
-
-    def symmetric():
-        start = pre_contact_start(cycle_branch(base, ustar_max=args.ustar_max))
-        scene = base.replace(ustar=start.ustar, **IMPACT)
-        return impacting_collocation_branch(scene, start.state, start.period,
-                                            start.pressure_drop, ustar_max=args.ustar_max,
-                                            settings=settings)
-    main_branch = computed(out / f"symmetric_{tag}.json", symmetric)
+    main_branch = computed(out / f"symmetric_{tag}.json", lambda: branch_through_contact(
+        scene, ustar_max=args.ustar_max, settings=settings))
     specials("symmetric", main_branch)
     bps = [p for p in main_branch.special if p.kind == "bp"]
     if not bps:
@@ -97,19 +79,34 @@ def main(argv=None) -> None:
         settings=CollocationImpactSettings(ntst=bps[0].ntst, max_points=args.points,
                                            ds=0.05, max_turn=0.3)))
     specials("asymmetric", broken)
-    scene, model = broken.scene, build_model(broken.scene)
-    stable = [p for p in broken.points if p.stable]
-    print(f"{len(stable)} of {len(broken.points)} asymmetric cycles stable")
+    checks(broken, args.checks)
+    if not args.doubled:
+        return
+    doublings = {round(p.ustar, 4): p for p in broken.special if p.kind == "pd"}
+    for u, pd in sorted(doublings.items()):
+        doubled = computed(out / f"doubled_{tag}_U{u:g}.json", lambda: period_doubled_branch(
+            broken.scene, pd, ustar_min=0.0, ustar_max=args.ustar_max,
+            settings=CollocationImpactSettings(ntst=pd.ntst, max_points=40, ds=0.05,
+                                               max_turn=0.3)))
+        specials(f"doubled at U* = {u:g}", doubled)
+        checks(doubled, args.checks)
+
+
+def checks(branch, count) -> None:
+    """Time integration from ``count`` of the branch's stable cycles (a table)."""
+    scene, model = branch.scene, build_model(branch.scene)
+    stable = [p for p in branch.points if p.stable]
+    print(f"{len(stable)} of {len(branch.points)} cycles stable")
     print("| U* | T | against integration (T, A, peak force) | swings | mirror distance |")
     print("|---|---|---|---|---|")
-    for p in stable[::max(1, len(stable) // max(args.checks, 1))][:args.checks]:
+    for p in stable[::max(1, len(stable) // max(count, 1))][:count]:
         run = settled_cycle(model, scene.replace(ustar=p.ustar), p.state, p.period)
         rel = lambda a, b: abs(a / b - 1) if b else float("nan")  # noqa: E731
         print(f"| {p.ustar:.6f} | {p.period:.7f} | {rel(run.period, p.period):.1e}, "
               f"{rel(run.tip_amplitude, p.tip_amplitude):.1e}, "
               f"{rel(run.peak_force, p.peak_force):.1e} ({run.status}) | {run.swings} | "
-              f"{mirror_miss(model, scene, p):.1e} |", flush=True)
-
+              f"{mirror_distance(model, scene.replace(ustar=p.ustar), p.state, p.period):.1e}"
+              " |", flush=True)
 
 if __name__ == "__main__":
     main()

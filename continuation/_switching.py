@@ -133,13 +133,7 @@ def cycle_from_pd(problem: CycleProblem, point: SpecialPoint, *, amplitude: floa
     is tangent to ``w`` at the PD point), so ``direction=+1`` continues towards
     larger amplitudes.
     """
-    if not isinstance(problem, CycleProblem):
-        raise ValueError("problem must be the CycleProblem whose branch holds the point")
-    if not isinstance(point, SpecialPoint) or point.kind != "pd" or "X" not in point.data:
-        raise ValueError("point must be a 'pd' SpecialPoint of a cycle branch")
-    if not (np.isfinite(amplitude) and amplitude > 0):
-        raise ValueError(f"amplitude must be a positive finite number, got {amplitude!r}")
-    problem, X = problem.at(point)
+    problem, X = _switch_point(problem, point, "pd", amplitude)
     V = floquet_eigenfunction(problem, X, -1.0).ravel()
 
     def doubled(s, which):
@@ -168,15 +162,10 @@ def cycle_from_bp(problem: CycleProblem, point: SpecialPoint, *,
     Both come from :func:`_null_pair` (``G_X`` bordered by two random rows); the guess
     is ``X + a phi / max |phi_U|`` on the point's mesh, and the start corrector fixes
     the amplitude along ``phi`` instead of the parameter (``direction=+1`` continues
-    towards larger ``a``; ``-a`` is the mirror branch).
+    towards larger ``a``; ``direction=-1`` passes through the branch point onto the
+    mirror branch).
     """
-    if not isinstance(problem, CycleProblem):
-        raise ValueError("problem must be the CycleProblem whose branch holds the point")
-    if not isinstance(point, SpecialPoint) or point.kind != "bp" or "X" not in point.data:
-        raise ValueError("point must be a 'bp' SpecialPoint of a cycle branch")
-    if not (np.isfinite(amplitude) and amplitude > 0):
-        raise ValueError(f"amplitude must be a positive finite number, got {amplitude!r}")
-    problem, X = problem.at(point)
+    problem, X = _switch_point(problem, point, "bp", amplitude)
     w1, w2 = _null_pair(problem.jacobian(X))
     phi = w1 * w2[-1] - w2 * w1[-1]                # no part in the active parameter
     rows = problem.n_nodes * problem.vf.n
@@ -188,6 +177,18 @@ def cycle_from_bp(problem: CycleProblem, point: SpecialPoint, *,
     new.start_direction = np.concatenate([phi[:rows] / np.linalg.norm(phi[:rows]),
                                           np.zeros(len(X) - rows)])
     return new
+
+
+def _switch_point(problem, point, kind: str, amplitude: float):
+    """``problem.at(point)`` once ``point`` is a ``kind`` point of ``problem``'s branch
+    and ``amplitude`` positive (else ValueError)."""
+    if not isinstance(problem, CycleProblem):
+        raise ValueError("problem must be the CycleProblem whose branch holds the point")
+    if not isinstance(point, SpecialPoint) or point.kind != kind or "X" not in point.data:
+        raise ValueError(f"point must be a {kind!r} SpecialPoint of a cycle branch")
+    if not (np.isfinite(amplitude) and amplitude > 0):
+        raise ValueError(f"amplitude must be a positive finite number, got {amplitude!r}")
+    return problem.at(point)
 
 
 def _null_pair(J) -> tuple[np.ndarray, np.ndarray]:

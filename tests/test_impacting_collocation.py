@@ -11,16 +11,22 @@ from fsicas import Scene
 from fsicas.cycles import (CollocatedImpactBranch, CollocationImpactSettings, CycleSettings,
                            ImpactSettings, cycle_branch, impacting_branch,
                            impacting_collocation_branch, period_doubled_branch,
-                           pre_contact_start, symmetry_broken_branch)
+                           branch_through_contact, pre_contact_start,
+                           symmetry_broken_branch)
 from fsicas.linear.steady import steady_state
 from fsicas.model import build_model
 from fsicas.model.contact import gaps
 from fsicas.timedomain.integrators import Settings, simulate
-from fsicas.timedomain.settled import settled_cycle
+from fsicas.timedomain.settled import mirror_distance, settled_cycle
 
 #: the start cycle on the scene's nodes, those of the impacting branch
 SCENE_NODES = CycleSettings(quadrature_tol=None)
 IMPACT = dict(contact=True, contact_stiffness=1e8, contact_eps=1e-2, contact_smoothing=0.1)
+
+
+def _mirror(model, scene, point) -> float:
+    """``mirror_distance`` of a branch point's cycle (IDAS 1e-11, half a period)."""
+    return mirror_distance(model, scene.replace(ustar=point.ustar), point.state, point.period)
 
 
 def _one_period(model, scene, point, method="radau", rtol=1e-11):
@@ -39,21 +45,23 @@ def _one_period(model, scene, point, method="radau", rtol=1e-11):
 
 def _through_contact(modes, ustar_max, settings, mstar=1.0):
     """k* = 1e8, eps/H = 1e-2, smoothing 0.1: the impacting branch by collocation from the
-    contact-free collocation cycle at gap >= 3 eps; (start, scene, model, branch)."""
-    base = Scene(mstar=mstar, zeta=0.01, modes=modes, contact_eps=1e-2)
-    start = pre_contact_start(cycle_branch(base, ustar_max=10.0, settings=SCENE_NODES))
-    scene = base.replace(ustar=start.ustar, **IMPACT)
-    model = build_model(scene)
-    return start, scene, model, impacting_collocation_branch(
-        scene, start.state, start.period, start.pressure_drop, model=model,
-        ustar_max=ustar_max, settings=settings)
+    contact-free collocation cycle at gap >= 3 eps (``branch_through_contact``);
+    (scene, model, branch)."""
+    br = branch_through_contact(Scene(mstar=mstar, zeta=0.01, modes=modes, **IMPACT),
+                                ustar_max=ustar_max, settings=settings,
+                                cycle_settings=SCENE_NODES)
+    return br.scene, build_model(br.scene), br
 
 
 @pytest.fixture(scope="module")
 def n3_branch():
-    """N = 3: five points through the first contact."""
-    return _through_contact(3, 12.0, CollocationImpactSettings(ntst=100, max_points=5, ds=0.1,
-                                                               ds_max=1.0))
+    """N = 3: five points through the first contact, and the contact-free cycle it
+    started from (computed again here, on the contact-free model)."""
+    scene, model, br = _through_contact(3, 12.0, CollocationImpactSettings(
+        ntst=100, max_points=5, ds=0.1, ds_max=1.0))
+    free = Scene(mstar=1.0, zeta=0.01, modes=3, contact_eps=1e-2)
+    return pre_contact_start(cycle_branch(free, ustar_max=12.0, settings=SCENE_NODES)), \
+        scene, model, br
 
 
 def test_collocation_passes_first_contact_and_matches_time_integration(n3_branch):
@@ -96,6 +104,18 @@ def test_save_load_and_validation(n3_branch, tmp_path):
         impacting_collocation_branch(scene.replace(contact_smoothing=0.0), np.zeros(8), 0.1, 1.0)
     with pytest.raises(ValueError, match="kind 'pd'"):
         period_doubled_branch(scene, br.points[-1])
+    with pytest.raises(ValueError, match="kind 'bp'"):
+        symmetry_broken_branch(scene, br.points[-1])
+    with pytest.raises(ValueError, match="amplitude"):
+        symmetry_broken_branch(scene, replace(br.points[-1], kind="bp"), amplitude=-1e-3)
+
+
+def test_branch_through_contact_says_what_is_missing():
+    with pytest.raises(ValueError, match="contact=True"):
+        branch_through_contact(Scene(mstar=1.0, modes=3))
+    with pytest.raises(ValueError, match="do not reach the wall below U. = 5.6"):
+        branch_through_contact(Scene(mstar=1.0, zeta=0.01, modes=3, **IMPACT), ustar_max=5.6,
+                               cycle_settings=SCENE_NODES)
 
 
 @pytest.mark.slow
@@ -105,7 +125,7 @@ def test_collocation_equals_shooting_at_the_same_ustar():
     the same pressure drop agree in period, amplitude, min gap and multipliers (those of
     collocation converge at the stage order only: measured 1.3e-5 relative at NTST = 300,
     2e-6 at 400; the period to 1e-11)."""
-    _, scene, model, br = _through_contact(4, 6.9, CollocationImpactSettings(
+    scene, model, br = _through_contact(4, 6.9, CollocationImpactSettings(
         ntst=200, max_points=40, ds=0.2, ds_max=1.0))
     near = min(br.points, key=lambda p: abs(p.ustar - 6.8))
     target = scene.replace(ustar=6.8)
@@ -182,7 +202,7 @@ def test_fold_of_the_period3_isola_by_its_poincare_multiplier(period3_impacting_
 def n4_torus():
     """M* = 1, N = 4, same law, NTST = 100: the period-1 impacting cycle loses stability
     shortly past the first contact through a complex pair of multipliers."""
-    _, scene, model, br = _through_contact(4, 6.7, CollocationImpactSettings(ntst=100,
+    scene, model, br = _through_contact(4, 6.7, CollocationImpactSettings(ntst=100,
                                                                               max_points=12))
     return scene, model, br
 
@@ -222,14 +242,11 @@ def test_period1_impacting_cycles_are_symmetric(n4_torus):
     real multiplier cannot cross -1: such cycles do not period-double (docs/cycles.md)."""
     scene, model, br = n4_torus
     (ns,) = br.special
-    n = model.scene.modes
-    mirror = np.r_[-ns.state[:2 * n], ns.state[-1], ns.state[-2]]
+    assert _mirror(model, scene, ns) < 1e-8
     traj = simulate(model, steady_state(scene.replace(ustar=ns.ustar), model), ns.period / 2,
                     x0=ns.state, settings=Settings(method="idas", rtol=1e-11, atol=1e-13,
                                                    dt_out=ns.period / 2000))
-    assert traj.status == "success"
     size = np.max(np.abs(ns.state))
-    assert np.max(np.abs(traj.x[-1] - mirror)) < 1e-8 * size
     assert np.max(np.abs(traj.x[-1] - ns.state)) > 0.1 * size
 
 
@@ -272,7 +289,7 @@ def test_case_1a_at_n10_matches_time_integration():
     1e-4, peak force 1e-2 (measured 7e-9, 3e-6, 1e-3). On the way the branch loses and
     regains stability at two located Neimark-Sacker points (pair on the circle to 1e-9),
     as its points show."""
-    _, scene, model, br = _through_contact(10, 7.05, CollocationImpactSettings(
+    scene, model, br = _through_contact(10, 7.05, CollocationImpactSettings(
         ntst=200, max_points=150))
     near = min(br.points, key=lambda p: abs(p.ustar - 7.0))
     at = scene.replace(ustar=7.0)
@@ -335,19 +352,6 @@ def test_period_doubling_of_an_asymmetric_cycle_and_its_doubled_branch():
     assert run.peak_force == pytest.approx(last.peak_force, rel=1e-2)
 
 
-def _mirror_miss(model, scene, point) -> float:
-    """Half a period after the point's state, the distance of an independent integration
-    (IDAS 1e-11) from the state's mirror image R x = (-r, -r', Q2, Q1), relative."""
-    n = model.scene.modes
-    mirror = np.r_[-point.state[:2 * n], point.state[-1], point.state[-2]]
-    traj = simulate(model, steady_state(scene.replace(ustar=point.ustar), model),
-                    point.period / 2, x0=point.state,
-                    settings=Settings(method="idas", rtol=1e-11, atol=1e-13,
-                                      dt_out=point.period / 2000))
-    assert traj.status == "success"
-    return np.max(np.abs(traj.x[-1] - mirror)) / np.max(np.abs(point.state))
-
-
 @pytest.mark.slow
 def test_symmetry_breaking_and_period_doubling_in_the_symmetric_channel():
     """N = 4, M* = 3 (about 3 min): past contact a real multiplier of the symmetric cycle
@@ -355,7 +359,7 @@ def test_symmetry_breaking_and_period_doubling_in_the_symmetric_channel():
     own mirror image half a period on (the symmetric one is, to 1e-5), stable, and
     checked by time integration; on them a period doubling is located (in the symmetric
     channel, only such cycles can period-double)."""
-    _, scene, model, br = _through_contact(4, 8.7, CollocationImpactSettings(
+    scene, model, br = _through_contact(4, 8.7, CollocationImpactSettings(
         ntst=200, max_points=30, ds=0.05, max_turn=0.3), mstar=3.0)
     (bp,) = [p for p in br.special if p.kind == "bp"]
     assert not [p for p in br.special if p.kind == "fold"]
@@ -363,12 +367,12 @@ def test_symmetry_breaking_and_period_doubling_in_the_symmetric_channel():
     assert abs(bp.critical_multiplier - 1) < 1e-4 and abs(bp.ustar - 8.6377) < 1e-3
     before = [p for p in br.points if p.ustar < bp.ustar]
     assert before[-1].stable and not [p for p in br.points if p.ustar > bp.ustar][0].stable
-    assert _mirror_miss(model, scene, bp) < 1e-5                    # measured 2.6e-7
+    assert _mirror(model, scene, bp) < 1e-5                    # measured 2.6e-7
     sb = symmetry_broken_branch(scene, bp, model=model, ustar_max=8.7, settings=
                                 CollocationImpactSettings(ntst=200, max_points=8, ds=0.05,
                                                           max_turn=0.3))
     p = sb.points[1]
-    assert p.stable and p.ustar > bp.ustar and _mirror_miss(model, scene, p) > 1e-3
+    assert p.stable and p.ustar > bp.ustar and _mirror(model, scene, p) > 1e-3
     run = settled_cycle(model, scene.replace(ustar=p.ustar), p.state, p.period)
     assert run.status == "settled" and abs(run.period / p.period - 1) < 1e-8
     assert abs(run.tip_amplitude / p.tip_amplitude - 1) < 1e-5

@@ -239,7 +239,8 @@ def symmetry_broken_branch(scene: Scene, point: "CollocatedImpactPoint", *,
     ``point`` (kind "bp" of :func:`impacting_collocation_branch` on ``scene``).
 
     The cycle is rebuilt from the point's state (as for :func:`period_doubled_branch`)
-    and corrected at the point's U*; the new branch starts from it plus ``amplitude``
+    and kept as the guess (Newton at fixed U* is singular at a branch point: two null
+    vectors); the new branch starts from it plus ``amplitude``
     times the null direction of its Jacobian that keeps U* (``continuation.cycle_from_bp``,
     scaled to a largest nodal change of ``amplitude``; at 1e-2 the stiff contact law
     already throws the guess out of Newton's reach) and is continued towards larger
@@ -255,6 +256,8 @@ def _switched(scene, point, kind, model, amplitude, ustar_range, settings
     if getattr(point, "kind", None) != kind:
         raise ValueError(f"point must be a special point of kind {kind!r} of an impacting "
                          f"collocation branch, got kind {getattr(point, 'kind', None)!r}")
+    if not (np.isfinite(amplitude) and amplitude > 0):
+        raise ValueError(f"amplitude must be a positive finite number, got {amplitude!r}")
     model = model or build_model(scene)
     try:
         problem = impacting_collocation_problem(scene, point.state, point.period,

@@ -32,7 +32,7 @@ from ..scene import Scene
 from .integrators import Settings, simulate
 from .returns import cycles, xdot_rows
 
-__all__ = ["SettledCycle", "settled_cycle"]
+__all__ = ["SettledCycle", "settled_cycle", "mirror_distance"]
 
 SettledStatus = Literal["settled", "unsettled", "failed"]
 
@@ -82,3 +82,23 @@ def settled_cycle(model: Model, scene: Scene, state, period: float, *, periods: 
                         float(cyc.times[-1] - cyc.times[-1 - k]), k, drift,
                         float(np.ptp(y) / 2), float(gaps(model, X[last]).min()),
                         float(load.max() / reference_force(model)))
+
+
+def mirror_distance(model: Model, scene: Scene, state, period: float, *,
+                    rtol: float = 1e-11) -> float:
+    """How far a cycle is from the channel's symmetry: half a period after ``state`` (at
+    ``scene``'s U*; IDAS at ``rtol``), the distance of the run from the mirror image
+    ``R x = (-r, -r', Q2, Q1)`` of ``state`` (beam reflected, channels swapped), relative
+    to ``max |state|``. Zero for a symmetric cycle, ``u(t + T/2) = R u(t)``, of a
+    symmetric channel; of order one for one that breaks the symmetry."""
+    state = np.asarray(state, dtype=float)
+    n = model.scene.modes
+    require(state.shape == (2 * n + 2,), f"state must have {2 * n + 2} entries")
+    require(finite_number("period", period) > 0, f"period must be positive, got {period!r}")
+    mirror = np.r_[-state[:2 * n], state[-1], state[-2]]
+    traj = simulate(model, steady_state(scene, model), period / 2, x0=state,
+                    settings=Settings(method="idas", rtol=rtol, atol=rtol * 1e-2,
+                                      dt_out=period / 2000))
+    if traj.status != "success":
+        raise RuntimeError(f"the half-period integration failed: {traj.message}")
+    return float(np.max(np.abs(traj.x[-1] - mirror)) / np.max(np.abs(state)))
