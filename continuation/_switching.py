@@ -194,8 +194,8 @@ def _switch_point(problem, point, kind: str, amplitude: float):
 def _null_pair(J) -> tuple[np.ndarray, np.ndarray]:
     """Two independent vectors of the (near) two-dimensional null space of ``J`` (``m``
     x ``m + 1``, rank ``m - 1`` at a branch point): for random rows ``r``, the bordered
-    ``[J; r^T]`` is (nearly) singular, and one inverse iteration with it returns its
-    null vector, the element of ``null(J)`` with ``r^T w = 0``."""
+    ``[J; r^T]`` is (nearly) singular, and two steps of inverse iteration with it return
+    its null vector, the element of ``null(J)`` with ``r^T w = 0``."""
     rng = np.random.default_rng(0)
     J = sp.csc_matrix(J)
     out = []
