@@ -43,11 +43,13 @@ IMPACT = dict(contact=True, contact_stiffness=1e8, contact_eps=1e-2, contact_smo
 
 def impacting(base: Scene, ustar_max: float, points: int, refine_ntst: int = 0):
     """(scene, model, branch): the period-1 impacting branch from 3 eps before contact."""
+    scene = base.replace(**IMPACT)
+    model = build_model(scene)                    # independent of U*: one build
     branch = branch_through_contact(
-        base.replace(**IMPACT), ustar_max=ustar_max,
+        scene, model=model, ustar_max=ustar_max,
         cycle_settings=CycleSettings(quadrature_tol=None), settings=CollocationImpactSettings(
             ntst=200, max_points=points, ds=0.1, refine_ntst=refine_ntst))
-    return branch.scene, build_model(branch.scene), branch
+    return branch.scene, model, branch
 
 
 def nearest_real_to_minus_one(branch) -> tuple[float, float]:

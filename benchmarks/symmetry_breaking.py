@@ -67,34 +67,35 @@ def main(argv=None) -> None:
     tag = f"N{args.modes}_M{args.mstar:g}"
     scene = Scene(mstar=args.mstar, zeta=0.01, modes=args.modes, **IMPACT)
     settings = CollocationImpactSettings(ntst=200, max_points=400, ds=0.05, max_turn=0.3)
+    model = build_model(scene)                    # independent of U*: one build
     main_branch = computed(out / f"symmetric_{tag}.json", lambda: branch_through_contact(
-        scene, ustar_max=args.ustar_max, settings=settings))
+        scene, model=model, ustar_max=args.ustar_max, settings=settings))
     specials("symmetric", main_branch)
     bps = [p for p in main_branch.special if p.kind == "bp"]
     if not bps:
         print("no branch point below --ustar-max")
         return
     broken = computed(out / f"asymmetric_{tag}.json", lambda: symmetry_broken_branch(
-        main_branch.scene, bps[0], ustar_min=0.0, ustar_max=args.ustar_max,
+        main_branch.scene, bps[0], model=model, ustar_min=0.0, ustar_max=args.ustar_max,
         settings=CollocationImpactSettings(ntst=bps[0].ntst, max_points=args.points,
                                            ds=0.05, max_turn=0.3)))
     specials("asymmetric", broken)
-    checks(broken, args.checks)
+    checks(broken, model, args.checks)
     if not args.doubled:
         return
     doublings = {round(p.ustar, 4): p for p in broken.special if p.kind == "pd"}
     for u, pd in sorted(doublings.items()):
         doubled = computed(out / f"doubled_{tag}_U{u:g}.json", lambda: period_doubled_branch(
-            broken.scene, pd, ustar_min=0.0, ustar_max=args.ustar_max,
+            broken.scene, pd, model=model, ustar_min=0.0, ustar_max=args.ustar_max,
             settings=CollocationImpactSettings(ntst=pd.ntst, max_points=40, ds=0.05,
                                                max_turn=0.3)))
         specials(f"doubled at U* = {u:g}", doubled)
-        checks(doubled, args.checks)
+        checks(doubled, model, args.checks)
 
 
-def checks(branch, count) -> None:
+def checks(branch, model, count) -> None:
     """Time integration from ``count`` of the branch's stable cycles (a table)."""
-    scene, model = branch.scene, build_model(branch.scene)
+    scene = branch.scene
     stable = [p for p in branch.points if p.stable]
     print(f"{len(stable)} of {len(branch.points)} cycles stable")
     print("| U* | T | against integration (T, A, peak force) | swings | mirror distance |")

@@ -47,10 +47,11 @@ def _through_contact(modes, ustar_max, settings, mstar=1.0):
     """k* = 1e8, eps/H = 1e-2, smoothing 0.1: the impacting branch by collocation from the
     contact-free collocation cycle at gap >= 3 eps (``branch_through_contact``);
     (scene, model, branch)."""
-    br = branch_through_contact(Scene(mstar=mstar, zeta=0.01, modes=modes, **IMPACT),
-                                ustar_max=ustar_max, settings=settings,
+    scene = Scene(mstar=mstar, zeta=0.01, modes=modes, **IMPACT)
+    model = build_model(scene)
+    br = branch_through_contact(scene, model=model, ustar_max=ustar_max, settings=settings,
                                 cycle_settings=SCENE_NODES)
-    return br.scene, build_model(br.scene), br
+    return br.scene, model, br
 
 
 @pytest.fixture(scope="module")
