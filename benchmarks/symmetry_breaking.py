@@ -2,13 +2,14 @@
 doublings it opens.
 
     python benchmarks/symmetry_breaking.py [--modes 10] [--mstar 1] [--ustar-max 7.6]
-        [--points 60] [--checks 3] [--doubled] [--out runs/symmetry]
+        [--points 60] [--checks 3] [--doubled] [--refine-ntst 0] [--out runs/symmetry]
 
 k* = 1e8, eps/H = 1e-2, smoothing 0.1, zeta = 0.01, NTST = 200. The period-1 impacting
 branch from the first contact (``impacting_collocation_branch``) to ``--ustar-max``, its
 branch points ("bp": a real multiplier through +1 where the branch does not turn), the
 branch of asymmetric cycles from the first (``symmetry_broken_branch``, ``--points``
-points) with its special cycles, with ``--doubled`` the branch of twice the period from
+points) with its special cycles (located again on ``--refine-ntst`` intervals where
+given), with ``--doubled`` the branch of twice the period from
 each of its period doublings (``period_doubled_branch``), and at ``--checks`` of the
 stable cycles of each a time integration (``settled_cycle``, IDAS 1e-10, 30 periods:
 period, amplitude, peak force against the cycle's) and the distance, half a period on,
@@ -20,6 +21,7 @@ from __future__ import annotations
 import argparse
 import os
 import time
+from dataclasses import replace
 from pathlib import Path
 
 os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")   # before NumPy: docs/continuation.md
@@ -60,13 +62,16 @@ def main(argv=None) -> None:
     ap.add_argument("--points", type=int, default=60)
     ap.add_argument("--checks", type=int, default=3)
     ap.add_argument("--doubled", action="store_true")
+    ap.add_argument("--refine-ntst", type=int, default=0,
+                    help="locate the special cycles again on this many intervals")
     ap.add_argument("--out", default="runs/symmetry")
     args = ap.parse_args(argv)
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
-    tag = f"N{args.modes}_M{args.mstar:g}"
+    tag = f"N{args.modes}_M{args.mstar:g}" + (f"_R{args.refine_ntst}" if args.refine_ntst else "")
     scene = Scene(mstar=args.mstar, zeta=0.01, modes=args.modes, **IMPACT)
-    settings = CollocationImpactSettings(ntst=200, max_points=400, ds=0.05, max_turn=0.3)
+    settings = CollocationImpactSettings(ntst=200, max_points=400, ds=0.05, max_turn=0.3,
+                                         refine_ntst=args.refine_ntst)
     model = build_model(scene)                    # independent of U*: one build
     main_branch = computed(out / f"symmetric_{tag}.json", lambda: branch_through_contact(
         scene, model=model, ustar_max=args.ustar_max, settings=settings))
@@ -77,8 +82,7 @@ def main(argv=None) -> None:
         return
     broken = computed(out / f"asymmetric_{tag}.json", lambda: symmetry_broken_branch(
         main_branch.scene, bps[0], model=model, ustar_min=0.0, ustar_max=args.ustar_max,
-        settings=CollocationImpactSettings(ntst=bps[0].ntst, max_points=args.points,
-                                           ds=0.05, max_turn=0.3)))
+        settings=replace(settings, ntst=bps[0].ntst, max_points=args.points)))
     specials("asymmetric", broken)
     checks(broken, model, args.checks)
     if not args.doubled:
@@ -87,8 +91,7 @@ def main(argv=None) -> None:
     for u, pd in sorted(doublings.items()):
         doubled = computed(out / f"doubled_{tag}_U{u:g}.json", lambda: period_doubled_branch(
             broken.scene, pd, model=model, ustar_min=0.0, ustar_max=args.ustar_max,
-            settings=CollocationImpactSettings(ntst=pd.ntst, max_points=40, ds=0.05,
-                                               max_turn=0.3)))
+            settings=replace(settings, ntst=pd.ntst, max_points=40)))
         specials(f"doubled at U* = {u:g}", doubled)
         checks(doubled, model, args.checks)
 
