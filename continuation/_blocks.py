@@ -31,8 +31,9 @@ import casadi as ca
 import numpy as np
 import scipy.sparse as sp
 
-from ._collocation import collocation, interval_nodes
+from ._collocation import collocation
 from ._condensed import CollocationJacobian
+from ._jit import jit
 from ._lifted import LiftedBatch
 from ._sparse import Layout, layout
 from .compilation import compiled_or_none, has_compiler
@@ -99,6 +100,8 @@ class PointKernel:
         self.n, self.n_par, self.K = self.pointwise.n, self.pointwise.n_par, K
         rows, cols = self.pointwise.pattern.get_triplet()
         self.rows, self.cols = np.asarray(rows), np.asarray(cols)
+        self._pattern = (self.rows.astype(np.int64), self.cols.astype(np.int64))
+        self._dense_pattern = tuple(a.ravel() for a in np.indices((self.n, self.n)))
         self.expand, self.cache_dir = vf.sym is ca.SX, cache_dir
         self.backend = _backend(backend, vf)
         self.lifted = {name: LiftedBatch(lifted, K, self._compiled(lifted.D))
@@ -125,6 +128,14 @@ class PointKernel:
                     for name, batch in self.lifted.items()}
         return {name: batch(*args[name])[:, self.rows, self.cols]
                 for name, batch in self.lifted.items()}
+
+    def pattern(self, name: str, dense: bool) -> tuple:
+        """``(rows, cols)`` of the entries of the matrix ``name`` as the kernel called
+        with ``dense`` returns them: all ``n n`` (row by row) for a lifted matrix asked
+        dense, else the kernel's pattern."""
+        if dense and name in self.lifted:
+            return self._dense_pattern
+        return self._pattern
 
     def densified(self, name: str, values: np.ndarray, dense: bool) -> np.ndarray:
         """The matrix ``name`` at the points as ``K x n n`` (row by row), from what the
@@ -231,6 +242,8 @@ class BlockCollocationSystem:
                              f"{ntst * ncol}")
         self.kernel, self.ntst, self.ncol = kernel, ntst, ncol
         self.col = collocation(ncol)
+        #: ``P[k, l]`` and ``Dm[k, l]`` of every collocation point ``i NCOL + k``
+        self._weights = (np.tile(self.col.P, (ntst, 1)), np.tile(self.col.Dm, (ntst, 1)))
         self.n_state = self.n_equations = kernel.n * ntst * ncol + 1
         self._layouts: dict = {}
         base = self._layout(0)
@@ -255,10 +268,8 @@ class BlockCollocationSystem:
     def points(self, U) -> tuple:
         """``(u_k, u'_k)`` at the ``K`` collocation points, each ``(K, n)``:
         ``u_k = sum_l P[k, l] u_l``, ``u'_k = sum_l Dm[k, l] u_l``."""
-        nodes = interval_nodes(U, self.kernel.n, self.ntst, self.ncol)
-        x = np.einsum("kl,ilj->ikj", self.col.P, nodes).reshape(-1, self.kernel.n)
-        v = np.einsum("kl,ilj->ikj", self.col.Dm, nodes).reshape(-1, self.kernel.n)
-        return x, v
+        return _collocation_points(np.ascontiguousarray(U, dtype=float), self.col.P,
+                                   self.col.Dm, self.kernel.n, self.ntst, self.ncol)
 
     def residual(self, Y, P, D) -> np.ndarray:
         """``G = (vec(M(u_k) u'_k - h_i T F(u_k)), c . U)``."""
@@ -296,18 +307,22 @@ class BlockCollocationSystem:
 
     def interval_jacobian(self, Y, P, D, par_columns) -> CollocationJacobian:
         """The same matrix by dense interval blocks (``_condensed``): block ``(k, l)`` of
-        interval ``i`` is ``W_ik P[k, l] + M_ik Dm[k, l]``."""
-        hk, c, F, W, M, Gp = self._pointwise(Y, P, D, par_columns, dense=True)
-        n, ntst, ncol = self.kernel.n, self.ntst, self.ncol
-        X = np.stack([W, M], axis=-1).reshape(ntst, ncol, n, n, 2)
-        blocks = np.empty((ntst, ncol, n, ncol + 1, n))
-        for k in range(ncol):                        # (i, a, b, l) -> (i, a, l, b)
-            PD = np.stack([self.col.P[k], self.col.Dm[k]])
-            blocks[:, k] = (X[:, k] @ PD).transpose(0, 1, 3, 2)
-        extra = np.concatenate([(-hk[:, None] * F)[:, :, None], Gp.transpose(0, 2, 1)], axis=2)
+        interval ``i`` is ``W_ik P[k, l] + M_ik Dm[k, l]``, accumulated from each matrix
+        on its pattern by a compiled loop."""
+        U, T, h, c, hk = self._split(Y, D)
+        x, v = self.points(U)
+        kr, cols = self.kernel, tuple(par_columns)
+        F, Mv, Fx, Mvx, M, Fp, Mvp = kr.evaluate(kr.jacobians(cols), x, v, P, dense=True)
+        n, ntst, ncol = kr.n, self.ntst, self.ncol
         m = n * ncol
-        return CollocationJacobian(n, ntst, ncol, blocks.reshape(ntst, m, m + n),
-                                   extra.reshape(ntst, m, -1), c)
+        Pk, Dk = self._weights
+        blocks = np.zeros((ntst, m, m + n))
+        for name, values, weights in (("Fx", Fx, Pk * (-hk * T)[:, None]), ("Mvx", Mvx, Pk),
+                                      ("M", M, Dk)):
+            _add_blocks(blocks, values, *kr.pattern(name, True), weights, n, ncol)
+        Gp = (Mvp - (hk * T)[:, None] * Fp).reshape(kr.K, len(cols), n)
+        extra = np.concatenate([(-hk[:, None] * F)[:, :, None], Gp.transpose(0, 2, 1)], axis=2)
+        return CollocationJacobian(n, ntst, ncol, blocks, extra.reshape(ntst, m, -1), c)
 
     def fill(self) -> float:
         """Nonzero fraction of the interval blocks (of the pointwise pattern in ``n x n``)."""
@@ -325,3 +340,34 @@ def builder(ntst: int, ncol: int, backend: str = "mx"):
         return BlockCollocationSystem(kernel, ntst, ncol)
 
     return build
+
+
+@jit
+def _collocation_points(U, P, Dm, n, ntst, ncol):
+    """``(x, v)``: ``x_ik = sum_l P[k, l] u_(i, l)``, ``v_ik = sum_l Dm[k, l] u_(i, l)``
+    at the ``K = NTST NCOL`` points (node ``(i, NCOL)`` is ``(i + 1, 0)``, wrapping)."""
+    K = ntst * ncol
+    x, v = np.zeros((K, n)), np.zeros((K, n))
+    for i in range(ntst):
+        for l in range(ncol + 1):
+            node = ((i * ncol + l) % K) * n
+            for k in range(ncol):
+                pk, dk, row = P[k, l], Dm[k, l], i * ncol + k
+                for a in range(n):
+                    x[row, a] += pk * U[node + a]
+                    v[row, a] += dk * U[node + a]
+    return x, v
+
+
+@jit
+def _add_blocks(blocks, values, rows, cols, weights, n, ncol):
+    """``blocks[i, k n + a, l n + b] += weights[i NCOL + k, l] values[i NCOL + k, e]``
+    for the entries ``e = (a, b) = (rows[e], cols[e])`` of a matrix at every point."""
+    for point in range(values.shape[0]):
+        i, k = point // ncol, point % ncol
+        block = blocks[i]
+        for l in range(ncol + 1):
+            w = weights[point, l]
+            if w != 0.0:
+                for e in range(values.shape[1]):
+                    block[k * n + rows[e], l * n + cols[e]] += w * values[point, e]

@@ -9,7 +9,7 @@ The bordered Newton matrix of a collocated cycle (``_collocation``) is
 The ``m = n NCOL`` rows of interval ``i`` couple its ``NCOL + 1`` nodes: the mesh point
 ``v_i``, the ``NCOL - 1`` interior nodes ``w_i`` (in no other interval) and the next
 mesh point ``v_{i+1}``. With ``M_i = [B_i^w, B_i^R]`` (square, the columns of ``w_i`` and
-``v_{i+1}``) factorized by LAPACK's LU with partial pivoting, each interval reads
+``v_{i+1}``) factorized by LU with partial pivoting, each interval reads
 
     [w_i; v_{i+1}] + Z_i [v_i; y] = M_i^-1 r_i,     Z_i = M_i^-1 [B_i^L, E_i],
 
@@ -18,13 +18,15 @@ interval's Floquet transfer maps (``_floquet``: the multipliers come with the in
 factorizations, cached on the Jacobian). The border rows are freed of ``w`` by the same
 relation. What is left is the reduced system in the mesh points and ``y`` (``n NTST + k``
 unknowns, block-cyclic bidiagonal with an identity on one diagonal, dense borders),
-reduced pairwise by QR as AUTO-07p's ``REDUCE`` does (:class:`Chain`: stable like a
-multiple-shooting system, not a recursion over the transfer maps, which would be single
-shooting); the interior nodes follow by back-substitution.
+reduced pairwise by QR (:class:`Chain`: stable like a multiple-shooting system, not a
+recursion over the transfer maps, which would be single shooting); the interior nodes
+follow by back-substitution.
 
-The interval blocks are dense: the route pays where the model couples many components
-at every point (a modal model), and is chosen by :func:`condensed_pays`; banded fields
-(a discretized PDE) stay on SuperLU of the whole matrix. An interval whose ``M_i`` is
+All loops over intervals and pairs run compiled (``_jit``: numba; a point of a small
+system costs a few hundred microseconds, not the milliseconds of a Python loop over
+LAPACK calls). The route pays for dense interval blocks and for small ones, and is
+chosen by :func:`condensed_pays`; large banded blocks (a discretized PDE) stay on
+SuperLU of the whole matrix, which keeps their sparsity. An interval whose ``M_i`` is
 singular (not met in practice: ``M_i`` is the derivative part of the collocation
 equations, ``h T F_x`` is small against it) falls back to SuperLU of the whole matrix.
 """
@@ -35,23 +37,22 @@ from dataclasses import dataclass
 from functools import cached_property, lru_cache
 
 import numpy as np
-from scipy.linalg.lapack import dgetrf, dgetrs
 
+from . import _jit
 from ._newton import factorize
 from ._sparse import layout
-from ._threads import single_threaded
 
-#: the condensed route is chosen ('auto') for interval blocks of at least this many rows
-#: that are at least this full: below, SuperLU of the whole sparse matrix is as fast or
-#: faster (a Python loop over the intervals costs more than it saves), and on banded
-#: blocks (a discretized PDE) SuperLU keeps the sparsity the dense blocks would fill in
-CONDENSED_MIN_ROWS, CONDENSED_MIN_FILL = 64, 0.5
+#: the condensed route is chosen ('auto') for interval blocks of at most ``CONDENSED_ROWS``
+#: rows, and for larger ones at least ``CONDENSED_MIN_FILL`` full: larger sparse blocks
+#: (a discretized PDE, banded) are faster on SuperLU, which keeps their sparsity
+#: (``docs/performance.md``)
+CONDENSED_ROWS, CONDENSED_MIN_FILL = 128, 0.5
 
 
 def condensed_pays(rows: int, fill: float) -> bool:
     """Whether interval blocks of ``rows`` rows and nonzero fraction ``fill`` are solved
-    faster by condensation than by SuperLU of the whole matrix (``docs/performance.md``)."""
-    return rows >= CONDENSED_MIN_ROWS and fill >= CONDENSED_MIN_FILL
+    faster by condensation than by SuperLU of the whole matrix."""
+    return rows <= CONDENSED_ROWS or fill >= CONDENSED_MIN_FILL
 
 
 @dataclass(frozen=True, eq=False)
@@ -79,13 +80,9 @@ class CollocationJacobian:
 
     def collocation_times(self, x: np.ndarray) -> np.ndarray:
         """``[B, E] x`` for ``x`` of shape ``(columns,)`` or ``(columns, r)``."""
-        n, ntst, ncol = self.n, self.ntst, self.ncol
-        N = n * ntst * ncol
-        X = x.reshape(x.shape[0], -1)
-        nodes = X[:N].reshape(ntst, ncol * n, -1)
-        ahead = np.roll(nodes[:, :n], -1, axis=0)               # v_{i+1}
-        out = self.blocks @ np.concatenate([nodes, ahead], axis=1) + self.extra @ X[N:]
-        return out.reshape((N,) + x.shape[1:])
+        X = _owned(x.reshape(x.shape[0], -1))
+        out = _jit.collocation_times(self.blocks, self.extra, X)
+        return out.reshape((out.shape[0],) + x.shape[1:])
 
     def toarray(self) -> np.ndarray:
         """The dense matrix (for checks; the solvers never form it)."""
@@ -98,32 +95,18 @@ class CollocationJacobian:
         return BorderedCollocation(self, np.atleast_2d(np.asarray(rows, dtype=float)))
 
     @cached_property
-    def interval_lu(self) -> list | None:
-        """LAPACK LU factors ``(lu, piv)`` of every ``M_i``; None if one is singular."""
-        factors = []
-        with single_threaded():
-            for M in self.blocks[:, :, self.n:]:
-                lu, piv, info = dgetrf(M)
-                if info != 0:
-                    return None
-                factors.append((lu, piv))
-        return factors
+    def factors(self) -> tuple | None:
+        """``(lu, piv, Z)``: the LU factors of every ``M_i`` and ``Z_i = M_i^-1 [B_i^L,
+        E_i]`` (``(NTST, m, n + k)``); None if an ``M_i`` is singular."""
+        lu, piv, Z, ok = _jit.interval_factors(_owned(self.blocks), _owned(self.extra))
+        return (lu, piv, Z) if ok else None
 
-    @cached_property
+    @property
     def maps(self) -> np.ndarray | None:
-        """``Z_i = M_i^-1 [B_i^L, E_i]``, ``(NTST, m, n + k)``; None if an ``M_i`` is
-        singular. ``-Z_i[:, :n]`` maps ``v_i`` to the nodes ``1 .. NCOL`` of interval
-        ``i`` at fixed ``T`` and ``p`` (the Floquet transfer, ``_floquet``)."""
-        if self.interval_lu is None:
-            return None
-        rhs = np.concatenate([self.blocks[:, :, :self.n], self.extra], axis=2)
-        return self.interval_solve(rhs)
-
-    def interval_solve(self, b: np.ndarray) -> np.ndarray:
-        """``M_i^-1 b_i`` for ``b`` of shape ``(NTST, m, r)``."""
-        with single_threaded():
-            return np.stack([dgetrs(lu, piv, bi)[0]
-                             for (lu, piv), bi in zip(self.interval_lu, b)])
+        """``Z_i``; None if an ``M_i`` is singular. ``-Z_i[:, :n]`` maps ``v_i`` to the
+        nodes ``1 .. NCOL`` of interval ``i`` at fixed ``T`` and ``p`` (the Floquet
+        transfer, ``_floquet``)."""
+        return None if self.factors is None else self.factors[2]
 
 
 @dataclass(frozen=True, eq=False)
@@ -138,6 +121,7 @@ class BorderedCollocation:
         m, cols = self.J.shape
         return (m + self.rows.shape[0], cols)
 
+    @cached_property
     def border(self) -> np.ndarray:
         """All rows below the collocation rows: the phase row, then ``rows``."""
         cols = self.shape[1]
@@ -145,7 +129,7 @@ class BorderedCollocation:
         return np.vstack([phase, self.rows])
 
     def __matmul__(self, x: np.ndarray) -> np.ndarray:
-        return np.concatenate([self.J.collocation_times(x), self.border() @ x])
+        return np.concatenate([self.J.collocation_times(x), self.border @ x])
 
     def toarray(self) -> np.ndarray:
         return np.vstack([self.J.toarray(), self.rows])
@@ -154,23 +138,20 @@ class BorderedCollocation:
         """The whole matrix as a sparse matrix (explicit zeros of the blocks kept)."""
         J = self.J
         k = J.extra.shape[2]
-        values = np.concatenate([J.blocks.ravel(), J.extra.ravel(), self.border().ravel()])
+        values = np.concatenate([J.blocks.ravel(), J.extra.ravel(), self.border.ravel()])
         return _full_layout(J.n, J.ntst, J.ncol, k).matrix(values)
 
     def factorize(self):
         """:class:`CondensedLU` of this matrix; SuperLU of the whole matrix if an
         interval's ``M_i`` is singular; None when the matrix is singular."""
-        if self.J.maps is None:
+        if self.J.factors is None:
             return factorize(self.tocsc())
         return CondensedLU.of(self)
 
 
 class CondensedLU:
     """Factors of a :class:`BorderedCollocation` by condensation (module doc), with
-    ``solve(b)`` like SciPy's ``SuperLU`` (``b``: a vector or a matrix of columns).
-
-    The work on the border rows is a small part (a few products per level), kept apart
-    from the chain's factorization."""
+    ``solve(b)`` like SciPy's ``SuperLU`` (``b``: a vector or a matrix of columns)."""
 
     def __init__(self, J: CollocationJacobian, chain: "Chain", border_w, bordered):
         #: the Jacobian (its interval factors and maps ``Z``), the chain of the mesh
@@ -181,157 +162,92 @@ class CondensedLU:
     @classmethod
     def of(cls, A: BorderedCollocation):
         J = A.J
-        n, ntst, p = J.n, J.ntst, J.n * (J.ncol - 1)
-        ZR = J.maps[:, p:]                                  # condensed rows (ntst, n, n + k)
-        with single_threaded():
-            chain = Chain.of(ZR[:, :, :n], np.broadcast_to(np.eye(n), (ntst, n, n)),
-                             ZR[:, :, n:])
-        return None if chain is None else cls._bordered(J, chain, A.border())
-
-    @classmethod
-    def _bordered(cls, J, chain, border):
         n, ntst, ncol, k = J.n, J.ntst, J.ncol, J.extra.shape[2]
         m, p = n * ncol, n * (ncol - 1)
+        border = A.border
         if border.shape[0] != k:
             raise ValueError(f"the bordered collocation matrix is not square: "
                              f"{border.shape[0]} border rows for {k} extra columns")
+        Z = J.maps
+        chain = Chain.of(Z[:, p:, :n], np.broadcast_to(np.eye(n), (ntst, n, n)), Z[:, p:, n:])
+        if chain is None:
+            return None
         bu = border[:, :ntst * m].reshape(k, ntst, ncol, n).transpose(1, 0, 2, 3)
-        border_w = bu[:, :, 1:, :].reshape(ntst, k, p)
-        Wv = border_w @ J.maps[:, :p]                        # (ntst, k, n + k)
-        with single_threaded():
-            bordered = chain.bordered(bu[:, :, 0, :] - Wv[:, :, :n],
-                                      border[:, ntst * m:] - Wv[:, :, n:].sum(axis=0))
+        border_w = _owned(bu[:, :, 1:, :].reshape(ntst, k, p))
+        Wv = border_w @ Z[:, :p]                             # (ntst, k, n + k)
+        bordered = chain.bordered(bu[:, :, 0, :] - Wv[:, :, :n],
+                                  border[:, ntst * m:] - Wv[:, :, n:].sum(axis=0))
         return None if bordered is None else cls(J, chain, border_w, bordered)
 
     def solve(self, b: np.ndarray, trans: str = "N") -> np.ndarray:
         if trans != "N":
             raise NotImplementedError("the condensed factors solve with the matrix only "
                                       "(trans='N')")
-        J = self.J
-        n, ntst, ncol = J.n, J.ntst, J.ncol
-        m, p, N = n * ncol, n * (ncol - 1), n * ntst * ncol
         b = np.asarray(b, dtype=float)
-        b2 = b.reshape(b.shape[0], -1)
-        z = J.interval_solve(b2[:N].reshape(ntst, m, -1))   # M_i^-1 r_i
-        s = b2[N:] - np.einsum("iqw,iwr->qr", self.border_w, z[:, :p])
-        v, y = self.chain.solve(self.bordered, z[:, p:], s)
-        Zw = J.maps[:, :p]
-        w = z[:, :p] - Zw[:, :, :n] @ v - Zw[:, :, n:] @ y
-        U = np.concatenate([v, w], axis=1).reshape(N, -1)
-        return np.concatenate([U, y]).reshape(b.shape)
-
-
-@dataclass(frozen=True)
-class _Level:
-    """One level of :class:`Chain`: ``pairs`` pairs of equations, each eliminating the
-    point between them by QR: ``Qb`` (the last ``n`` rows of ``Q^T``, the new
-    equation), ``H = R^-1 Q_top^T`` and ``Zt = R^-1 Q_top^T [left, right, y]`` (the
-    point from its neighbours)."""
-
-    pairs: int
-    odd: bool
-    Qb: np.ndarray
-    H: np.ndarray
-    Zt: np.ndarray
+        lu, piv, Z = self.J.factors
+        c = self.chain
+        x = _jit.condensed_solve(lu, piv, Z, self.border_w, c.schedule, c.Qb, c.H, c.Zt,
+                             *self.bordered, _owned(b.reshape(b.shape[0], -1)))
+        return x.reshape(b.shape)
 
 
 class Chain:
     """The cyclic chain ``A_i v_i + C_i v_{i+1} + G_i y = z_i`` (``i < N``,
-    ``v_N = v_0``) reduced pairwise as AUTO-07p does: equations ``2j`` and ``2j + 1``
-    share the point ``2j + 1``, which a QR of its stacked column ``[C_2j; A_2j+1]``
-    eliminates (the top rows give it from its neighbours, the bottom ``n`` rows a new
-    equation between ``v_2j`` and ``v_2j+2``); ``log2 N`` levels, each one batched call
-    over its pairs, leave ``(A + C) v_0 + G y = z``. Stable like a QR of each pair (no
-    recursion over transfer maps). The ``k`` border rows ``sum_i Bv_i v_i + By y = s``
-    that make the system square (:meth:`bordered`) follow the eliminations, and with
-    the last equation form an ``n + k`` dense system."""
+    ``v_N = v_0``) reduced pairwise: equations ``2j`` and ``2j + 1`` share the point
+    ``2j + 1``, which a QR of its stacked column ``[C_2j; A_2j+1]`` eliminates (the top
+    rows give it from its neighbours, the bottom ``n`` rows a new equation between
+    ``v_2j`` and ``v_2j+2``); ``log2 N`` levels (``schedule``: pairs and whether an odd
+    equation is carried, per level) leave ``(A + C) v_0 + G y = z``. Stable like a QR
+    of each pair (no recursion over transfer maps). Per pair, in the order of the levels:
+    ``Qb`` (the last ``n`` rows of ``Q^T``, the new equation), ``H = R^-1 Q_top^T`` and
+    ``Zt = R^-1 Q_top^T [left, right, y]`` (the point from its neighbours). The ``k``
+    border rows ``sum_i Bv_i v_i + By y = s`` that make the system square
+    (:meth:`bordered`) follow the eliminations, and with the last equation form an
+    ``n + k`` dense system."""
 
-    def __init__(self, levels: list, last: tuple):
-        self.levels, self.last = levels, last
+    def __init__(self, schedule, Qb, H, Zt, last):
+        self.schedule, self.Qb, self.H, self.Zt, self.last = schedule, Qb, H, Zt, last
 
     @classmethod
     def of(cls, A, C, G):
         """``A, C``: ``(N, n, n)``; ``G``: ``(N, n, k)``. None when a pair's column is
         rank-deficient."""
-        levels = []
-        while A.shape[0] > 1:
-            level, (A, C, G) = _reduce(A, C, G)
-            if level is None:
-                return None
-            levels.append(level)
-        return cls(levels, (A[0] + C[0], G[0]))
+        schedule = _schedule(A.shape[0])
+        *factors, ok = _jit.chain_reduce(*map(_owned, (A, C, G)), schedule)
+        return cls(schedule, *factors[:3], factors[3:]) if ok else None
 
     def bordered(self, Bv, By):
-        """``(shares, lu)``: per level the border rows' share ``Bv_mid H`` of the
-        eliminated points, and the LU of the final ``n + k`` system; None when it is
+        """``(shares, lu, piv)``: per pair the border rows' share ``Bv_mid H`` of the
+        eliminated point, and the LU of the final ``n + k`` system; None when it is
         singular. ``Bv``: ``(N, k, n)``, ``By``: ``(k, k)``."""
-        n = Bv.shape[2]
-        Bv = np.concatenate([Bv, np.zeros((1,) + Bv.shape[1:])])   # point N: none yet
-        By = np.array(By, dtype=float)
-        shares = []
-        for lv in self.levels:
-            q = lv.pairs
-            mids = Bv[1:2 * q:2]
-            Bz = mids @ lv.Zt                      # the border rows once the mids are gone
-            kept = Bv[0:2 * q + 1:2].copy()
-            kept[:-1] -= Bz[:, :, :n]
-            kept[1:] -= Bz[:, :, n:2 * n]
-            By = By - Bz[:, :, 2 * n:].sum(axis=0)
-            shares.append(mids @ lv.H)
-            Bv = np.concatenate([kept, Bv[-1:]]) if lv.odd else kept
-        AC, G = self.last
-        lu, piv, info = dgetrf(np.block([[AC, G], [Bv[0] + Bv[1], By]]))
-        return None if info != 0 else (shares, (lu, piv))
+        *factors, ok = _jit.chain_border(_owned(Bv), _owned(By),
+                                     self.schedule, self.H, self.Zt, *self.last)
+        return tuple(factors) if ok else None
 
     def solve(self, bordered, z: np.ndarray, s: np.ndarray) -> tuple:
         """``(v, y)`` for right-hand sides ``z`` (``(N, n, r)``) and ``s`` (``(k, r)``),
         with the factors ``bordered`` of :meth:`bordered`; ``v``: ``(N, n, r)``."""
-        n = z.shape[1]
-        shares, (lu, piv) = bordered
-        kept = []
-        for lv, Wb in zip(self.levels, shares):        # forward: the new right-hand sides
-            q = lv.pairs
-            zp = np.concatenate([z[0:2 * q:2], z[1:2 * q:2]], axis=1)       # (q, 2n, r)
-            kept.append(zp)
-            s = s - np.einsum("jkw,jwr->kr", Wb, zp)
-            new = lv.Qb @ zp
-            z = np.concatenate([new, z[-1:]]) if lv.odd else new
-        x = dgetrs(lu, piv, np.concatenate([z[0], s]))[0]
-        v0, y = x[:n], x[n:]
-        vals = np.stack([v0, v0])                      # the points v_0 and v_N = v_0
-        for lv, zp in zip(reversed(self.levels), reversed(kept)):   # backward: the points
-            q = lv.pairs
-            mid = lv.H @ zp - lv.Zt[:, :, :n] @ vals[:q] \
-                - lv.Zt[:, :, n:2 * n] @ vals[1:q + 1] - lv.Zt[:, :, 2 * n:] @ y
-            out = np.empty((2 * q + 1 + lv.odd,) + vals.shape[1:])
-            out[0:2 * q + 1:2], out[1:2 * q:2] = vals[:q + 1], mid
-            if lv.odd:
-                out[-1] = vals[-1]
-            vals = out
-        return vals[:-1], y
+        return _jit.chain_solve(self.schedule, self.Qb, self.H, self.Zt, *bordered,
+                            _owned(z), _owned(s))
 
 
-def _reduce(A, C, G):
-    """One level of :class:`Chain`: ``(level, (A, C, G))`` of the reduced chain; level
-    None when a pair's column is rank-deficient."""
-    n, E = A.shape[1], A.shape[0]
-    q, odd = E // 2, E % 2 == 1
-    a0, c0, g0 = A[0:2 * q:2], C[0:2 * q:2], G[0:2 * q:2]
-    a1, c1, g1 = A[1:2 * q:2], C[1:2 * q:2], G[1:2 * q:2]
-    Q, R = np.linalg.qr(np.concatenate([c0, a1], axis=1), mode="complete")
-    diag = np.abs(np.diagonal(R[:, :n], axis1=1, axis2=2))
-    if not np.all(np.isfinite(diag)) or diag.min() <= n * np.finfo(float).eps * diag.max():
-        return None, (A, C, G)
-    Qt = Q.transpose(0, 2, 1)
-    zero = np.zeros_like(a0)
-    T = Qt @ np.concatenate([np.concatenate([a0, zero, g0], axis=2),
-                             np.concatenate([zero, c1, g1], axis=2)], axis=1)
-    HZ = np.linalg.solve(R[:, :n], np.concatenate([Qt[:, :n], T[:, :n]], axis=2))
-    bot = T[:, n:]
-    new = [bot[:, :, :n], bot[:, :, n:2 * n], bot[:, :, 2 * n:]]
-    if odd:
-        new = [np.concatenate([x, old[-1:]]) for x, old in zip(new, (A, C, G))]
-    return _Level(q, odd, Qt[:, n:], HZ[:, :, :2 * n], HZ[:, :, 2 * n:]), tuple(new)
+def _owned(a) -> np.ndarray:
+    """``a`` as a writable C-ordered float array of its own (one array type for the
+    compiled functions, which then compile once)."""
+    return np.array(a, dtype=float, order="C")
+
+
+@lru_cache(maxsize=64)
+def _schedule(N: int) -> np.ndarray:
+    """``(levels, 2)``: the pairs of each level of the reduction of ``N`` equations and
+    whether it carries an odd last equation (``N - 1`` pairs in all)."""
+    levels = []
+    while N > 1:
+        levels.append((N // 2, N % 2))
+        N = N // 2 + N % 2
+    out = np.array(levels, dtype=np.int64).reshape(-1, 2)
+    out.setflags(write=False)
+    return out
 
 
 @lru_cache(maxsize=4)

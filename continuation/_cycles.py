@@ -234,8 +234,7 @@ class CycleProblem(PeriodicProblem):
         s = self.settings
         method = s.floquet if s.floquet != "auto" else \
             ("pencil" if self.vf.n * self.ntst <= s.pencil_max else "product")
-        return self.kept("multipliers", X, lambda: _floquet.multipliers(
-            self.transfer_matrices(X), method))
+        return self.floquet_multipliers(X, method)
 
 
 def _collocation_system(settings: CollocationSettings) -> tuple:

@@ -26,6 +26,7 @@ import scipy.linalg as sla
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
+from ._jit import SMALL, jit
 from ._threads import single_threaded
 
 #: interval systems up to this size are always solved densely (one batched LAPACK
@@ -89,18 +90,23 @@ def _sparse_blocks(J, n, ntst, ncol):
         yield right, rows[:, c0:c0 + n]
 
 
-def multipliers(A: np.ndarray, method: str = "pencil") -> np.ndarray:
-    """Eigenvalues of ``A_{N-1} ... A_0``, sorted by decreasing modulus."""
+def multipliers(A: np.ndarray, method: str = "pencil", mono: np.ndarray | None = None
+                ) -> np.ndarray:
+    """Eigenvalues of ``A_{N-1} ... A_0``, sorted by decreasing modulus (``mono``: that
+    product, if already formed, for ``method='product'``)."""
     with single_threaded():
-        mu = np.linalg.eigvals(monodromy(A)) if method == "product" else \
-            _pencil_multipliers(A)
+        if method == "product":
+            mu = np.linalg.eigvals(monodromy(A) if mono is None else mono)
+        else:
+            mu = _pencil_multipliers(A)
     return _by_modulus(mu)
 
 
-def section_multipliers(A: np.ndarray, f: np.ndarray) -> np.ndarray:
+def section_multipliers(mono: np.ndarray, f: np.ndarray) -> np.ndarray:
     """The ``n - 1`` multipliers of the Poincare map on the hyperplane through ``u(0)``
     normal to the flow ``f = u'(0)``, sorted by decreasing modulus: the eigenvalues of
-    ``Q^T Phi Q``, ``Phi = A_{N-1} ... A_0`` and ``Q`` an orthonormal basis of ``f^perp``.
+    ``Q^T Phi Q``, ``Phi = A_{N-1} ... A_0`` (``mono``) and ``Q`` an orthonormal basis
+    of ``f^perp``.
 
     The map's Jacobian is ``(I - f f^T / |f|^2) Phi`` on the section; as ``Phi f = f``,
     its eigenvalues are the non-trivial multipliers. They are not coupled to the trivial
@@ -109,18 +115,33 @@ def section_multipliers(A: np.ndarray, f: np.ndarray) -> np.ndarray:
     multiplier at +1 moves by ``O(e)``. Formed by the product (strongly contracting
     multipliers are only accurate relative to the largest)."""
     f = np.asarray(f, dtype=float)
-    if f.shape != (A.shape[1],) or not np.linalg.norm(f) > 0:
-        raise ValueError(f"f must be a nonzero flow direction of length {A.shape[1]}")
+    if f.shape != (mono.shape[0],) or not np.linalg.norm(f) > 0:
+        raise ValueError(f"f must be a nonzero flow direction of length {mono.shape[0]}")
     with single_threaded():
         Q = np.linalg.qr(np.column_stack([f, np.eye(f.size)]))[0][:, 1:f.size]
-        return _by_modulus(np.linalg.eigvals(Q.T @ monodromy(A) @ Q))
+        return _by_modulus(np.linalg.eigvals(Q.T @ mono @ Q))
 
 
 def monodromy(A: np.ndarray) -> np.ndarray:
     """``Phi = A_{N-1} ... A_0``."""
-    mono = np.eye(A.shape[1])
-    for Ai in A:
-        mono = Ai @ mono
+    return _product(np.ascontiguousarray(A, dtype=float))
+
+
+@jit
+def _product(A):
+    """``A_{N-1} ... A_0`` by BLAS for large blocks, by loops for small ones (whose BLAS
+    calls cost more than their arithmetic)."""
+    n = A.shape[1]
+    mono = np.eye(n)
+    for i in range(A.shape[0]):
+        if n > SMALL:
+            mono = np.ascontiguousarray(A[i]) @ mono
+            continue
+        out = np.zeros((n, n))
+        for r in range(n):
+            for l in range(n):
+                out[r] += A[i, r, l] * mono[l]
+        mono = out
     return mono
 
 

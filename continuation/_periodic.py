@@ -78,7 +78,19 @@ class PeriodicProblem(Problem):
         the flow ``M(u0)^-1 F(u0)`` at ``u0 = state(X)`` (``_floquet``): a fold's
         multiplier at +1 as accurate as the others (the monodromy's pair is not)."""
         return self.kept("section_multipliers", X, lambda: _floquet.section_multipliers(
-            self.transfer_matrices(X), self.flow(X)))
+            self.monodromy(X), self.flow(X)))
+
+    def monodromy(self, X) -> np.ndarray:
+        """``Phi = A_{N-1} ... A_0`` of :meth:`transfer_matrices` (kept for the last ``X``:
+        the multipliers and the section's share it)."""
+        return self.kept("monodromy", X, lambda: _floquet.monodromy(self.transfer_matrices(X)))
+
+    def floquet_multipliers(self, X, method: str) -> np.ndarray:
+        """Floquet multipliers by ``method`` ('product': of :meth:`monodromy`; 'pencil')
+        sorted by decreasing modulus, kept for the last ``X``."""
+        return self.kept("multipliers", X, lambda: _floquet.multipliers(
+            self.transfer_matrices(X), method,
+            self.monodromy(X) if method == "product" else None))
 
     def flow(self, X) -> np.ndarray:
         """``u'(0) = M(u0)^-1 F(u0)`` (time in units of T), ``u0 = state(X)``."""

@@ -43,7 +43,6 @@ import casadi as ca
 import numpy as np
 import scipy.sparse as sp
 
-from . import _floquet
 from ._cycles import sample_orbit
 from ._periodic import PeriodicProblem
 from ._settings import ShootingSettings
@@ -323,5 +322,4 @@ class ShootingProblem(PeriodicProblem):
 
     def multipliers(self, X) -> np.ndarray:
         """Floquet multipliers sorted by decreasing modulus (kept for the last ``X``)."""
-        return self.kept("multipliers", X, lambda: _floquet.multipliers(
-            self.transfer_matrices(X), self.settings.floquet))
+        return self.floquet_multipliers(X, self.settings.floquet)

@@ -155,14 +155,15 @@ def test_linear_solver_setting_and_its_automatic_choice():
         C.CollocationSettings(linear_solver="lu")
     with pytest.raises(ValueError, match="needs jacobian = 'blocks'"):
         C.CollocationSettings(linear_solver="condensed", jacobian="graph")
-    # 'auto': 6 states x NCOL 4 = 24 rows per interval (too few to pay) -> sparse; a dense
-    # 20-state field (80 rows) -> condensed; a banded one of the same size -> sparse
-    assert not _problem(8, 4, "auto").condensed
-    assert _problem(8, 4, "auto", mass=True, n=20).condensed
-    x, p = ca.SX.sym("x", 20), ca.SX.sym("p", 2)
+    # 'auto': interval blocks of up to 128 rows (6 states x NCOL 4 = 24 here) condense;
+    # larger ones when dense (a 40-state field with a dense mass, 160 rows), not when
+    # banded (a 40-state ring, 160 rows: SuperLU keeps the band)
+    assert _problem(8, 4, "auto").condensed
+    assert _problem(8, 4, "auto", mass=True, n=40).condensed
+    x, p = ca.SX.sym("x", 40), ca.SX.sym("p", 2)
     banded = ca.Function("F", [x, p], [ca.vertcat(x[1:], x[0]) - p[0] * x
                                        + p[1] * ca.vertcat(x[-1], x[:-1]) ** 3])
-    prob = C.CycleProblem(banded, lambda t: np.ones((np.size(t), 20)), 1.0,
+    prob = C.CycleProblem(banded, lambda t: np.ones((np.size(t), 40)), 1.0,
                           {"mu": 1.0, "k": 0.2}, "mu",
                           settings=C.CollocationSettings(ntst=8, ncol=4))
     assert not prob.condensed

@@ -148,7 +148,7 @@ def test_section_multiplier_of_a_fold_is_not_split_from_the_trivial_one():
         (nu,) = problem.section_multipliers(Z)
         assert abs(nu / exact - 1) < 1e-7
     with pytest.raises(ValueError, match="flow direction"):
-        section_multipliers(np.eye(2)[None], np.zeros(2))     # at an equilibrium
+        section_multipliers(np.eye(2), np.zeros(2))           # at an equilibrium
 
 
 def test_period_doubling_located_and_continued_on_mu_equal_nu_squared(models):

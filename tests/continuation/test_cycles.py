@@ -231,21 +231,27 @@ def test_sampled_orbit_guess_and_compile_cache():
 
 
 def test_dense_and_sparse_condensation_agree(monkeypatch):
-    """Both condensation paths (batched dense for small or well-filled blocks, SuperLU
-    per interval for the others) give the same transfer matrices."""
+    """Both condensation paths of the sparse Jacobian (batched dense for small or
+    well-filled blocks, SuperLU per interval for the others) give the same transfer
+    matrices, and so do the maps of the condensed Newton solver."""
     from continuation import _floquet
     F, e = _ring(), 0.5
     prob, X = _solve(F, e, 12, 3, 2 * np.pi / np.sqrt(1 - e ** 2))
+    J = C.CycleProblem.jacobian(prob, X)
+    n, ntst, ncol = prob.vf.n, prob.ntst, prob.ncol
     calls = []
     monkeypatch.setattr(_floquet, "_sparse_blocks",
                         lambda *a, f=_floquet._sparse_blocks: calls.append(1) or f(*a))
-    dense = prob.transfer_matrices(X, full=True)
+    dense = _floquet.transfer_matrices(J, n, ntst, ncol, full=True)
     assert not calls
     monkeypatch.setattr(_floquet, "DENSE_ALWAYS", 0)
     monkeypatch.setattr(_floquet, "DENSE_MAX", 0)
-    sparse = prob.transfer_matrices(X, full=True)
+    sparse = _floquet.transfer_matrices(J, n, ntst, ncol, full=True)
     assert calls
     assert np.max(np.abs(dense - sparse)) < 1e-12 * np.max(np.abs(dense))
+    assert prob.condensed
+    condensed = prob.transfer_matrices(X, full=True)
+    assert np.max(np.abs(dense - condensed)) < 1e-12 * np.max(np.abs(dense))
 
 
 def test_extrema_of_the_collocation_polynomial_match_dense_sampling():
