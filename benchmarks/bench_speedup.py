@@ -14,7 +14,16 @@ pairwise ratios old/new and the largest difference between the two trees' result
 - ``cycle``: cost per point of a collocation branch of ``--cycle-points`` (default 8)
   cycles from the Hopf point at M* = 1 (NTST = 20, NCOL = 4), after a warm-up branch of
   2 points that builds the systems (and compiles the kernel into the on-disk cache if
-  it is not there yet); value: period and Δp of the last cycle.
+  it is not there yet); value: period and Δp of the last cycle;
+- ``branch``: the same with ``cycle_branch``'s defaults (re-meshed every 5 points,
+  detection, the measures of every point), 40 points;
+- ``impacting``: cost per point of the impacting collocation branch (k* = 1e8,
+  eps/H = 1e-2, smoothing 0.1, zeta = 0.01, NTST = 200, re-meshed at every point) from
+  the last contact-free cycle 3 eps from the wall, ``--cycle-points`` points after a
+  2-point warm-up; value: U* and period of the last cycle;
+- ``brusselator``: cost per point of the cycle branch of ``bench_cycles.py`` (the
+  Brusselator chain of ``--modes`` states, NTST = 50, 20 points; no flutter model is
+  built); value: the last point's B and period.
 
     python benchmarks/bench_speedup.py [--baseline 1ba3c13] [--modes 10] [--tasks eig ucrit]
 """
@@ -31,10 +40,13 @@ import json, sys, time
 import numpy as np
 import fsicas
 n = int(sys.argv[1])
-scene = fsicas.Scene(mstar=1.0, ustar=5.0, modes=n)
-model = fsicas.build_model(scene)
 def done(t, value):
     print(json.dumps({"time": t, "value": [float(v) for v in value]}))
+"""
+#: the flutter model of the tasks on it (all but 'brusselator')
+FLUTTER = """
+scene = fsicas.Scene(mstar=1.0, ustar=5.0, modes=n)
+model = fsicas.build_model(scene)
 """
 
 TASKS = {
@@ -71,6 +83,40 @@ t = (time.perf_counter() - t0) / len(br.points)
 last = br.points[-1]
 done(t, [last.period, last.pressure_drop])
 """,
+    "branch": """
+from fsicas.cycles import cycle_branch
+hopf = fsicas.critical_velocity(scene, model)
+cycle_branch(scene, model, hopf=hopf)
+t0 = time.perf_counter()
+br = cycle_branch(scene, model, settings=fsicas.cycles.CycleSettings(max_points=40), hopf=hopf)
+t = (time.perf_counter() - t0) / len(br.points)
+done(t, [br.points[-1].ustar, br.points[-1].period])
+""",
+    "impacting": """
+from fsicas.cycles import cycle_branch
+from fsicas.cycles.impacting import pre_contact_start
+from fsicas.cycles.impacting_collocation import (CollocationImpactSettings,
+                                                 impacting_collocation_branch)
+scene = fsicas.Scene(mstar=1.0, zeta=0.01, modes=n, contact=True, contact_stiffness=1e8,
+                     contact_eps=1e-2, contact_smoothing=0.1)
+model = fsicas.build_model(scene)
+start = pre_contact_start(cycle_branch(scene.replace(contact=False), ustar_max=12), 3.0)
+run = lambda points: impacting_collocation_branch(
+    scene.replace(ustar=start.ustar), start.state, start.period, start.pressure_drop,
+    model=model, ustar_max=12, settings=CollocationImpactSettings(max_points=points))
+run(2)
+t0 = time.perf_counter()
+br = run(int(sys.argv[3]))
+t = (time.perf_counter() - t0) / len(br.points)
+done(t, [br.points[-1].ustar, br.points[-1].period])
+""",
+    "brusselator": """
+sys.path.insert(0, "benchmarks")
+import bench_cycles
+r = bench_cycles.ours(n, 20, "product")
+X = r["steps"][-1].X
+done(r["per_point"], [r["cyc"].params(X)[1], r["cyc"].period(X)])
+""",
 }
 
 
@@ -91,7 +137,8 @@ def main() -> None:
     with Baseline(args.baseline) as base:
         for task in args.tasks:
             for n in args.modes:
-                c = compare(base.path, PRELUDE + TASKS[task], [n, args.points, args.cycle_points],
+                prelude = PRELUDE + ("" if task == "brusselator" else FLUTTER)
+                c = compare(base.path, prelude + TASKS[task], [n, args.points, args.cycle_points],
                             args.repeats)
                 print(f"| {task} | {n} | {c.old:.4g} | {c.new:.4g} | {c.speedup:.1f}x | "
                       f"{c.difference:.1e} |", flush=True)

@@ -319,7 +319,10 @@ class BlockCollocationSystem:
         blocks = np.zeros((ntst, m, m + n))
         for name, values, weights in (("Fx", Fx, Pk * (-hk * T)[:, None]), ("Mvx", Mvx, Pk),
                                       ("M", M, Dk)):
-            _add_blocks(blocks, values, *kr.pattern(name, True), weights, n, ncol)
+            if name in kr.lifted:                # dense, row by row
+                _add_dense_blocks(blocks, values, weights, n, ncol)
+            else:
+                _add_blocks(blocks, values, *kr.pattern(name, True), weights, n, ncol)
         Gp = (Mvp - (hk * T)[:, None] * Fp).reshape(kr.K, len(cols), n)
         extra = np.concatenate([(-hk[:, None] * F)[:, :, None], Gp.transpose(0, 2, 1)], axis=2)
         return CollocationJacobian(n, ntst, ncol, blocks, extra.reshape(ntst, m, -1), c)
@@ -371,3 +374,17 @@ def _add_blocks(blocks, values, rows, cols, weights, n, ncol):
             if w != 0.0:
                 for e in range(values.shape[1]):
                     block[k * n + rows[e], l * n + cols[e]] += w * values[point, e]
+
+
+@jit
+def _add_dense_blocks(blocks, values, weights, n, ncol):
+    """:func:`_add_blocks` for matrices given dense, row by row (``values``: ``K x n n``)."""
+    for point in range(values.shape[0]):
+        i, k = point // ncol, point % ncol
+        for l in range(ncol + 1):
+            w = weights[point, l]
+            if w != 0.0:
+                for a in range(n):
+                    row, c = k * n + a, l * n
+                    for b in range(n):
+                        blocks[i, row, c + b] += w * values[point, a * n + b]

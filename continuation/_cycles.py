@@ -166,14 +166,26 @@ class CycleProblem(PeriodicProblem):
 
     def restart(self, X):
         """On the field ``refine`` returns at X, if any; else re-mesh every
-        ``settings.adapt_every`` accepted points (0: never)."""
+        ``settings.adapt_every`` accepted points (0: never), continuously as AUTO-07p
+        adapts its mesh: the branch goes on from the cycle's polynomial at the new nodes
+        along the tangent's (``carried``), and the next step's corrector corrects it."""
         vf = None if self.refine is None else self.refine(self, X)
         if vf is not None:
             return self.on_field(vf, X)
         every = self.settings.adapt_every
         if every and self._accepted >= every:
-            return self.remesh(X)
+            new, X_new = self.remesh(X)
+            return new, X_new, lambda tau: self.carried(tau, new)
         return None
+
+    def carried(self, tau, new: "CycleProblem") -> np.ndarray:
+        """The tangent ``tau`` of this problem's unknowns in those of ``new`` (same field
+        and free parameters, another mesh): its node part is its polynomial at the new
+        nodes, ``T`` and ``p`` are kept; unit length."""
+        N = self.n_nodes * self.vf.n
+        nodes = colloc.evaluate(tau[:N], self.mesh, self.ncol, self.vf.n, new.times())
+        out = np.concatenate([nodes.ravel(), tau[N:]])
+        return out / np.linalg.norm(out)
 
     def frame(self, X) -> np.ndarray:
         """Only ``T`` and ``p`` keep their meaning across a re-mesh."""

@@ -94,17 +94,18 @@ def _run_segments(problem, algorithm, settings, run):
     an augmented system drifted, a re-mesh), continue with the rebuilt problem
     from the same point, oriented by the previous tangent. Returns the last
     iterator."""
-    tau_ref, seg_settings = None, settings
+    tau_ref, origin, seg_settings = None, None, settings
     while True:
-        it = ContinuationIterator(problem, algorithm, seg_settings, tau_ref)
+        it = ContinuationIterator(problem, algorithm, seg_settings, tau_ref, origin)
         step, restart = _iterate(problem, it, tau_ref is not None, settings, run)
         _merge(run.rec.stats, it.stats)
         if restart is None:
             return it
-        problem, X_new = restart
+        problem, X_new, *carry = restart
         tau_ref = np.zeros(X_new.size)
         frame = problem.frame(X_new)
         tau_ref[frame] = step.tau[frame]
+        origin = Step(X_new, carry[0](step.tau), 0.0, 0, step.residual) if carry else None
         remaining = settings.max_steps - (len(run.rec.X) - 1)
         run.rec.stats["restarts"] = run.rec.stats.get("restarts", 0) + 1
         seg_settings = replace(settings, max_steps=remaining,
@@ -115,10 +116,12 @@ def _iterate(problem, it, restarted, settings, run):
     """One segment: ``(last step, restart or None)``; stops early on ``run.halt``."""
     step = None
     for step in it:
-        info = problem.monitor(step.X, step.tau, step.lu, settings)
         if restarted and step.ds == 0.0:  # restart point, already recorded
+            info = run.prev[1] if it.origin is not None else \
+                problem.monitor(step.X, step.tau, step.lu, settings)
             run.prev = (step, info, run.prev[2])
             continue
+        info = problem.monitor(step.X, step.tau, step.lu, settings)
         before = run.prev[1] if run.prev is not None else None
         run.point(problem, step, info)
         if run.halt is not None:

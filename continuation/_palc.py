@@ -82,9 +82,11 @@ class ContinuationIterator:
     """
 
     def __init__(self, problem, algorithm: PALC, settings: ContinuationSettings,
-                 tau_ref: np.ndarray | None = None):
+                 tau_ref: np.ndarray | None = None, origin: Step | None = None):
         self.problem, self.algorithm, self.settings = problem, algorithm, settings
         self.tau_ref = None if tau_ref is None else np.asarray(tau_ref, dtype=float)
+        #: a first step taken as it is (a continuous restart), instead of correcting X0
+        self.origin = origin
         self.status, self.message, self.failure = "running", "", {}
         self.stats = {"steps": 0, "newton_iterations": 0, "rejected_steps": 0,
                       "time_steps": 0.0}
@@ -108,8 +110,12 @@ class ContinuationIterator:
 
     # ------------------------------------------------------------------------
     def start(self) -> Step | None:
-        """Correct ``X0`` at fixed parameter and orient the first tangent."""
+        """Correct ``X0`` at fixed parameter and orient the first tangent (or take
+        ``origin`` as it is)."""
         prob, X0 = self.problem, self.problem.X0
+        if self.origin is not None:
+            prob.accept(self.origin.X)
+            return self.origin
         e = prob.start_row()
         res = correct(prob, X0, e, self.settings.newton)
         if not res.converged:
@@ -123,7 +129,8 @@ class ContinuationIterator:
                               "fold or branch point?)", res, 0.0)
         if self.tau_ref is None:
             tau = self.settings.direction * tau
-        lu = factorize(prob.bordered_jacobian(res.X, tau))
+        if prob.monitor_uses_lu and self.settings.detect:     # the monitor's factors
+            lu = factorize(prob.bordered_jacobian(res.X, tau))
         prob.accept(res.X)
         self.stats["newton_iterations"] += res.iterations
         return Step(res.X, tau, 0.0, res.iterations, res.residual, lu)

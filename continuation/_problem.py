@@ -121,7 +121,12 @@ class Problem:
 
     def restart(self, X):
         """``(new_problem, X_new)`` when the augmented system should be rebuilt at
-        ``X`` (e.g. reference vectors drifted), else None (default: never)."""
+        ``X`` (e.g. reference vectors drifted), else None (default: never). The branch
+        goes on from ``X_new`` corrected on the new problem, with a fresh tangent. A
+        third entry ``carry(tau) -> tau_new`` (the tangent in the new unknowns, e.g.
+        interpolated onto a new mesh) makes the restart continuous: the branch goes on
+        from ``X_new`` along the carried tangent with no correction of its own (the next
+        step's corrector corrects), and the last point's monitor values stand for it."""
         return None
 
     def start_row(self) -> np.ndarray:
