@@ -15,14 +15,21 @@ from bench_kernels import Case, factorize, instrument, once
 
 
 class TimedLU:
-    """Time spent in SuperLU: ``scipy.sparse.linalg.splu`` and the solves of its result."""
+    """Time spent in the linear algebra of the Newton and tangent systems and of the
+    Floquet condensation: SuperLU (``scipy.sparse.linalg.splu`` and the solves of its
+    result) and the compiled condensed solver (the loops of ``continuation._jit``)."""
+
+    #: the compiled linear-algebra functions of ``continuation._jit``
+    COMPILED = ("interval_factors", "chain_reduce", "chain_border", "chain_solve",
+                "condensed_solve", "collocation_times")
 
     def __init__(self):
-        self.total, self._splu = 0.0, None
+        self.total, self._saved = 0.0, {}
 
     def __enter__(self):
         import scipy.sparse.linalg as spla
-        self._splu, timer = spla.splu, self
+        from continuation import _jit
+        timer = self
 
         class Factor:
             def __init__(self, lu):
@@ -34,12 +41,18 @@ class TimedLU:
             def solve(self, *args, **kw):
                 return timer.timed(self.lu.solve, *args, **kw)
 
-        spla.splu = lambda *a, **kw: Factor(self.timed(self._splu, *a, **kw))
+        self._saved = {(spla, "splu"): spla.splu,
+                       **{(_jit, name): getattr(_jit, name) for name in self.COMPILED}}
+        splu = spla.splu
+        spla.splu = lambda *a, **kw: Factor(self.timed(splu, *a, **kw))
+        for name in self.COMPILED:
+            fun = getattr(_jit, name)
+            setattr(_jit, name, lambda *a, fun=fun: self.timed(fun, *a))
         return self
 
     def __exit__(self, *exc):
-        import scipy.sparse.linalg as spla
-        spla.splu = self._splu
+        for (module, name), fun in self._saved.items():
+            setattr(module, name, fun)
 
     def timed(self, fun, *args, **kw):
         t0 = time.perf_counter()

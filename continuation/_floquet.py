@@ -90,16 +90,18 @@ def _sparse_blocks(J, n, ntst, ncol):
         yield right, rows[:, c0:c0 + n]
 
 
-def multipliers(A: np.ndarray, method: str = "pencil", mono: np.ndarray | None = None
-                ) -> np.ndarray:
-    """Eigenvalues of ``A_{N-1} ... A_0``, sorted by decreasing modulus (``mono``: that
-    product, if already formed, for ``method='product'``)."""
+def multipliers(A: np.ndarray, method: str = "pencil") -> np.ndarray:
+    """Eigenvalues of ``A_{N-1} ... A_0``, sorted by decreasing modulus."""
+    if method == "product":
+        return product_multipliers(monodromy(A))
     with single_threaded():
-        if method == "product":
-            mu = np.linalg.eigvals(monodromy(A) if mono is None else mono)
-        else:
-            mu = _pencil_multipliers(A)
-    return _by_modulus(mu)
+        return _by_modulus(_pencil_multipliers(A))
+
+
+def product_multipliers(mono: np.ndarray) -> np.ndarray:
+    """Eigenvalues of the monodromy matrix ``mono``, sorted by decreasing modulus."""
+    with single_threaded():
+        return _by_modulus(np.linalg.eigvals(mono))
 
 
 def section_multipliers(mono: np.ndarray, f: np.ndarray) -> np.ndarray:
@@ -140,7 +142,9 @@ def _product(A):
         out = np.zeros((n, n))
         for r in range(n):
             for l in range(n):
-                out[r] += A[i, r, l] * mono[l]
+                a = A[i, r, l]
+                for c in range(n):
+                    out[r, c] += a * mono[l, c]
         mono = out
     return mono
 

@@ -86,11 +86,13 @@ class PeriodicProblem(Problem):
         return self.kept("monodromy", X, lambda: _floquet.monodromy(self.transfer_matrices(X)))
 
     def floquet_multipliers(self, X, method: str) -> np.ndarray:
-        """Floquet multipliers by ``method`` ('product': of :meth:`monodromy`; 'pencil')
-        sorted by decreasing modulus, kept for the last ``X``."""
-        return self.kept("multipliers", X, lambda: _floquet.multipliers(
-            self.transfer_matrices(X), method,
-            self.monodromy(X) if method == "product" else None))
+        """Floquet multipliers by ``method`` ('product': of :meth:`monodromy`; 'pencil':
+        of the transfer matrices) sorted by decreasing modulus, kept for the last ``X``."""
+        if method == "product":
+            compute = lambda: _floquet.product_multipliers(self.monodromy(X))  # noqa: E731
+        else:
+            compute = lambda: _floquet.multipliers(self.transfer_matrices(X), method)  # noqa: E731
+        return self.kept("multipliers", X, compute)
 
     def flow(self, X) -> np.ndarray:
         """``u'(0) = M(u0)^-1 F(u0)`` (time in units of T), ``u0 = state(X)``."""
