@@ -21,9 +21,10 @@ pairwise ratios old/new and the largest difference between the two trees' result
   eps/H = 1e-2, smoothing 0.1, zeta = 0.01, NTST = 200, re-meshed at every point) from
   the last contact-free cycle 3 eps from the wall, ``--cycle-points`` points after a
   2-point warm-up; value: U* and period of the last cycle;
-- ``brusselator``: cost per point of the cycle branch of ``bench_cycles.py`` (the
-  Brusselator chain of ``--modes`` states, NTST = 50, 20 points; no flutter model is
-  built); value: the last point's B and period.
+- ``brusselator``: cost per point (corrector, tangent, multipliers) of the cycle branch
+  of ``bench_cycles.py`` (the Brusselator chain of ``--modes`` states, NTST = 50), 20
+  points after 2 untimed ones; no flutter model is built; value: the last point's B
+  and period.
 
     python benchmarks/bench_speedup.py [--baseline 1ba3c13] [--modes 10] [--tasks eig ucrit]
 """
@@ -112,10 +113,23 @@ done(t, [br.points[-1].ustar, br.points[-1].period])
 """,
     "brusselator": """
 sys.path.insert(0, "benchmarks")
-import bench_cycles
-r = bench_cycles.ours(n, 20, "product")
-X = r["steps"][-1].X
-done(r["per_point"], [r["cyc"].params(X)[1], r["cyc"].period(X)])
+import continuation as C
+from bench_cycles import A, brusselator_chain, hopf_b, params
+eq = C.EquilibriumProblem(brusselator_chain(n), np.tile([A, 4.5 / A], n // 2), params(4.5), "B")
+hopf = C.continuation(eq, settings=C.ContinuationSettings(
+    ds=0.05, ds_max=0.1, bounds={"B": (4.0, hopf_b(n) + 0.3)})).special("hopf")[0]
+cyc = C.cycle_from_hopf(eq, hopf, dp=1e-3, settings=C.CollocationSettings(
+    ntst=50, ncol=4, floquet="product"))
+scale = np.sqrt(200)
+it = C.ContinuationIterator(cyc, C.PALC(), C.ContinuationSettings(
+    ds=0.01 * scale, ds_max=0.05 * scale, max_steps=30, direction=cyc.hopf_direction))
+step = it.start()
+for _ in range(2):                      # untimed: builds and loads everything
+    step = it.advance(step); cyc.multipliers(step.X)
+t0 = time.perf_counter()
+for _ in range(20):
+    step = it.advance(step); cyc.multipliers(step.X)
+done((time.perf_counter() - t0) / 20, [cyc.params(step.X)[1], cyc.period(step.X)])
 """,
 }
 

@@ -33,7 +33,7 @@ import scipy.sparse as sp
 
 from ._collocation import collocation
 from ._condensed import CollocationJacobian
-from ._jit import jit
+from ._lazyjit import jit
 from ._lifted import LiftedBatch
 from ._sparse import Layout, layout
 from .compilation import compiled_or_none, has_compiler

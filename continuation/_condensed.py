@@ -38,7 +38,6 @@ from functools import cached_property, lru_cache
 
 import numpy as np
 
-from . import _jit
 from ._newton import factorize
 from ._sparse import layout
 
@@ -81,7 +80,7 @@ class CollocationJacobian:
     def collocation_times(self, x: np.ndarray) -> np.ndarray:
         """``[B, E] x`` for ``x`` of shape ``(columns,)`` or ``(columns, r)``."""
         X = _owned(x.reshape(x.shape[0], -1))
-        out = _jit.collocation_times(self.blocks, self.extra, X)
+        out = _compiled().collocation_times(self.blocks, self.extra, X)
         return out.reshape((out.shape[0],) + x.shape[1:])
 
     def toarray(self) -> np.ndarray:
@@ -98,7 +97,7 @@ class CollocationJacobian:
     def factors(self) -> tuple | None:
         """``(lu, piv, Z)``: the LU factors of every ``M_i`` and ``Z_i = M_i^-1 [B_i^L,
         E_i]`` (``(NTST, m, n + k)``); None if an ``M_i`` is singular."""
-        lu, piv, Z, ok = _jit.interval_factors(_owned(self.blocks), _owned(self.extra))
+        lu, piv, Z, ok = _compiled().interval_factors(_owned(self.blocks), _owned(self.extra))
         return (lu, piv, Z) if ok else None
 
     @property
@@ -186,7 +185,7 @@ class CondensedLU:
         b = np.asarray(b, dtype=float)
         lu, piv, Z = self.J.factors
         c = self.chain
-        x = _jit.condensed_solve(lu, piv, Z, self.border_w, c.schedule, c.Qb, c.H, c.Zt,
+        x = _compiled().condensed_solve(lu, piv, Z, self.border_w, c.schedule, c.Qb, c.H, c.Zt,
                              *self.bordered, _owned(b.reshape(b.shape[0], -1)))
         return x.reshape(b.shape)
 
@@ -213,22 +212,28 @@ class Chain:
         """``A, C``: ``(N, n, n)``; ``G``: ``(N, n, k)``. None when a pair's column is
         rank-deficient."""
         schedule = _schedule(A.shape[0])
-        *factors, ok = _jit.chain_reduce(*map(_owned, (A, C, G)), schedule)
+        *factors, ok = _compiled().chain_reduce(*map(_owned, (A, C, G)), schedule)
         return cls(schedule, *factors[:3], factors[3:]) if ok else None
 
     def bordered(self, Bv, By):
         """``(shares, lu, piv)``: per pair the border rows' share ``Bv_mid H`` of the
         eliminated point, and the LU of the final ``n + k`` system; None when it is
         singular. ``Bv``: ``(N, k, n)``, ``By``: ``(k, k)``."""
-        *factors, ok = _jit.chain_border(_owned(Bv), _owned(By),
+        *factors, ok = _compiled().chain_border(_owned(Bv), _owned(By),
                                      self.schedule, self.H, self.Zt, *self.last)
         return tuple(factors) if ok else None
 
     def solve(self, bordered, z: np.ndarray, s: np.ndarray) -> tuple:
         """``(v, y)`` for right-hand sides ``z`` (``(N, n, r)``) and ``s`` (``(k, r)``),
         with the factors ``bordered`` of :meth:`bordered`; ``v``: ``(N, n, r)``."""
-        return _jit.chain_solve(self.schedule, self.Qb, self.H, self.Zt, *bordered,
+        return _compiled().chain_solve(self.schedule, self.Qb, self.H, self.Zt, *bordered,
                             _owned(z), _owned(s))
+
+
+def _compiled():
+    """``continuation._jit``, imported at first use (it imports numba)."""
+    from . import _jit
+    return _jit
 
 
 def _owned(a) -> np.ndarray:

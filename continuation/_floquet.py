@@ -26,7 +26,7 @@ import scipy.linalg as sla
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
-from ._jit import SMALL, jit
+from ._lazyjit import SMALL, jit
 from ._threads import single_threaded
 
 #: interval systems up to this size are always solved densely (one batched LAPACK

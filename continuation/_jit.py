@@ -8,7 +8,9 @@ compiled once per machine into ``__pycache__``, then loaded in a fraction of a s
 Every compiled function that calls another one lives in this module: numba's disk cache
 is invalidated by edits of a function's own file only, so a caller elsewhere would keep
 the machine code of an edited kernel (leaves that call nothing compiled may live with
-their module, as the collocation assembly of ``_blocks`` does).
+their module, as the collocation assembly of ``_blocks`` does, compiled at their first
+call by ``_lazyjit.jit``). This module is imported at first use (``_condensed``), so that
+``import continuation`` and problems that use no compiled code do not import numba.
 
 The dense kernels, for C-ordered arrays: :func:`lu_factor` / :func:`lu_solve` (partial
 pivoting), :func:`qr_eliminate` (Householder QR of a stacked column applied to its rows:
@@ -27,11 +29,10 @@ import numpy as np
 from numba import njit, types
 from numba.extending import get_cython_function_address
 
+from ._lazyjit import SMALL
+
 #: the compiled functions: nopython, cached on disk, releasing the GIL
 jit = njit(cache=True, nogil=True)
-
-#: blocks of at most this many rows are factorized by loops, larger ones by LAPACK
-SMALL = 32
 
 
 def _bound(module: str, name: str, nargs: int):

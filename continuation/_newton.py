@@ -9,7 +9,6 @@ import numpy as np
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
-from ._jit import jit
 from ._settings import NewtonSettings
 
 
@@ -196,21 +195,7 @@ def _iterate(residual, jacobian, X, settings, polish) -> NewtonResult:
 
 
 def _norm(r: np.ndarray) -> float:
-    return _inf_norm(np.ravel(r))
-
-
-@jit
-def _inf_norm(r) -> float:
-    """``max |r_i|`` (0 for an empty vector, NaN if an entry is NaN), without the
-    temporaries of ``np.max(np.abs(r))``: Newton and refinement take it dozens of times
-    per continuation point."""
-    out = 0.0
-    for x in r:
-        a = abs(x)
-        if a != a:
-            return a
-        out = max(out, a)
-    return out
+    return float(np.max(np.abs(r))) if r.size else 0.0
 
 
 def _polish(residual, jacobian, X, res, iterations):
