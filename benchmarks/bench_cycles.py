@@ -66,23 +66,32 @@ def hopf_b(n: int) -> float:
     return 1 + A ** 2 + (D1 + D2) * 2 * (1 - np.cos(np.pi / (n // 2 + 1)))
 
 
-def ours(n: int, points: int, floquet: str):
-    """Continue the cycles from the first Hopf point; returns timings and the last X."""
-    F = brusselator_chain(n)
-    x0 = np.tile([A, 4.5 / A], n // 2)
-    eq = C.EquilibriumProblem(F, x0, params(4.5), "B")
+def hopf_start(n: int):
+    """``(equilibrium problem, its first Hopf point)`` of the chain of ``n`` states."""
+    eq = C.EquilibriumProblem(brusselator_chain(n), np.tile([A, 4.5 / A], n // 2),
+                              params(4.5), "B")
     br = C.continuation(eq, settings=C.ContinuationSettings(ds=0.05, ds_max=0.1,
                                                             bounds={"B": (4.0, hopf_b(n) + 0.3)}))
-    hopf = br.special("hopf")[0]
-    t0 = time.perf_counter()
+    return eq, br.special("hopf")[0]
+
+
+def stepper(eq, hopf, floquet: str = "product", max_steps: int = 10 ** 6):
+    """``(cycle problem, step iterator)`` of the benchmark's cycle branch from ``hopf``."""
     cyc = C.cycle_from_hopf(eq, hopf, dp=1e-3, settings=C.CollocationSettings(
         ntst=50, ncol=4, floquet=floquet))
     # AUTO's arclength uses the L2 norm of the profile over [0, 1]; ours is the
     # Euclidean norm of all NTST NCOL node values, sqrt(NTST NCOL) = sqrt(200) larger
     scale = np.sqrt(50 * 4)
-    it = C.ContinuationIterator(cyc, C.PALC(), C.ContinuationSettings(
-        ds=0.01 * scale, ds_max=0.05 * scale, max_steps=points - 1,
+    return cyc, C.ContinuationIterator(cyc, C.PALC(), C.ContinuationSettings(
+        ds=0.01 * scale, ds_max=0.05 * scale, max_steps=max_steps,
         direction=cyc.hopf_direction))
+
+
+def ours(n: int, points: int, floquet: str):
+    """Continue the cycles from the first Hopf point; returns timings and the last X."""
+    eq, hopf = hopf_start(n)
+    t0 = time.perf_counter()
+    cyc, it = stepper(eq, hopf, floquet, points - 1)
     first = it.start()
     second = it.advance(first)   # one step, untimed: builds the systems and loads the
     cyc.multipliers(second.X)    # compiled code (numba's cache: ~0.5 s in a new process)
@@ -98,7 +107,7 @@ def ours(n: int, points: int, floquet: str):
         steps.append(step)
         mus.append(cyc.multipliers(step.X))
     per_point = (time.perf_counter() - t0) / max(len(steps) - 2, 1)
-    return {"F": F, "cyc": cyc, "steps": steps, "mu": mus, "per_point": per_point,
+    return {"F": cyc.vf, "cyc": cyc, "steps": steps, "mu": mus, "per_point": per_point,
             "build": build, "hopf_B": hopf.params["B"], "stats": it.stats,
             "newton": np.mean([s.iterations for s in steps[1:]])}
 

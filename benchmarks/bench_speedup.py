@@ -112,6 +112,7 @@ t = (time.perf_counter() - t0) / len(br.points)
 done(t, [br.points[-1].ustar, br.points[-1].period])
 """,
     "brusselator": """
+# written out (not bench_cycles' stepper): the older trees compared have none
 sys.path.insert(0, "benchmarks")
 import continuation as C
 from bench_cycles import A, brusselator_chain, hopf_b, params

@@ -93,16 +93,8 @@ class Anatomy:
 
 def brusselator(n: int, points: int):
     """``run(points)``: that many steps of the bench_cycles chain (continuing)."""
-    from bench_cycles import A, brusselator_chain, hopf_b, params
-    eq = C.EquilibriumProblem(brusselator_chain(n), np.tile([A, 4.5 / A], n // 2),
-                              params(4.5), "B")
-    hopf = C.continuation(eq, settings=C.ContinuationSettings(
-        ds=0.05, ds_max=0.1, bounds={"B": (4.0, hopf_b(n) + 0.3)})).special("hopf")[0]
-    cyc = C.cycle_from_hopf(eq, hopf, dp=1e-3, settings=C.CollocationSettings(
-        ntst=50, ncol=4, floquet="product"))
-    scale = np.sqrt(200)
-    it = C.ContinuationIterator(cyc, C.PALC(), C.ContinuationSettings(
-        ds=0.01 * scale, ds_max=0.05 * scale, max_steps=10 ** 6, direction=cyc.hopf_direction))
+    from bench_cycles import hopf_start, stepper
+    cyc, it = stepper(*hopf_start(n))
     state = {"step": it.start()}
 
     def run(k):
