@@ -32,9 +32,6 @@ from collections import Counter
 from pathlib import Path
 
 os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")   # before NumPy: docs/continuation.md
-import numpy as np  # noqa: E402
-
-import continuation as C  # noqa: E402
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
