@@ -9,8 +9,9 @@ builds the systems and loads the compiled code) and times, by wrapping the funct
   residuals) and the lifted matrices' dense products (``LiftedBatch``), i.e. what the
   model itself costs at the points the analysis needs;
 * **linear algebra**: the condensed solver's compiled loops (interval LUs and maps, the
-  chain's QRs, solves, the interval products of the refinement), SuperLU, the
-  monodromy and the eigenvalues of the multipliers;
+  chain's QRs, solves, the interval products of the refinement), SuperLU, the Floquet
+  condensation of a sparse Jacobian, the monodromy and the eigenvalues of the
+  multipliers;
 * **rest**: everything else (assembly of the Jacobian from the pointwise matrices,
   Newton/PALC bookkeeping, detection, measures, Python).
 
@@ -46,6 +47,7 @@ TIMED = [
     ("continuation._jit", "collocation_times", "algebra"),
     ("scipy.sparse.linalg", "splu", "algebra"),
     ("continuation._newton", "LU.solve", "algebra"),
+    ("continuation._floquet", "transfer_matrices", "algebra"),
     ("continuation._floquet", "monodromy", "algebra"),
     ("numpy.linalg", "eigvals", "algebra"),
 ]
