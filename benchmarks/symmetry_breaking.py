@@ -48,10 +48,16 @@ def computed(path: Path, compute) -> CollocatedImpactBranch:
     return branch
 
 
+#: the multiplier each kind of special cycle puts on the unit circle (None: |mu| = 1)
+TARGET = {"fold": 1.0, "bp": 1.0, "pd": -1.0, "ns": None}
+
+
 def specials(name, branch) -> None:
     for p in branch.special:
+        m, target = p.critical_multiplier, TARGET[p.kind]
+        off = abs(abs(m) - 1) if target is None else abs(m - target)
         print(f"  {name}: {p.kind} at U* = {p.ustar:.6f}, critical multiplier "
-              f"{p.critical_multiplier:.6f} (located by Newton: {p.located})")
+              f"{m:.6f} ({off:.1e} off, NTST = {p.ntst}; located by Newton: {p.located})")
 
 
 def main(argv=None) -> None:

@@ -100,8 +100,8 @@ class PointKernel:
         self.n, self.n_par, self.K = self.pointwise.n, self.pointwise.n_par, K
         rows, cols = self.pointwise.pattern.get_triplet()
         self.rows, self.cols = np.asarray(rows), np.asarray(cols)
-        self._pattern = (self.rows.astype(np.int64), self.cols.astype(np.int64))
-        self._dense_pattern = tuple(a.ravel() for a in np.indices((self.n, self.n)))
+        #: ``(rows, cols)`` as int64, for the compiled assembly
+        self.entries = (self.rows.astype(np.int64), self.cols.astype(np.int64))
         self.expand, self.cache_dir = vf.sym is ca.SX, cache_dir
         self.backend = _backend(backend, vf)
         self.lifted = {name: LiftedBatch(lifted, K, self._compiled(lifted.D))
@@ -128,24 +128,6 @@ class PointKernel:
                     for name, batch in self.lifted.items()}
         return {name: batch(*args[name])[:, self.rows, self.cols]
                 for name, batch in self.lifted.items()}
-
-    def pattern(self, name: str, dense: bool) -> tuple:
-        """``(rows, cols)`` of the entries of the matrix ``name`` as the kernel called
-        with ``dense`` returns them: all ``n n`` (row by row) for a lifted matrix asked
-        dense, else the kernel's pattern."""
-        if dense and name in self.lifted:
-            return self._dense_pattern
-        return self._pattern
-
-    def densified(self, name: str, values: np.ndarray, dense: bool) -> np.ndarray:
-        """The matrix ``name`` at the points as ``K x n n`` (row by row), from what the
-        kernel called with ``dense`` returned: values on the pattern are scattered, dense
-        lifted ones are as they are."""
-        if dense and name in self.lifted:
-            return values
-        out = np.zeros((self.K, self.n * self.n))
-        out[:, self.rows * self.n + self.cols] = values
-        return out
 
     def _compiled(self, fun: ca.Function) -> ca.Function | None:
         """``fun`` as compiled C when the backend is 'compiled' (else, or if compiling
@@ -279,18 +261,14 @@ class BlockCollocationSystem:
         r = Mv - (hk * T)[:, None] * F
         return np.append(r.ravel(), c @ U)
 
-    def _pointwise(self, Y, P, D, par_columns, dense: bool = False) -> tuple:
+    def _pointwise(self, Y, P, D, par_columns) -> tuple:
         """``(hk, c, F, W, M, Gp)`` at the collocation points: ``W = d(M v)/dx - h T F_x``
-        and ``M`` on the pattern (``K x s``; with ``dense``, ``K x n n`` row by row),
-        ``Gp = d(M v)/dp - h T F_p`` in the directions ``par_columns`` (``K x k x n``)."""
+        and ``M`` on the pattern (``K x s``), ``Gp = d(M v)/dp - h T F_p`` in the
+        directions ``par_columns`` (``K x k x n``)."""
         U, T, h, c, hk = self._split(Y, D)
         x, v = self.points(U)
         kr, cols = self.kernel, tuple(par_columns)
-        kw = {"dense": True} if dense else {}
-        F, Mv, Fx, Mvx, M, Fp, Mvp = kr.evaluate(kr.jacobians(cols), x, v, P, **kw)
-        if dense:
-            Fx, Mvx, M = (kr.densified(name, a, True) for name, a in
-                          (("Fx", Fx), ("Mvx", Mvx), ("M", M)))
+        F, Mv, Fx, Mvx, M, Fp, Mvp = kr.evaluate(kr.jacobians(cols), x, v, P)
         W = Mvx - (hk * T)[:, None] * Fx
         Gp = (Mvp - (hk * T)[:, None] * Fp).reshape(kr.K, len(cols), kr.n)
         return hk, c, F, W, M, Gp
@@ -322,7 +300,7 @@ class BlockCollocationSystem:
             if name in kr.lifted:                # dense, row by row
                 _add_dense_blocks(blocks, values, weights, n, ncol)
             else:
-                _add_blocks(blocks, values, *kr.pattern(name, True), weights, n, ncol)
+                _add_blocks(blocks, values, *kr.entries, weights, n, ncol)
         Gp = (Mvp - (hk * T)[:, None] * Fp).reshape(kr.K, len(cols), n)
         extra = np.concatenate([(-hk[:, None] * F)[:, :, None], Gp.transpose(0, 2, 1)], axis=2)
         return CollocationJacobian(n, ntst, ncol, blocks, extra.reshape(ntst, m, -1), c)
