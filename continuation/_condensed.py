@@ -79,8 +79,8 @@ class CollocationJacobian:
 
     def collocation_times(self, x: np.ndarray) -> np.ndarray:
         """``[B, E] x`` for ``x`` of shape ``(columns,)`` or ``(columns, r)``."""
-        X = _owned(x.reshape(x.shape[0], -1))
-        out = _compiled().collocation_times(self.blocks, self.extra, X)
+        X = _c(x.reshape(x.shape[0], -1))
+        out = _compiled().collocation_times(_c(self.blocks), _c(self.extra), X)
         return out.reshape((out.shape[0],) + x.shape[1:])
 
     def toarray(self) -> np.ndarray:
@@ -97,7 +97,7 @@ class CollocationJacobian:
     def factors(self) -> tuple | None:
         """``(lu, piv, Z)``: the LU factors of every ``M_i`` and ``Z_i = M_i^-1 [B_i^L,
         E_i]`` (``(NTST, m, n + k)``); None if an ``M_i`` is singular."""
-        lu, piv, Z, ok = _compiled().interval_factors(_owned(self.blocks), _owned(self.extra))
+        lu, piv, Z, ok = _compiled().interval_factors(_c(self.blocks), _c(self.extra))
         return (lu, piv, Z) if ok else None
 
     @property
@@ -172,7 +172,7 @@ class CondensedLU:
         if chain is None:
             return None
         bu = border[:, :ntst * m].reshape(k, ntst, ncol, n).transpose(1, 0, 2, 3)
-        border_w = _owned(bu[:, :, 1:, :].reshape(ntst, k, p))
+        border_w = _c(bu[:, :, 1:, :].reshape(ntst, k, p))
         Wv = border_w @ Z[:, :p]                             # (ntst, k, n + k)
         bordered = chain.bordered(bu[:, :, 0, :] - Wv[:, :, :n],
                                   border[:, ntst * m:] - Wv[:, :, n:].sum(axis=0))
@@ -185,8 +185,9 @@ class CondensedLU:
         b = np.asarray(b, dtype=float)
         lu, piv, Z = self.J.factors
         c = self.chain
-        x = _compiled().condensed_solve(lu, piv, Z, self.border_w, c.schedule, c.Qb, c.H, c.Zt,
-                             *self.bordered, _owned(b.reshape(b.shape[0], -1)))
+        x = _compiled().condensed_solve(lu, piv, Z, self.border_w, c.schedule, c.Qb, c.H,
+                                        c.Zt, *self.bordered,
+                                        _c(b.reshape(b.shape[0], -1)))
         return x.reshape(b.shape)
 
 
@@ -212,22 +213,22 @@ class Chain:
         """``A, C``: ``(N, n, n)``; ``G``: ``(N, n, k)``. None when a pair's column is
         rank-deficient."""
         schedule = _schedule(A.shape[0])
-        *factors, ok = _compiled().chain_reduce(*map(_owned, (A, C, G)), schedule)
+        *factors, ok = _compiled().chain_reduce(*map(_c, (A, C, G)), schedule)
         return cls(schedule, *factors[:3], factors[3:]) if ok else None
 
     def bordered(self, Bv, By):
         """``(shares, lu, piv)``: per pair the border rows' share ``Bv_mid H`` of the
         eliminated point, and the LU of the final ``n + k`` system; None when it is
         singular. ``Bv``: ``(N, k, n)``, ``By``: ``(k, k)``."""
-        *factors, ok = _compiled().chain_border(_owned(Bv), _owned(By),
-                                     self.schedule, self.H, self.Zt, *self.last)
+        *factors, ok = _compiled().chain_border(_c(Bv), _owned(By), self.schedule,
+                                                self.H, self.Zt, *self.last)
         return tuple(factors) if ok else None
 
     def solve(self, bordered, z: np.ndarray, s: np.ndarray) -> tuple:
         """``(v, y)`` for right-hand sides ``z`` (``(N, n, r)``) and ``s`` (``(k, r)``),
         with the factors ``bordered`` of :meth:`bordered`; ``v``: ``(N, n, r)``."""
         return _compiled().chain_solve(self.schedule, self.Qb, self.H, self.Zt, *bordered,
-                            _owned(z), _owned(s))
+                                       _c(z), _owned(s))
 
 
 def _compiled():
@@ -236,10 +237,15 @@ def _compiled():
     return _jit
 
 
+def _c(a) -> np.ndarray:
+    """``a`` as a writable C-ordered float array, copied only if it is not one (one
+    array type for the compiled functions, which then compile once)."""
+    return np.require(a, dtype=np.float64, requirements=("C", "W"))
+
+
 def _owned(a) -> np.ndarray:
-    """``a`` as a writable C-ordered float array of its own (one array type for the
-    compiled functions, which then compile once)."""
-    return np.array(a, dtype=float, order="C")
+    """A copy of ``a`` as :func:`_c` (for the arguments a compiled function overwrites)."""
+    return np.array(a, dtype=np.float64, order="C")
 
 
 @lru_cache(maxsize=64)
