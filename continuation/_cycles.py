@@ -192,6 +192,13 @@ class CycleProblem(PeriodicProblem):
         return np.arange(self.n_nodes * self.vf.n, len(X))
 
     # -- Jacobians and Floquet multipliers ---------------------------------------------------
+    @property
+    def monitor_uses_lu(self) -> bool:
+        """Condensed: the tangent is solved on fresh factors at the point, whose interval
+        maps the multipliers reuse (refining it on the corrector's factors would leave
+        the interval factorizations to do once more); sparse: refined on them."""
+        return self.condensed
+
     def jacobian(self, X):
         """``G_X`` (sparse); the last one is kept for the multipliers at the same ``X``."""
         J = super().jacobian(X)

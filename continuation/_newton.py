@@ -21,8 +21,10 @@ class NewtonResult:
     iterations: int
     residual: float
     message: str
-    #: factors of the last Jacobian used (at the iterate before the last update)
+    #: factors of the last Jacobian used (None when they stopped contracting)
     lu: object = field(default=None, repr=False, compare=False)
+    #: Jacobians factorized (the iterations not counted here were chord steps)
+    jacobians: int = 0
 
 
 class LU:
@@ -147,18 +149,26 @@ def _ordering(A: sp.csc_matrix):
 
 def newton(residual: Callable, jacobian: Callable, X0: np.ndarray,
            settings: NewtonSettings, polish: int = 0) -> NewtonResult:
-    """Solve ``H(X) = 0`` by ``X <- X - H_X(X)^{-1} H(X)``.
+    """Solve ``H(X) = 0`` by ``X <- X - A^{-1} H(X)``, ``A`` the factors of ``H_X`` at
+    an iterate, kept while they contract (the chord method).
+
+    A step whose residual shrank at least by ``settings.contraction`` keeps its factors
+    for the next step (a chord step: a residual and a solve instead of a Jacobian and a
+    factorization); otherwise the next step factorizes ``H_X`` at its iterate. After the
+    first chord step that did not contract so, the solve goes on by Newton's method (a
+    chord step that increased the residual is undone and retaken as a Newton step, not
+    counted). A solve that converged on a chord step takes one more (uncounted) chord
+    step when it lowers the residual: a chord step shrinks the error by the contraction
+    factor, Newton's squares it, and this keeps the accuracy of Newton's last step.
 
     Converged when ``||H(X)||_inf <= tol`` or when an update was at round-off
     level (``||dX||_inf <= xtol (1 + ||X||_inf)``). Stops on a singular Jacobian, a
     non-finite or diverging residual, a residual or Jacobian that cannot be evaluated
     there (``LinAlgError``, e.g. an extended system's inner solve failing away from its
     point: a continuation step there is rejected and retried shorter), or after
-    ``max_iter`` iterations; the last residual is always reported. From the second
-    iteration on, the step is solved by refinement on the previous factors when that
-    converges to round-off (``solve``), saving a factorization. ``polish`` extra
-    iterations after convergence are kept while they decrease the residual (used to
-    refine special points to round-off).
+    ``max_iter`` iterations; the last residual is always reported. ``polish`` extra
+    Newton iterations after convergence are kept while they decrease the residual (used
+    to refine special points to round-off).
     """
     X = np.array(X0, dtype=float)
     try:
@@ -170,28 +180,59 @@ def newton(residual: Callable, jacobian: Callable, X0: np.ndarray,
 def _iterate(residual, jacobian, X, settings, polish) -> NewtonResult:
     r = residual(X)
     res = res0 = _norm(r)
-    lu = None
-    tiny_step = False
-    for it in range(settings.max_iter + 1):
+    lu, chord, jacobians = None, False, 0
+    tiny_step, chords = False, settings.contraction > 0
+    it = 0                                       # accepted steps
+    while True:
         if res <= settings.tol or (tiny_step and np.isfinite(res)):
-            X, res = _polish(residual, jacobian, X, res, polish)
-            how = "" if not tiny_step or res <= settings.tol else \
-                f" (update below xtol; residual {res:.3e} at round-off level)"
-            return NewtonResult(X, True, it, res, f"converged in {it} iterations{how}", lu)
+            if chord and lu is not None:         # as accurate as a last Newton step
+                X, res = _chord_step(residual, lu, X, r, res)
+            return _converged(residual, jacobian, X, res, polish, settings, it, lu, jacobians)
         if not np.isfinite(res) or res > settings.divergence * (1 + res0) \
                 or it == settings.max_iter:
             break
-        dX, lu = solve(jacobian(X), r, lu)
-        if dX is None:
-            return NewtonResult(X, False, it, res,
-                                f"singular Jacobian at iteration {it}, residual {res:.3e}")
-        X = X - dX
+        at_X = lu is None                        # a Newton step, else a chord step
+        if at_X:
+            lu, jacobians = factorize(jacobian(X)), jacobians + 1
+            if lu is None:
+                return NewtonResult(X, False, it, res,
+                                    f"singular Jacobian at iteration {it}, residual {res:.3e}",
+                                    jacobians=jacobians)
+        dX = lu.solve(r)
+        X_new = X - dX
+        r_new = residual(X_new)
+        res_new = _norm(r_new)
+        if not (chords and res_new <= settings.contraction * res):
+            lu = None                            # factorize at the next step
+            if not at_X:
+                chords = False                   # Newton from here on
+                if not res_new < res:
+                    continue                     # undone: retaken as a Newton step
+        X, r, res, chord = X_new, r_new, res_new, not at_X
         tiny_step = _norm(dX) <= settings.xtol * (1.0 + _norm(X))
-        r = residual(X)
-        res = _norm(r)
+        it += 1
     return NewtonResult(X, False, it, res,
                         f"Newton did not converge: residual {res:.3e} > tol "
-                        f"{settings.tol:.1e} after {it} iterations")
+                        f"{settings.tol:.1e} after {it} iterations", jacobians=jacobians)
+
+
+def _converged(residual, jacobian, X, res, polish, settings, it, lu, jacobians):
+    """The result of a converged solve, ``polish`` Newton iterations further."""
+    tiny = res > settings.tol
+    X, res = _polish(residual, jacobian, X, res, polish)
+    how = "" if not tiny or res <= settings.tol else \
+        f" (update below xtol; residual {res:.3e} at round-off level)"
+    return NewtonResult(X, True, it, res, f"converged in {it} iterations{how}", lu, jacobians)
+
+
+def _chord_step(residual, lu, X, r, res):
+    """One more step on the factors ``lu``, kept when it lowers the residual (not
+    counted as an iteration, like ``polish``): a chord step only shrinks the error by
+    the contraction factor, where Newton's last step squares it, so the iterate that met
+    the tolerance is taken to the accuracy a Newton iteration would have reached."""
+    X_new = X - lu.solve(r)
+    res_new = _norm(residual(X_new))
+    return (X_new, res_new) if res_new < res else (X, res)
 
 
 def _norm(r: np.ndarray) -> float:

@@ -6,13 +6,13 @@ From a point ``X_k`` with unit tangent ``tau_k`` (``G_X(X_k) tau_k = 0``):
 * corrector: Newton on the bordered system
   ``G(X) = 0``, ``tau_k . (X - X^0) = 0`` with the matrix
   ``[G_X(X); tau_k^T]`` (``Problem.bordered_jacobian``) factorized by SuperLU, or by the
-  problem's own structured solver (collocated cycles: condensation);
+  problem's own structured solver (collocated cycles: condensation), its factors kept
+  for chord steps while they contract (``_newton.newton``);
 * tangent: ``[G_X(X_{k+1}); tau_k^T] t = e_{m+1}``, ``tau_{k+1} = t / |t|``
-  (so ``tau_{k+1} . tau_k > 0``: orientation is kept), or the secant; for
-  problems whose ``monitor`` does not use the factors (``monitor_uses_lu``
-  False), and for all problems when ``settings.detect`` is False (then the
-  recorded branch-point test is the sign on those nearby factors), it is solved by
-  refinement on the corrector's last factors;
+  (so ``tau_{k+1} . tau_k > 0``: orientation is kept), or the secant, on fresh factors
+  at ``X_{k+1}`` when the monitor uses them (``Problem.monitor_uses_lu``: the
+  branch-point test; condensed collocated cycles, whose Floquet maps come with them),
+  else by refinement on the corrector's last factors;
 * step control: ``ds <- min(grow ds, ds_max)`` after at most
   ``easy_iterations`` Newton iterations; on failure ``ds <- shrink ds`` and
   retry; below ``ds_min`` the run stops with status ``'failed'`` and the last
@@ -168,10 +168,10 @@ class ContinuationIterator:
             tau = tau / np.linalg.norm(tau)
             lu = factorize(self.problem.bordered_jacobian(res.X, tau))
         else:
-            # the factors of [G_X; tau^T] are only needed by the detection of special points
+            # the factors at X: for the monitor (a branch-point test, a cycle's
+            # condensed Floquet maps); else the corrector's are refined on
             exact = self.problem.monitor_uses_lu and self.settings.detect
-            reuse = None if exact else res.lu
-            tau, lu = tangent(self.problem, res.X, step.tau, reuse)
+            tau, lu = tangent(self.problem, res.X, step.tau, None if exact else res.lu)
         if tau is None or lu is None:
             return None
         return Step(res.X, tau, ds, res.iterations, res.residual, lu)

@@ -39,18 +39,26 @@ class NewtonSettings:
     for badly scaled residuals whose round-off floor exceeds ``tol``; set
     ``xtol = 0`` to disable). The iteration aborts early when the residual
     exceeds ``divergence * (1 + initial residual)`` or is not finite.
+
+    ``contraction``: the factors of a Jacobian are kept for the next step (chord) while
+    each step shrinks the residual at least by this factor; 0 refactorizes at every
+    step (Newton's method).
     """
 
     tol: float = 1e-10
     max_iter: int = 10
     divergence: float = 1e8
     xtol: float = 1e-13
+    contraction: float = 1e-3
 
     def __post_init__(self):
         _positive(self, "tol", "divergence")
         _positive_int(self, "max_iter")
         if not (math.isfinite(self.xtol) and self.xtol >= 0):
             raise ValueError(f"NewtonSettings.xtol must be >= 0, got {self.xtol!r}")
+        if not 0 <= self.contraction < 1:
+            raise ValueError("NewtonSettings.contraction must be in [0, 1), got "
+                             f"{self.contraction!r}")
 
 
 @dataclass(frozen=True)

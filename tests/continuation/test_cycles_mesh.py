@@ -8,17 +8,18 @@ import continuation as C
 
 
 def _settings(**kw):
-    return C.ContinuationSettings(ds=0.5, ds_max=5.0, max_steps=60, bounds={"mu": (0.5, 10.0)},
-                                  **kw)
+    return C.ContinuationSettings(**{**dict(ds=0.5, ds_max=5.0, max_steps=60,
+                                            bounds={"mu": (0.5, 10.0)}), **kw})
 
 
 @pytest.fixture(scope="module")
 def relaxation(models):
-    """Van der Pol near mu = 8 (a relaxation oscillation) and its period by shooting."""
+    """Van der Pol near mu = 8 (a relaxation oscillation: the last cycle below mu = 8.5)
+    and its period by shooting."""
     F = models.van_der_pol()
     co = C.CycleProblem(F, models.van_der_pol_guess, 6.6, {"mu": 1.0}, "mu",
                         settings=C.CollocationSettings(ntst=40, ncol=4, adapt_every=3))
-    X = list(C.ContinuationIterator(co, C.PALC(), _settings()))[-1].X
+    X = list(C.ContinuationIterator(co, C.PALC(), _settings(bounds={"mu": (0.5, 8.5)})))[-1].X
     mu, T = co.params(X)[0], co.period(X)
     sh = C.ShootingProblem(F, lambda t: co.evaluate(X, t), T, {"mu": mu}, "mu",
                            settings=C.ShootingSettings(segments=20))

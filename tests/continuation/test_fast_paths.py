@@ -3,6 +3,7 @@
 import casadi as ca
 import numpy as np
 import pytest
+import scipy.sparse as sp
 
 from continuation._symbolic import BufferedFunction
 
@@ -57,21 +58,44 @@ def _random_system(seed, n=200):
     return A, rng.standard_normal(n)
 
 
-def test_refinement_on_nearby_factors_matches_a_fresh_solve():
-    from continuation._newton import factorize, solve
+def _cubic_system(n=30, seed=5):
+    """``H(x) = A x + x^3 / 10 - b`` with the root ``x*`` built in, its Jacobian sparse."""
+    A, _ = _random_system(seed, n)
+    x_star = np.random.default_rng(seed + 1).standard_normal(n)
+    b = A @ x_star + 0.1 * x_star ** 3
+    H = lambda x: A @ x + 0.1 * x ** 3 - b                              # noqa: E731
+    J = lambda x: (A + sp.diags(0.3 * x ** 2)).tocsc()                   # noqa: E731
+    return H, J, x_star
 
-    A, b = _random_system(2)
-    lu = factorize(A)
-    near = A.copy()
-    near.data = near.data * (1 + 1e-5 * np.random.default_rng(3).standard_normal(near.nnz))
-    x, used = solve(near, b, lu)
-    assert used is lu                                  # refined, not refactorized
-    fresh = factorize(near).solve(b)
-    assert np.max(np.abs(x - fresh)) < 1e-12 * np.max(np.abs(fresh))
-    far = A.copy()
-    far.data = np.random.default_rng(4).standard_normal(far.nnz)
-    x, used = solve(far, b, lu)                        # no convergence: fresh factors
-    assert used is not lu and np.max(np.abs(far @ x - b)) < 1e-10
+
+@pytest.mark.parametrize("start", [1e-3, 1.0])
+def test_chord_steps_reach_the_root_as_accurately_as_newton(start):
+    """Near the root (1e-3) the first step's factors serve all later steps (one
+    Jacobian); far from it (1.0) the steps are Newton's until one contracts by 1e-3,
+    then chord steps. Either way the root the system was built from is met to
+    round-off, as by Newton's method (contraction 0), with no more Jacobians."""
+    from continuation._newton import newton
+    from continuation._settings import NewtonSettings
+
+    H, J, x_star = _cubic_system()
+    x0 = x_star + start * np.random.default_rng(7).standard_normal(x_star.size)
+    chord = newton(H, J, x0, NewtonSettings(tol=1e-10))
+    plain = newton(H, J, x0, NewtonSettings(tol=1e-10, contraction=0.0))
+    assert chord.converged and plain.converged
+    assert plain.jacobians == plain.iterations
+    scale = np.max(np.abs(x_star))
+    for res in (chord, plain):
+        assert np.max(np.abs(res.X - x_star)) < 1e-13 * scale
+    assert chord.jacobians < plain.jacobians and chord.iterations <= plain.iterations + 1
+    if start < 0.01:
+        assert chord.jacobians == 1 < chord.iterations
+
+
+def test_contraction_setting_is_validated():
+    from continuation._settings import NewtonSettings
+    for bad in (-0.1, 1.0, float("nan")):
+        with pytest.raises(ValueError, match="NewtonSettings.contraction"):
+            NewtonSettings(contraction=bad)
 
 
 def _brusselator_cycles():
@@ -88,23 +112,30 @@ def _brusselator_cycles():
     return cyc, it
 
 
-def test_cycle_tangent_from_corrector_factors_equals_a_fresh_tangent(monkeypatch):
+def test_cycle_step_factorizes_at_the_predictor_and_for_the_tangent(monkeypatch):
+    """On a smooth cycle branch a step costs two factorizations: the corrector's at the
+    predictor (the next Newton iterations are chord steps on it) and the tangent's at
+    the new point, whose factors are those of ``[G_X(X); tau_k^T]`` there (checked by
+    solving with the matrix assembled independently, sparse) and give ``G_X tau = 0``."""
     import continuation._newton as newton_module
-    from continuation._palc import tangent
+    import continuation._palc as palc_module
+    from continuation._problem import Problem
 
     cyc, it = _brusselator_cycles()
     step = it.start()
     calls = []
     fresh_factors = newton_module.factorize
-    monkeypatch.setattr(newton_module, "factorize", lambda A: calls.append(1) or fresh_factors(A))
-    for _ in range(4):
+    for module in (newton_module, palc_module):
+        monkeypatch.setattr(module, "factorize", lambda A: calls.append(1) or fresh_factors(A))
+    for k in range(4):
         D = cyc.system.D.copy()                        # phase reference of the step
         calls.clear()
         new = it.advance(step)
-        assert len(calls) == 1 <= new.iterations       # one LU for corrector and tangent
+        assert len(calls) == 2 and new.iterations >= 2    # chord steps in the corrector
         D_new, cyc.system.D = cyc.system.D, D
-        fresh, _ = tangent(cyc, new.X, step.tau)
-        assert np.max(np.abs(new.tau - fresh)) < 1e-12
+        A = Problem.bordered_jacobian(cyc, new.X, step.tau)          # sparse, assembled
+        v = np.random.default_rng(k).standard_normal(new.X.size)
+        assert np.max(np.abs(new.lu.solve(A @ v) - v)) < 1e-10 * np.max(np.abs(v))
         assert np.max(np.abs(cyc.jacobian(new.X) @ new.tau)) < 1e-12
         cyc.system.D, step = D_new, new
 
