@@ -24,16 +24,16 @@ from __future__ import annotations
 import numpy as np
 import scipy.linalg as sla
 import scipy.sparse as sp
-import scipy.sparse.linalg as spla
 
 from ._lazyjit import SMALL, jit
+from ._newton import factorize
 from ._threads import single_threaded
 
 #: interval systems up to this size are always solved densely (one batched LAPACK
 #: solve with one BLAS thread); up to ``DENSE_MAX`` when their blocks are at least
 #: ``DENSE_FILL`` full (a modal model couples all n components at every point: dense
 #: LAPACK is 20x faster than SuperLU there), larger or sparser ones (a discretized
-#: PDE with a banded ``F_x``) by SuperLU per interval
+#: PDE with a banded ``F_x``) by one SuperLU of their block diagonal
 DENSE_ALWAYS, DENSE_MAX, DENSE_FILL = 96, 1024, 0.25
 
 
@@ -44,15 +44,16 @@ def transfer_matrices(J, n: int, ntst: int, ncol: int, full: bool = False) -> np
     nodes ``v_{i,1..NCOL}``. Small or well-filled blocks (``DENSE_ALWAYS``,
     ``DENSE_MAX``, ``DENSE_FILL``) are solved by one batched dense solve with one BLAS
     thread (``_threads``; at n = 82, NCOL = 4, NTST = 20: 0.13 s, against 2.5 s by
-    SuperLU per interval), the others by one SuperLU per interval."""
+    SuperLU per interval), the others by one SuperLU factorization of the block
+    diagonal ``diag(B_R)`` (:func:`sparse_transfer_matrices`)."""
     m = n * ncol
-    J = sp.csc_matrix(J)
-    fill = np.count_nonzero(J.indices < m * ntst) / (m * ntst * (m + n))
+    rows, local, values = _interval_entries(J, n, ntst, ncol)
+    fill = values.size / (m * ntst * (m + n))
     if m <= DENSE_ALWAYS or (m <= DENSE_MAX and fill >= DENSE_FILL):
-        return block_transfer_matrices(_dense_blocks(J, n, ntst, ncol), n, full)
-    with single_threaded():
-        out = np.array([-spla.splu(sp.csc_matrix(r)).solve(l.toarray())
-                        for r, l in _sparse_blocks(J, n, ntst, ncol)])
+        B = np.zeros((ntst, m, m + n))
+        B.reshape(-1)[rows * (m + n) + local] = values        # no duplicates
+        return block_transfer_matrices(B, n, full)
+    out = sparse_transfer_matrices(rows, local, values, n, ntst, ncol)
     return out if full else out[:, -n:, :]
 
 
@@ -64,8 +65,29 @@ def block_transfer_matrices(blocks: np.ndarray, n: int, full: bool = False) -> n
     return out if full else out[:, -n:, :]
 
 
-def _dense_blocks(J, n, ntst, ncol) -> np.ndarray:
-    """``(ntst, n NCOL, n (NCOL+1))`` interval blocks ``[B_L, B_R]`` of ``J``."""
+def sparse_transfer_matrices(rows, local, values, n, ntst, ncol) -> np.ndarray:
+    """``-(B_R^{-1} B_L)`` of every interval ``(ntst, n NCOL, n)`` from the entries of
+    the interval blocks (:func:`_interval_entries`): ``diag(B_R)`` is one sparse matrix
+    (its column ordering is computed once per pattern, ``_newton.factorize``), and as it
+    is block diagonal, one solve with the stacked ``B_L`` (``N x n``) gives all maps."""
+    m, N = n * ncol, n * ncol * ntst
+    left = local < n
+    right = ~left
+    start = rows[right] - rows[right] % m                  # first row (= column) of the block
+    R = sp.csc_matrix((values[right], (rows[right], start + local[right] - n)), shape=(N, N))
+    L = np.zeros((N, n))
+    L[rows[left], local[left]] = values[left]
+    with single_threaded():
+        lu = factorize(R)
+        if lu is None:
+            raise np.linalg.LinAlgError("singular interval block of the collocation Jacobian")
+        return -lu.solve(L).reshape(ntst, m, n)
+
+
+def _interval_entries(J, n, ntst, ncol):
+    """``(rows, local, values)``: the entries of the interval blocks ``[B_L, B_R]`` of
+    ``J`` (``n NCOL x n (NCOL + 1)``, the last interval's right node wrapped to the
+    first node), with their column ``local`` within the block of their row."""
     m, N = n * ncol, n * ncol * ntst
     J = sp.csc_matrix(J)
     c = np.repeat(np.arange(J.shape[1]), np.diff(J.indptr))
@@ -73,21 +95,7 @@ def _dense_blocks(J, n, ntst, ncol) -> np.ndarray:
     r, c, v = J.indices[keep], c[keep], J.data[keep]
     local = (c - (r // m) * m) % N                     # column within interval r // m
     inside = local < m + n
-    B = np.zeros((ntst, m, m + n))
-    B.reshape(-1)[r[inside] * (m + n) + local[inside]] = v[inside]   # no duplicates
-    return B
-
-
-def _sparse_blocks(J, n, ntst, ncol):
-    """``(B_R, B_L)`` sparse blocks of each interval."""
-    J = sp.csr_matrix(J)
-    m, N = n * ncol, n * ncol * ntst
-    for i in range(ntst):
-        rows = J[i * m:(i + 1) * m]
-        c0 = i * m
-        right = rows[:, c0 + n:c0 + n + m] if i < ntst - 1 else \
-            sp.hstack([rows[:, c0 + n:N], rows[:, :n]])
-        yield right, rows[:, c0:c0 + n]
+    return r[inside], local[inside], v[inside]
 
 
 def multipliers(A: np.ndarray, method: str = "pencil") -> np.ndarray:

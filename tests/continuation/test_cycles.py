@@ -232,7 +232,7 @@ def test_sampled_orbit_guess_and_compile_cache():
 
 def test_dense_and_sparse_condensation_agree(monkeypatch):
     """Both condensation paths of the sparse Jacobian (batched dense for small or
-    well-filled blocks, SuperLU per interval for the others) give the same transfer
+    well-filled blocks, SuperLU on the block diagonal of the others) give the same transfer
     matrices, and so do the maps of the condensed Newton solver."""
     from continuation import _floquet
     F, e = _ring(), 0.5
@@ -240,8 +240,8 @@ def test_dense_and_sparse_condensation_agree(monkeypatch):
     J = C.CycleProblem.jacobian(prob, X)
     n, ntst, ncol = prob.vf.n, prob.ntst, prob.ncol
     calls = []
-    monkeypatch.setattr(_floquet, "_sparse_blocks",
-                        lambda *a, f=_floquet._sparse_blocks: calls.append(1) or f(*a))
+    monkeypatch.setattr(_floquet, "sparse_transfer_matrices",
+                        lambda *a, f=_floquet.sparse_transfer_matrices: calls.append(1) or f(*a))
     dense = _floquet.transfer_matrices(J, n, ntst, ncol, full=True)
     assert not calls
     monkeypatch.setattr(_floquet, "DENSE_ALWAYS", 0)
