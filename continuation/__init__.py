@@ -22,6 +22,7 @@ Public API (everything else is private)::
     ShootingProblem(F, orbit, period, params, active, *, M=None, settings=ShootingSettings())
     Branch, SpecialPoint, ContinuationIterator, PALC, ContinuationSettings,
     NewtonSettings, EigenSettings, CollocationSettings, ShootingSettings
+    BufferedFunction(fun)                     # a CasADi Function called zero-copy on NumPy
 
 Plotting lives in ``continuation.plotting`` (Matplotlib is imported there only).
 """
@@ -41,11 +42,12 @@ from ._problem import Problem
 from ._settings import (CollocationSettings, ContinuationSettings, EigenSettings,
                         NewtonSettings, PALC, ShootingSettings)
 from ._shooting import ShootingProblem
+from ._symbolic import BufferedFunction
 from ._switching import cycle_from_bp, cycle_from_hopf, cycle_from_pd
 from ._vectorfield import VectorField
 
 __all__ = [
-    "Branch", "Event", "Status", "CollocationSettings", "Condition", "CycleCurveProblem",
+    "Branch", "BufferedFunction", "Event", "Status", "CollocationSettings", "Condition", "CycleCurveProblem",
     "CycleFold", "Extremum", "NeimarkSacker", "PeriodDoubling", "locate_cycle", "ContinuationIterator", "ContinuationSettings",
     "CycleProblem", "EigenSettings", "ShootingProblem", "ShootingSettings", "cycle_from_hopf",
     "cycle_from_bp", "cycle_from_pd",

@@ -131,28 +131,49 @@ def _row_polynomials(U, mesh, ncol, n, A, samples):
     local time, the sample times and the values there ``(sample, interval, row)``."""
     ntst = len(mesh) - 1
     nodes = interval_nodes(U, n, ntst, ncol) @ np.asarray(A, dtype=float).T  # (ntst, l, m)
-    coef = np.linalg.solve(np.vander(np.linspace(0.0, 1.0, ncol + 1), increasing=True),
-                           nodes.transpose(1, 0, 2).reshape(ncol + 1, -1))
-    coef = coef.reshape(ncol + 1, ntst, -1)
+    coef = np.einsum("dl,ilm->dim", _monomial_map(ncol), nodes)
     s = np.arange(samples) / samples
     return coef, s, np.einsum("jd,dim->jim", np.vander(s, ncol + 1, increasing=True), coef)
+
+
+@lru_cache(maxsize=None)
+def _monomial_map(ncol: int) -> np.ndarray:
+    """``V^-1`` (read-only): monomial coefficients from the values at the ``NCOL + 1``
+    equidistant local nodes (``V`` their Vandermonde matrix)."""
+    inverse = np.linalg.inv(np.vander(np.linspace(0.0, 1.0, ncol + 1), increasing=True))
+    inverse.flags.writeable = False
+    return inverse
 
 
 def _interval_minima(coef, s, v, sign) -> tuple[np.ndarray, np.ndarray]:
     """Per interval and row of ``sign * p`` (``p`` the polynomials ``coef``, ``v`` the
     signed samples): the local time of its minimum and the minimum, by Newton from the
-    best sample (kept where it improves the sample)."""
+    best sample (kept where it improves the sample).
+
+    Only the intervals whose minimum could be below the row's best sample are polished:
+    every time in ``[0, 1]`` lies within ``1 / samples`` of a sample, and ``|p'| <=
+    sum_d d |c_d|`` there, so an interval whose best sample exceeds the row's by more
+    than that bound keeps its sample (its minimum cannot be the row's)."""
     best = np.argmin(v, axis=0)
     t = s[best]                                             # (interval, row)
+    sampled = v.min(axis=0)
     d = np.arange(1, coef.shape[0])[:, None, None] * coef[1:]   # derivative coefficients
-    dd = np.arange(1, d.shape[0])[:, None, None] * d[1:]
+    slope = np.abs(d).sum(axis=0) / len(s)
+    i, j = np.nonzero(sampled - slope < sampled.min(axis=0))
+    d, dd = d[:, i, j], np.arange(1, d.shape[0])[:, None] * d[1:, i, j]
     horner = lambda a, t: np.polynomial.polynomial.polyval(t, a, tensor=False)
+    u = t[i, j]
     for _ in range(8):
-        curvature = horner(dd, t)
-        step = np.divide(horner(d, t), curvature, out=np.zeros_like(t), where=curvature != 0)
-        t = np.clip(t - step, 0.0, 1.0)
-    polished, sampled = sign * horner(coef, t), v.min(axis=0)
-    return np.where(polished < sampled, t, s[best]), np.minimum(sampled, polished)
+        curvature = horner(dd, u)
+        step = np.divide(horner(d, u), curvature, out=np.zeros_like(u), where=curvature != 0)
+        u, last = np.clip(u - step, 0.0, 1.0), u
+        if np.array_equal(u, last):                         # converged (or at the ends)
+            break
+    polished = sign * horner(coef[:, i, j], u)
+    better = polished < sampled[i, j]
+    t[i[better], j[better]] = u[better]
+    sampled[i[better], j[better]] = polished[better]
+    return t, sampled
 
 
 def phase_coefficients(U_ref: np.ndarray, n: int, ntst: int, ncol: int) -> np.ndarray:

@@ -340,3 +340,22 @@ def test_quadrature_error_estimate_tracks_the_true_error_near_the_wall():
             assert estimate == pytest.approx(true, rel=0.05)
         errors.append(estimate)
     assert errors[0] < 1e-12 and 1e-7 < errors[1] < errors[2] < errors[3]
+
+
+def test_quadrature_error_of_many_states_is_that_of_their_plain_evaluations():
+    """Over several states (rows) the estimate is ``max_k |F_2n(x_k) - F_n(x_k)| /
+    max_k |F_2n(x_k)|`` of the plain per-state calls of the two models (the mapped,
+    buffered call must lay out states and components alike), for any row order."""
+    from fsicas.model.accuracy import finer_model, quadrature_error
+    scene = Scene(mstar=1.0, ustar=6.0, modes=4)
+    model = build_model(scene)
+    st = steady_state(scene, model)
+    n, tip = model.n_modes, model.tip.phi[0, 1]
+    x = np.tile(st.x, (5, 1))
+    x[:, n] += np.array([0.1, 0.97, 0.5, 0.99, 0.3]) * scene.hstar / 2 / tip
+    fine, coarse = finer_model(model), model
+    F = lambda m: np.array([np.array(m.rhs(xk, st.p)).ravel() for xk in x])   # noqa: E731
+    expected = np.max(np.abs(F(fine) - F(coarse))) / np.max(np.abs(F(fine)))
+    assert expected > 1e-8                                  # the near-wall rows dominate
+    assert quadrature_error(model, x, st.p) == pytest.approx(expected, rel=1e-12)
+    assert quadrature_error(model, x[::-1], st.p) == pytest.approx(expected, rel=1e-12)

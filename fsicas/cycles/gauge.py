@@ -131,7 +131,7 @@ class PolynomialExtrema:
 
     def min_gap(self, problem, X) -> float:
         """``min_{t, x_j, c} h_c(x_j, t)``."""
-        return float(np.min(self._walls + problem.extrema(X, self._gap_rows)[0]))
+        return self.gap_condition(0.0).value(problem, X)
 
 
 class PolynomialGauge(Gauge):

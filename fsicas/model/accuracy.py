@@ -21,6 +21,8 @@ import warnings
 
 import numpy as np
 
+import continuation as C
+
 from ..scene import MAX_QUAD_NODES
 from .assembly import Model, build_model, per_model
 
@@ -50,7 +52,21 @@ def quadrature_error(model: Model, x, p) -> float:
     """The relative quadrature error of ``F`` at the states ``x`` (rows) and parameters
     ``p`` of ``model`` (module docstring)."""
     x = np.atleast_2d(np.asarray(x, dtype=float))
-    return relative_error(finer_model(model).rhs.map(len(x))(x.T, p), model.rhs.map(len(x))(x.T, p))
+    return relative_error(_rhs_at(finer_model(model), x, p), _rhs_at(model, x, p))
+
+
+@per_model
+def _mapped_rhs(model: Model) -> dict:
+    """``model.rhs`` mapped over ``count`` states (p shared), by count (filled on use)."""
+    return {}
+
+
+def _rhs_at(model: Model, x: np.ndarray, p) -> np.ndarray:
+    """``F(x_k, p)`` of the states ``x`` (rows), flat, in one zero-copy mapped call."""
+    cache, count = _mapped_rhs(model), len(x)
+    if count not in cache:
+        cache[count] = C.BufferedFunction(model.rhs.map(f"F_{count}", "serial", count, [1], []))
+    return cache[count](x, p)[0]
 
 
 def adequate_model(model: Model, x, p, tol: float = QUADRATURE_TOL) -> tuple[Model, float]:

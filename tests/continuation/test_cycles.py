@@ -272,3 +272,24 @@ def test_extrema_of_the_collocation_polynomial_match_dense_sampling():
     assert np.all(lo <= dense.min(axis=0) + 1e-14) and np.all(hi >= dense.max(axis=0) - 1e-14)
     assert np.max(np.abs(lo - dense.min(axis=0))) < 1e-9 * scale
     assert np.max(np.abs(hi - dense.max(axis=0))) < 1e-9 * scale
+
+
+def test_minimizer_over_many_rows_matches_dense_sampling():
+    """``minimizer`` (only the intervals that can beat a row's best sample are polished)
+    finds ``min_{t, j} (A u(t))_j`` of 200 rows of a cycle to the resolution of 400 001
+    samples, where it is taken, and the least of ``extrema``'s row minima."""
+    from continuation._collocation import evaluate, extrema, minimizer
+    ntst, ncol, n = 20, 4, 3
+    t = np.linspace(0, 1, ntst * ncol, endpoint=False)
+    U = np.column_stack([np.cos(2 * np.pi * t), np.sin(6 * np.pi * t + 0.3),
+                         np.cos(4 * np.pi * t) ** 2]).ravel()
+    mesh = np.linspace(0.0, 1.0, ntst + 1)
+    A = np.random.default_rng(2).normal(size=(200, n))
+    value, i, s, j = minimizer(U, mesh, ncol, n, A)
+    times = np.linspace(0, 1, 400001)
+    dense = evaluate(U, mesh, ncol, n, times) @ A.T
+    scale = np.abs(dense).max()
+    assert value <= dense.min() + 1e-14 and abs(value - dense.min()) < 1e-9 * scale
+    k, j_dense = np.unravel_index(np.argmin(dense), dense.shape)
+    assert j == j_dense and abs(mesh[i] + s * (mesh[i + 1] - mesh[i]) - times[k]) < 1e-4
+    assert value == extrema(U, mesh, ncol, n, A)[0].min()
