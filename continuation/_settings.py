@@ -223,7 +223,8 @@ class CollocationSettings:
     backend : how the 'blocks' kernel is evaluated: 'mx' (CasADi's virtual machine),
     'compiled' (C compiled once per vector field and cached on disk, see
     ``docs/performance.md``; falls back to 'mx' without a C compiler) or 'auto'
-    ('compiled' for MX vector fields, 'mx' for SX ones); None (default):
+    ('compiled' for MX vector fields and small SX ones, 'mx' for large SX ones); None
+    (default):
     ``$CONTINUATION_BACKEND`` if set, else 'auto'.
     linear_solver : how the Newton and tangent systems are solved: 'condensed' (the
     interior nodes of every interval eliminated by dense QR, then SuperLU on the

@@ -159,14 +159,19 @@ def test_cache_dir_follows_the_environment(tmp_path, monkeypatch):
     assert compilation.default_cache_dir() == tmp_path / "xdg" / "continuation"
 
 
-def test_auto_backend_compiles_mx_fields_only(cache):
-    """'auto' (the default) compiles the kernel of an MX field and keeps an SX field's
-    kernel in the virtual machine."""
-    from continuation._blocks import point_kernel
+def test_auto_backend_compiles_mx_and_small_sx_fields(cache):
+    """'auto' (the default) compiles the kernel of an MX field and of a small SX field,
+    and keeps an SX field of more than ``SX_COMPILE_MAX`` instructions in the virtual
+    machine."""
+    from continuation._blocks import SX_COMPILE_MAX, point_kernel
     x, p = ca.MX.sym("x", 2), ca.MX.sym("p", 1)
     F = ca.Function("F", [x, p], [ca.vertcat(x[1], p * (1 - x[0] ** 2) * x[1] - x[0])])
     kinds = {expand: point_kernel(C.VectorField(F, None, ("mu",), expand=expand), 6, "auto")
              for expand in (False, True)}
-    kinds[False].jacobians([0])
-    assert kinds[False].backend == ("compiled" if compilation.has_compiler() else "mx")
-    assert kinds[True].backend == "mx"
+    xs, ps = ca.SX.sym("x", 2), ca.SX.sym("p", 1)
+    terms = sum(ca.sin(xs[0] + k * ps) for k in range(SX_COMPILE_MAX))
+    large = ca.Function("G", [xs, ps], [ca.vertcat(xs[1], terms - xs[0])])
+    kinds["large"] = point_kernel(C.VectorField(large, None, ("mu",)), 6, "auto")
+    compiled = "compiled" if compilation.has_compiler() else "mx"
+    assert kinds[False].backend == kinds[True].backend == compiled
+    assert kinds["large"].backend == "mx"

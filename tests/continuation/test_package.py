@@ -27,7 +27,7 @@ def test_public_names():
         "cycle_from_hopf", "ShootingProblem", "ShootingSettings",
         "cycle_from_pd", "cycle_from_bp", "correct", "Event", "Lifted", "Status", "Condition",
         "CycleCurveProblem", "CycleFold", "Extremum", "NeimarkSacker", "PeriodDoubling",
-        "locate_cycle"}
+        "locate_cycle", "BufferedFunction"}
 
 
 def test_new_problem_kind_plugs_into_palc():
