@@ -26,6 +26,14 @@ class NewtonResult:
     #: Jacobians factorized (the iterations not counted here were chord steps)
     jacobians: int = 0
 
+    @property
+    def effort(self) -> int:
+        """Newton iterations the solve is worth, for step control: the Newton steps and
+        one for the run of chord steps, if any (a solve takes at most one such run, and
+        it does the work of the Newton step it replaces). Equals ``iterations`` for
+        Newton's method."""
+        return self.jacobians + (self.iterations > self.jacobians)
+
 
 class LU:
     """SuperLU factors of ``A[:, q]``, solving with ``A`` (``q`` a column ordering).

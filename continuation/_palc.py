@@ -14,7 +14,8 @@ From a point ``X_k`` with unit tangent ``tau_k`` (``G_X(X_k) tau_k = 0``):
   branch-point test; condensed collocated cycles, whose Floquet maps come with them),
   else by refinement on the corrector's last factors;
 * step control: ``ds <- min(grow ds, ds_max)`` after at most
-  ``easy_iterations`` Newton iterations; on failure ``ds <- shrink ds`` and
+  ``easy_iterations`` Newton iterations (a run of chord steps counts as one,
+  ``NewtonResult.effort``); on failure ``ds <- shrink ds`` and
   retry; below ``ds_min`` the run stops with status ``'failed'`` and the last
   residual in the message.
 """
@@ -158,7 +159,7 @@ class ContinuationIterator:
             return None
         self.stats["steps"] += 1
         self.problem.accept(new.X)
-        if res.iterations <= s.easy_iterations:
+        if res.effort <= s.easy_iterations:
             self.ds = min(self.ds * s.step_grow, s.ds_max)
         return new
 

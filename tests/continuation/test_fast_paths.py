@@ -73,7 +73,8 @@ def test_chord_steps_reach_the_root_as_accurately_as_newton(start):
     """Near the root (1e-3) the first step's factors serve all later steps (one
     Jacobian); far from it (1.0) the steps are Newton's until one contracts by 1e-3,
     then chord steps. Either way the root the system was built from is met to
-    round-off, as by Newton's method (contraction 0), with no more Jacobians."""
+    round-off, as by Newton's method (contraction 0), with no more Jacobians; for step
+    control the run of chord steps counts as one Newton iteration (``effort``)."""
     from continuation._newton import newton
     from continuation._settings import NewtonSettings
 
@@ -82,11 +83,12 @@ def test_chord_steps_reach_the_root_as_accurately_as_newton(start):
     chord = newton(H, J, x0, NewtonSettings(tol=1e-10))
     plain = newton(H, J, x0, NewtonSettings(tol=1e-10, contraction=0.0))
     assert chord.converged and plain.converged
-    assert plain.jacobians == plain.iterations
+    assert plain.jacobians == plain.iterations == plain.effort
     scale = np.max(np.abs(x_star))
     for res in (chord, plain):
         assert np.max(np.abs(res.X - x_star)) < 1e-13 * scale
     assert chord.jacobians < plain.jacobians and chord.iterations <= plain.iterations + 1
+    assert chord.effort == chord.jacobians + 1            # the chord run counts once
     if start < 0.01:
         assert chord.jacobians == 1 < chord.iterations
 
