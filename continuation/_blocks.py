@@ -108,10 +108,11 @@ class PointKernel:
         #: ``(rows, cols)`` as int64, for the compiled assembly
         self.entries = (self.rows.astype(np.int64), self.cols.astype(np.int64))
         self.expand, self.cache_dir = vf.sym is ca.SX, cache_dir
-        self.backend = _backend(backend, vf, self.pointwise)
+        values = self.pointwise.values()
+        self.backend = _backend(backend, vf, values)
         self.lifted = {name: LiftedBatch(lifted, K, self._compiled(lifted.D))
                        for name, lifted in vf.lifted.items()}
-        self.values = self._mapped(self.pointwise.values())
+        self.values = self._mapped(values)
         self._jacobians: dict = {}
 
     def jacobians(self, par_columns) -> "SeededKernel":
@@ -176,13 +177,13 @@ class SeededKernel:
         return [extra[name] if name in extra else next(out) for name in KERNEL_OUTPUTS]
 
 
-def _backend(backend: str, vf, pointwise: Pointwise) -> str:
+def _backend(backend: str, vf, values: ca.Function) -> str:
     """The kernel backend for ``vf``: 'auto' is 'compiled' for MX fields (dense modal
-    blocks, where C pays) and for SX fields of at most ``SX_COMPILE_MAX`` instructions
-    (small straight-line code: quick to compile), 'mx' for larger SX fields; 'compiled'
-    needs a C compiler."""
+    blocks, where C pays) and for SX fields whose ``values`` (F, M v) take at most
+    ``SX_COMPILE_MAX`` instructions (small straight-line code: quick to compile), 'mx'
+    for larger SX fields; 'compiled' needs a C compiler."""
     if backend == "auto":
-        small = vf.sym is ca.MX or pointwise.values().n_instructions() <= SX_COMPILE_MAX
+        small = vf.sym is ca.MX or values.n_instructions() <= SX_COMPILE_MAX
         backend = "compiled" if small else "mx"
     return backend if backend == "mx" or has_compiler() else "mx"
 
