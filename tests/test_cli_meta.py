@@ -189,3 +189,16 @@ def test_docs_cli_md_is_generated_from_the_parser():
         for action in command._actions:
             for option in () if action.dest == "help" else action.option_strings:
                 assert f"`{option}" in text, (name, option)
+
+
+def test_reference_writer_takes_a_file_and_answers_help(tmp_path, monkeypatch, capsys):
+    """``python3 -m fsicas.cli.reference FILE`` writes the reference there; ``--help``
+    prints the usage and writes nothing."""
+    from fsicas.cli.reference import main
+    monkeypatch.chdir(tmp_path)
+    main(["out.md"])
+    assert (tmp_path / "out.md").read_text() == cli_reference()
+    with pytest.raises(SystemExit) as exit_:
+        main(["--help"])
+    assert exit_.value.code == 0 and "usage:" in capsys.readouterr().out
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["out.md"]

@@ -8,7 +8,6 @@ from __future__ import annotations
 
 import argparse
 import re
-import sys
 from pathlib import Path
 
 __all__ = ["cli_reference", "write_reference"]
@@ -118,5 +117,14 @@ def _cell(text: str) -> str:
     return text.replace("|", "\\|")
 
 
+def main(argv=None) -> None:
+    """``python3 -m fsicas.cli.reference [FILE]`` (``--help`` prints the usage)."""
+    parser = argparse.ArgumentParser(prog="python3 -m fsicas.cli.reference",
+                                     description="Write the command-line reference.")
+    parser.add_argument("file", nargs="?", default="docs/cli.md",
+                        help="where to write it (default: docs/cli.md)")
+    write_reference(parser.parse_args(argv).file)
+
+
 if __name__ == "__main__":  # pragma: no cover
-    write_reference(*sys.argv[1:2])
+    main()
