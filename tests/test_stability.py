@@ -94,6 +94,24 @@ def test_lyapunov_coefficient_agrees_with_the_explicit_form(paper_n10):
     assert h.l1 == pytest.approx(l1_explicit, rel=1e-8)
 
 
+def test_steady_ustar_stops_at_round_off_when_tol_is_below_it(paper_n10):
+    """At the Hopf point's parameters, Newton from a perturbed state finds the steady
+    state of the onset U* (``critical_velocity``, from the Hopf system) even when asked
+    for a residual below rounding (1e-20): it stops at a round-off-level update instead
+    of failing; a non-finite start still raises."""
+    from fsicas.linear.adapter import steady_ustar
+    scene, model = paper_n10
+    h = critical_velocity(scene, model)
+    vf = flutter_field(model)
+    pv = np.array([h.point.params[k] for k in vf.par_names])
+    guess = h.x * (1 + 1e-3 * np.random.default_rng(0).standard_normal(h.x.size))
+    ustar, x = steady_ustar(vf, pv, guess, scene.hstar, tol=1e-20)
+    assert ustar == pytest.approx(h.ustar, rel=1e-10)
+    assert np.max(np.abs(x - h.x)) < 1e-10 * np.max(np.abs(h.x))
+    with pytest.raises(SteadyStateError, match="residual"):
+        steady_ustar(vf, pv, np.full(h.x.size, np.nan), scene.hstar)
+
+
 def test_criticality_matches_the_paper_trend(paper_n10):
     """Small M*: subcritical flutter (the beam jumps to large amplitude, cf. the paper's
     finding that every instability ends in contact there); M* = 1: supercritical."""

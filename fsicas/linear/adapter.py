@@ -79,20 +79,25 @@ def steady_ustar(vf, p, x_guess, hstar: float, tol: float = 1e-12,
                  max_iter: int = 30) -> tuple[float, np.ndarray]:
     """U* = (Q1 + Q2)/H* of the steady state of the adapted field ``vf`` at parameters p,
     and that state: Newton ``x <- x - F_x(x)^{-1} F(x)`` from ``x_guess`` until
-    ``max|F| < tol``; the inverse of :func:`pi_of`.
+    ``max|F| < tol``, or until an update is at round-off level (``max|dx| <= 1e-13 (1 +
+    max|x|)``: where the rounding of F exceeds ``tol``, as the continuation's Newton
+    accepts); the inverse of :func:`pi_of`.
 
     Raises SteadyStateError (naming the residual) if ``max_iter`` iterations do not
     reach ``tol`` or the residual is not finite.
     """
     x = np.asarray(x_guess, dtype=float)
+    at_round_off = False
     for iteration in range(max_iter + 1):
         F = np.asarray(vf.rhs(x, p), dtype=float).ravel()
         residual = float(np.max(np.abs(F)))
-        if residual < tol:
+        if np.isfinite(residual) and (residual < tol or at_round_off):
             return float(x[-2:].sum() / hstar), x
         if iteration == max_iter or not np.isfinite(residual):
             break
-        x = x - np.linalg.solve(dense(vf.jac_x(x, p)), F)
+        dx = np.linalg.solve(dense(vf.jac_x(x, p)), F)
+        x = x - dx
+        at_round_off = np.max(np.abs(dx)) <= 1e-13 * (1.0 + np.max(np.abs(x)))
     raise SteadyStateError(f"steady_ustar: Newton did not converge in {max_iter} iterations "
                            f"(residual max|F| = {residual:.3e} >= {tol:.0e})")
 
