@@ -21,6 +21,9 @@ accurate; ``method='product'`` forms the product (``O(n^3 NTST)``, for large
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+from functools import cached_property
+
 import numpy as np
 import scipy.linalg as sla
 import scipy.sparse as sp
@@ -45,15 +48,20 @@ def transfer_matrices(J, n: int, ntst: int, ncol: int, full: bool = False) -> np
     ``DENSE_MAX``, ``DENSE_FILL``) are solved by one batched dense solve with one BLAS
     thread (``_threads``; at n = 82, NCOL = 4, NTST = 20: 0.13 s, against 2.5 s by
     SuperLU per interval), the others by one SuperLU factorization of the block
-    diagonal ``diag(B_R)`` (:func:`sparse_transfer_matrices`)."""
-    m = n * ncol
-    rows, local, values = _interval_entries(J, n, ntst, ncol)
-    fill = values.size / (m * ntst * (m + n))
-    if m <= DENSE_ALWAYS or (m <= DENSE_MAX and fill >= DENSE_FILL):
+    diagonal ``diag(B_R)`` (:func:`sparse_transfer_matrices`). Where the blocks' entries
+    sit in ``J`` is found once per sparsity pattern (:class:`_Layout`)."""
+    J = sp.csc_matrix(J)
+    if not J.has_canonical_format:                   # duplicates summed, on a copy
+        J = J.copy()
+        J.sum_duplicates()
+    layout = _Layout.of(J, n, ntst, ncol)
+    values = J.data[layout.take]
+    if layout.dense:
+        m = n * ncol
         B = np.zeros((ntst, m, m + n))
-        B.reshape(-1)[rows * (m + n) + local] = values        # no duplicates
+        B.reshape(-1)[layout.rows * (m + n) + layout.local] = values   # no duplicates
         return block_transfer_matrices(B, n, full)
-    out = sparse_transfer_matrices(rows, local, values, n, ntst, ncol)
+    out = sparse_transfer_matrices(layout, values)
     return out if full else out[:, -n:, :]
 
 
@@ -65,37 +73,84 @@ def block_transfer_matrices(blocks: np.ndarray, n: int, full: bool = False) -> n
     return out if full else out[:, -n:, :]
 
 
-def sparse_transfer_matrices(rows, local, values, n, ntst, ncol) -> np.ndarray:
-    """``-(B_R^{-1} B_L)`` of every interval ``(ntst, n NCOL, n)`` from the entries of
-    the interval blocks (:func:`_interval_entries`): ``diag(B_R)`` is one sparse matrix
-    (its column ordering is computed once per pattern, ``_newton.factorize``), and as it
-    is block diagonal, one solve with the stacked ``B_L`` (``N x n``) gives all maps."""
-    m, N = n * ncol, n * ncol * ntst
-    left = local < n
-    right = ~left
-    start = rows[right] - rows[right] % m                  # first row (= column) of the block
-    R = sp.csc_matrix((values[right], (rows[right], start + local[right] - n)), shape=(N, N))
+def sparse_transfer_matrices(layout: "_Layout", values: np.ndarray) -> np.ndarray:
+    """``-(B_R^{-1} B_L)`` of every interval ``(ntst, n NCOL, n)`` from the values of the
+    interval blocks' entries (in the order of ``layout``): ``diag(B_R)`` is one sparse
+    matrix (its column ordering is computed once per pattern, ``_newton.factorize``), and
+    as it is block diagonal, one solve with the stacked ``B_L`` (``N x n``) gives all
+    maps (a solve of many columns, ``_newton.LU``)."""
+    n, N = layout.n, layout.m * layout.ntst
+    right, indptr, indices, left, L_rows, L_cols = layout.sparse
+    R = sp.csc_matrix((values[right], indices, indptr), shape=(N, N))
     L = np.zeros((N, n))
-    L[rows[left], local[left]] = values[left]
+    L[L_rows, L_cols] = values[left]
     with single_threaded():
         lu = factorize(R)
         if lu is None:
             raise np.linalg.LinAlgError("singular interval block of the collocation Jacobian")
-        return -lu.solve(L).reshape(ntst, m, n)
+        return -lu.solve(L).reshape(layout.ntst, layout.m, n)
 
 
-def _interval_entries(J, n, ntst, ncol):
-    """``(rows, local, values)``: the entries of the interval blocks ``[B_L, B_R]`` of
-    ``J`` (``n NCOL x n (NCOL + 1)``, the last interval's right node wrapped to the
-    first node), with their column ``local`` within the block of their row."""
-    m, N = n * ncol, n * ncol * ntst
-    J = sp.csc_matrix(J)
-    c = np.repeat(np.arange(J.shape[1]), np.diff(J.indptr))
-    keep = (J.indices < N) & (c < N)
-    r, c, v = J.indices[keep], c[keep], J.data[keep]
-    local = (c - (r // m) * m) % N                     # column within interval r // m
-    inside = local < m + n
-    return r[inside], local[inside], v[inside]
+@dataclass(frozen=True, eq=False)
+class _Layout:
+    """Where the entries of the interval blocks ``[B_L, B_R]`` (``n NCOL x n (NCOL +
+    1)``, the last interval's right node wrapped to the first node) sit in a collocation
+    Jacobian of one sparsity pattern: ``J.data[take]`` are their values, in rows ``rows``
+    and block columns ``local``; ``fill``: the blocks' nonzero fraction."""
+
+    indptr: np.ndarray
+    indices: np.ndarray
+    n: int
+    ntst: int
+    m: int
+    take: np.ndarray
+    rows: np.ndarray
+    local: np.ndarray
+    fill: float
+
+    @classmethod
+    def of(cls, J: sp.csc_matrix, n: int, ntst: int, ncol: int) -> "_Layout":
+        """The layout of ``J``'s pattern (found among the last few, else computed)."""
+        for known in _layouts:
+            if (known.n, known.ntst, known.m) == (n, ntst, n * ncol) and \
+                    np.array_equal(known.indptr, J.indptr) and \
+                    np.array_equal(known.indices, J.indices):
+                return known
+        m, N = n * ncol, n * ncol * ntst
+        c = np.repeat(np.arange(J.shape[1]), np.diff(J.indptr))
+        keep = (J.indices < N) & (c < N)
+        local = (c - (J.indices // m) * m) % N             # column within interval r // m
+        take = np.flatnonzero(keep & (local < m + n))
+        layout = cls(J.indptr.copy(), J.indices.copy(), n, ntst, m, take, J.indices[take],
+                     local[take], take.size / (m * ntst * (m + n)))
+        _layouts.insert(0, layout)
+        del _layouts[LAYOUTS_KEPT:]
+        return layout
+
+    @property
+    def dense(self) -> bool:
+        """Whether the blocks are solved densely (:func:`transfer_matrices`)."""
+        return self.m <= DENSE_ALWAYS or (self.m <= DENSE_MAX and self.fill >= DENSE_FILL)
+
+    @cached_property
+    def sparse(self) -> tuple:
+        """``(right, indptr, indices, left, L_rows, L_cols)``: the CSC pattern of
+        ``diag(B_R)``, whose values are ``values[right]`` in that order, and the places
+        ``(L_rows, L_cols)`` of ``B_L``'s values ``values[left]`` in the stacked
+        ``(N, n)`` matrix."""
+        n, m, N = self.n, self.m, self.m * self.ntst
+        rows, local = self.rows, self.local
+        left, right = np.flatnonzero(local < n), np.flatnonzero(local >= n)
+        start = rows[right] - rows[right] % m              # first row (= column) of the block
+        order = sp.csc_matrix((np.arange(1.0, right.size + 1),
+                               (rows[right], start + local[right] - n)), shape=(N, N))
+        return (right[order.data.astype(np.intp) - 1], order.indptr, order.indices, left,
+                rows[left], local[left])
+
+
+#: interval layouts of recent Jacobian patterns (a branch re-meshes: a few at a time)
+_layouts: list = []
+LAYOUTS_KEPT = 4
 
 
 def multipliers(A: np.ndarray, method: str = "pencil") -> np.ndarray:

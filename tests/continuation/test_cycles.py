@@ -293,3 +293,51 @@ def test_minimizer_over_many_rows_matches_dense_sampling():
     k, j_dense = np.unravel_index(np.argmin(dense), dense.shape)
     assert j == j_dense and abs(mesh[i] + s * (mesh[i + 1] - mesh[i]) - times[k]) < 1e-4
     assert value == extrema(U, mesh, ncol, n, A)[0].min()
+
+
+def test_transfer_matrices_on_a_kept_layout_and_with_duplicate_entries(monkeypatch):
+    """The interval layout of a Jacobian's pattern is found once and reused: a second
+    Jacobian of the same pattern with other values gives its own maps (equal to the dense
+    route's on it), and a non-canonical Jacobian (entries split into duplicates) gives
+    the same maps as the canonical one, by both routes."""
+    import scipy.sparse as sp
+    from continuation import _floquet
+    F, e = _ring(), 0.5
+    prob, X = _solve(F, e, 12, 3, 2 * np.pi / np.sqrt(1 - e ** 2))
+    J = sp.csc_matrix(C.CycleProblem.jacobian(prob, X))
+    n, ntst, ncol = prob.vf.n, prob.ntst, prob.ncol
+    other = J.copy()
+    other.data = other.data * (1.0 + 0.1 * np.sin(np.arange(other.nnz)))
+    cols = [slice(J.indptr[j], J.indptr[j + 1]) for j in range(J.shape[1])]
+    split = sp.csc_matrix((np.concatenate([np.r_[0.25 * J.data[c], 0.75 * J.data[c]]
+                                           for c in cols]),
+                           np.concatenate([np.r_[J.indices[c], J.indices[c]] for c in cols]),
+                           2 * J.indptr), shape=J.shape)
+    assert not split.has_canonical_format
+    assert _floquet._Layout.of(J, n, ntst, ncol) is _floquet._Layout.of(other, n, ntst, ncol)
+    for dense_limit in (None, 0):
+        if dense_limit == 0:
+            monkeypatch.setattr(_floquet, "DENSE_ALWAYS", 0)
+            monkeypatch.setattr(_floquet, "DENSE_MAX", 0)
+        maps = [_floquet.transfer_matrices(A, n, ntst, ncol, full=True)
+                for A in (J, other, J, split)]
+        blocks = [_floquet.block_transfer_matrices(_dense_blocks(A, n, ntst, ncol), n, True)
+                  for A in (J, other)]
+        scale = np.abs(maps[0]).max()
+        assert np.abs(maps[0] - blocks[0]).max() < 1e-12 * scale
+        assert np.abs(maps[1] - blocks[1]).max() < 1e-12 * scale
+        assert np.abs(maps[1] - maps[0]).max() > 1e-3 * scale     # its own values
+        assert np.abs(maps[2] - maps[0]).max() < 1e-13 * scale
+        assert np.abs(maps[3] - maps[0]).max() < 1e-12 * scale
+
+
+def _dense_blocks(J, n, ntst, ncol):
+    """``[B_L, B_R]`` of every interval read from the dense Jacobian (independent of
+    the sparse layout): rows of interval ``i``, columns of its nodes 0..NCOL wrapped."""
+    D = J.toarray()
+    m, N = n * ncol, n * ncol * ntst
+    out = np.empty((ntst, m, m + n))
+    for i in range(ntst):
+        cols = (i * m + np.arange(m + n)) % N
+        out[i] = D[i * m:(i + 1) * m][:, cols]
+    return out

@@ -203,3 +203,28 @@ def test_sparse_bordering_helpers_match_dense():
         cols[rng.random((m, 3)) < 0.3] = 0.0
         assert np.array_equal(append_row(A, row).toarray(), np.vstack([A.toarray(), row]))
         assert np.array_equal(append_columns(A, cols).toarray(), np.hstack([A.toarray(), cols]))
+
+
+def test_solves_of_many_columns_equal_dense_lapack():
+    """``LU.solve`` with at least ``MANY_RHS`` columns runs on the factors in compiled
+    code: on unsymmetric matrices that need row pivoting (a zero diagonal), at the first
+    factorization of a pattern and on its kept ordering, it equals LAPACK's dense solve
+    and the column-by-column SuperLU solve."""
+    import scipy.sparse as sp
+    from continuation._newton import MANY_RHS, factorize
+    rng = np.random.default_rng(3)
+    for seed in range(6):
+        m = int(rng.integers(5, 120))
+        A = sp.random(m, m, density=0.1, random_state=seed) + sp.eye(m, k=1) + \
+            sp.diags(rng.choice([0.0, 2.0], m))
+        A = sp.csc_matrix(A)
+        dense = A.toarray()
+        if np.linalg.cond(dense) > 1e8:
+            continue
+        B = rng.standard_normal((m, MANY_RHS + seed))
+        for lu in (factorize(A), factorize(A)):          # new pattern, kept ordering
+            x = lu.solve(B)
+            by_columns = np.column_stack([lu.solve(B[:, j]) for j in range(B.shape[1])])
+            scale = np.abs(x).max()
+            assert np.abs(x - np.linalg.solve(dense, B)).max() < 1e-11 * scale
+            assert np.abs(x - by_columns).max() < 1e-12 * scale
