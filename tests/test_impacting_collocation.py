@@ -379,3 +379,24 @@ def test_symmetry_breaking_and_period_doubling_in_the_symmetric_channel():
     assert abs(run.tip_amplitude / p.tip_amplitude - 1) < 1e-5
     (pd,) = [q for q in sb.special if q.kind == "pd"]
     assert pd.located and abs(pd.critical_multiplier + 1) < 1e-4
+
+
+def test_critical_multiplier_comes_from_the_map_that_carries_it():
+    """At +1 (fold, branch point) the Poincare map's multiplier is taken (the
+    monodromy's pair there is split by the square root of the discretization error); at
+    -1 and on the unit circle the monodromy's non-trivial one, which the located
+    condition pins (the section adds the error of ``Phi f = f``)."""
+    from fsicas.cycles.impacting_collocation import CollocatedImpactPoint
+    full = np.array([1.0 + 2e-3, 1.0 - 2e-3, -1.0 + 1e-10, 0.6 + 0.8j, 0.6 - 0.8j, 0.1])
+    section = np.array([1.0 + 1e-6, -1.0 + 4e-6, 0.6 + 0.8j + 3e-6, 0.6 - 0.8j, 0.1])
+    point = CollocatedImpactPoint(ustar=7.0, pressure_drop=1.0, period=0.1, tip_amplitude=0.04,
+                                  min_gap=0.0, gap_ratio=1.0, impacts=1, multipliers=full,
+                                  section_multipliers=section)
+    assert replace(point, kind="regular").critical_multiplier is None
+    assert replace(point, kind="fold").critical_multiplier == 1.0 + 1e-6
+    assert replace(point, kind="bp").critical_multiplier == 1.0 + 1e-6
+    assert replace(point, kind="pd").critical_multiplier == -1.0 + 1e-10
+    assert replace(point, kind="ns").critical_multiplier in (0.6 + 0.8j, 0.6 - 0.8j)
+    # without the section (a point that was not located): the monodromy's, trivial dropped
+    bare = replace(point, kind="fold", section_multipliers=np.zeros(0, complex))
+    assert abs(bare.critical_multiplier - 1) == pytest.approx(2e-3)
