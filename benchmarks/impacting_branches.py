@@ -130,9 +130,10 @@ def at_ustar(branch, target, model, args):
 def special_rows(name, modes, branch):
     for p in branch.special:
         m = p.critical_multiplier
-        error = abs(abs(m) - 1) if p.kind == "ns" else abs(m - (1 if p.kind == "fold" else -1))
+        error = abs(abs(m) - 1) if p.kind == "ns" else abs(m - (-1 if p.kind == "pd" else 1))
         print(f"| {modes} | {name} | {p.kind} | {p.ustar:.6f} | {p.period:.7f} | "
-              f"{p.tip_amplitude:.6f} | {p.impacts} | {error:.1e} | {p.located} |")
+              f"{p.tip_amplitude:.6f} | {p.impacts} | {error:.1e} (flow defect "
+              f"{p.flow_defect:.1e}) | {p.located} |")
 
 
 def from_integration(modes, target, args):

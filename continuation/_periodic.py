@@ -80,6 +80,15 @@ class PeriodicProblem(Problem):
         return self.kept("section_multipliers", X, lambda: _floquet.section_multipliers(
             self.monodromy(X), self.flow(X)))
 
+    def flow_defect(self, X) -> float:
+        """``|Phi f - f| / |f|`` with ``f`` the flow at ``u(0)`` (:meth:`flow`): how far
+        the discretized monodromy is from mapping the flow onto itself, as the exact one
+        does. It bounds what the discretization can show at +1: a fold's Poincare
+        multiplier (:meth:`section_multipliers`) is only that close to 1, and the
+        monodromy's pair there splits by about its square root."""
+        f = self.flow(X)
+        return float(np.linalg.norm(self.monodromy(X) @ f - f) / np.linalg.norm(f))
+
     def monodromy(self, X) -> np.ndarray:
         """``Phi = A_{N-1} ... A_0`` of :meth:`transfer_matrices` (kept for the last ``X``:
         the multipliers and the section's share it)."""

@@ -135,6 +135,9 @@ class CollocatedImpactPoint(ImpactPoint):
     #: from the trivial one there); empty elsewhere
     section_multipliers: np.ndarray = field(repr=False,
                                             default_factory=lambda: np.zeros(0, complex))
+    #: of a located special cycle: ``|Phi f - f| / |f|`` (``continuation``'s
+    #: ``flow_defect``), how near +1 its discretization can put a multiplier; NaN elsewhere
+    flow_defect: float = float("nan")
 
     @property
     def critical_multiplier(self) -> complex | None:
@@ -333,7 +336,7 @@ def _refined(problem, sp, gauge, settings, finer) -> "CollocatedImpactPoint":
         square, X = problem.at(sp)
         return CollocatedImpactPoint.from_columns(
             sp.record, None, kind=sp.kind, located=False,
-            section_multipliers=square.section_multipliers(X))
+            section_multipliers=square.section_multipliers(X), flow_defect=square.flow_defect(X))
     point = _located(*problem.at(sp), sp.kind, gauge, settings)
     if point is None:
         return CollocatedImpactPoint.from_columns(sp.record, None, kind=sp.kind, located=False)
@@ -358,7 +361,8 @@ def _located(problem, X, kind, gauge, settings) -> "CollocatedImpactPoint | None
         return None
     return CollocatedImpactPoint.from_columns(
         gauge.record(square, result.X), None, kind=kind,
-        section_multipliers=square.section_multipliers(result.X))
+        section_multipliers=square.section_multipliers(result.X),
+        flow_defect=square.flow_defect(result.X))
 
 
 def field_parameters(vf, model: Model, scene: Scene, pressure_drop: float) -> dict:
