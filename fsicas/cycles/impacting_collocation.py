@@ -141,17 +141,11 @@ class CollocatedImpactPoint(ImpactPoint):
 
     @property
     def critical_multiplier(self) -> complex | None:
-        """A special cycle's critical multiplier: the non-trivial one nearest +1 (fold,
-        branch point), -1 (period doubling) or, among the complex ones, the unit circle
-        (Neimark-Sacker); None for a regular point.
-
-        At +1 it is the Poincare map's (``section_multipliers`` where computed): the
-        monodromy's pair there is split by the square root of the discretization error.
-        At -1 and on the circle it is the monodromy's: the located cycle makes the
-        discretized monodromy singular there to the Newton tolerance (the condition is
-        written on the collocation Jacobian), while the section, normal to the flow
-        ``M^-1 F``, adds the discretization error of ``Phi f = f`` (stiff impacting
-        cycles, NTST = 1600, N = 10: -1 to 3e-10 against 5e-6 by the section)."""
+        """The non-trivial multiplier nearest +1 (fold, branch point: the Poincare map's,
+        ``section_multipliers``, as the monodromy's pair there is split), -1 (period
+        doubling) or, among the complex ones, the unit circle (Neimark-Sacker; these two
+        the monodromy's, on which the located condition is written: the section adds the
+        ``flow_defect``); None for a regular point."""
         if self.kind not in _CRITICAL:
             return None
         target = _CRITICAL[self.kind]
