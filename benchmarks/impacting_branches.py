@@ -26,10 +26,10 @@ from the perturbed steady state (IDAS 1e-9, ``--t-end``) gives the settled cycle
 it and checked as in 3 (the route where a branch from contact costs too much, N = 40).
 
 Branches are saved to ``--out`` as they are computed (JSON) and read back on a rerun,
-so an interrupted run resumes; a rerun with a higher ``--ustar-max`` than a saved main
-branch reached continues that branch from its last cycle (saved as a branch of its own,
-``impacting_N{modes}_from{U*}.json``). Prints the special cycles, the checks and the
-cost.
+so an interrupted run resumes; a rerun with a higher ``--ustar-max`` than the saved
+branches reached continues the last of them from its last cycle (saved as a branch of its
+own, ``impacting_N{modes}_from{U*}.json``; reruns chain such pieces). Prints the special
+cycles, the checks and the cost.
 Single-threaded BLAS (``OPENBLAS_NUM_THREADS=1`` unless set).
 """
 from __future__ import annotations
@@ -73,17 +73,22 @@ def branches(modes, args):
                                       settings=settings)
         main.save(main_path)
     found = [("period-1", main)]
-    last = main.points[-1]
-    if main.status == "bound" and last.ustar < args.ustar_max - 1e-6:
-        path = out / f"impacting_N{modes}_from{last.ustar:.4f}.json"   # a longer rerun
+    reached = main
+    # a longer rerun: the last piece stopped at a lower --ustar-max (its last step lands
+    # short of the bound by less than a step)
+    while reached.status == "bound" and reached.points[-1].ustar < args.ustar_max - 0.01:
+        last = reached.points[-1]
+        path = out / f"impacting_N{modes}_from{last.ustar:.4f}.json"
         if path.exists():
-            more = CollocatedImpactBranch.load(path)
+            reached = CollocatedImpactBranch.load(path)
         else:
-            more = impacting_collocation_branch(
+            reached = impacting_collocation_branch(
                 main.scene.replace(ustar=last.ustar), last.state, last.period,
                 last.pressure_drop, ustar_max=args.ustar_max, settings=settings)
-            more.save(path)
-        found.append((f"period-1 from U* = {last.ustar:.4f}", more))
+            reached.save(path)
+        found.append((f"period-1 from U* = {last.ustar:.4f}", reached))
+        if reached.points[-1].ustar < last.ustar + 1e-3:
+            break                                                       # no progress
     before = [p for p in main.points if p.ustar < main.points[-1].ustar - 0.05]
     if main.status == "failed" and before and args.fine_ntst:
         path = out / f"impacting_N{modes}_fine.json"
