@@ -57,8 +57,8 @@ def specials(name, branch) -> None:
         m, target = p.critical_multiplier, TARGET[p.kind]
         off = abs(abs(m) - 1) if target is None else abs(m - target)
         print(f"  {name}: {p.kind} at U* = {p.ustar:.6f}, critical multiplier "
-              f"{m:.6f} ({off:.1e} off, flow defect {p.flow_defect:.1e}, NTST = {p.ntst}; "
-              f"located by Newton: {p.located})")
+              f"{m:.6f} ({off:.1e} off, flow defect {p.flow_defect:.1e}, NTST = {p.ntst}, "
+              f"NCOL = {p.ncol}; located by Newton: {p.located})")
 
 
 def main(argv=None) -> None:

@@ -198,7 +198,9 @@ def test_cli_lco_through_contact(capsys):
     assert 0 < imp["max_error_estimate"] < 0.1          # no coarse-mesh warning here
     (ns,) = imp["special"]
     assert ns["kind"] == "ns" and ns["located"] and ns["ntst"] == 200
-    assert set(ns) == keys | {"kind", "located", "ntst", "multiplier"}
+    assert ns["ncol"] == 6 and 0 < ns["flow_defect"] < 1e-2
+    assert set(ns) == keys | {"kind", "located", "ntst", "ncol", "flow_defect",
+                                "multiplier"}
     assert abs(np.hypot(*ns["multiplier"]) - 1) < 1e-9 and 6.59 < ns["ustar"] < 6.62
     code = main(["lco", "--mstar", "1", "--zeta", "0.01", "--modes", "4", "--ustar-max", "8",
                  "--through-contact", "--impact-route", "shooting", "--impact-points", "1",

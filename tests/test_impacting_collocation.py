@@ -97,6 +97,10 @@ def test_save_load_and_validation(n3_branch, tmp_path):
         CollocationImpactSettings(ntst=0)
     with pytest.raises(ValueError, match="mesh_passes"):
         CollocationImpactSettings(mesh_passes=-1)
+    with pytest.raises(ValueError, match="refine_ncol"):
+        CollocationImpactSettings(refine_ncol=8)
+    with pytest.raises(ValueError, match="refine_passes"):
+        CollocationImpactSettings(refine_passes=-1)
     with pytest.raises(ValueError, match="max_turn"):
         CollocationImpactSettings(max_turn=-0.1)
     with pytest.raises(ValueError, match="detect"):
@@ -176,25 +180,26 @@ def test_fold_of_the_period3_isola_by_its_poincare_multiplier(period3_impacting_
     """N = 4, from the period-3 cycle at U* = 7 (about 2 min): the branch turns at the
     upper fold of the period-3 isola, U* = 7.6521. There the monodromy has a Jordan
     block at +1, split by the trivial multiplier's discretization error into
-    1 +- 0.04i on NTST = 300; the Poincare section's multiplier is 8.6e-4 from +1 on
-    that mesh, and 1.7e-5 once the fold is rebuilt on NTST = 600 and located again
-    (``refine_ntst``; 1.2e-6 and 5.3e-6 from other starts' meshes: the stiff cycle's
-    conditioning, not the order, limits it), with the monodromy's pair still split by
-    3e-4..1e-2. What one mesh can show at +1 is its ``flow_defect`` (|Phi f - f| / |f|,
-    2e-5 on the 5.3e-6 mesh): the Poincare multiplier sits within half of it (0.2-0.4 on
-    the five meshes of this and the N = 10 folds measured), and the split pair 64-200x
-    farther. The located fold bounds the branch's own points (the turn)."""
+    1 +- 0.04i on NTST = 300, where the Poincare section's multiplier is 8.6e-4 from +1.
+    What one mesh can show at +1 is its ``flow_defect`` (|Phi f - f| / |f|): the
+    section's multiplier sits within half of it. On a mesh equidistributed on the
+    integrated guess that is 2e-5..6e-4 (NTST 600-1200, NCOL 4 or 6); each re-meshing
+    on the located cycle's own error lowers it. Rebuilt on NTST = 1200, NCOL = 6 and
+    re-meshed three times (``refine_*``), the fold's flow defect is 5e-7, its multiplier
+    1.5e-7 from +1 (NCOL = 4: 9e-6 and 5e-7) and the monodromy's pair split by 7e-4.
+    The located fold bounds the branch's own points (the turn)."""
     r = period3_impacting_run
     br = impacting_collocation_branch(r.scene, r.state, r.period, r.run.steady.pressure_drop,
                                       model=r.model, ustar_max=7.7,
                                       settings=CollocationImpactSettings(
-                                          ntst=300, max_points=60, ds=0.1, refine_ntst=600))
+                                          ntst=300, max_points=60, ds=0.1, refine_ntst=1200))
     (fold,) = [p for p in br.special if p.kind == "fold"]
-    assert fold.located and fold.ntst == 600 and abs(fold.ustar - 7.6521) < 1e-4
+    assert fold.located and (fold.ntst, fold.ncol) == (1200, 6)
+    assert abs(fold.ustar - 7.6521) < 1e-4
     assert len(fold.section_multipliers) == len(fold.multipliers) - 1
-    assert abs(fold.critical_multiplier - 1) < 1e-4
-    pair = np.sort(np.abs(fold.multipliers - 1))[:2]
+    assert abs(fold.critical_multiplier - 1) < 1e-6
     assert abs(fold.critical_multiplier - 1) < 0.5 * fold.flow_defect
+    pair = np.sort(np.abs(fold.multipliers - 1))[:2]
     assert pair[1] > 30 * abs(fold.critical_multiplier - 1)
     ustar = br.column("ustar")
     assert ustar.max() <= fold.ustar + 1e-6 and ustar.max() > fold.ustar - 1e-3

@@ -7,6 +7,7 @@ time integration commands of :mod:`fsicas.cli.timedomain`.
 """
 from __future__ import annotations
 
+import math
 
 from ..cycles.collocation import CycleSettings, cycle_branch
 from ..cycles.impacting import ImpactSettings, impacting_branch, pre_contact_start
@@ -67,8 +68,9 @@ def add_cycle_commands(sub) -> None:
     p.add_argument("--impact-ntst", type=int, default=200,
                    help="collocation intervals of the impacting branch (adapted to the impacts)")
     p.add_argument("--special-ntst", type=int, default=0,
-                   help="locate each special cycle once more on this many intervals (its "
-                        "critical multiplier nearer the unit circle; 0: on the branch's mesh)")
+                   help="locate each special cycle once more on this many intervals of 6 "
+                        "points, re-meshed three times on its own error (its critical "
+                        "multiplier nearer the unit circle; 0: on the branch's mesh)")
     p.set_defaults(run=_cmd_cycles)
 
 
@@ -148,9 +150,12 @@ def _through_contact(scene, branch, args, say) -> dict:
 
 def _special_summary(point) -> dict:
     """A special impacting cycle: its kind, whether Newton refined it (and on which
-    NTST), the measures and its critical multiplier [re, im] (of the Poincare map)."""
+    NTST and NCOL), the measures, its critical multiplier [re, im] and its flow defect
+    (None where not located)."""
     m = point.critical_multiplier
     return {"kind": point.kind, "located": point.located, "ntst": point.ntst,
+            "ncol": point.ncol,
+            "flow_defect": point.flow_defect if math.isfinite(point.flow_defect) else None,
             **{k: getattr(point, k) for k in _IMPACT_KEYS},
             "multiplier": [float(m.real), float(m.imag)]}
 

@@ -10,10 +10,10 @@ from .curves import (CurveMap, CurvePoint, CurveSettings, CycleCurve, cycle_curv
                      fold_curves, grazing_curve)
 from .impacting import (ImpactBranch, ImpactPoint, ImpactSettings, cycle_from_trajectory,
                         impacting_branch, pre_contact_start)
+from .branch_switching import period_doubled_branch, symmetry_broken_branch
 from .impacting_collocation import (CollocatedImpactBranch, CollocatedImpactPoint,
                                     CollocationImpactSettings, impacting_collocation_branch,
-                                    impacting_collocation_problem, period_doubled_branch,
-                                    symmetry_broken_branch)
+                                    impacting_collocation_problem)
 from .through_contact import branch_through_contact
 
 __all__ = ["CycleBranch", "CyclePoint", "CycleSettings", "cycle_branch", "ImpactBranch",

@@ -160,4 +160,4 @@ class PolynomialGauge(Gauge):
         weights = np.repeat(np.diff(mesh), self.samples)          # the samples' time steps
         return {**common, "tip_amplitude": (y_max - y_min) / 2,
                 "min_gap": lowest, "gap_ratio": lowest / self.eps, "impacts": impacts,
-                "ntst": problem.ntst, "wall_time": wall, **self.impact_measures(x, weights)}
+                "ntst": problem.ntst, "ncol": problem.ncol, "wall_time": wall, **self.impact_measures(x, weights)}

@@ -28,9 +28,8 @@ library and refined by Newton on their minimally extended systems
 (``continuation.CycleFold``, ``PeriodDoubling``, ``NeimarkSacker``: the critical
 multiplier at +1, -1 or on the unit circle); branch points (a multiplier through +1
 where the branch does not turn: the symmetric cycle of the symmetric channel gives way
-to a pair of asymmetric ones), located on the arclength. :func:`period_doubled_branch`
-switches at a period doubling onto the branch of cycles of twice the period,
-:func:`symmetry_broken_branch` at a branch point onto the asymmetric cycles.
+to a pair of asymmetric ones), located on the arclength. :mod:`fsicas.cycles.branch_switching` switches at them onto
+the period-doubled and the asymmetric cycles.
 
 Extrema are those of the collocation polynomial, exact in t
 (:class:`fsicas.cycles.gauge.PolynomialExtrema`); the contact intervals are counted on
@@ -57,7 +56,7 @@ from .records import check_settings
 
 __all__ = ["CollocationImpactSettings", "CollocatedImpactPoint", "CollocatedImpactBranch",
            "impacting_collocation_branch", "impacting_collocation_problem", "field_parameters",
-           "period_doubled_branch", "symmetry_broken_branch", "ImpactKind"]
+           "ImpactKind"]
 
 ImpactKind = Literal["regular", "fold", "pd", "ns", "bp"]
 """A branch point ("regular") or a special cycle: "fold" (a second multiplier at +1),
@@ -86,8 +85,10 @@ class CollocationImpactSettings:
     (``continuation.ContinuationSettings.max_turn``, 0 = off: past the contacts the
     branch folds sharply, and a step over such a fold came back oriented backwards);
     ``refine_ntst``: special cycles, once located, are rebuilt on a mesh of this many
-    intervals (equidistributed on one integrated period of the located cycle) and
-    located again, for critical multipliers of a smaller discretization error (0: on
+    intervals and ``refine_ncol`` points (0: ``ncol``), equidistributed on one
+    integrated period of the located cycle, and located again, then ``refine_passes``
+    times re-meshed on their own error and located again, the one of smallest
+    ``flow_defect`` kept: critical multipliers of a smaller discretization error (0: on
     the branch's mesh)."""
 
     ntst: int = 200
@@ -104,11 +105,17 @@ class CollocationImpactSettings:
     detect: bool = True
     max_turn: float = 0.3
     refine_ntst: int = 0
+    refine_ncol: int = 6
+    refine_passes: int = 3
 
     def __post_init__(self):
         check_settings(self, integers=("ntst", "ncol", "max_points", "samples", "guess_samples"),
                        positives=("tol", "ds", "ds_max", "guess_tol"),
-                       nonnegative_integers=("adapt_every", "mesh_passes", "refine_ntst"))
+                       nonnegative_integers=("adapt_every", "mesh_passes", "refine_ntst",
+                                             "refine_ncol", "refine_passes"))
+        if not (2 <= self.ncol <= 7 and self.refine_ncol in (0, *range(2, 8))):
+            raise ValueError("CollocationImpactSettings.ncol must be in 2..7 and refine_ncol "
+                             f"0 (ncol) or in 2..7, got {self.ncol!r} and {self.refine_ncol!r}")
         if not isinstance(self.detect, bool):
             raise ValueError("CollocationImpactSettings.detect must be a bool, got "
                              f"{self.detect!r}")
@@ -119,12 +126,13 @@ class CollocationImpactSettings:
 
 @dataclass(frozen=True)
 class CollocatedImpactPoint(ImpactPoint):
-    """An impacting cycle by collocation: the shooting route's measures, plus ``ntst``
-    and ``error_estimate`` (the library's indicator max_i h_i^(NCOL+1) |u^(NCOL+1)|_i)."""
+    """An impacting cycle by collocation: the shooting route's measures, plus ``ntst``,
+    ``ncol`` and ``error_estimate`` (the library's indicator max_i h_i^(NCOL+1) |u^(NCOL+1)|_i)."""
 
     _complex = ("multipliers", "section_multipliers")
 
     ntst: int = 0
+    ncol: int = 4
     error_estimate: float = 0.0
     kind: ImpactKind = "regular"
     #: a special cycle refined by Newton on its minimally extended system (False: where
@@ -207,105 +215,32 @@ def impacting_collocation_branch(scene: Scene, state, period: float, pressure_dr
     ``contact_smoothing`` > 0). ``direction`` = +1 continues towards larger Δp (U*).
     The arguments are those of :func:`fsicas.cycles.impacting.impacting_branch`."""
     start = time.perf_counter()
-    _check_smooth(scene)
+    check_smooth(scene)
     model = model or build_model(scene)
     try:
         problem = impacting_collocation_problem(scene, state, period, pressure_drop,
                                                 model=model, settings=settings)
     except RuntimeError as err:                  # CVODES failure, e.g. a gap closing
-        return _failed(scene, model, "the start cycle could not be integrated over one "
+        return failed_branch(scene, model, "the start cycle could not be integrated over one "
                        f"period: {err}", start)
-    return _continued(scene, model, problem, (ustar_min, ustar_max), direction, settings, start)
+    return continued_branch(scene, model, problem, (ustar_min, ustar_max), direction, settings, start)
 
 
-def period_doubled_branch(scene: Scene, point: "CollocatedImpactPoint", *,
-                          model: Model | None = None, amplitude: float = 1e-2,
-                          ustar_min: float = 0.0, ustar_max: float = 12.0,
-                          settings: CollocationImpactSettings = CollocationImpactSettings()
-                          ) -> CollocatedImpactBranch:
-    """The branch of cycles of twice the period born at the period doubling ``point`` (a
-    special point of kind "pd" of :func:`impacting_collocation_branch` on ``scene``).
-
-    The PD cycle is rebuilt from the point's state (one integrated period, the start mesh
-    equidistributed on it) and refined by Newton on its minimally extended system; the
-    doubled cycle starts from it plus ``amplitude`` times its Floquet solution of
-    multiplier -1 (``continuation.cycle_from_pd``: 2 NTST intervals, the PD cycle's mesh
-    run through twice) and is continued towards larger amplitude, in either direction
-    of U* as the branch bends (the PD is super- or subcritical)."""
-    return _switched(scene, point, "pd", model, amplitude, (ustar_min, ustar_max), settings)
-
-
-def symmetry_broken_branch(scene: Scene, point: "CollocatedImpactPoint", *,
-                           model: Model | None = None, amplitude: float = 1e-3,
-                           ustar_min: float = 0.0, ustar_max: float = 12.0,
-                           settings: CollocationImpactSettings = CollocationImpactSettings()
-                           ) -> CollocatedImpactBranch:
-    """The branch of cycles that break the channel's symmetry, born at the branch point
-    ``point`` (kind "bp" of :func:`impacting_collocation_branch` on ``scene``).
-
-    The cycle is rebuilt from the point's state (as for :func:`period_doubled_branch`)
-    and kept as the guess (Newton at fixed U* is singular at a branch point: two null
-    vectors); the new branch starts from it plus ``amplitude``
-    times the null direction of its Jacobian that keeps U* (``continuation.cycle_from_bp``,
-    scaled to a largest nodal change of ``amplitude``; at 1e-2 the stiff contact law
-    already throws the guess out of Newton's reach) and is continued towards larger
-    amplitude."""
-    return _switched(scene, point, "bp", model, amplitude, (ustar_min, ustar_max), settings)
-
-
-def _switched(scene, point, kind, model, amplitude, ustar_range, settings
-              ) -> CollocatedImpactBranch:
-    """The branch born at the special cycle ``point`` of ``kind`` ("pd", "bp")."""
-    start = time.perf_counter()
-    _check_smooth(scene)
-    if getattr(point, "kind", None) != kind:
-        raise ValueError(f"point must be a special point of kind {kind!r} of an impacting "
-                         f"collocation branch, got kind {getattr(point, 'kind', None)!r}")
-    if not (np.isfinite(amplitude) and amplitude > 0):
-        raise ValueError(f"amplitude must be a positive finite number, got {amplitude!r}")
-    model = model or build_model(scene)
-    try:
-        problem = impacting_collocation_problem(scene, point.state, point.period,
-                                                point.pressure_drop, model=model,
-                                                settings=settings)
-        square, X, residual = _rebuilt_special(problem, kind, settings)
-    except (RuntimeError, ValueError, np.linalg.LinAlgError) as err:
-        return _failed(scene, model, f"the special cycle could not be rebuilt: {err}", start)
-    special = C.SpecialPoint(kind, 0, square.state(X), square.par_dict(X), "converged",
-                             residual, {"X": list(X), "mesh": list(square.mesh)})
-    switch = C.cycle_from_pd if kind == "pd" else C.cycle_from_bp
-    return _continued(scene, model, switch(problem, special, amplitude=amplitude),
-                      ustar_range, 1, settings, start)
-
-
-def _rebuilt_special(problem, kind, settings) -> tuple:
-    """``(problem, X, residual)``: a period doubling by Newton on its minimally extended
-    system (RuntimeError if that fails). A branch point has none, and Newton at fixed U*
-    is singular there (two null vectors): the rebuilt cycle stays the guess, and the new
-    branch's start corrector, off the branch point by the switch's amplitude, corrects
-    it."""
-    if kind == "bp":
-        return problem, problem.X0, float("nan")
-    square, result = C.locate_cycle(problem, problem.X0, C.PeriodDoubling(),
-                                    C.NewtonSettings(tol=settings.tol))
-    if not result.converged:
-        raise RuntimeError(f"Newton on its extended system failed: {result.message}")
-    return square, result.X, result.residual
-
-
-def _check_smooth(scene: Scene) -> None:
+def check_smooth(scene: Scene) -> None:
+    """ValueError unless ``scene`` has the smoothed contact law collocation needs."""
     if not (scene.contact and scene.contact_smoothing > 0):
         raise ValueError("impacting cycles by collocation need scene.contact = True and "
                          "scene.contact_smoothing > 0 (a smooth contact law)")
 
 
-def _failed(scene, model, message, start) -> CollocatedImpactBranch:
+def failed_branch(scene, model, message, start) -> CollocatedImpactBranch:
+    """The empty branch of status "failed" with ``message``, timed from ``start``."""
     return CollocatedImpactBranch(scene, model.scene.contact_gap, [], "failed", message,
                                   time.perf_counter() - start)
 
 
-def _continued(scene, model, problem, ustar_range, direction, settings, start
-               ) -> CollocatedImpactBranch:
+def continued_branch(scene, model, problem, ustar_range, direction, settings, start
+                     ) -> CollocatedImpactBranch:
     """The branch of ``problem`` in U* within ``ustar_range``, its special cycles refined."""
     gauge = PolynomialGauge(model, steady_state(scene, model).x, settings.samples)
     once = (lambda problem, X: "reached max_points = 1") if settings.max_points == 1 else None
@@ -313,7 +248,8 @@ def _continued(scene, model, problem, ustar_range, direction, settings, start
         scene, model, *ustar_range, direction, settings))
     finer = lambda point: impacting_collocation_problem(         # noqa: E731
         scene, point.state, point.period, point.pressure_drop, model=model,
-        settings=replace(settings, ntst=settings.refine_ntst))
+        settings=replace(settings, ntst=settings.refine_ntst,
+                         ncol=settings.refine_ncol or settings.ncol))
     special = [_refined(problem, sp, gauge, settings, finer) for sp in branch.special_points
                if sp.kind in _CRITICAL]
     return _result(scene, model.scene.contact_gap, branch, special, settings,
@@ -339,24 +275,33 @@ def _refined(problem, sp, gauge, settings, finer) -> "CollocatedImpactPoint":
             fine = finer(point)
         except RuntimeError:                     # the integrated guess failed
             return point
-        point = _located(fine, fine.X0, sp.kind, gauge, settings) or point
+        point = _located(fine, fine.X0, sp.kind, gauge, settings,
+                         settings.refine_passes) or point
     return point
 
 
-def _located(problem, X, kind, gauge, settings) -> "CollocatedImpactPoint | None":
+def _located(problem, X, kind, gauge, settings, passes=0) -> "CollocatedImpactPoint | None":
     """The special cycle of ``kind`` by Newton from ``X`` on its minimally extended
-    system, with its section multipliers; None where that Newton fails."""
-    try:
-        square, result = C.locate_cycle(problem, X, _CONDITIONS[kind](),
-                                        C.NewtonSettings(tol=settings.tol))
-    except (ValueError, np.linalg.LinAlgError):
+    system, then ``passes`` times on a mesh equidistributing the located cycle's error
+    (the equidistribution does not settle: the one of smallest ``flow_defect`` is kept),
+    with its section multipliers; None where the first Newton fails."""
+    found = []
+    for _ in range(passes + 1):
+        try:
+            square, result = C.locate_cycle(problem, X, _CONDITIONS[kind](),
+                                            C.NewtonSettings(tol=settings.tol))
+        except (ValueError, np.linalg.LinAlgError):
+            break
+        if not result.converged:
+            break
+        found.append((square.flow_defect(result.X), len(found), square, result.X))
+        problem, X = problem.remesh(result.X)
+    if not found:
         return None
-    if not result.converged:
-        return None
+    defect, _, square, X = min(found)
     return CollocatedImpactPoint.from_columns(
-        gauge.record(square, result.X), None, kind=kind,
-        section_multipliers=square.section_multipliers(result.X),
-        flow_defect=square.flow_defect(result.X))
+        gauge.record(square, X), None, kind=kind,
+        section_multipliers=square.section_multipliers(X), flow_defect=defect)
 
 
 def field_parameters(vf, model: Model, scene: Scene, pressure_drop: float) -> dict:
