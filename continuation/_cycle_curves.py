@@ -113,7 +113,7 @@ class _Bordered(Condition):
     def bind(self, problem, X) -> "_Bordered":
         bound = type(self)()
         A = self.matrix(problem, problem.cycle_jacobian(X))
-        bound.c, bound.b = _null_vectors(A)
+        bound.c, bound.b = matrix_null_vectors(A)
         return bound
 
     def _solved(self, problem, X):
@@ -123,7 +123,7 @@ class _Bordered(Condition):
         return self._last[1]
 
     def _solve(self, problem, J):
-        v, w, g = _bordered_solve(self.matrix(problem, J), self.b, self.c)
+        v, w, g = bordered_solve(self.matrix(problem, J), self.b, self.c)
         return v, w, float(g)
 
     def value(self, problem, X) -> float:
@@ -133,8 +133,8 @@ class _Bordered(Condition):
         v, w, _ = self._solved(problem, X)
         out = np.zeros(len(X))
         for weights, d in self.pairs(problem, X, v, w):
-            H = _hessian(problem, X, d)
-            out -= H.T @ _padded(weights, H.shape[0])
+            H = jacobian_derivative(problem.cycle_jacobian, X, d)
+            out -= H.T @ padded(weights, H.shape[0])
         return out
 
     def accept(self, problem, X) -> None:
@@ -150,7 +150,7 @@ class CycleFold(_Bordered):
         return J[:, : J.shape[0]]
 
     def pairs(self, problem, X, v, w) -> list:
-        return [(w, _padded(v, len(X)))]
+        return [(w, padded(v, len(X)))]
 
 
 class PeriodDoubling(_Bordered):
@@ -186,7 +186,7 @@ class NeimarkSacker(Condition):
             problem.multipliers(X))
         bound = NeimarkSacker(mu)
         A, _ = _twisted(problem, problem.cycle_jacobian(X), mu)
-        bound.c, bound.b = _null_vectors(A)
+        bound.c, bound.b = matrix_null_vectors(A)
         return bound
 
     def _root(self, problem, X):
@@ -196,7 +196,7 @@ class NeimarkSacker(Condition):
         J, mu = problem.cycle_jacobian(X), self.multiplier
         for _ in range(30):
             A, A_mu = _twisted(problem, J, mu)
-            v, w, g = _bordered_solve(A, self.b, self.c)
+            v, w, g = bordered_solve(A, self.b, self.c)
             g_mu = -(w @ (A_mu @ v))
             step = g / g_mu
             mu -= step
@@ -220,8 +220,8 @@ class NeimarkSacker(Condition):
         g_X = np.zeros(len(X), dtype=complex)
         for weights, d in _twisted_pairs(problem, X, v, w, mu):
             for part, factor in ((d.real, 1.0), (d.imag, 1j)):
-                H = _hessian(problem, X, part)
-                g_X -= factor * (H.T @ _padded(weights, H.shape[0]))
+                H = jacobian_derivative(problem.cycle_jacobian, X, part)
+                g_X -= factor * (H.T @ padded(weights, H.shape[0]))
         mu_X = -g_X / g_mu
         return np.real(np.conj(mu) * mu_X) / abs(mu)
 
@@ -262,18 +262,18 @@ def _twisted_pairs(problem, X, v, w, mu) -> list:
     """``[(w_k, d_k)]`` of ``w^T A(mu)_X v`` (see ``_Bordered.pairs``): the rows of the
     last interval see ``v`` with node 0 times ``mu``."""
     last, wrap = _wrap_masks(problem)
-    return [(np.where(last, 0.0, w), _padded(v, len(X))),
-            (np.where(last, w, 0.0), _padded(np.where(wrap, mu * v, v), len(X)))]
+    return [(np.where(last, 0.0, w), padded(v, len(X))),
+            (np.where(last, w, 0.0), padded(np.where(wrap, mu * v, v), len(X)))]
 
 
-def _hessian(problem, X, d) -> sp.csc_matrix:
-    """``(d/dh) G_X(X + h d)`` by the central difference of two Jacobians (error
-    ``O(h^2)``): ``H^T w`` is the Hessian of ``w^T G`` in the direction ``d``."""
+def jacobian_derivative(jacobian, X, d) -> sp.csc_matrix:
+    """``(d/dh) G_X(X + h d)`` by the central difference of two Jacobians ``jacobian(X)``
+    (error ``O(h^2)``): ``H^T w`` is the Hessian of ``w^T G`` in the direction ``d``."""
     h = 1e-7 * (1.0 + np.max(np.abs(X))) / max(np.max(np.abs(d)), 1e-300)
-    return (problem.cycle_jacobian(X + h * d) - problem.cycle_jacobian(X - h * d)) / (2 * h)
+    return (jacobian(X + h * d) - jacobian(X - h * d)) / (2 * h)
 
 
-def _bordered_solve(A, b, c):
+def bordered_solve(A, b, c):
     """``(v, w, g)``: ``[[A, b], [c^T, 0]] (v, g) = (0, 1)`` and its transpose."""
     B = sp.bmat([[A, b[:, None]], [c[None, :], None]], format="csc")
     lu = factorize(B)
@@ -285,14 +285,14 @@ def _bordered_solve(A, b, c):
     return vg[:-1], wg[:-1], vg[-1]
 
 
-def _padded(v, size) -> np.ndarray:
+def padded(v, size) -> np.ndarray:
     """``v`` followed by zeros, ``size`` entries."""
     out = np.zeros(size, dtype=np.result_type(v, float))
     out[: v.size] = v
     return out
 
 
-def _null_vectors(A):
+def matrix_null_vectors(A):
     """Approximate right and left null vectors of a nearly singular ``A`` (an exactly
     singular one is nudged first)."""
     lu = factorize(A)

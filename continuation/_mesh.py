@@ -44,7 +44,12 @@ def error_indicator(U, mesh, ncol, n) -> float:
     return float(np.max(np.diff(mesh) ** (ncol + 1) * next_derivative(U, mesh, ncol, n)))
 
 
-def equidistribute(U, mesh, ncol, n, ntst_new: int, floor: float = 0.05) -> np.ndarray:
+#: the uniform share of the equidistributed density (of its mean), so no interval grows
+#: without bound where the solution is smooth
+FLOOR = 0.05
+
+
+def equidistribute(U, mesh, ncol, n, ntst_new: int, floor: float = FLOOR) -> np.ndarray:
     """New mesh of ``ntst_new`` intervals with equal shares of
     ``int (|u^(m+1)| ^ (1/(m+1)) + floor * mean) dt``."""
     h = np.diff(mesh)
