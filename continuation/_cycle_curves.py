@@ -129,6 +129,12 @@ class _Bordered(Condition):
     def value(self, problem, X) -> float:
         return self._solved(problem, X)[2]
 
+    def null_vector(self, problem, X) -> np.ndarray:
+        """The unit direction ``A(X)`` nearly annihilates (exactly at the point): the
+        bordered system's ``v`` (of a fold: the ``(U, T)`` direction of the turn)."""
+        v = self._solved(problem, X)[0]
+        return v / np.linalg.norm(v)
+
     def gradient(self, problem, X) -> np.ndarray:
         v, w, _ = self._solved(problem, X)
         out = np.zeros(len(X))

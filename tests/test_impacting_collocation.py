@@ -365,7 +365,8 @@ def test_period_doubling_of_an_asymmetric_cycle_and_its_doubled_branch():
 @pytest.mark.slow
 def test_symmetry_breaking_and_period_doubling_in_the_symmetric_channel():
     """N = 4, M* = 3 (about 3 min): past contact a real multiplier of the symmetric cycle
-    crosses +1 with no turn, a branch point; the switch reaches cycles that are not their
+    crosses +1 with no turn, a branch point, located by Newton on the cycles that keep
+    the channel's mirror; the switch reaches cycles that are not their
     own mirror image half a period on (the symmetric one is, to 1e-5), stable, and
     checked by time integration; on them a period doubling is located (in the symmetric
     channel, only such cycles can period-double)."""
@@ -373,8 +374,12 @@ def test_symmetry_breaking_and_period_doubling_in_the_symmetric_channel():
         ntst=200, max_points=30, ds=0.05, max_turn=0.3), mstar=3.0)
     (bp,) = [p for p in br.special if p.kind == "bp"]
     assert not [p for p in br.special if p.kind == "fold"]
-    # located on the arclength, where the PALC corrector turns singular (two null vectors)
-    assert abs(bp.critical_multiplier - 1) < 1e-4 and abs(bp.ustar - 8.6377) < 1e-3
+    # by Newton on the cycles that keep the mirror (the arclength put it at 8.6377 +- 1e-3
+    # with its multiplier 1e-4 from +1): the breaking multiplier at +1 to 1e-9 (measured
+    # 9e-12), and so is one of the whole monodromy's, beside the trivial one (5.6e-7 off)
+    assert bp.located and abs(bp.ustar - 8.6377) < 1e-3
+    assert abs(bp.critical_multiplier - 1) < 1e-9
+    assert np.sort(np.abs(bp.multipliers - 1))[0] < 1e-9
     before = [p for p in br.points if p.ustar < bp.ustar]
     assert before[-1].stable and not [p for p in br.points if p.ustar > bp.ustar][0].stable
     assert _mirror(model, scene, bp) < 1e-5                    # measured 2.6e-7

@@ -215,6 +215,25 @@ def test_mirror_symmetry_of_the_dynamics():
     assert sb.pressure_drop == pytest.approx(sa.pressure_drop, rel=1e-12)
 
 
+def test_model_mirror_is_the_symmetry_of_a_symmetric_channel():
+    """``Model.mirror`` is the mirror above as a matrix (an orthogonal involution); a
+    symmetric channel's dynamics (with contact) commute with it, an asymmetric one's do
+    not."""
+    scene = Scene(mstar=1.5, modes=5, contact=True, contact_eps=1e-2)
+    model = build_model(scene)
+    R = model.mirror
+    p = model.parameters(pressure_drop=40.0)
+    assert np.array_equal(R @ R, np.eye(12)) and np.array_equal(R, R.T)
+    for seed in range(3):
+        x = random_state(scene, seed)
+        assert np.array_equal(R @ x, mirror(x, 5))
+        assert np.allclose(model.xdot(R @ x, p), R @ model.xdot(x, p), rtol=1e-12, atol=1e-10)
+    off = build_model(scene.replace(channel1=Profile.constant(0.06),
+                                    channel2=Profile.constant(0.04)))
+    x = random_state(scene, 0)
+    assert not np.allclose(off.xdot(R @ x, p), R @ off.xdot(x, p), rtol=1e-6, atol=1e-6)
+
+
 def test_beam_deflects_towards_the_wider_channel():
     """Equal Δp drives faster flow, hence lower pressure, in the wider channel 1 (y > 0)."""
     scene = Scene(mstar=1.0, ustar=4.0, modes=8, channel1=Profile.constant(0.055),

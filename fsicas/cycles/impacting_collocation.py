@@ -28,8 +28,10 @@ library and refined by Newton on their minimally extended systems
 (``continuation.CycleFold``, ``PeriodDoubling``, ``NeimarkSacker``: the critical
 multiplier at +1, -1 or on the unit circle); branch points (a multiplier through +1
 where the branch does not turn: the symmetric cycle of the symmetric channel gives way
-to a pair of asymmetric ones), located on the arclength. :mod:`fsicas.cycles.branch_switching` switches at them onto
-the period-doubled and the asymmetric cycles.
+to a pair of asymmetric ones), by Newton on the cycles that keep the channel's mirror,
+``u(t + T/2) = R u(t)`` (``continuation.locate_symmetry_breaking``; in an asymmetric
+channel they keep the arclength location). :mod:`fsicas.cycles.branch_switching`
+switches at them onto the period-doubled and the asymmetric cycles.
 
 Extrema are those of the collocation polynomial, exact in t
 (:class:`fsicas.cycles.gauge.PolynomialExtrema`); the contact intervals are counted on
@@ -140,7 +142,8 @@ class CollocatedImpactPoint(ImpactPoint):
     located: bool = True
     #: of a located special cycle: the n - 1 non-trivial multipliers of the Poincare map
     #: (``continuation``'s ``section_multipliers``; a fold's multiplier at +1 is not split
-    #: from the trivial one there); empty elsewhere
+    #: from the trivial one there; of a branch point, those of the mirror's symmetric
+    #: split, ``continuation.symmetric_multipliers``); empty elsewhere
     section_multipliers: np.ndarray = field(repr=False,
                                             default_factory=lambda: np.zeros(0, complex))
     #: of a located special cycle: ``|Phi f - f| / |f|`` (``continuation``'s
@@ -258,50 +261,82 @@ def continued_branch(scene, model, problem, ustar_range, direction, settings, st
 
 def _refined(problem, sp, gauge, settings, finer) -> "CollocatedImpactPoint":
     """A special cycle located on the arclength, refined by Newton on its minimally
-    extended system, then (``settings.refine_ntst``) once more on the finer mesh of
-    ``finer(point)``; the arclength location (``located=False``) where the first fails,
-    the branch mesh's where the second does. A branch point has no such system: it is
-    kept where the arclength location put it (``located=False``)."""
-    if sp.kind not in _CONDITIONS:
-        square, X = problem.at(sp)
-        return CollocatedImpactPoint.from_columns(
-            sp.record, None, kind=sp.kind, located=False,
-            section_multipliers=square.section_multipliers(X), flow_defect=square.flow_defect(X))
-    point = _located(*problem.at(sp), sp.kind, gauge, settings)
+    extended system (a branch point: on the symmetric cycles of the channel's mirror; so
+    is a turn whose direction breaks the mirror, the vertex of a pitchfork, unless that
+    fails), then (``settings.refine_ntst``) once more on the finer mesh of ``finer(point)``; the
+    arclength location (``located=False``) where the first fails (a branch point of an
+    asymmetric channel: there is no such system), the branch mesh's where the second
+    does."""
+    mirror = gauge.model.mirror
+    vertex = sp.kind == "fold" and _pitchfork_vertex(*problem.at(sp), mirror)
+    for kind in ("bp", "fold") if vertex else (sp.kind,):
+        point = _located(*problem.at(sp), kind, gauge, settings)
+        if point is not None:
+            break
     if point is None:
-        return CollocatedImpactPoint.from_columns(sp.record, None, kind=sp.kind, located=False)
+        square, X = problem.at(sp)
+        section = dict(section_multipliers=square.section_multipliers(X),
+                       flow_defect=square.flow_defect(X)) if sp.kind == "bp" else {}
+        return CollocatedImpactPoint.from_columns(sp.record, None, kind=sp.kind,
+                                                  located=False, **section)
     if settings.refine_ntst:
         try:
             fine = finer(point)
         except RuntimeError:                     # the integrated guess failed
             return point
-        point = _located(fine, fine.X0, sp.kind, gauge, settings,
+        point = _located(fine, fine.X0, point.kind, gauge, settings,
                          settings.refine_passes) or point
     return point
 
 
+def _pitchfork_vertex(problem, X, mirror) -> bool:
+    """Whether the turn of the branch at ``X`` may be the vertex of a pitchfork, where
+    asymmetric cycles meet the symmetric ones at their branch point: the direction of
+    the turn (the null vector of G_(U,T)) breaks the mirror more than it keeps it,
+    ``|v(t) + R v(t - 1/2)| < |v(t) - R v(t - 1/2)|`` (a fold of symmetric cycles keeps
+    it; whether the cycle itself keeps it, the branch point's Newton checks)."""
+    square = C.CycleCurveProblem(problem, X, problem.free, C.CycleFold())
+    v, t = square.condition.null_vector(square, square.X0), problem.times()
+    u, image = problem.evaluate(v, t), problem.evaluate(v, t - 0.5) @ mirror.T
+    return bool(np.linalg.norm(u + image) < np.linalg.norm(u - image))
+
+
 def _located(problem, X, kind, gauge, settings, passes=0) -> "CollocatedImpactPoint | None":
-    """The special cycle of ``kind`` by Newton from ``X`` on its minimally extended
-    system, then ``passes`` times on a mesh equidistributing the located cycle's error
-    (the equidistribution does not settle: the one of smallest ``flow_defect`` is kept),
-    with its section multipliers; None where the first Newton fails."""
+    """The special cycle of ``kind`` by Newton from ``X`` (:func:`_locate`), then
+    ``passes`` times on a mesh equidistributing the located cycle's error (the
+    equidistribution does not settle: the one of smallest ``flow_defect`` is kept), with
+    its non-trivial multipliers; None where the first Newton fails."""
     found = []
     for _ in range(passes + 1):
         try:
-            square, result = C.locate_cycle(problem, X, _CONDITIONS[kind](),
-                                            C.NewtonSettings(tol=settings.tol))
+            square, result, multipliers, cycle = _locate(problem, X, kind, gauge.model.mirror,
+                                                         C.NewtonSettings(tol=settings.tol))
         except (ValueError, np.linalg.LinAlgError):
             break
         if not result.converged:
             break
-        found.append((square.flow_defect(result.X), len(found), square, result.X))
-        problem, X = problem.remesh(result.X)
+        found.append((square.flow_defect(result.X), len(found), square, result.X, multipliers))
+        problem, X = cycle.remesh(result.X)
     if not found:
         return None
-    defect, _, square, X = min(found)
+    defect, _, square, X, multipliers = min(found)
     return CollocatedImpactPoint.from_columns(
         gauge.record(square, X), None, kind=kind,
-        section_multipliers=square.section_multipliers(X), flow_defect=defect)
+        section_multipliers=multipliers(X), flow_defect=defect)
+
+
+def _locate(problem, X, kind, mirror, newton) -> tuple:
+    """``(square, result, multipliers, cycle)``: Newton on the minimally extended system of
+    ``kind`` (a branch point: on the cycles that keep ``u(t + T/2) = R u(t)``, the
+    channel's mirror ``R``, where the broken ones branch off; ValueError if the channel
+    or the cycle is not symmetric) and ``multipliers(X)``, the n - 1 non-trivial ones
+    (the Poincare map's; of a branch point the symmetric split's, the breaking one
+    apart from the trivial one); ``cycle``: the cycle problem of the located cycle's mesh."""
+    if kind == "bp":
+        sym, result = C.locate_symmetry_breaking(problem, X, mirror, 0.5, newton)
+        return sym, result, lambda X: C.symmetric_multipliers(sym, X, mirror)[1], sym
+    square, result = C.locate_cycle(problem, X, _CONDITIONS[kind](), newton)
+    return square, result, square.section_multipliers, problem
 
 
 def field_parameters(vf, model: Model, scene: Scene, pressure_drop: float) -> dict:

@@ -157,6 +157,17 @@ class Model:
             values[name] = value
         return np.array([values[name] for name in self.parameter_names], dtype=float)
 
+    @property
+    def mirror(self) -> np.ndarray:
+        """The channel's mirror ``R``: ``R x = (-r, -q, Q2, Q1)`` (beam reflected, channels
+        swapped), an orthogonal involution; a symmetric channel's model is equivariant
+        under it, and its symmetric cycles keep ``u(t + T/2) = R u(t)``."""
+        n = self.n_modes
+        R = np.zeros((2 * n + 2, 2 * n + 2))
+        R[range(2 * n), range(2 * n)] = -1.0
+        R[2 * n, 2 * n + 1] = R[2 * n + 1, 2 * n] = 1.0
+        return R
+
     def split(self, x) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """(r, q, Q) views of a state vector."""
         x = np.asarray(x, dtype=float)

@@ -95,7 +95,7 @@ def mirror_distance(model: Model, scene: Scene, state, period: float, *,
     n = model.scene.modes
     require(state.shape == (2 * n + 2,), f"state must have {2 * n + 2} entries")
     require(finite_number("period", period) > 0, f"period must be positive, got {period!r}")
-    mirror = np.r_[-state[:2 * n], state[-1], state[-2]]
+    mirror = model.mirror @ state
     traj = simulate(model, steady_state(scene, model), period / 2, x0=state,
                     settings=Settings(method="idas", rtol=rtol, atol=rtol * 1e-2,
                                       dt_out=period / 2000))

@@ -114,6 +114,10 @@ def test_lpc_located_by_newton_and_continued_on_the_bautin_fold_curve():
     assert np.allclose(np.sum(square.nodes(result.X) ** 2, axis=1), rho, atol=1e-8)
     mu = square.multipliers(result.X)
     assert np.sort(np.abs(mu - 1))[1] < 1e-6                 # the double multiplier at +1
+    v = square.condition.null_vector(square, result.X)       # the turn: radial, T fixed
+    U = result.X[: v.size - 1]
+    assert abs(np.linalg.norm(v) - 1) < 1e-12 and abs(v[-1]) < 1e-10
+    assert abs(abs(v[:-1] @ U) / (np.linalg.norm(v[:-1]) * np.linalg.norm(U)) - 1) < 1e-10
     curve, branch = _curve(square, result.X, "b2", C.CycleFold(), {"b2": (0.6, 1.6)})
     b1, b2 = branch.par("b1"), branch.par("b2")
     assert branch.status == "bound" and b2.max() > 1.45
