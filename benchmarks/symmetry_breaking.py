@@ -9,7 +9,7 @@ branch from the first contact (``impacting_collocation_branch``) to ``--ustar-ma
 branch points ("bp": a real multiplier through +1 where the branch does not turn), the
 branch of asymmetric cycles from the first (``symmetry_broken_branch``, ``--points``
 points) with its special cycles (located again on ``--refine-ntst`` intervals where
-given), with ``--doubled`` the branch of twice the period from
+given; the switched branches run on the branch's NTST), with ``--doubled`` the branch of twice the period from
 each of its period doublings (``period_doubled_branch``), and at ``--checks`` of the
 stable cycles of each a time integration (``settled_cycle``, IDAS 1e-10, 30 periods:
 period, amplitude, peak force against the cycle's) and the distance, half a period on,
@@ -89,7 +89,7 @@ def main(argv=None) -> None:
         return
     broken = computed(out / f"asymmetric_{tag}.json", lambda: symmetry_broken_branch(
         main_branch.scene, bps[0], model=model, ustar_min=0.0, ustar_max=args.ustar_max,
-        settings=replace(settings, ntst=bps[0].ntst, max_points=args.points)))
+        settings=replace(settings, max_points=args.points)))
     specials("asymmetric", broken)
     checks(broken, model, args.checks)
     if not args.doubled:
@@ -98,7 +98,7 @@ def main(argv=None) -> None:
     for u, pd in sorted(doublings.items()):
         doubled = computed(out / f"doubled_{tag}_U{u:g}.json", lambda: period_doubled_branch(
             broken.scene, pd, model=model, ustar_min=0.0, ustar_max=args.ustar_max,
-            settings=replace(settings, ntst=pd.ntst, max_points=40)))
+            settings=replace(settings, max_points=40)))
         specials(f"doubled at U* = {u:g}", doubled)
         checks(doubled, model, args.checks)
 
