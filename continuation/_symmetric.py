@@ -39,7 +39,7 @@ from ._settings import NewtonSettings
 
 #: largest ``|u(t + shift T) - S u(t)|`` of a start cycle (relative to ``max |u|``) and
 #: of the field's equivariance (relative to ``1 + max |F|``) accepted
-SYMMETRY_TOL, EQUIVARIANCE_TOL = 1e-3, 1e-8
+SYMMETRY_TOL, EQUIVARIANCE_TOL = 1e-2, 1e-8
 
 
 def locate_symmetry_breaking(problem: CycleProblem, X, symmetry, shift: float = 0.5,

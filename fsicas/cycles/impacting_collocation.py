@@ -68,6 +68,8 @@ symmetry branch off)."""
 
 #: the multiplier each kind of special cycle puts on the unit circle (None: a complex one)
 _CRITICAL = {"fold": 1.0, "pd": -1.0, "ns": None, "bp": 1.0}
+#: how far (relative, in U*) the branch point of a pitchfork's vertex may lie from the turn
+VERTEX_SHIFT = 1e-3
 #: the minimally extended system of each kind of special cycle
 _CONDITIONS = {"fold": C.CycleFold, "pd": C.PeriodDoubling, "ns": C.NeimarkSacker}
 
@@ -267,12 +269,7 @@ def _refined(problem, sp, gauge, settings, finer) -> "CollocatedImpactPoint":
     arclength location (``located=False``) where the first fails (a branch point of an
     asymmetric channel: there is no such system), the branch mesh's where the second
     does."""
-    mirror = gauge.model.mirror
-    vertex = sp.kind == "fold" and _pitchfork_vertex(*problem.at(sp), mirror)
-    for kind in ("bp", "fold") if vertex else (sp.kind,):
-        point = _located(*problem.at(sp), kind, gauge, settings)
-        if point is not None:
-            break
+    point = _first_located(*problem.at(sp), sp.kind, gauge, settings)
     if point is None:
         square, X = problem.at(sp)
         section = dict(section_multipliers=square.section_multipliers(X),
@@ -284,9 +281,21 @@ def _refined(problem, sp, gauge, settings, finer) -> "CollocatedImpactPoint":
             fine = finer(point)
         except RuntimeError:                     # the integrated guess failed
             return point
-        point = _located(fine, fine.X0, point.kind, gauge, settings,
-                         settings.refine_passes) or point
+        point = _first_located(fine, fine.X0, point.kind, gauge, settings,
+                               settings.refine_passes) or point
     return point
+
+
+def _first_located(problem, X, kind, gauge, settings, passes=0) -> "CollocatedImpactPoint | None":
+    """:func:`_located` of ``kind``; of a fold that may be the vertex of a pitchfork
+    (:func:`_pitchfork_vertex`), first as the branch point there, kept where its Newton
+    stays at the turn (U* within ``VERTEX_SHIFT`` relative)."""
+    if kind == "fold" and _pitchfork_vertex(problem, X, gauge.model.mirror):
+        point = _located(problem, X, "bp", gauge, settings, passes)
+        turn = gauge.record(problem, X)["ustar"]
+        if point is not None and abs(point.ustar - turn) <= VERTEX_SHIFT * abs(turn):
+            return point
+    return _located(problem, X, kind, gauge, settings, passes)
 
 
 def _pitchfork_vertex(problem, X, mirror) -> bool:
