@@ -9,10 +9,11 @@ branch from the first contact (``impacting_collocation_branch``) to ``--ustar-ma
 branch points ("bp": a real multiplier through +1 where the branch does not turn), the
 branch of asymmetric cycles from the first (``symmetry_broken_branch``, ``--points``
 points) with its special cycles (located again on ``--refine-ntst`` intervals where
-given; the switched branches run on the branch's NTST), with ``--doubled`` the branch of twice the period from
-each of its period doublings (``period_doubled_branch``), and at ``--checks`` of the
-stable cycles of each a time integration (``settled_cycle``, IDAS 1e-10, 30 periods:
-period, amplitude, peak force against the cycle's) and the distance, half a period on,
+given; the switched branches run on the branch's NTST), with ``--doubled`` the branch of
+twice the period from each of its period doublings (``period_doubled_branch``), and at
+``--checks`` of the stable cycles of each a time integration (``settled_cycle``, IDAS
+1e-10, 30 periods: period, amplitude, peak force against the cycle's) and the distance,
+half a period on,
 from the state's mirror image R x = (-r, -r', Q2, Q1) (zero for a symmetric cycle).
 Branches are saved to ``--out`` (JSON) and read back on a rerun.
 """

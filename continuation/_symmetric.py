@@ -100,7 +100,7 @@ class _BranchPointSystem:
         self.rows = sp.block_diag([plus.T, sp.eye(1)], format="csr")   # sym. rows, phase
         self.P = sp.block_diag([plus, sp.eye(2)], format="csc")        # Z -> X
         self.Z0 = self.P.T @ sym.X0
-        A = self._breaking_block(CycleProblem.jacobian(sym, sym.X0))
+        A = self._breaking_block(sym.jacobian(sym.X0))
         self.c, self.b = matrix_null_vectors(A)
         self._last = None
 
@@ -112,7 +112,7 @@ class _BranchPointSystem:
         """``(X, G, J, v, w, g)`` at ``Z`` (kept for the last ``Z``)."""
         if self._last is None or not np.array_equal(self._last[0], Z):
             X = self.P @ Z
-            J = CycleProblem.jacobian(self.sym, X)
+            J = self.sym.jacobian(X)
             v, w, g = bordered_solve(self._breaking_block(J), self.b, self.c)
             self._last = (np.array(Z), (X, self.sym.residual(X), J, v, w, float(g)))
         return self._last[1]
@@ -125,7 +125,7 @@ class _BranchPointSystem:
         X, _, J, v, w, _ = self._at(Z)
         d = np.zeros(X.size)
         d[: self.N] = self.minus @ v
-        H = jacobian_derivative(lambda X: CycleProblem.jacobian(self.sym, X), X, d)
+        H = jacobian_derivative(self.sym.jacobian, X, d)
         g_X = -(H[: self.N].T @ (self.minus @ w))
         return sp.vstack([self.rows @ J @ self.P, sp.csr_matrix(g_X @ self.P)], format="csc")
 

@@ -71,18 +71,19 @@ def _switched(scene, point, kind, model, amplitude, ustar_range, settings
                                                 settings=settings)
         square, X, residual = _rebuilt_special(problem, kind, settings)
     except (RuntimeError, ValueError, np.linalg.LinAlgError) as err:
-        return failed_branch(scene, model, f"the special cycle could not be rebuilt: {err}", start)
+        return failed_branch(scene, model, f"the special cycle could not be rebuilt: {err}",
+                             start)
     special = C.SpecialPoint(kind, 0, square.state(X), square.par_dict(X), "converged",
                              residual, {"X": list(X), "mesh": list(square.mesh)})
     switch = C.cycle_from_pd if kind == "pd" else C.cycle_from_bp
     return continued_branch(scene, model, switch(problem, special, amplitude=amplitude),
-                      ustar_range, 1, settings, start)
+                            ustar_range, 1, settings, start)
 
 
 def _rebuilt_special(problem, kind, settings) -> tuple:
     """``(problem, X, residual)``: a period doubling by Newton on its minimally extended
-    system (RuntimeError if that fails). A branch point has none, and Newton at fixed U*
-    is singular there (two null vectors): the rebuilt cycle stays the guess, and the new
+    system (RuntimeError if that fails). A branch point is not located again here (the
+    point was, on the symmetric cycles): the rebuilt cycle stays the guess, and the new
     branch's start corrector, off the branch point by the switch's amplitude, corrects
     it."""
     if kind == "bp":

@@ -49,13 +49,18 @@ class Gauge:
         p = problem.params(X)
         mu, rest = problem.multipliers(X), problem.section_multipliers(X)
         mstar = 10 ** p[problem.vf.par_index(LOG_M)]
-        ustar, self.x_eq = steady_ustar(problem.vf, p, self.x_eq, self.model.scene.hstar)
-        return {"ustar": ustar, "mstar": float(mstar),
+        return {"ustar": self.ustar(problem, X), "mstar": float(mstar),
                 "pressure_drop": float(p[problem.vf.par_index(PI)] * PI_SCALE * mstar),
                 PERIOD_COLUMN: problem.period(X) / TIME_SCALE, "multipliers": mu,
                 "stable": bool(np.all(np.abs(rest) < 1.0)), "state": problem.state(X).copy(),
                 "quadrature_error": self.quadrature_error(problem, X),
                 "quadrature_nodes": self.model.scene.n_quad}
+
+    def ustar(self, problem, X) -> float:
+        """U* of the steady state at the pressure drop of X (Newton from the last one)."""
+        ustar, self.x_eq = steady_ustar(problem.vf, problem.params(X), self.x_eq,
+                                        self.model.scene.hstar)
+        return ustar
 
     def quadrature_error(self, problem, X) -> float:
         """:func:`fsicas.model.accuracy.quadrature_error` over the cycle (kept for the

@@ -226,9 +226,10 @@ def impacting_collocation_branch(scene: Scene, state, period: float, pressure_dr
         problem = impacting_collocation_problem(scene, state, period, pressure_drop,
                                                 model=model, settings=settings)
     except RuntimeError as err:                  # CVODES failure, e.g. a gap closing
-        return failed_branch(scene, model, "the start cycle could not be integrated over one "
-                       f"period: {err}", start)
-    return continued_branch(scene, model, problem, (ustar_min, ustar_max), direction, settings, start)
+        return failed_branch(scene, model, "the start cycle could not be integrated over "
+                             f"one period: {err}", start)
+    return continued_branch(scene, model, problem, (ustar_min, ustar_max), direction,
+                            settings, start)
 
 
 def check_smooth(scene: Scene) -> None:
@@ -292,7 +293,7 @@ def _first_located(problem, X, kind, gauge, settings, passes=0) -> "CollocatedIm
     stays at the turn (U* within ``VERTEX_SHIFT`` relative)."""
     if kind == "fold" and _pitchfork_vertex(problem, X, gauge.model.mirror):
         point = _located(problem, X, "bp", gauge, settings, passes)
-        turn = gauge.record(problem, X)["ustar"]
+        turn = gauge.ustar(problem, X)
         if point is not None and abs(point.ustar - turn) <= VERTEX_SHIFT * abs(turn):
             return point
     return _located(problem, X, kind, gauge, settings, passes)
@@ -316,7 +317,7 @@ def _located(problem, X, kind, gauge, settings, passes=0) -> "CollocatedImpactPo
     equidistribution does not settle: the one of smallest ``flow_defect`` is kept), with
     its non-trivial multipliers; None where the first Newton fails."""
     found = []
-    for _ in range(passes + 1):
+    for k in range(passes + 1):
         try:
             square, result, multipliers, cycle = _locate(problem, X, kind, gauge.model.mirror,
                                                          C.NewtonSettings(tol=settings.tol))
@@ -324,8 +325,9 @@ def _located(problem, X, kind, gauge, settings, passes=0) -> "CollocatedImpactPo
             break
         if not result.converged:
             break
-        found.append((square.flow_defect(result.X), len(found), square, result.X, multipliers))
-        problem, X = cycle.remesh(result.X)
+        found.append((square.flow_defect(result.X), k, square, result.X, multipliers))
+        if k < passes:                           # the next pass: re-meshed on this cycle
+            problem, X = cycle.remesh(result.X)
     if not found:
         return None
     defect, _, square, X, multipliers = min(found)
