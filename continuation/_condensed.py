@@ -168,7 +168,7 @@ class CondensedLU:
             raise ValueError(f"the bordered collocation matrix is not square: "
                              f"{border.shape[0]} border rows for {k} extra columns")
         Z = J.maps
-        chain = Chain.of(Z[:, p:, :n], np.broadcast_to(np.eye(n), (ntst, n, n)), Z[:, p:, n:])
+        chain = Chain.of(Z[:, p:, :n], None, Z[:, p:, n:])
         if chain is None:
             return None
         bu = border[:, :ntst * m].reshape(k, ntst, ncol, n).transpose(1, 0, 2, 3)
@@ -203,17 +203,26 @@ class Chain:
     ``Zt = R^-1 Q_top^T [left, right, y]`` (the point from its neighbours). The ``k``
     border rows ``sum_i Bv_i v_i + By y = s`` that make the system square
     (:meth:`bordered`) follow the eliminations, and with the last equation form an
-    ``n + k`` dense system."""
+    ``n + k`` dense system.
+
+    When every ``C_i`` is the identity (the condensed chain, ``C = None``), the first
+    level eliminates each pair's point by that identity instead of a QR: one product of
+    two adjacent transfer maps, ``v_2j+2 = a_2j+1 a_2j v_2j + ...``, as multiple shooting
+    over pairs of intervals does (the higher levels, whose columns are general, keep
+    the QR). Half the pairs are on the first level: this halves the reduction's cost."""
 
     def __init__(self, schedule, Qb, H, Zt, last):
         self.schedule, self.Qb, self.H, self.Zt, self.last = schedule, Qb, H, Zt, last
 
     @classmethod
     def of(cls, A, C, G):
-        """``A, C``: ``(N, n, n)``; ``G``: ``(N, n, k)``. None when a pair's column is
-        rank-deficient."""
+        """``A, C``: ``(N, n, n)``, ``C`` None for identities (the condensed chain);
+        ``G``: ``(N, n, k)``. None when a pair's column is rank-deficient."""
         schedule = _schedule(A.shape[0])
-        *factors, ok = _compiled().chain_reduce(*map(_c, (A, C, G)), schedule)
+        unit = C is None
+        if unit:
+            C = np.broadcast_to(np.eye(A.shape[1]), A.shape)
+        *factors, ok = _compiled().chain_reduce(*map(_c, (A, C, G)), schedule, unit)
         return cls(schedule, *factors[:3], factors[3:]) if ok else None
 
     def bordered(self, Bv, By):

@@ -7,47 +7,27 @@ its 16 x 16 block 1-2 us). Its loops therefore run compiled by numba (``cache=Tr
 compiled once per machine into ``__pycache__``, then loaded in a fraction of a second).
 Every compiled function that calls another one lives in this module: numba's disk cache
 is invalidated by edits of a function's own file only, so a caller elsewhere would keep
-the machine code of an edited kernel (leaves that call nothing compiled may live with
-their module, as the collocation assembly of ``_blocks`` does, compiled at their first
-call by ``_lazyjit.jit``). This module is imported at first use (``_condensed``), so that
-``import continuation`` and problems that use no compiled code do not import numba.
+the machine code of an edited kernel (leaves may live with their module: ``_lazyjit``).
+Imported at first use (``_condensed``): ``import continuation`` does not import numba.
 
 The dense kernels, for C-ordered arrays: :func:`lu_factor` / :func:`lu_solve` (partial
 pivoting), :func:`qr_eliminate` (Householder QR of a stacked column applied to its rows:
 the elimination of one unknown block from a pair of equations) and :func:`gemm`
 (``C += alpha A B`` without allocation). Blocks of at most ``SMALL`` rows are handled by
 plain loops, which skip LAPACK's per-call overhead; larger ones by LAPACK and BLAS
-(``dgetrf``/``dgetrs``, ``dgeqrf``/``dormqr``, ``dtrsm`` of SciPy's
-``cython_lapack``/``cython_blas``, bound to process-wide symbols by name so that the
-cached code stays valid), 2-3x faster from a few dozen rows on.
+(``_lapack``), 2-3x faster from a few dozen rows on.
 """
 
 from __future__ import annotations
 
-import llvmlite.binding as llvm
 import numpy as np
-from numba import njit, types
-from numba.extending import get_cython_function_address
+from numba import njit
 
+from ._lapack import dgeqrf, dgetrf, dgetrs, dormqr, dtrsm
 from ._lazyjit import SMALL
 
 #: the compiled functions: nopython, cached on disk, releasing the GIL
 jit = njit(cache=True, nogil=True)
-
-
-def _bound(module: str, name: str, nargs: int):
-    """SciPy's ``module.name`` (all arguments pointers, Fortran convention) as an external
-    function of numba, through a symbol of this process named after it."""
-    symbol = f"continuation_{name}"
-    llvm.add_symbol(symbol, get_cython_function_address(f"scipy.linalg.{module}", name))
-    return types.ExternalFunction(symbol, types.void(*([types.voidptr] * nargs)))
-
-
-_dgetrf = _bound("cython_lapack", "dgetrf", 6)
-_dgetrs = _bound("cython_lapack", "dgetrs", 9)
-_dgeqrf = _bound("cython_lapack", "dgeqrf", 8)
-_dormqr = _bound("cython_lapack", "dormqr", 13)
-_dtrsm = _bound("cython_blas", "dtrsm", 11)
 
 
 @jit
@@ -57,7 +37,7 @@ def lu_factor(a, piv) -> bool:
     m = a.shape[0]
     if m > SMALL:                        # a C-ordered a is A^T in Fortran's eyes
         ints = np.array([m, 0], np.int32)
-        _dgetrf(ints.ctypes, ints.ctypes, a.ctypes, ints.ctypes, piv.ctypes,
+        dgetrf(ints.ctypes, ints.ctypes, a.ctypes, ints.ctypes, piv.ctypes,
                 ints[1:].ctypes)
         return ints[1] == 0
     for j in range(m):
@@ -90,7 +70,7 @@ def lu_solve(a, piv, b) -> None:
         bt = np.ascontiguousarray(b.T)
         ints = np.array([m, r, 0], np.int32)
         trans = np.array([ord("T")], np.uint8)
-        _dgetrs(trans.ctypes, ints.ctypes, ints[1:].ctypes, a.ctypes, ints.ctypes,
+        dgetrs(trans.ctypes, ints.ctypes, ints[1:].ctypes, a.ctypes, ints.ctypes,
                 piv.ctypes, bt.ctypes, ints.ctypes, ints[2:].ctypes)
         b[:] = bt.T
         return
@@ -153,16 +133,16 @@ def _qr_eliminate_lapack(S, W) -> bool:
     lwork = 64 * max(n, w, 1)
     work = np.empty(lwork)
     ints = np.array([p, n, w, lwork, 0], np.int32)
-    _dgeqrf(ints.ctypes, ints[1:].ctypes, Sf.ctypes, ints.ctypes, tau.ctypes, work.ctypes,
+    dgeqrf(ints.ctypes, ints[1:].ctypes, Sf.ctypes, ints.ctypes, tau.ctypes, work.ctypes,
             ints[3:].ctypes, ints[4:].ctypes)
     chars = np.array([ord("L"), ord("T"), ord("U"), ord("N")], np.uint8)
-    _dormqr(chars.ctypes, chars[1:].ctypes, ints.ctypes, ints[2:].ctypes, ints[1:].ctypes,
+    dormqr(chars.ctypes, chars[1:].ctypes, ints.ctypes, ints[2:].ctypes, ints[1:].ctypes,
             Sf.ctypes, ints.ctypes, tau.ctypes, Wf.ctypes, ints.ctypes, work.ctypes,
             ints[3:].ctypes, ints[4:].ctypes)
     if not _full_rank(Sf, n):
         return False
     one = np.ones(1)
-    _dtrsm(chars.ctypes, chars[2:].ctypes, chars[3:].ctypes, chars[3:].ctypes,
+    dtrsm(chars.ctypes, chars[2:].ctypes, chars[3:].ctypes, chars[3:].ctypes,
            ints[1:].ctypes, ints[2:].ctypes, one.ctypes, Sf.ctypes, ints.ctypes, Wf.ctypes,
            ints.ctypes)
     S[:] = Sf
@@ -238,23 +218,37 @@ def interval_factors(blocks, extra):
     return lu, piv, Z, True
 
 
+#: the largest ``|a|_inf`` of the two transfer maps a pair is eliminated by its identity
+#: pivot with (:func:`_unit_eliminate`); a larger one takes the QR
+UNIT_GROWTH = 4.0
+
+
 @jit
-def chain_reduce(A, C, G, schedule):
+def chain_reduce(A, C, G, schedule, unit):
     """``(Qb, H, Zt, AC, G0, ok)`` of :class:`Chain` (``AC = A + C``, ``G0``: the last
-    equation); ok False when a pair's column is rank-deficient."""
+    equation); ok False when a pair's column is rank-deficient. ``unit``: every ``C_i``
+    is the identity; pairs whose pivot is still one and whose maps are bounded are then
+    eliminated by it (:func:`_unit_eliminate`), the others by a QR."""
     n, k = A.shape[1], G.shape[2]
     pairs = A.shape[0] - 1
-    Qb = np.empty((pairs, n, 2 * n))
-    H = np.empty((pairs, n, 2 * n))
+    Qb, H = np.empty((pairs, n, 2 * n)), np.empty((pairs, n, 2 * n))
     Zt = np.empty((pairs, n, 2 * n + k))
-    S = np.empty((2 * n, n))
-    W = np.empty((2 * n, 4 * n + k))
+    S, W = np.empty((2 * n, n)), np.empty((2 * n, 4 * n + k))
+    ident = np.full(A.shape[0], unit)                 # whether C_i is the identity
     off = 0
     for level in range(schedule.shape[0]):
         q, odd = schedule[level, 0], schedule[level, 1]
         A2, C2, G2 = np.empty((q + odd, n, n)), np.empty((q + odd, n, n)), \
             np.empty((q + odd, n, k))
+        ident2 = np.zeros(q + odd, np.bool_)
         for j in range(q):
+            i = off + j
+            if ident[2 * j] and max(np.abs(A[2 * j]).sum(axis=1).max(),
+                                    np.abs(A[2 * j + 1]).sum(axis=1).max()) <= UNIT_GROWTH:
+                _unit_eliminate(A[2 * j], A[2 * j + 1], G[2 * j], G[2 * j + 1],
+                                Qb[i], H[i], Zt[i], A2[j], G2[j])
+                C2[j], ident2[j] = C[2 * j + 1], ident[2 * j + 1]
+                continue
             S[:n], S[n:] = C[2 * j], A[2 * j + 1]
             W[:] = 0.0
             for d in range(2 * n):
@@ -263,13 +257,29 @@ def chain_reduce(A, C, G, schedule):
             W[n:, 3 * n:4 * n], W[n:, 4 * n:] = C[2 * j + 1], G[2 * j + 1]      # [0, c1, g1]
             if not qr_eliminate(S, W):
                 return Qb, H, Zt, A[0], G[0], False
-            Qb[off + j], H[off + j], Zt[off + j] = W[n:, :2 * n], W[:n, :2 * n], W[:n, 2 * n:]
+            Qb[i], H[i], Zt[i] = W[n:, :2 * n], W[:n, :2 * n], W[:n, 2 * n:]
             A2[j], C2[j], G2[j] = W[n:, 2 * n:3 * n], W[n:, 3 * n:4 * n], W[n:, 4 * n:]
         if odd:
-            A2[q], C2[q], G2[q] = A[2 * q], C[2 * q], G[2 * q]
-        A, C, G = A2, C2, G2
+            A2[q], C2[q], G2[q], ident2[q] = A[2 * q], C[2 * q], G[2 * q], ident[2 * q]
+        A, C, G, ident = A2, C2, G2, ident2
         off += q
     return Qb, H, Zt, A[0] + C[0], G[0].copy(), True
+
+
+@jit
+def _unit_eliminate(a0, a1, g0, g1, Qb, H, Zt, A2, G2) -> None:
+    """The pair ``a0 v_0 + v_1 + g0 y = z_0``, ``a1 v_1 + c1 v_2 + g1 y = z_1`` freed of
+    ``v_1`` by its identity pivot (a product of transfer maps: multiple shooting over the
+    two intervals): ``v_1 = z_0 - a0 v_0 - g0 y`` (``H = [I, 0]``, ``Zt = [a0, 0, g0]``),
+    ``-a1 a0 v_0 + c1 v_2 + (g1 - a1 g0) y = z_1 - a1 z_0`` (``Qb = [-a1, I]``). With
+    ``|a0|, |a1| <= UNIT_GROWTH`` its rounding is a few eps of the identity's scale."""
+    n = a0.shape[0]
+    Qb[:], H[:], Zt[:], A2[:], G2[:] = 0.0, 0.0, 0.0, 0.0, g1
+    for d in range(n):
+        H[d, d], Qb[d, n + d] = 1.0, 1.0
+    Qb[:, :n], Zt[:, :n], Zt[:, 2 * n:] = -a1, a0, g0
+    gemm(A2, a1, a0, -1.0)
+    gemm(G2, a1, g0, -1.0)
 
 
 @jit

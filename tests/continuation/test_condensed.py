@@ -77,39 +77,66 @@ def test_transposed_solves_are_refused():
         lu.solve(np.ones(prob.X0.size), trans="T")
 
 
-def test_chain_reduction_is_stable_where_a_transfer_recursion_is_not():
-    """A chain ``v_{i+1} = Phi_i v_i + ...`` whose monodromy has multipliers 1e+-20 (a
-    recursion over the transfer maps, single shooting, loses everything there): the
-    pairwise QR reduction solves it with a backward error at round-off."""
-    N, n, k = 21, 4, 2
+def _chain(decades: float, N: int = 21, n: int = 4, k: int = 2):
+    """A cyclic chain ``v_{i+1} = -A_i v_i + ...`` (``C_i = I``) whose monodromy has
+    multipliers ``10^(+-decades)``, its borders, and its dense matrix."""
     rng = np.random.default_rng(5)
-    rates = np.array([20.0, 0.0, -20.0, 3.0]) * np.log(10) / N
+    rates = np.array([1.0, 0.0, -1.0, 0.15]) * decades * np.log(10) / N
     A = np.empty((N, n, n))
     Q, _ = np.linalg.qr(rng.standard_normal((n, n)))
     for i in range(N):                                         # v_{i+1} = -A_i v_i
         A[i] = -Q @ np.diag(np.exp(rates)) @ Q.T @ (np.eye(n) + 1e-3 * rng.standard_normal((n, n)))
-    C_ = np.broadcast_to(np.eye(n), (N, n, n))
     G = rng.standard_normal((N, n, k))
     Bv, By = rng.standard_normal((N, k, n)), rng.standard_normal((k, k))
     dense = np.zeros((N * n + k, N * n + k))
     for i in range(N):
         j = (i + 1) % N
         dense[i * n:(i + 1) * n, i * n:(i + 1) * n] = A[i]
-        dense[i * n:(i + 1) * n, j * n:(j + 1) * n] += C_[i]
+        dense[i * n:(i + 1) * n, j * n:(j + 1) * n] += np.eye(n)
         dense[i * n:(i + 1) * n, N * n:] = G[i]
     dense[N * n:, :N * n] = Bv.transpose(1, 0, 2).reshape(k, N * n)
     dense[N * n:, N * n:] = By
+    return A, G, Bv, By, dense, rng
+
+
+def _chain_backward_error(A, C_, G, Bv, By, dense, rng) -> float:
+    N, n, k = G.shape
     chain = Chain.of(A, C_, G)
     factors = chain.bordered(Bv, By)
     rhs = rng.standard_normal((N * n + k, 2))
     v, y = chain.solve(factors, rhs[:N * n].reshape(N, n, 2), rhs[N * n:])
     x = np.concatenate([v.reshape(N * n, 2), y])
-    backward = np.max(np.abs(dense @ x - rhs)) / (np.max(np.abs(dense)) * np.max(np.abs(x)))
-    assert backward < 1e-14
-    mono = np.eye(n)
+    return np.max(np.abs(dense @ x - rhs)) / (np.max(np.abs(dense)) * np.max(np.abs(x)))
+
+
+@pytest.mark.parametrize("unit", [False, True])
+def test_chain_reduction_is_stable_where_a_transfer_recursion_is_not(unit):
+    """A chain whose monodromy has multipliers 1e+-20 (a recursion over the transfer
+    maps, single shooting, loses everything there): the pairwise QR reduction solves it
+    with a backward error at round-off, also when told its ``C_i`` are identities
+    (``C = None``: its maps, ``|A_i| ~ 9``, are too large for the identity pivot)."""
+    A, G, Bv, By, dense, rng = _chain(20.0)
+    C_ = None if unit else np.broadcast_to(np.eye(A.shape[1]), A.shape)
+    assert _chain_backward_error(A, C_, G, Bv, By, dense, rng) < 1e-14
+    mono = np.eye(A.shape[1])
     for Ai in A:
         mono = -Ai @ mono
     assert np.max(np.abs(np.linalg.eigvals(mono))) > 1e19           # really that hard
+
+
+def test_identity_pivots_solve_a_chain_of_bounded_maps_to_round_off():
+    """Multipliers 1e+-0.5 over 21 maps: with ``C = None`` every pair whose maps stay
+    within ``UNIT_GROWTH`` is eliminated by its identity pivot (products of maps), the
+    rest by QR; the backward error stays at round-off, as with QR alone."""
+    from continuation import _jit
+    A, G, Bv, By, dense, rng = _chain(0.5)
+    assert np.abs(A).sum(axis=2).max() < _jit.UNIT_GROWTH / 2    # two levels at least
+    errors = [_chain_backward_error(A, C_, G, Bv, By, dense, rng)
+              for C_ in (None, np.broadcast_to(np.eye(A.shape[1]), A.shape))]
+    assert max(errors) < 1e-15
+    n = A.shape[1]
+    by_pivot = [np.array_equal(H, np.eye(n, 2 * n)) for H in Chain.of(A, None, G).H]
+    assert sum(by_pivot) >= 10 + 5                  # the first two levels at least
 
 
 def test_multipliers_from_the_factorization_equal_the_sparse_floquet_condensation():
