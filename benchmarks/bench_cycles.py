@@ -28,6 +28,7 @@ import shutil
 import subprocess
 import tempfile
 import time
+from dataclasses import replace
 
 # Single-threaded BLAS, like AUTO (OMP_NUM_THREADS=1): on a shared, loaded 2-core
 # machine the multithreaded OpenBLAS made the many small solves of the Floquet
@@ -97,14 +98,16 @@ def ours(n: int, points: int, floquet: str):
     cyc.multipliers(second.X)    # compiled code (numba's cache: ~0.5 s in a new process)
     build = time.perf_counter() - t0
     t0 = time.perf_counter()
-    steps = [first, second]
+    # the points are kept without their factors: a run keeps only the last point's (a
+    # list of 20 sets of LU factors would make every point allocate fresh memory)
+    steps = [replace(first, lu=None), replace(second, lu=None)]
     mus = [cyc.multipliers(first.X), cyc.multipliers(second.X)]
     step = second
     for _ in range(points - 2):
         step = it.advance(step)
         if step is None:
             break
-        steps.append(step)
+        steps.append(replace(step, lu=None))
         mus.append(cyc.multipliers(step.X))
     per_point = (time.perf_counter() - t0) / max(len(steps) - 2, 1)
     return {"F": cyc.vf, "cyc": cyc, "steps": steps, "mu": mus, "per_point": per_point,

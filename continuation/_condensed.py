@@ -45,7 +45,7 @@ from ._sparse import layout
 #: rows, and for larger ones at least ``CONDENSED_MIN_FILL`` full: larger sparse blocks
 #: (a discretized PDE, banded) are faster on SuperLU, which keeps their sparsity
 #: (``docs/performance.md``)
-CONDENSED_ROWS, CONDENSED_MIN_FILL = 64, 0.5
+CONDENSED_ROWS, CONDENSED_MIN_FILL = 100, 0.5
 
 
 def condensed_pays(rows: int, fill: float) -> bool:

@@ -182,7 +182,7 @@ def test_linear_solver_setting_and_its_automatic_choice():
         C.CollocationSettings(linear_solver="lu")
     with pytest.raises(ValueError, match="needs jacobian = 'blocks'"):
         C.CollocationSettings(linear_solver="condensed", jacobian="graph")
-    # 'auto': interval blocks of up to 64 rows (6 states x NCOL 4 = 24 here) condense;
+    # 'auto': interval blocks of up to 100 rows (6 states x NCOL 4 = 24 here) condense;
     # larger ones when dense (a 40-state field with a dense mass, 160 rows), not when
     # banded (a 40-state ring, 160 rows: SuperLU keeps the band)
     assert _problem(8, 4, "auto").condensed
