@@ -21,6 +21,7 @@ Public API (everything else is private)::
     Extremum(rows, offset, level), CycleFold(), PeriodDoubling(), NeimarkSacker()   # conditions
     locate_symmetry_breaking(cycle_problem, X, symmetry, shift=0.5) -> (problem, NewtonResult)
     symmetric_multipliers(cycle_problem, X, symmetry, shift=0.5) -> (trivial, rest)
+    keeps_symmetry(cycle_problem, X, symmetry, shift=0.5) -> bool   # what those two accept
     ShootingProblem(F, orbit, period, params, active, *, M=None, settings=ShootingSettings())
     Branch, SpecialPoint, ContinuationIterator, PALC, ContinuationSettings,
     NewtonSettings, EigenSettings, CollocationSettings, ShootingSettings
@@ -46,7 +47,7 @@ from ._settings import (CollocationSettings, ContinuationSettings, EigenSettings
 from ._shooting import ShootingProblem
 from ._symbolic import BufferedFunction
 from ._switching import cycle_from_bp, cycle_from_hopf, cycle_from_pd
-from ._symmetric import locate_symmetry_breaking, symmetric_multipliers
+from ._symmetric import keeps_symmetry, locate_symmetry_breaking, symmetric_multipliers
 from ._vectorfield import VectorField
 
 __all__ = [
@@ -56,5 +57,6 @@ __all__ = [
     "cycle_from_bp", "cycle_from_pd",
     "EquilibriumProblem", "FoldCurveProblem", "HopfCurveProblem", "Lifted", "NewtonSettings",
     "PALC", "Problem", "SpecialPoint", "Step", "VectorField", "continuation", "correct", "observing",
-    "first_lyapunov", "hopf_point", "locate_symmetry_breaking", "symmetric_multipliers",
+    "first_lyapunov", "hopf_point", "keeps_symmetry", "locate_symmetry_breaking",
+    "symmetric_multipliers",
 ]

@@ -1,21 +1,14 @@
-"""The compiled layer: numba functions, cached on disk.
+"""The compiled layer: numba functions, cached on disk (``cache=True``), for the loops over
+the many small dense blocks of the condensed collocation solver (``_condensed``), where
+a Python loop over LAPACK calls costs more than their arithmetic. Every compiled
+function that calls another one lives in this module: numba's cache is invalidated by
+edits of a function's own file only (leaves may live elsewhere: ``_lazyjit``). Imported
+at first use, so that ``import continuation`` does not import numba.
 
-The condensed Newton solver of collocated cycles (``_condensed``) works on many small
-dense blocks, one or two per mesh interval: a Python loop over them costs more than
-their arithmetic (at n = 4, NTST = 50 a LAPACK call from Python costs 3-6 us, the LU of
-its 16 x 16 block 1-2 us). Its loops therefore run compiled by numba (``cache=True``:
-compiled once per machine into ``__pycache__``, then loaded in a fraction of a second).
-Every compiled function that calls another one lives in this module: numba's disk cache
-is invalidated by edits of a function's own file only, so a caller elsewhere would keep
-the machine code of an edited kernel (leaves may live with their module: ``_lazyjit``).
-Imported at first use (``_condensed``): ``import continuation`` does not import numba.
-
-The dense kernels, for C-ordered arrays: :func:`lu_factor` / :func:`lu_solve` (partial
-pivoting), :func:`qr_eliminate` (Householder QR of a stacked column applied to its rows:
-the elimination of one unknown block from a pair of equations) and :func:`gemm`
-(``C += alpha A B`` without allocation). Blocks of at most ``SMALL`` rows are handled by
-plain loops, which skip LAPACK's per-call overhead; larger ones by LAPACK and BLAS
-(``_lapack``), 2-3x faster from a few dozen rows on.
+Dense kernels, for C-ordered arrays: :func:`lu_factor` / :func:`lu_solve`,
+:func:`qr_eliminate` (the elimination of one unknown block from a pair of equations)
+and :func:`gemm`; blocks of at most ``SMALL`` rows by plain loops (no per-call
+overhead), larger ones by LAPACK and BLAS (``_lapack``), 2-3x faster there.
 """
 
 from __future__ import annotations
@@ -38,7 +31,7 @@ def lu_factor(a, piv) -> bool:
     if m > SMALL:                        # a C-ordered a is A^T in Fortran's eyes
         ints = np.array([m, 0], np.int32)
         dgetrf(ints.ctypes, ints.ctypes, a.ctypes, ints.ctypes, piv.ctypes,
-                ints[1:].ctypes)
+               ints[1:].ctypes)
         return ints[1] == 0
     for j in range(m):
         p, big = j, abs(a[j, j])
@@ -71,7 +64,7 @@ def lu_solve(a, piv, b) -> None:
         ints = np.array([m, r, 0], np.int32)
         trans = np.array([ord("T")], np.uint8)
         dgetrs(trans.ctypes, ints.ctypes, ints[1:].ctypes, a.ctypes, ints.ctypes,
-                piv.ctypes, bt.ctypes, ints.ctypes, ints[2:].ctypes)
+               piv.ctypes, bt.ctypes, ints.ctypes, ints[2:].ctypes)
         b[:] = bt.T
         return
     for j in range(m):
@@ -134,17 +127,17 @@ def _qr_eliminate_lapack(S, W) -> bool:
     work = np.empty(lwork)
     ints = np.array([p, n, w, lwork, 0], np.int32)
     dgeqrf(ints.ctypes, ints[1:].ctypes, Sf.ctypes, ints.ctypes, tau.ctypes, work.ctypes,
-            ints[3:].ctypes, ints[4:].ctypes)
+           ints[3:].ctypes, ints[4:].ctypes)
     chars = np.array([ord("L"), ord("T"), ord("U"), ord("N")], np.uint8)
     dormqr(chars.ctypes, chars[1:].ctypes, ints.ctypes, ints[2:].ctypes, ints[1:].ctypes,
-            Sf.ctypes, ints.ctypes, tau.ctypes, Wf.ctypes, ints.ctypes, work.ctypes,
-            ints[3:].ctypes, ints[4:].ctypes)
+           Sf.ctypes, ints.ctypes, tau.ctypes, Wf.ctypes, ints.ctypes, work.ctypes,
+           ints[3:].ctypes, ints[4:].ctypes)
     if not _full_rank(Sf, n):
         return False
     one = np.ones(1)
     dtrsm(chars.ctypes, chars[2:].ctypes, chars[3:].ctypes, chars[3:].ctypes,
-           ints[1:].ctypes, ints[2:].ctypes, one.ctypes, Sf.ctypes, ints.ctypes, Wf.ctypes,
-           ints.ctypes)
+          ints[1:].ctypes, ints[2:].ctypes, one.ctypes, Sf.ctypes, ints.ctypes, Wf.ctypes,
+          ints.ctypes)
     S[:] = Sf
     W[:] = Wf
     return True
@@ -205,22 +198,20 @@ def interval_factors(blocks, extra):
     ``Z_i = M_i^-1 [blocks[i, :, :n], extra[i]]``; ok False if an ``M_i`` is singular."""
     ntst, m, cols = blocks.shape
     n, k = cols - m, extra.shape[2]
-    lu = np.empty((ntst, m, m))
-    piv = np.zeros((ntst, m), np.int32)
+    lu, piv = np.empty((ntst, m, m)), np.zeros((ntst, m), np.int32)
     Z = np.empty((ntst, m, n + k))
     for i in range(ntst):
         lu[i] = blocks[i, :, n:]
         if not lu_factor(lu[i], piv[i]):
             return lu, piv, Z, False
-        Z[i, :, :n] = blocks[i, :, :n]
-        Z[i, :, n:] = extra[i]
+        Z[i, :, :n], Z[i, :, n:] = blocks[i, :, :n], extra[i]
         lu_solve(lu[i], piv[i], Z[i])
     return lu, piv, Z, True
 
 
-#: the largest ``|a|_inf`` of the two transfer maps a pair is eliminated by its identity
-#: pivot with (:func:`_unit_eliminate`); a larger one takes the QR
-UNIT_GROWTH = 4.0
+#: the largest growth ``rho(|a1| |a0|)`` (:func:`_scaled_growth`) of a pair eliminated
+#: by its identity pivot (:func:`_unit_eliminate`); a larger one takes the QR
+UNIT_GROWTH = 16.0
 
 
 @jit
@@ -243,16 +234,14 @@ def chain_reduce(A, C, G, schedule, unit):
         ident2 = np.zeros(q + odd, np.bool_)
         for j in range(q):
             i = off + j
-            if ident[2 * j] and max(np.abs(A[2 * j]).sum(axis=1).max(),
-                                    np.abs(A[2 * j + 1]).sum(axis=1).max()) <= UNIT_GROWTH:
+            if ident[2 * j] and _scaled_growth(A[2 * j + 1], A[2 * j]) <= UNIT_GROWTH:
                 _unit_eliminate(A[2 * j], A[2 * j + 1], G[2 * j], G[2 * j + 1],
                                 Qb[i], H[i], Zt[i], A2[j], G2[j])
                 C2[j], ident2[j] = C[2 * j + 1], ident[2 * j + 1]
                 continue
             S[:n], S[n:] = C[2 * j], A[2 * j + 1]
             W[:] = 0.0
-            for d in range(2 * n):
-                W[d, d] = 1.0
+            W[:, :2 * n] = np.eye(2 * n)
             W[:n, 2 * n:3 * n], W[:n, 4 * n:] = A[2 * j], G[2 * j]              # [a0, 0, g0]
             W[n:, 3 * n:4 * n], W[n:, 4 * n:] = C[2 * j + 1], G[2 * j + 1]      # [0, c1, g1]
             if not qr_eliminate(S, W):
@@ -271,15 +260,29 @@ def _unit_eliminate(a0, a1, g0, g1, Qb, H, Zt, A2, G2) -> None:
     """The pair ``a0 v_0 + v_1 + g0 y = z_0``, ``a1 v_1 + c1 v_2 + g1 y = z_1`` freed of
     ``v_1`` by its identity pivot (a product of transfer maps: multiple shooting over the
     two intervals): ``v_1 = z_0 - a0 v_0 - g0 y`` (``H = [I, 0]``, ``Zt = [a0, 0, g0]``),
-    ``-a1 a0 v_0 + c1 v_2 + (g1 - a1 g0) y = z_1 - a1 z_0`` (``Qb = [-a1, I]``). With
-    ``|a0|, |a1| <= UNIT_GROWTH`` its rounding is a few eps of the identity's scale."""
+    ``-a1 a0 v_0 + c1 v_2 + (g1 - a1 g0) y = z_1 - a1 z_0`` (``Qb = [-a1, I]``). The
+    rounding of ``a1 a0`` is at most ``n eps |a1| |a0|``: a few eps of the identity's
+    scale where :func:`_scaled_growth` is within ``UNIT_GROWTH``."""
     n = a0.shape[0]
     Qb[:], H[:], Zt[:], A2[:], G2[:] = 0.0, 0.0, 0.0, 0.0, g1
-    for d in range(n):
-        H[d, d], Qb[d, n + d] = 1.0, 1.0
-    Qb[:, :n], Zt[:, :n], Zt[:, 2 * n:] = -a1, a0, g0
+    H[:, :n], Qb[:, n:], Qb[:, :n], Zt[:, :n], Zt[:, 2 * n:] = np.eye(n), np.eye(n), -a1, a0, g0
     gemm(A2, a1, a0, -1.0)
     gemm(G2, a1, g0, -1.0)
+
+
+@jit
+def _scaled_growth(a1, a0) -> float:
+    """An upper bound of the Perron root of ``B = |a1| |a0|`` (Collatz-Wielandt,
+    ``max_i (B x)_i / x_i``, ``x > 0`` after power steps from ones): ``|B|_inf`` in a
+    diagonal scaling, which judges badly scaled states (modal displacements and
+    velocities) in their natural units."""
+    b1, b0 = np.abs(a1), np.abs(a0)
+    x, bound = np.ones(a0.shape[0]), np.inf
+    for _ in range(6):
+        y = b1 @ (b0 @ x)
+        bound = min(bound, np.max(y / x))
+        x = y / np.max(y) + 1e-12 if np.max(y) > 0.0 else x
+    return bound
 
 
 @jit
@@ -288,8 +291,7 @@ def chain_border(Bv, By, schedule, H, Zt, AC, G0):
     N, k, n = Bv.shape
     B = np.zeros((N + 1, k, n))                       # point N (= point 0): none yet
     B[:N] = Bv
-    shares = np.zeros((H.shape[0], k, 2 * n))
-    Bz = np.empty((k, 2 * n + k))
+    shares, Bz = np.zeros((H.shape[0], k, 2 * n)), np.empty((k, 2 * n + k))
     off = 0
     for level in range(schedule.shape[0]):
         q, odd = schedule[level, 0], schedule[level, 1]
@@ -311,8 +313,7 @@ def chain_border(Bv, By, schedule, H, Zt, AC, G0):
     final[:n, :n], final[:n, n:] = AC, G0
     final[n:, :n], final[n:, n:] = B[0] + B[1], By
     piv = np.zeros(n + k, np.int32)
-    ok = lu_factor(final, piv)
-    return shares, final, piv, ok
+    return shares, final, piv, lu_factor(final, piv)
 
 
 @jit

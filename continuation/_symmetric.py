@@ -145,16 +145,29 @@ def _checked_symmetry(symmetry, n: int, shift) -> np.ndarray:
     return S
 
 
+def keeps_symmetry(problem: CycleProblem, X, symmetry, shift: float = 0.5) -> bool:
+    """Whether the cycle ``X`` keeps ``u(t + shift T) = symmetry u(t)`` to
+    ``SYMMETRY_TOL`` of ``max |u|`` at the nodes: the start cycles
+    :func:`locate_symmetry_breaking` and :func:`symmetric_multipliers` accept."""
+    S = _checked_symmetry(symmetry, problem.vf.n, shift)
+    return _defect(problem, X, S, shift)[0] <= SYMMETRY_TOL
+
+
+def _defect(problem, X, S, shift) -> tuple[float, np.ndarray]:
+    """``(max |u(t) - S u(t - shift)| / max |u|, u)`` at the problem's node times."""
+    t = problem.times()
+    u, image = problem.evaluate(X, t), problem.evaluate(X, t - shift) @ S.T
+    return float(np.max(np.abs(u - image)) / np.max(np.abs(u))), u
+
+
 def _symmetric_problem(problem, X, S, shift) -> CycleProblem:
     """``X`` rebuilt symmetric on a mesh the symmetry maps onto itself, after checking
     that the cycle keeps the symmetry and the field respects it."""
-    t = problem.times()
-    u, image = problem.evaluate(X, t), problem.evaluate(X, t - shift) @ S.T
-    scale = float(np.max(np.abs(u)))
-    if np.max(np.abs(u - image)) > SYMMETRY_TOL * scale:
+    defect, u = _defect(problem, X, S, shift)
+    if defect > SYMMETRY_TOL:
         raise ValueError(f"the cycle does not keep the symmetry: |u(t) - S u(t - {shift:g} T)|"
-                         f" = {np.max(np.abs(u - image)):.2g} (> {SYMMETRY_TOL:g} max |u|)")
-    _check_equivariant(problem, X, u[:: max(1, len(t) // 16)], S)
+                         f" = {defect:.2g} max |u| (> {SYMMETRY_TOL:g} max |u|)")
+    _check_equivariant(problem, X, u[:: max(1, len(u) // 16)], S)
     ntst = problem.ntst + (problem.ntst % 2 if shift else 0)
     mesh = _symmetric_mesh(problem, X, ntst) if shift else problem.mesh
     orbit = lambda s: 0.5 * (problem.evaluate(X, s)                     # noqa: E731

@@ -304,7 +304,10 @@ def _pitchfork_vertex(problem, X, mirror) -> bool:
     asymmetric cycles meet the symmetric ones at their branch point: the direction of
     the turn (the null vector of G_(U,T)) breaks the mirror more than it keeps it,
     ``|v(t) + R v(t - 1/2)| < |v(t) - R v(t - 1/2)|`` (a fold of symmetric cycles keeps
-    it; whether the cycle itself keeps it, the branch point's Newton checks)."""
+    it). A cycle that does not keep the mirror itself is no vertex (the branch point's
+    Newton would refuse it), and costs no factorization here."""
+    if not C.keeps_symmetry(problem, X, mirror):
+        return False
     square = C.CycleCurveProblem(problem, X, problem.free, C.CycleFold())
     v, t = square.condition.null_vector(square, square.X0), problem.times()
     u, image = problem.evaluate(v, t), problem.evaluate(v, t - 0.5) @ mirror.T

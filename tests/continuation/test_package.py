@@ -27,7 +27,8 @@ def test_public_names():
         "cycle_from_hopf", "ShootingProblem", "ShootingSettings",
         "cycle_from_pd", "cycle_from_bp", "correct", "Event", "Lifted", "Status", "Condition",
         "CycleCurveProblem", "CycleFold", "Extremum", "NeimarkSacker", "PeriodDoubling",
-        "locate_cycle", "BufferedFunction", "locate_symmetry_breaking", "symmetric_multipliers"}
+        "locate_cycle", "BufferedFunction", "locate_symmetry_breaking", "symmetric_multipliers",
+        "keeps_symmetry"}
 
 
 def test_new_problem_kind_plugs_into_palc():

@@ -98,3 +98,15 @@ def test_symmetry_breaking_refuses_what_it_cannot_locate():
             _field(), _circle, T, {"lam": 0.3}, "lam", settings=C.CollocationSettings(
                 ntst=10, ncol=4), mesh=np.r_[0.0, np.sort(np.random.default_rng(0).uniform(
                     0, 1, 9)), 1.0]), X, INVERSION)
+
+
+def test_keeps_symmetry_says_which_cycles_the_location_accepts():
+    """The circle keeps u(t + T/2) = -u(t) and z -> -z (shift 0), not (x, y) -> (x, y)
+    half a period later (it maps u(t) to -u(t): a defect of 2 max |u|); the verdict is
+    that of ``locate_symmetry_breaking``, which refuses the third."""
+    problem, X = _cycle(10)
+    assert C.keeps_symmetry(problem, X, INVERSION)
+    assert C.keeps_symmetry(problem, X, MIRROR, shift=0)
+    assert not C.keeps_symmetry(problem, X, MIRROR)
+    with pytest.raises(ValueError, match="orthogonal involution"):
+        C.keeps_symmetry(problem, X, 2 * np.eye(3))
