@@ -79,9 +79,12 @@ class CollocationJacobian:
 
     def collocation_times(self, x: np.ndarray) -> np.ndarray:
         """``[B, E] x`` for ``x`` of shape ``(columns,)`` or ``(columns, r)``."""
-        X = _c(x.reshape(x.shape[0], -1))
-        out = _compiled().collocation_times(_c(self.blocks), _c(self.extra), X)
-        return out.reshape((out.shape[0],) + x.shape[1:])
+        n, ntst, (_, m, _) = self.n, self.ntst, self.blocks.shape
+        X = x.reshape(x.shape[0], -1)
+        nodes = X[:ntst * m].reshape(ntst, m, -1)     # interval i's rows: its nodes 0..NCOL,
+        out = self.blocks[:, :, :m] @ nodes + self.extra @ X[ntst * m:]   # the last the next
+        out += self.blocks[:, :, m:] @ np.roll(nodes[:, :n], -1, axis=0)  # interval's first
+        return out.reshape((ntst * m,) + x.shape[1:])
 
     def toarray(self) -> np.ndarray:
         """The dense matrix (for checks; the solvers never form it)."""

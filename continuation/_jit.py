@@ -162,11 +162,8 @@ def _reflect(A, v, j, c0, c1, beta, dots) -> None:
 @jit
 def _full_rank(R, n) -> bool:
     """Whether the upper triangle of ``R[:n, :n]`` has ``|R_jj| > n eps max |R_ii|``."""
-    lo, hi = np.inf, 0.0
-    for j in range(n):
-        d = abs(R[j, j])
-        lo, hi = min(lo, d), max(hi, d)
-    return np.isfinite(hi) and lo > n * 2.220446049250313e-16 * hi
+    d = np.abs(np.diag(R[:n, :n]))
+    return np.isfinite(d.max()) and d.min() > n * 2.220446049250313e-16 * d.max()
 
 
 @jit
@@ -224,7 +221,7 @@ def chain_reduce(A, C, G, schedule, unit):
     pairs = A.shape[0] - 1
     Qb, H = np.empty((pairs, n, 2 * n)), np.empty((pairs, n, 2 * n))
     Zt = np.empty((pairs, n, 2 * n + k))
-    S, W = np.empty((2 * n, n)), np.empty((2 * n, 4 * n + k))
+    S, W, work = np.empty((2 * n, n)), np.empty((2 * n, 4 * n + k)), np.empty((3, n))
     ident = np.full(A.shape[0], unit)                 # whether C_i is the identity
     off = 0
     for level in range(schedule.shape[0]):
@@ -234,7 +231,7 @@ def chain_reduce(A, C, G, schedule, unit):
         ident2 = np.zeros(q + odd, np.bool_)
         for j in range(q):
             i = off + j
-            if ident[2 * j] and _scaled_growth(A[2 * j + 1], A[2 * j]) <= UNIT_GROWTH:
+            if ident[2 * j] and _scaled_growth(A[2 * j + 1], A[2 * j], work) <= UNIT_GROWTH:
                 _unit_eliminate(A[2 * j], A[2 * j + 1], G[2 * j], G[2 * j + 1],
                                 Qb[i], H[i], Zt[i], A2[j], G2[j])
                 C2[j], ident2[j] = C[2 * j + 1], ident[2 * j + 1]
@@ -265,23 +262,34 @@ def _unit_eliminate(a0, a1, g0, g1, Qb, H, Zt, A2, G2) -> None:
     scale where :func:`_scaled_growth` is within ``UNIT_GROWTH``."""
     n = a0.shape[0]
     Qb[:], H[:], Zt[:], A2[:], G2[:] = 0.0, 0.0, 0.0, 0.0, g1
-    H[:, :n], Qb[:, n:], Qb[:, :n], Zt[:, :n], Zt[:, 2 * n:] = np.eye(n), np.eye(n), -a1, a0, g0
+    for d in range(n):
+        H[d, d] = Qb[d, n + d] = 1.0
+    Qb[:, :n], Zt[:, :n], Zt[:, 2 * n:] = -a1, a0, g0
     gemm(A2, a1, a0, -1.0)
     gemm(G2, a1, g0, -1.0)
 
 
 @jit
-def _scaled_growth(a1, a0) -> float:
+def _scaled_growth(a1, a0, work) -> float:
     """An upper bound of the Perron root of ``B = |a1| |a0|`` (Collatz-Wielandt,
-    ``max_i (B x)_i / x_i``, ``x > 0`` after power steps from ones): ``|B|_inf`` in a
-    diagonal scaling, which judges badly scaled states (modal displacements and
-    velocities) in their natural units."""
-    b1, b0 = np.abs(a1), np.abs(a0)
-    x, bound = np.ones(a0.shape[0]), np.inf
+    ``max_i (B x)_i / x_i`` after power steps from ``x = 1``): ``|B|_inf`` in a diagonal
+    scaling, which judges badly scaled states (modal displacements, velocities) fairly.
+    Loops on ``work`` (``3 x n``): no allocation, no BLAS call (both cost more here)."""
+    n, (x, t, y), bound = a0.shape[0], work, np.inf
+    x[:] = 1.0
     for _ in range(6):
-        y = b1 @ (b0 @ x)
-        bound = min(bound, np.max(y / x))
-        x = y / np.max(y) + 1e-12 if np.max(y) > 0.0 else x
+        t[:], y[:] = 0.0, 0.0
+        for i in range(n):
+            for j in range(n):
+                t[i] += abs(a0[i, j]) * x[j]
+        for i in range(n):
+            for j in range(n):
+                y[i] += abs(a1[i, j]) * t[j]
+        top, ratio = y.max(), 0.0
+        for i in range(n):
+            ratio = max(ratio, y[i] / x[i])
+            x[i] = y[i] / max(top, 1e-300) + 1e-12
+        bound = min(bound, ratio)
     return bound
 
 
@@ -380,21 +388,3 @@ def condensed_solve(lu, piv, Z, border_w, schedule, Qb, H, Zt, shares, flu, fpiv
         gemm(w, Z[i, :p, n:], y, -1.0)
     x[N:] = y
     return x
-
-
-@jit
-def collocation_times(blocks, extra, x):
-    """``[B, E] x`` of :class:`~continuation._condensed.CollocationJacobian` for ``x``
-    of shape ``(N + k, r)``: interval ``i``'s rows times its nodes ``l = 0 .. NCOL``
-    (the last is the next interval's first, wrapping) and the extra columns."""
-    ntst, m, cols = blocks.shape
-    n, r = cols - m, x.shape[1]
-    N = ntst * m
-    out = np.zeros((N, r))
-    for i in range(ntst):
-        rows = out[i * m:(i + 1) * m]
-        gemm(rows, blocks[i, :, :m], x[i * m:(i + 1) * m], 1.0)
-        ahead = ((i + 1) % ntst) * m
-        gemm(rows, blocks[i, :, m:], x[ahead:ahead + n], 1.0)
-        gemm(rows, extra[i], x[N:], 1.0)
-    return out

@@ -11,9 +11,13 @@ solves of size 328 with 82 right-hand sides took 4.3 s with two threads on a loa
 
 from __future__ import annotations
 
+from contextlib import contextmanager
 from functools import lru_cache
 
 from threadpoolctl import ThreadpoolController
+
+#: how many :func:`single_threaded` contexts are open (only the outermost one limits)
+_depth = 0
 
 
 @lru_cache(maxsize=1)
@@ -23,6 +27,18 @@ def _controller() -> ThreadpoolController:
     return ThreadpoolController()
 
 
+@contextmanager
 def single_threaded():
-    """Context manager: BLAS/OpenMP pools limited to one thread inside, restored after."""
-    return _controller().limit(limits=1)
+    """Context manager: BLAS/OpenMP pools limited to one thread inside, restored after.
+    Inside another one (the driver's, around a whole run) it does nothing: a limit
+    costs about 40 us, more than the small eigenproblem of a point it guards."""
+    global _depth
+    if _depth:
+        yield
+        return
+    with _controller().limit(limits=1):
+        _depth += 1
+        try:
+            yield
+        finally:
+            _depth -= 1

@@ -216,3 +216,21 @@ def test_a_run_uses_one_blas_thread_and_restores_the_callers_pools():
         after = [pool["num_threads"] for pool in threadpool_info()]
     assert inside and all(all(n == 1 for n in counts) for counts in inside)
     assert after == before
+
+
+def test_nested_single_threaded_contexts_limit_once_and_restore_once():
+    """An inner ``single_threaded`` (a Floquet routine inside a run) leaves the outer
+    limit in place on exit; the outer one restores the caller's pools."""
+    from threadpoolctl import threadpool_info, threadpool_limits
+
+    from continuation._threads import single_threaded
+
+    def counts():
+        return [pool["num_threads"] for pool in threadpool_info()]
+    with threadpool_limits(2):
+        before = counts()
+        with single_threaded():
+            with single_threaded():
+                assert all(n == 1 for n in counts())
+            assert all(n == 1 for n in counts())
+        assert counts() == before
