@@ -17,11 +17,12 @@ from bench_kernels import Case, factorize, instrument, once
 class TimedLU:
     """Time spent in the linear algebra of the Newton and tangent systems and of the
     Floquet condensation: SuperLU (``scipy.sparse.linalg.splu`` and the solves of its
-    result) and the compiled condensed solver (the loops of ``continuation._jit``)."""
+    result), the compiled condensed solver (the loops of ``continuation._jit``) and its
+    interval products (the refinement's residuals)."""
 
     #: the compiled linear-algebra functions of ``continuation._jit``
     COMPILED = ("interval_factors", "chain_reduce", "chain_border", "chain_solve",
-                "condensed_solve", "collocation_times")
+                "condensed_solve")
 
     def __init__(self):
         self.total, self._saved = 0.0, {}
@@ -29,6 +30,7 @@ class TimedLU:
     def __enter__(self):
         import scipy.sparse.linalg as spla
         from continuation import _jit
+        from continuation._condensed import CollocationJacobian
         timer = self
 
         class Factor:
@@ -42,12 +44,16 @@ class TimedLU:
                 return timer.timed(self.lu.solve, *args, **kw)
 
         self._saved = {(spla, "splu"): spla.splu,
+                       (CollocationJacobian, "collocation_times"):
+                           CollocationJacobian.collocation_times,
                        **{(_jit, name): getattr(_jit, name) for name in self.COMPILED}}
         splu = spla.splu
         spla.splu = lambda *a, **kw: Factor(self.timed(splu, *a, **kw))
         for name in self.COMPILED:
             fun = getattr(_jit, name)
             setattr(_jit, name, lambda *a, fun=fun: self.timed(fun, *a))
+        times = CollocationJacobian.collocation_times
+        CollocationJacobian.collocation_times = lambda *a: self.timed(times, *a)
         return self
 
     def __exit__(self, *exc):

@@ -44,7 +44,7 @@ TIMED = [
     ("continuation._jit", "chain_reduce", "algebra"),
     ("continuation._jit", "chain_border", "algebra"),
     ("continuation._jit", "condensed_solve", "algebra"),
-    ("continuation._jit", "collocation_times", "algebra"),
+    ("continuation._condensed", "CollocationJacobian.collocation_times", "algebra"),
     ("scipy.sparse.linalg", "splu", "algebra"),
     ("continuation._newton", "LU.solve", "algebra"),
     ("continuation._floquet", "transfer_matrices", "algebra"),
