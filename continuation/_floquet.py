@@ -30,6 +30,7 @@ import scipy.sparse as sp
 
 from ._lazyjit import SMALL, jit
 from ._newton import factorize
+from ._sparse import PatternCache
 from ._threads import single_threaded
 
 #: interval systems up to this size are always solved densely (one batched LAPACK
@@ -98,8 +99,6 @@ class _Layout:
     Jacobian of one sparsity pattern: ``J.data[take]`` are their values, in rows ``rows``
     and block columns ``local``; ``fill``: the blocks' nonzero fraction."""
 
-    indptr: np.ndarray
-    indices: np.ndarray
     n: int
     ntst: int
     m: int
@@ -111,21 +110,17 @@ class _Layout:
     @classmethod
     def of(cls, J: sp.csc_matrix, n: int, ntst: int, ncol: int) -> "_Layout":
         """The layout of ``J``'s pattern (found among the last few, else computed)."""
-        for known in _layouts:
-            if (known.n, known.ntst, known.m) == (n, ntst, n * ncol) and \
-                    np.array_equal(known.indptr, J.indptr) and \
-                    np.array_equal(known.indices, J.indices):
-                return known
+        key = (n, ntst, ncol)
+        known = _layouts.get(J, key)
+        if known is not None:
+            return known
         m, N = n * ncol, n * ncol * ntst
         c = np.repeat(np.arange(J.shape[1]), np.diff(J.indptr))
         keep = (J.indices < N) & (c < N)
         local = (c - (J.indices // m) * m) % N             # column within interval r // m
         take = np.flatnonzero(keep & (local < m + n))
-        layout = cls(J.indptr.copy(), J.indices.copy(), n, ntst, m, take, J.indices[take],
-                     local[take], take.size / (m * ntst * (m + n)))
-        _layouts.insert(0, layout)
-        del _layouts[LAYOUTS_KEPT:]
-        return layout
+        return _layouts.put(J, cls(n, ntst, m, take, J.indices[take], local[take],
+                                   take.size / (m * ntst * (m + n))), key)
 
     @property
     def dense(self) -> bool:
@@ -148,9 +143,8 @@ class _Layout:
                 rows[left], local[left])
 
 
-#: interval layouts of recent Jacobian patterns (a branch re-meshes: a few at a time)
-_layouts: list = []
-LAYOUTS_KEPT = 4
+#: interval layouts of recent Jacobian patterns
+_layouts = PatternCache(kept=4)
 
 
 def multipliers(A: np.ndarray, method: str = "pencil") -> np.ndarray:

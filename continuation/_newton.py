@@ -11,6 +11,7 @@ import scipy.sparse.linalg as spla
 
 from ._lazyjit import jit
 from ._settings import NewtonSettings
+from ._sparse import PatternCache
 
 #: right-hand sides from which a solve runs by rows of the factors in compiled code
 #: (``_solve_columns``): SuperLU solves column by column (at n = 40, NCOL = 4, NTST =
@@ -110,11 +111,9 @@ def _solve_columns(Lp, Li, Lx, Up, Ui, Ux, Ud, B) -> None:
 
 @dataclass(frozen=True)
 class _Ordering:
-    """A sparsity pattern, its column ordering ``q`` and the pattern of ``A[:, q]``
+    """A column ordering ``q`` of a sparsity pattern and the pattern of ``A[:, q]``
     (``gather``: positions of the nonzeros of ``A`` in it)."""
 
-    indptr: np.ndarray
-    indices: np.ndarray
     q: np.ndarray
     permuted_indptr: np.ndarray
     permuted_indices: np.ndarray
@@ -127,8 +126,7 @@ class _Ordering:
         indptr = np.concatenate([[0], np.cumsum(counts)]).astype(A.indptr.dtype)
         gather = np.concatenate([np.arange(A.indptr[j], A.indptr[j + 1]) for j in q]) \
             if A.nnz else np.zeros(0, dtype=int)
-        return cls(A.indptr.copy(), A.indices.copy(), q, indptr,
-                   A.indices[gather].copy(), gather)
+        return cls(q, indptr, A.indices[gather].copy(), gather)
 
     def permuted(self, A: sp.csc_matrix) -> sp.csc_matrix:
         """``A[:, q]`` from the stored pattern (one gather of the values)."""
@@ -137,7 +135,7 @@ class _Ordering:
 
 
 #: column orderings of recent sparsity patterns
-_orderings: list = []
+_orderings = PatternCache(kept=8)
 
 
 def factorize(A: sp.spmatrix):
@@ -152,12 +150,11 @@ def factorize(A: sp.spmatrix):
     if hasattr(A, "factorize"):
         return A.factorize()
     A = A if isinstance(A, sp.csc_matrix) else sp.csc_matrix(A)
-    known = _ordering(A)
+    known = _orderings.get(A)
     try:
         if known is None:
             lu = spla.splu(A, permc_spec="MMD_AT_PLUS_A")
-            _orderings.insert(0, _Ordering.of(A, np.argsort(lu.perm_c)))
-            del _orderings[8:]
+            _orderings.put(A, _Ordering.of(A, np.argsort(lu.perm_c)))
             return LU(lu, np.arange(A.shape[1]))
         return LU(spla.splu(known.permuted(A), permc_spec="NATURAL"), known.q)
     except RuntimeError:
@@ -192,13 +189,6 @@ def refine(lu, A, b, max_iter: int = 8, rtol: float = 1e-13, rate: float = 0.05)
         if size > rate * last:
             return None
         last = size
-    return None
-
-
-def _ordering(A: sp.csc_matrix):
-    for known in _orderings:
-        if np.array_equal(known.indptr, A.indptr) and np.array_equal(known.indices, A.indices):
-            return known
     return None
 
 

@@ -73,3 +73,27 @@ def layout(rows: np.ndarray, cols: np.ndarray, shape: tuple) -> Layout:
     indptr = np.concatenate([[0], np.cumsum(counts)])
     idx = np.int32 if max(shape) < 2 ** 31 - 1 else np.int64
     return Layout(shape, order, rows[order].astype(idx), indptr.astype(idx))
+
+
+class PatternCache:
+    """What was derived from the last ``kept`` sparsity patterns, most recent first (a
+    branch re-meshes: a few patterns at a time). A pattern is the ``indptr, indices``
+    of a CSC matrix and a ``key`` of whatever else the derived value depends on."""
+
+    def __init__(self, kept: int):
+        self.kept, self._entries = kept, []
+
+    def get(self, A: sp.csc_matrix, key=()):
+        """The value stored for the pattern of ``A`` and ``key``, else None."""
+        for known, indptr, indices, value in self._entries:
+            if known == key and np.array_equal(indptr, A.indptr) and \
+                    np.array_equal(indices, A.indices):
+                return value
+        return None
+
+    def put(self, A: sp.csc_matrix, value, key=()):
+        """Store ``value`` for the pattern of ``A`` and ``key`` (the oldest beyond
+        ``kept`` dropped); returns ``value``."""
+        self._entries.insert(0, (key, A.indptr.copy(), A.indices.copy(), value))
+        del self._entries[self.kept:]
+        return value

@@ -205,6 +205,25 @@ def test_sparse_bordering_helpers_match_dense():
         assert np.array_equal(append_columns(A, cols).toarray(), np.hstack([A.toarray(), cols]))
 
 
+def test_pattern_cache_matches_patterns_and_keys_and_keeps_the_newest():
+    """A value is found again for the same pattern (any values) and key only; a
+    pattern of equal nonzero count but other places, or another key, is a miss; the
+    oldest entry goes when more than ``kept`` are stored."""
+    import scipy.sparse as sp
+    from continuation._sparse import PatternCache
+    cache = PatternCache(kept=2)
+    A = sp.csc_matrix(np.array([[1.0, 0.0], [2.0, 3.0]]))
+    moved = sp.csc_matrix(np.array([[1.0, 4.0], [0.0, 3.0]]))
+    assert A.nnz == moved.nnz
+    assert cache.put(A, "a") == "a"
+    assert cache.get(sp.csc_matrix(A * 7.0)) == "a"
+    assert cache.get(moved) is None and cache.get(A, key=(1,)) is None
+    cache.put(A, "a1", key=(1,))
+    cache.put(moved, "m")
+    assert cache.get(moved) == "m" and cache.get(A, key=(1,)) == "a1"
+    assert cache.get(A) is None                          # the oldest of three, dropped
+
+
 def test_solves_of_many_columns_equal_dense_lapack():
     """``LU.solve`` with at least ``MANY_RHS`` columns runs on the factors in compiled
     code: on unsymmetric matrices that need row pivoting (a zero diagonal), at the first
