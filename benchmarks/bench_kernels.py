@@ -145,10 +145,10 @@ class TimedKernel:
     def __getattr__(self, name):
         return getattr(self.kernel, name)
 
-    def evaluate(self, *args):
+    def evaluate(self, *args, **kw):
         t0 = time.perf_counter()
         try:
-            return self.kernel.evaluate(*args)
+            return self.kernel.evaluate(*args, **kw)
         finally:
             self.total += time.perf_counter() - t0
 
