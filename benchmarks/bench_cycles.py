@@ -93,16 +93,16 @@ def ours(n: int, points: int, floquet: str):
     eq, hopf = hopf_start(n)
     t0 = time.perf_counter()
     cyc, it = stepper(eq, hopf, floquet, points - 1)
-    first = it.start()
-    second = it.advance(first)   # one step, untimed: builds the systems and loads the
-    cyc.multipliers(second.X)    # compiled code (numba's cache: ~0.5 s in a new process)
+    first = it.start()           # the start and one step, untimed: they build the
+    mus = [cyc.multipliers(first.X)]   # systems and load the compiled code (numba's
+    second = it.advance(first)   # cache: ~0.5 s in a new process)
+    mus.append(cyc.multipliers(second.X))
     build = time.perf_counter() - t0
-    t0 = time.perf_counter()
     # the points are kept without their factors: a run keeps only the last point's (a
     # list of 20 sets of LU factors would make every point allocate fresh memory)
     steps = [replace(first, lu=None), replace(second, lu=None)]
-    mus = [cyc.multipliers(first.X), cyc.multipliers(second.X)]
     step = second
+    t0 = time.perf_counter()
     for _ in range(points - 2):
         step = it.advance(step)
         if step is None:
