@@ -72,17 +72,33 @@ def lu_solve(a, piv, b) -> None:
         if p != j:
             for c in range(r):
                 b[j, c], b[p, c] = b[p, c], b[j, c]
-    for c in range(r):                   # row-oriented: inner loops along rows of a
+    if r == 1:                           # one column: dot products along rows of a
         for i in range(1, m):
-            acc = b[i, c]
+            acc = b[i, 0]
             for j in range(i):
-                acc -= a[i, j] * b[j, c]
-            b[i, c] = acc
+                acc -= a[i, j] * b[j, 0]
+            b[i, 0] = acc
         for i in range(m - 1, -1, -1):
-            acc = b[i, c]
+            acc = b[i, 0]
             for j in range(i + 1, m):
-                acc -= a[i, j] * b[j, c]
-            b[i, c] = acc / a[i, i]
+                acc -= a[i, j] * b[j, 0]
+            b[i, 0] = acc / a[i, i]
+        return
+    for i in range(1, m):                # several: row updates along the rows of b
+        for j in range(i):
+            f = a[i, j]
+            if f != 0.0:
+                for c in range(r):
+                    b[i, c] -= f * b[j, c]
+    for i in range(m - 1, -1, -1):
+        for j in range(i + 1, m):
+            f = a[i, j]
+            if f != 0.0:
+                for c in range(r):
+                    b[i, c] -= f * b[j, c]
+        d = a[i, i]
+        for c in range(r):
+            b[i, c] /= d
 
 
 @jit

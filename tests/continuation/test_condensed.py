@@ -210,3 +210,25 @@ def test_linear_solver_setting_and_its_automatic_choice():
                           {"mu": 1.0, "k": 0.2}, "mu",
                           settings=C.CollocationSettings(ntst=8, ncol=4))
     assert not prob.condensed
+
+
+@pytest.mark.parametrize("m", [1, 5, 16, 32, 33, 40])
+def test_dense_lu_kernels_equal_numpy_solves(m):
+    """The compiled LU and its solve, by loops up to ``SMALL`` rows and by LAPACK above,
+    against NumPy's solve: one and several right-hand sides, a matrix that needs row
+    exchanges (zero diagonal), and an exactly singular one (reported, not solved)."""
+    from continuation import _jit
+    rng = np.random.default_rng(m)
+    A = rng.standard_normal((m, m))
+    np.fill_diagonal(A, 0.0)
+    A[0, m - 1] = A[m - 1, 0] = 3.0
+    for r in (1, 3, 7):
+        b = rng.standard_normal((m, r))
+        lu, piv = A.copy(), np.zeros(m, np.int32)
+        assert _jit.lu_factor(lu, piv)
+        x = b.copy()
+        _jit.lu_solve(lu, piv, x)
+        assert _rel(x, np.linalg.solve(A, b)) < 1e-12 * np.linalg.cond(A)
+    singular = A.copy()
+    singular[:, -1] = 0.0
+    assert not _jit.lu_factor(singular, np.zeros(m, np.int32))
