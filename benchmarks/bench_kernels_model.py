@@ -21,8 +21,8 @@ class TimedLU:
     interval products (the refinement's residuals)."""
 
     #: the compiled linear-algebra functions of ``continuation._jit``
-    COMPILED = ("interval_factors", "chain_reduce", "chain_border", "chain_solve",
-                "condensed_solve")
+    COMPILED = ("interval_factors", "band_interval_factors", "chain_reduce", "chain_border",
+                "chain_solve", "condensed_solve")
 
     def __init__(self):
         self.total, self._saved = 0.0, {}

@@ -32,7 +32,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from ._collocation import collocation
-from ._condensed import CollocationJacobian
+from ._condensed import CollocationJacobian, interval_band
 from ._lazyjit import jit
 from ._lifted import LiftedBatch
 from ._sparse import Layout, layout
@@ -237,6 +237,9 @@ class BlockCollocationSystem:
         self._weights = (np.tile(self.col.P, (ntst, 1)), np.tile(self.col.Dm, (ntst, 1)))
         self.n_state = self.n_equations = kernel.n * ntst * ncol + 1
         self._layouts: dict = {}
+        #: the interval matrices' band (on the pattern; lifted matrices come dense)
+        self.band = None if kernel.lifted else interval_band(kernel.n, ncol, kernel.rows,
+                                                             kernel.cols)
         base = self._layout(0)
         self.pattern = ((self.n_equations, self.n_state), base.indptr, base.indices)
 
@@ -312,7 +315,8 @@ class BlockCollocationSystem:
                 _add_blocks(blocks, values, *kr.entries, weights, n, ncol)
         Gp = (Mvp - (hk * T)[:, None] * Fp).reshape(kr.K, len(cols), n)
         extra = np.concatenate([(-hk[:, None] * F)[:, :, None], Gp.transpose(0, 2, 1)], axis=2)
-        return CollocationJacobian(n, ntst, ncol, blocks, extra.reshape(ntst, m, -1), c)
+        return CollocationJacobian(n, ntst, ncol, blocks, extra.reshape(ntst, m, -1), c,
+                                   self.band)
 
     def fill(self) -> float:
         """Nonzero fraction of the interval blocks (of the pointwise pattern in ``n x n``)."""

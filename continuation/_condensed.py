@@ -24,11 +24,14 @@ follow by back-substitution.
 
 All loops over intervals and pairs run compiled (``_jit``: numba; a point of a small
 system costs a few hundred microseconds, not the milliseconds of a Python loop over
-LAPACK calls). The route pays for dense interval blocks and for small ones, and is
-chosen by :func:`condensed_pays`; large banded blocks (a discretized PDE) stay on
-SuperLU of the whole matrix, which keeps their sparsity. An interval whose ``M_i`` is
-singular (not met in practice: ``M_i`` is the derivative part of the collocation
-equations, ``h T F_x`` is small against it) falls back to SuperLU of the whole matrix.
+LAPACK calls). Where the pointwise pattern has a narrow band once its states are
+reordered (a chain of cells, a discretized PDE in one dimension: :func:`interval_band`),
+the ``M_i`` are factorized banded. The route pays for dense interval blocks, for small
+ones and for banded ones, and is chosen by :func:`condensed_pays`; large sparse blocks
+without a band stay on SuperLU of the whole matrix, which keeps their sparsity. An
+interval whose ``M_i`` is singular (not met in practice: ``M_i`` is the derivative part
+of the collocation equations, ``h T F_x`` is small against it) falls back to SuperLU of
+the whole matrix.
 """
 
 from __future__ import annotations
@@ -42,16 +45,68 @@ from ._newton import factorize
 from ._sparse import layout
 
 #: the condensed route is chosen ('auto') for interval blocks of at most ``CONDENSED_ROWS``
-#: rows, and for larger ones at least ``CONDENSED_MIN_FILL`` full: larger sparse blocks
-#: (a discretized PDE, banded) are faster on SuperLU, which keeps their sparsity
+#: rows, for larger ones at least ``CONDENSED_MIN_FILL`` full and for banded ones: larger
+#: sparse blocks without a band are faster on SuperLU, which keeps their sparsity
 #: (``docs/performance.md``)
 CONDENSED_ROWS, CONDENSED_MIN_FILL = 100, 0.5
 
 
-def condensed_pays(rows: int, fill: float) -> bool:
-    """Whether interval blocks of ``rows`` rows and nonzero fraction ``fill`` are solved
-    faster by condensation than by SuperLU of the whole matrix."""
-    return rows <= CONDENSED_ROWS or fill >= CONDENSED_MIN_FILL
+def condensed_pays(rows: int, fill: float, banded: bool = False) -> bool:
+    """Whether interval blocks of ``rows`` rows and nonzero fraction ``fill`` (``banded``:
+    with an :class:`IntervalBand`) are solved faster by condensation than by SuperLU of
+    the whole matrix."""
+    return rows <= CONDENSED_ROWS or fill >= CONDENSED_MIN_FILL or banded
+
+
+#: a band is used when its storage ``2 kl + ku + 1`` is at most this fraction of the rows
+BAND_MAX_WIDTH = 0.5
+
+
+@dataclass(frozen=True, eq=False)
+class IntervalBand:
+    """Rows and columns of the interval matrices ``M_i`` in an order that makes them
+    banded: ``M_i[rows][:, cols]`` has ``lower`` sub- and ``upper`` super-diagonals."""
+
+    rows: np.ndarray
+    cols: np.ndarray
+    lower: int
+    upper: int
+
+    @property
+    def args(self) -> tuple:
+        """``(rows, cols, kl, ku)`` for the compiled solver."""
+        return self.rows, self.cols, self.lower, self.upper
+
+
+#: the compiled solver's band arguments for dense interval factors
+DENSE = (np.zeros(0, np.int64), np.zeros(0, np.int64), -1, -1)
+
+
+def interval_band(n: int, ncol: int, prow: np.ndarray, pcol: np.ndarray):
+    """The :class:`IntervalBand` of interval matrices whose every ``n x n`` block (point
+    ``k``, node ``l``) has the pointwise pattern ``(prow, pcol)``, or None when it would
+    not be narrow (``BAND_MAX_WIDTH``). The states are ordered by reverse Cuthill-McKee
+    of the pattern, and each state's ``NCOL`` rows (points) and columns (nodes
+    ``1 .. NCOL``) kept together: a state coupled to states at most ``d`` places away
+    gives ``d NCOL + NCOL - 1`` off-diagonals."""
+    import scipy.sparse as sp
+    from scipy.sparse.csgraph import reverse_cuthill_mckee
+    if prow.size == 0:
+        return None
+    pattern = sp.csr_matrix((np.ones(prow.size), (prow, pcol)), shape=(n, n))
+    order = np.asarray(reverse_cuthill_mckee(pattern + pattern.T + sp.eye(n),
+                                             symmetric_mode=True), dtype=np.int64)
+    place = np.empty(n, np.int64)
+    place[order] = np.arange(n)
+    reach = place[prow] - place[pcol]
+    lower = int(max(reach.max(), 0)) * ncol + ncol - 1
+    upper = int(max(-reach.min(), 0)) * ncol + ncol - 1
+    m = n * ncol
+    if 2 * lower + upper + 1 > BAND_MAX_WIDTH * m:
+        return None
+    # position place[a] NCOL + k holds row k n + a (point k, state a); likewise columns
+    index = (np.arange(ncol)[None, :] * n + order[:, None]).ravel()
+    return IntervalBand(index, index.copy(), lower, upper)
 
 
 @dataclass(frozen=True, eq=False)
@@ -62,7 +117,8 @@ class CollocationJacobian:
         nodes ``l = 0 .. NCOL`` (node ``NCOL`` is the next interval's first, wrapping);
     extra : ``(NTST, m, k)``: the same rows in the columns of ``T`` and the free
         parameters;
-    phase : ``(NTST NCOL n,)``: the phase row ``c`` (zero in ``T`` and ``p``).
+    phase : ``(NTST NCOL n,)``: the phase row ``c`` (zero in ``T`` and ``p``);
+    band : an :class:`IntervalBand` of the ``M_i`` (factorized banded), or None (dense).
     """
 
     n: int
@@ -71,6 +127,7 @@ class CollocationJacobian:
     blocks: np.ndarray
     extra: np.ndarray
     phase: np.ndarray
+    band: IntervalBand | None = None
 
     @property
     def shape(self) -> tuple:
@@ -100,7 +157,12 @@ class CollocationJacobian:
     def factors(self) -> tuple | None:
         """``(lu, piv, Z)``: the LU factors of every ``M_i`` and ``Z_i = M_i^-1 [B_i^L,
         E_i]`` (``(NTST, m, n + k)``); None if an ``M_i`` is singular."""
-        lu, piv, Z, ok = _compiled().interval_factors(_c(self.blocks), _c(self.extra))
+        blocks, extra = _c(self.blocks), _c(self.extra)
+        if self.band is None:
+            lu, piv, Z, ok = _compiled().interval_factors(blocks, extra)
+        else:
+            lu, piv, Z, ok = _compiled().band_interval_factors(blocks, extra,
+                                                               *self.band.args)
         return (lu, piv, Z) if ok else None
 
     @property
@@ -188,7 +250,9 @@ class CondensedLU:
         b = np.asarray(b, dtype=float)
         lu, piv, Z = self.J.factors
         c = self.chain
-        x = _compiled().condensed_solve(lu, piv, Z, self.border_w, c.schedule, c.Qb, c.H,
+        band = DENSE if self.J.band is None else self.J.band.args
+        x = _compiled().condensed_solve(lu, piv, band, Z, self.border_w, c.schedule, c.Qb,
+                                        c.H,
                                         c.Zt, *self.bordered,
                                         _c(b.reshape(b.shape[0], -1)))
         return x.reshape(b.shape)

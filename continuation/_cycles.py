@@ -271,7 +271,7 @@ def _condensed_solver(settings: CollocationSettings, system) -> bool:
     'auto': where that pays, ``_condensed.condensed_pays``)."""
     if settings.linear_solver == "auto":
         return settings.jacobian == "blocks" and _condensed.condensed_pays(
-            system.kernel.n * settings.ncol, system.fill())
+            system.kernel.n * settings.ncol, system.fill(), system.band is not None)
     return settings.linear_solver == "condensed"
 
 

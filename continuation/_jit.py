@@ -1,14 +1,11 @@
 """The compiled layer: numba functions, cached on disk (``cache=True``), for the loops over
 the many small dense blocks of the condensed collocation solver (``_condensed``), where
-a Python loop over LAPACK calls costs more than their arithmetic. Every compiled
-function that calls another one lives in this module: numba's cache is invalidated by
-edits of a function's own file only (leaves may live elsewhere: ``_lazyjit``). Imported
-at first use, so that ``import continuation`` does not import numba.
-
-Dense kernels, for C-ordered arrays: :func:`lu_factor` / :func:`lu_solve`,
-:func:`qr_eliminate` (the elimination of one unknown block from a pair of equations)
-and :func:`gemm`; blocks of at most ``SMALL`` rows by plain loops (no per-call
-overhead), larger ones by LAPACK and BLAS (``_lapack``), 2-3x faster there.
+a Python loop over LAPACK calls costs more than their arithmetic: the interval LUs and
+maps (dense or banded), the pairwise reduction of the mesh-point chain and the solves.
+Every compiled function that calls another one lives in this module, on the dense
+kernels of ``_dense``: numba's cache is invalidated by edits of a function's own file
+only, hence :data:`DENSE_SOURCE` (leaves may live elsewhere: ``_lazyjit``). Imported at
+first use, so that ``import continuation`` does not import numba.
 """
 
 from __future__ import annotations
@@ -16,192 +13,16 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from ._lapack import dgeqrf, dgetrf, dgetrs, dormqr, dtrsm
-from ._lazyjit import SMALL
+from ._dense import band_solve, gemm, lu_factor, lu_solve, qr_eliminate
+from ._lapack import dgbtrf
+
+#: the first 16 hex digits of the SHA-256 of ``_dense.py`` that the functions here were
+#: compiled against; an edit of ``_dense.py`` must update it (a test checks), so that
+#: numba recompiles the callers of the edited kernels
+DENSE_SOURCE = "eddb8ac3f946359c"
 
 #: the compiled functions: nopython, cached on disk, releasing the GIL
 jit = njit(cache=True, nogil=True)
-
-
-@jit
-def lu_factor(a, piv) -> bool:
-    """``a = P L U`` (partial pivoting) in place, for :func:`lu_solve`; ``a``: square,
-    C-ordered; ``piv``: int32 of its size. False when a pivot is exactly zero."""
-    m = a.shape[0]
-    if m > SMALL:                        # a C-ordered a is A^T in Fortran's eyes
-        ints = np.array([m, 0], np.int32)
-        dgetrf(ints.ctypes, ints.ctypes, a.ctypes, ints.ctypes, piv.ctypes,
-               ints[1:].ctypes)
-        return ints[1] == 0
-    for j in range(m):
-        p, big = j, abs(a[j, j])
-        for i in range(j + 1, m):
-            if abs(a[i, j]) > big:
-                p, big = i, abs(a[i, j])
-        piv[j] = p
-        if p != j:
-            for c in range(m):
-                a[j, c], a[p, c] = a[p, c], a[j, c]
-        if a[j, j] == 0.0:
-            return False
-        inv = 1.0 / a[j, j]
-        for i in range(j + 1, m):
-            f = a[i, j] * inv
-            a[i, j] = f
-            if f != 0.0:
-                for c in range(j + 1, m):
-                    a[i, c] -= f * a[j, c]
-    return True
-
-
-@jit
-def lu_solve(a, piv, b) -> None:
-    """``b <- A^-1 b`` in place with the factors of :func:`lu_factor`; ``b``: ``(m, r)``,
-    C-ordered."""
-    m, r = b.shape
-    if m > SMALL:                        # solve with (A^T)^T: dgetrs 'T' on b^T
-        bt = np.ascontiguousarray(b.T)
-        ints = np.array([m, r, 0], np.int32)
-        trans = np.array([ord("T")], np.uint8)
-        dgetrs(trans.ctypes, ints.ctypes, ints[1:].ctypes, a.ctypes, ints.ctypes,
-               piv.ctypes, bt.ctypes, ints.ctypes, ints[2:].ctypes)
-        b[:] = bt.T
-        return
-    for j in range(m):
-        p = piv[j]
-        if p != j:
-            for c in range(r):
-                b[j, c], b[p, c] = b[p, c], b[j, c]
-    if r == 1:                           # one column: dot products along rows of a
-        for i in range(1, m):
-            acc = b[i, 0]
-            for j in range(i):
-                acc -= a[i, j] * b[j, 0]
-            b[i, 0] = acc
-        for i in range(m - 1, -1, -1):
-            acc = b[i, 0]
-            for j in range(i + 1, m):
-                acc -= a[i, j] * b[j, 0]
-            b[i, 0] = acc / a[i, i]
-        return
-    for i in range(1, m):                # several: row updates along the rows of b
-        for j in range(i):
-            f = a[i, j]
-            if f != 0.0:
-                for c in range(r):
-                    b[i, c] -= f * b[j, c]
-    for i in range(m - 1, -1, -1):
-        for j in range(i + 1, m):
-            f = a[i, j]
-            if f != 0.0:
-                for c in range(r):
-                    b[i, c] -= f * b[j, c]
-        d = a[i, i]
-        for c in range(r):
-            b[i, c] /= d
-
-
-@jit
-def qr_eliminate(S, W) -> bool:
-    """Eliminate the unknown of the column ``S`` (``p x n``, ``p >= n``) from the rows
-    ``[S | W]``: ``S = Q R``, ``W <- Q^T W``, then the top ``n`` rows of ``W`` solved
-    with ``R`` (they give the unknown, ``R^-1 Q_top^T W``), the bottom ``p - n`` rows
-    are the equations free of it. ``S``, ``W`` C-ordered, overwritten. False when ``R``
-    is numerically rank-deficient (``|R_jj| <= n eps max |R_ii|``)."""
-    if S.shape[0] > SMALL:
-        return _qr_eliminate_lapack(S, W)
-    p, n = S.shape
-    v, dots = np.empty(p), np.empty(max(n, W.shape[1]))
-    for j in range(n):
-        norm = np.sqrt(np.sum(S[j:, j] ** 2))
-        if norm == 0.0:
-            continue                     # a zero column: R_jj = 0, refused below
-        alpha = -norm if S[j, j] >= 0.0 else norm
-        v[j:] = S[j:, j]
-        v[j] -= alpha
-        beta = 1.0 / (norm * (norm + abs(S[j, j])))          # 2 / |v|^2
-        _reflect(S, v, j, j, n, beta, dots)
-        _reflect(W, v, j, 0, W.shape[1], beta, dots)
-        S[j, j] = alpha
-    if not _full_rank(S, n):
-        return False
-    for j in range(n - 1, -1, -1):       # top rows <- R^-1 top rows
-        W[j] /= S[j, j]
-        for i in range(j):
-            if S[i, j] != 0.0:
-                W[i] -= S[i, j] * W[j]
-    return True
-
-
-@jit
-def _qr_eliminate_lapack(S, W) -> bool:
-    """:func:`qr_eliminate` by ``dgeqrf``, ``dormqr`` and ``dtrsm`` (Fortran copies)."""
-    (p, n), w = S.shape, W.shape[1]
-    Sf, Wf = np.asfortranarray(S), np.asfortranarray(W)
-    tau = np.empty(n)
-    lwork = 64 * max(n, w, 1)
-    work = np.empty(lwork)
-    ints = np.array([p, n, w, lwork, 0], np.int32)
-    dgeqrf(ints.ctypes, ints[1:].ctypes, Sf.ctypes, ints.ctypes, tau.ctypes, work.ctypes,
-           ints[3:].ctypes, ints[4:].ctypes)
-    chars = np.array([ord("L"), ord("T"), ord("U"), ord("N")], np.uint8)
-    dormqr(chars.ctypes, chars[1:].ctypes, ints.ctypes, ints[2:].ctypes, ints[1:].ctypes,
-           Sf.ctypes, ints.ctypes, tau.ctypes, Wf.ctypes, ints.ctypes, work.ctypes,
-           ints[3:].ctypes, ints[4:].ctypes)
-    if not _full_rank(Sf, n):
-        return False
-    one = np.ones(1)
-    dtrsm(chars.ctypes, chars[2:].ctypes, chars[3:].ctypes, chars[3:].ctypes,
-          ints[1:].ctypes, ints[2:].ctypes, one.ctypes, Sf.ctypes, ints.ctypes, Wf.ctypes,
-          ints.ctypes)
-    S[:] = Sf
-    W[:] = Wf
-    return True
-
-
-@jit
-def _reflect(A, v, j, c0, c1, beta, dots) -> None:
-    """``A[j:, c0:c1] <- (I - beta v v^T) A[j:, c0:c1]`` with ``v`` in ``v[j:]``."""
-    p = A.shape[0]
-    for c in range(c0, c1):
-        dots[c] = 0.0
-    for i in range(j, p):
-        vi = v[i]
-        for c in range(c0, c1):
-            dots[c] += vi * A[i, c]
-    for i in range(j, p):
-        f = beta * v[i]
-        for c in range(c0, c1):
-            A[i, c] -= f * dots[c]
-
-
-@jit
-def _full_rank(R, n) -> bool:
-    """Whether the upper triangle of ``R[:n, :n]`` has ``|R_jj| > n eps max |R_ii|``."""
-    d = np.abs(np.diag(R[:n, :n]))
-    return np.isfinite(d.max()) and d.min() > n * 2.220446049250313e-16 * d.max()
-
-
-@jit
-def gemm(C, A, B, alpha) -> None:
-    """``C += alpha A B`` by loops (no allocation, any strides): for the products of the
-    structured solves, where one dimension is a few border rows or right-hand sides."""
-    m, q = A.shape
-    r = B.shape[1]
-    if r < 8:                            # few columns: dot products along rows of A
-        for i in range(m):
-            for j in range(r):
-                acc = 0.0
-                for l in range(q):
-                    acc += A[i, l] * B[l, j]
-                C[i, j] += alpha * acc
-        return
-    for i in range(m):
-        for l in range(q):
-            f = alpha * A[i, l]
-            if f != 0.0:
-                for j in range(r):
-                    C[i, j] += f * B[l, j]
 
 
 # ---- the condensed solver of collocated cycles (``_condensed``) ---------------------------
@@ -220,6 +41,52 @@ def interval_factors(blocks, extra):
         Z[i, :, :n], Z[i, :, n:] = blocks[i, :, :n], extra[i]
         lu_solve(lu[i], piv[i], Z[i])
     return lu, piv, Z, True
+
+
+@jit
+def band_interval_factors(blocks, extra, rows, cols, kl, ku):
+    """:func:`interval_factors` for banded ``M_i``: ``M_i[rows][:, cols]`` has ``kl``
+    sub- and ``ku`` super-diagonals (every entry outside is zero), factorized by LAPACK
+    in its band storage (``lu[i]``: ``(m, 2 kl + ku + 1)``, the transposed Fortran
+    array); ``Z_i`` in the original order of the nodes."""
+    ntst, m, width = blocks.shape
+    n, k = width - m, extra.shape[2]
+    lu = np.zeros((ntst, m, 2 * kl + ku + 1))
+    piv = np.zeros((ntst, m), np.int32)
+    Z = np.empty((ntst, m, n + k))
+    rhs = np.empty((m, n + k))
+    ints = np.array([m, kl, ku, 2 * kl + ku + 1, 0], np.int32)
+    for i in range(ntst):
+        ab = lu[i]
+        for j in range(m):                       # column j of the permuted M_i
+            c = n + cols[j]
+            for r in range(max(0, j - ku), min(m, j + kl + 1)):
+                ab[j, kl + ku + r - j] = blocks[i, rows[r], c]
+        dgbtrf(ints.ctypes, ints.ctypes, ints[1:].ctypes, ints[2:].ctypes, ab.ctypes,
+               ints[3:].ctypes, piv[i].ctypes, ints[4:].ctypes)
+        if ints[4] != 0:
+            return lu, piv, Z, False
+        for r in range(m):
+            rhs[r, :n], rhs[r, n:] = blocks[i, rows[r], :n], extra[i, rows[r]]
+        band_solve(ab, piv[i], rhs, kl, ku)
+        for r in range(m):
+            Z[i, cols[r]] = rhs[r]
+    return lu, piv, Z, True
+
+
+@jit
+def interval_solve(lu, piv, b, rows, cols, kl, ku) -> None:
+    """``b <- M^-1 b`` in place (``b``: ``(m, r)``) with the factors of
+    :func:`interval_factors` (``kl < 0``) or of :func:`band_interval_factors`."""
+    if kl < 0:
+        lu_solve(lu, piv, b)
+        return
+    bp = np.empty_like(b)
+    for j in range(b.shape[0]):
+        bp[j] = b[rows[j]]
+    band_solve(lu, piv, bp, kl, ku)
+    for j in range(b.shape[0]):
+        b[cols[j]] = bp[j]
 
 
 #: the largest growth ``rho(|a1| |a0|)`` (:func:`_scaled_growth`) of a pair eliminated
@@ -382,16 +249,19 @@ def chain_solve(schedule, Qb, H, Zt, shares, flu, fpiv, z, s):
 
 
 @jit
-def condensed_solve(lu, piv, Z, border_w, schedule, Qb, H, Zt, shares, flu, fpiv, b):
+def condensed_solve(lu, piv, band, Z, border_w, schedule, Qb, H, Zt, shares, flu, fpiv,
+                    b):
     """``x`` with ``A x = b`` (``b``: ``(N + k, r)``) from the factors of
-    :class:`CondensedLU`."""
+    :class:`CondensedLU`; ``band``: ``(rows, cols, kl, ku)`` of the interval factors
+    (:func:`interval_solve`)."""
+    rows, cols, kl, ku = band
     ntst, m = lu.shape[0], lu.shape[1]
     n = Z.shape[2] - border_w.shape[1]
     p, N, r = m - n, ntst * m, b.shape[1]
     z = b[:N].copy().reshape(ntst, m, r)
     s = b[N:].copy()
     for i in range(ntst):
-        lu_solve(lu[i], piv[i], z[i])                # M_i^-1 r_i
+        interval_solve(lu[i], piv[i], z[i], rows, cols, kl, ku)     # M_i^-1 r_i
         gemm(s, border_w[i], z[i, :p], -1.0)
     v, y = chain_solve(schedule, Qb, H, Zt, shares, flu, fpiv,
                         np.ascontiguousarray(z[:, p:]), s)

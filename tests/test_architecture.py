@@ -152,3 +152,14 @@ def test_modules_and_functions_stay_small():
                     long_functions.append(f"{m}.{node.name}: {n}")
     assert not long_functions, long_functions
     assert statistics.median(lengths) <= 15
+
+
+def test_the_compiled_layer_records_the_dense_kernels_it_was_compiled_against():
+    """numba's disk cache notices edits of a function's own file only: the loops of
+    ``continuation._jit`` call the kernels of ``continuation._dense``, so ``_jit`` holds
+    the hash of ``_dense.py`` (update ``DENSE_SOURCE`` after editing it, which makes numba
+    recompile the callers)."""
+    import hashlib
+    from continuation import _dense, _jit
+    source = Path(_dense.__file__).read_bytes()
+    assert hashlib.sha256(source).hexdigest()[:16] == _jit.DENSE_SOURCE

@@ -199,17 +199,21 @@ def test_linear_solver_setting_and_its_automatic_choice():
     with pytest.raises(ValueError, match="needs jacobian = 'blocks'"):
         C.CollocationSettings(linear_solver="condensed", jacobian="graph")
     # 'auto': interval blocks of up to 100 rows (6 states x NCOL 4 = 24 here) condense;
-    # larger ones when dense (a 40-state field with a dense mass, 160 rows), not when
-    # banded (a 40-state ring, 160 rows: SuperLU keeps the band)
+    # larger ones when dense (a 40-state field with a dense mass, 160 rows) or banded (a
+    # 40-state ring, 160 rows, banded once its states are reordered), not when sparse
+    # without a band (40 states coupled at scattered distances: SuperLU keeps them sparse)
     assert _problem(8, 4, "auto").condensed
     assert _problem(8, 4, "auto", mass=True, n=40).condensed
     x, p = ca.SX.sym("x", 40), ca.SX.sym("p", 2)
-    banded = ca.Function("F", [x, p], [ca.vertcat(x[1:], x[0]) - p[0] * x
-                                       + p[1] * ca.vertcat(x[-1], x[:-1]) ** 3])
-    prob = C.CycleProblem(banded, lambda t: np.ones((np.size(t), 40)), 1.0,
-                          {"mu": 1.0, "k": 0.2}, "mu",
-                          settings=C.CollocationSettings(ntst=8, ncol=4))
-    assert not prob.condensed
+    ring = ca.vertcat(x[1:], x[0]) - p[0] * x + p[1] * ca.vertcat(x[-1], x[:-1]) ** 3
+    scattered = p[0] * x + p[1] * ca.vertcat(*[x[(7 * i + 3) % 40] - x[(13 * i + 5) % 40] ** 3
+                                               for i in range(40)])
+    for f, condensed in ((ring, True), (scattered, False)):
+        prob = C.CycleProblem(ca.Function("F", [x, p], [f]),
+                              lambda t: np.ones((np.size(t), 40)), 1.0,
+                              {"mu": 1.0, "k": 0.2}, "mu",
+                              settings=C.CollocationSettings(ntst=8, ncol=4))
+        assert prob.condensed == condensed
 
 
 @pytest.mark.parametrize("m", [1, 5, 16, 32, 33, 40])
@@ -217,7 +221,7 @@ def test_dense_lu_kernels_equal_numpy_solves(m):
     """The compiled LU and its solve, by loops up to ``SMALL`` rows and by LAPACK above,
     against NumPy's solve: one and several right-hand sides, a matrix that needs row
     exchanges (zero diagonal), and an exactly singular one (reported, not solved)."""
-    from continuation import _jit
+    from continuation import _dense
     rng = np.random.default_rng(m)
     A = rng.standard_normal((m, m))
     np.fill_diagonal(A, 0.0)
@@ -225,10 +229,123 @@ def test_dense_lu_kernels_equal_numpy_solves(m):
     for r in (1, 3, 7):
         b = rng.standard_normal((m, r))
         lu, piv = A.copy(), np.zeros(m, np.int32)
-        assert _jit.lu_factor(lu, piv)
+        assert _dense.lu_factor(lu, piv)
         x = b.copy()
-        _jit.lu_solve(lu, piv, x)
+        _dense.lu_solve(lu, piv, x)
         assert _rel(x, np.linalg.solve(A, b)) < 1e-12 * np.linalg.cond(A)
     singular = A.copy()
     singular[:, -1] = 0.0
-    assert not _jit.lu_factor(singular, np.zeros(m, np.int32))
+    assert not _dense.lu_factor(singular, np.zeros(m, np.int32))
+
+
+def _block_pattern(n, ncol, prow, pcol):
+    """The structural pattern of an interval matrix ``M_i`` (``m x m``): every block
+    (point ``k``, node ``l = 1 .. NCOL``) has the pointwise pattern."""
+    S = np.zeros((n, n), bool)
+    S[prow, pcol] = True
+    return np.kron(np.ones((ncol, ncol), bool), S)
+
+
+@pytest.mark.parametrize("coupling", ["chain", "ring", "shuffled chain", "dense"])
+def test_interval_band_holds_every_entry_of_the_interval_matrices(coupling):
+    """Reordered by the band's rows and columns, the interval matrix of the pattern has
+    no entry outside ``lower`` / ``upper`` off-diagonals (checked on the explicit
+    pattern); a chain's band is its distance of coupling times NCOL, plus NCOL - 1; a
+    dense pattern has no band."""
+    from continuation._condensed import interval_band
+    n, ncol = 30, 4
+    near = {"chain": (-2, -1, 0, 1, 2), "ring": (-1, 0, 1), "shuffled chain": (-1, 0, 1),
+            "dense": tuple(range(-n + 1, n))}[coupling]
+    pairs = [(i, i + d) for i in range(n) for d in near
+             if coupling == "ring" or 0 <= i + d < n]
+    prow, pcol = (np.array([a for a, _ in pairs]), np.array([b % n for _, b in pairs]))
+    if coupling == "shuffled chain":                 # the states in a random order
+        order = np.random.default_rng(3).permutation(n)
+        prow, pcol = order[prow], order[pcol]
+    band = interval_band(n, ncol, prow, pcol)
+    if coupling == "dense":
+        assert band is None
+        return
+    assert sorted(band.rows) == list(range(n * ncol)) == sorted(band.cols)
+    S = _block_pattern(n, ncol, prow, pcol)[band.rows][:, band.cols]
+    i, j = np.nonzero(S)
+    assert (i - j).max() <= band.lower and (j - i).max() <= band.upper
+    if coupling == "chain":
+        assert band.lower == band.upper == 2 * ncol + ncol - 1
+    else:                                            # a ring / shuffled chain: RCM finds
+        assert band.lower <= 2 * ncol + ncol - 1     # a band of width 2 or less
+
+
+def test_banded_interval_factors_and_solves_equal_dense_lapack():
+    """The band route (LAPACK's band LU, our row-wise band solve, the permutations)
+    against NumPy on the same interval matrices: the maps ``Z_i`` and solves of one and
+    several right-hand sides; singular blocks are reported."""
+    from continuation import _jit
+    from continuation._condensed import interval_band
+    n, ncol, ntst, k = 12, 3, 5, 2
+    m = n * ncol
+    pairs = [(i, i + d) for i in range(n) for d in (-1, 0, 1) if 0 <= i + d < n]
+    prow, pcol = np.array([a for a, _ in pairs]), np.array([b for _, b in pairs])
+    band = interval_band(n, ncol, prow, pcol)
+    assert band is not None
+    rng = np.random.default_rng(0)
+    S = np.kron(np.ones((ncol, ncol + 1), bool),
+                np.isin(np.arange(n)[:, None] * n + np.arange(n), prow * n + pcol))
+    blocks = np.where(S, rng.standard_normal((ntst, m, m + n)), 0.0)
+    extra = rng.standard_normal((ntst, m, k))
+    lu, piv, Z, ok = _jit.band_interval_factors(blocks, extra, *band.args)
+    assert ok
+    for i in range(ntst):
+        M = blocks[i, :, n:]
+        expected = np.linalg.solve(M, np.hstack([blocks[i, :, :n], extra[i]]))
+        assert _rel(Z[i], expected) < 1e-11
+        for r in (1, 4):
+            b = rng.standard_normal((m, r))
+            x = b.copy()
+            _jit.interval_solve(lu[i], piv[i], x, *band.args)
+            assert _rel(x, np.linalg.solve(M, b)) < 1e-11
+    singular = blocks.copy()
+    singular[2, :, n + 5] = 0.0
+    assert not _jit.band_interval_factors(singular, extra, *band.args)[3]
+
+
+def _oscillator_chain(n=24):
+    """``n / 2`` Van der Pol oscillators in a line, each coupled to its neighbours (free
+    ends): banded interval matrices. ``p = (mu, k)``."""
+    x, p = ca.SX.sym("x", n), ca.SX.sym("p", 2)
+    u, v = x[0::2], x[1::2]
+    left = ca.vertcat(u[0], u[:-1])
+    right = ca.vertcat(u[1:], u[-1])
+    f = ca.vertcat(*[ca.vertcat(v[i], p[0] * (1 - u[i] ** 2) * v[i] - u[i]
+                                + p[1] * (left[i] - 2 * u[i] + right[i]))
+                     for i in range(n // 2)])
+    return ca.Function("F", [x, p], [f])
+
+
+def test_banded_condensation_equals_dense_lapack_and_the_sparse_branch():
+    """A chain whose interval matrices are banded (96 rows, 11 off-diagonals each side):
+    the band route's solves against LAPACK on the sparse route's matrix, and a branch
+    against the sparse solver's (points, Newton iterations, multipliers)."""
+    n = 24
+    guess = lambda t: np.column_stack([2 * np.cos(2 * np.pi * t),
+                                       -2 * np.sin(2 * np.pi * t)] * (n // 2))
+
+    def problem(solver):
+        return C.CycleProblem(_oscillator_chain(n), guess, 6.6, {"mu": 1.0, "k": 0.3},
+                              "mu", settings=C.CollocationSettings(ntst=9, ncol=4,
+                                                                   linear_solver=solver))
+    prob = problem("auto")
+    assert prob.condensed and prob.system.compiled.band is not None
+    rng = np.random.default_rng(5)
+    X = prob.X0 * (1 + 0.01 * rng.standard_normal(prob.X0.size))
+    tau = rng.standard_normal(X.size)
+    dense = append_row(C.CycleProblem.jacobian(prob, X), tau).toarray()
+    lu = factorize(prob.bordered_jacobian(X, tau))
+    for b in (rng.standard_normal(X.size), rng.standard_normal((X.size, 3))):
+        assert _rel(np.linalg.solve(dense, b), lu.solve(b)) < 1e-11
+    settings = C.ContinuationSettings(ds=0.05, ds_max=0.2, max_steps=5)
+    a, b = (C.continuation(problem(s), settings=settings) for s in ("sparse", "auto"))
+    assert len(a) == len(b) == settings.max_steps + 1
+    assert np.array_equal(a.iterations, b.iterations)
+    assert _rel(a.par("mu"), b.par("mu")) < 1e-10 and _rel(a.x, b.x) < 1e-10
+    assert _rel(np.array(a.eigenvalues), np.array(b.eigenvalues)) < 1e-9

@@ -1,0 +1,245 @@
+"""Dense kernels of the compiled layer (numba, cached on disk), for C-ordered arrays:
+:func:`lu_factor` / :func:`lu_solve`, :func:`qr_eliminate` (the elimination of one
+unknown block from a pair of equations), :func:`gemm` and :func:`band_solve` (with
+LAPACK's band LU). Blocks of at most ``SMALL`` rows by plain loops (no per-call
+overhead), larger ones by LAPACK and BLAS (``_lapack``), 2-3x faster there.
+
+They are called by the loops of ``_jit`` only. numba's disk cache notices edits of a
+function's own file only, so ``_jit`` records the hash of this file
+(``_jit.DENSE_SOURCE``, checked by a test): an edit here must update that line, which
+recompiles the callers.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+from ._lapack import dgeqrf, dgetrf, dgetrs, dormqr, dtrsm
+from ._lazyjit import SMALL
+
+#: the compiled functions: nopython, cached on disk, releasing the GIL
+jit = njit(cache=True, nogil=True)
+
+
+@jit
+def lu_factor(a, piv) -> bool:
+    """``a = P L U`` (partial pivoting) in place, for :func:`lu_solve`; ``a``: square,
+    C-ordered; ``piv``: int32 of its size. False when a pivot is exactly zero."""
+    m = a.shape[0]
+    if m > SMALL:                        # a C-ordered a is A^T in Fortran's eyes
+        ints = np.array([m, 0], np.int32)
+        dgetrf(ints.ctypes, ints.ctypes, a.ctypes, ints.ctypes, piv.ctypes,
+               ints[1:].ctypes)
+        return ints[1] == 0
+    for j in range(m):
+        p, big = j, abs(a[j, j])
+        for i in range(j + 1, m):
+            if abs(a[i, j]) > big:
+                p, big = i, abs(a[i, j])
+        piv[j] = p
+        if p != j:
+            for c in range(m):
+                a[j, c], a[p, c] = a[p, c], a[j, c]
+        if a[j, j] == 0.0:
+            return False
+        inv = 1.0 / a[j, j]
+        for i in range(j + 1, m):
+            f = a[i, j] * inv
+            a[i, j] = f
+            if f != 0.0:
+                for c in range(j + 1, m):
+                    a[i, c] -= f * a[j, c]
+    return True
+
+
+@jit
+def lu_solve(a, piv, b) -> None:
+    """``b <- A^-1 b`` in place with the factors of :func:`lu_factor`; ``b``: ``(m, r)``,
+    C-ordered."""
+    m, r = b.shape
+    if m > SMALL:                        # solve with (A^T)^T: dgetrs 'T' on b^T
+        bt = np.ascontiguousarray(b.T)
+        ints = np.array([m, r, 0], np.int32)
+        trans = np.array([ord("T")], np.uint8)
+        dgetrs(trans.ctypes, ints.ctypes, ints[1:].ctypes, a.ctypes, ints.ctypes,
+               piv.ctypes, bt.ctypes, ints.ctypes, ints[2:].ctypes)
+        b[:] = bt.T
+        return
+    for j in range(m):
+        p = piv[j]
+        if p != j:
+            for c in range(r):
+                b[j, c], b[p, c] = b[p, c], b[j, c]
+    if r == 1:
+        _substitute_column(a, b)
+    else:
+        _substitute_rows(a, b)
+
+
+@jit
+def _substitute_column(a, b) -> None:
+    """``b <- U^-1 L^-1 b`` for one column: dot products along the rows of ``a``."""
+    m = a.shape[0]
+    for i in range(1, m):
+        acc = b[i, 0]
+        for j in range(i):
+            acc -= a[i, j] * b[j, 0]
+        b[i, 0] = acc
+    for i in range(m - 1, -1, -1):
+        acc = b[i, 0]
+        for j in range(i + 1, m):
+            acc -= a[i, j] * b[j, 0]
+        b[i, 0] = acc / a[i, i]
+
+
+@jit
+def _substitute_rows(a, b) -> None:
+    """The same for several columns: updates of whole rows of ``b`` (contiguous)."""
+    m, r = b.shape
+    for i in range(1, m):
+        for j in range(i):
+            f = a[i, j]
+            if f != 0.0:
+                for c in range(r):
+                    b[i, c] -= f * b[j, c]
+    for i in range(m - 1, -1, -1):
+        for j in range(i + 1, m):
+            f = a[i, j]
+            if f != 0.0:
+                for c in range(r):
+                    b[i, c] -= f * b[j, c]
+        d = a[i, i]
+        for c in range(r):
+            b[i, c] /= d
+
+
+@jit
+def qr_eliminate(S, W) -> bool:
+    """Eliminate the unknown of the column ``S`` (``p x n``, ``p >= n``) from the rows
+    ``[S | W]``: ``S = Q R``, ``W <- Q^T W``, then the top ``n`` rows of ``W`` solved
+    with ``R`` (they give the unknown, ``R^-1 Q_top^T W``), the bottom ``p - n`` rows
+    are the equations free of it. ``S``, ``W`` C-ordered, overwritten. False when ``R``
+    is numerically rank-deficient (``|R_jj| <= n eps max |R_ii|``)."""
+    if S.shape[0] > SMALL:
+        return _qr_eliminate_lapack(S, W)
+    p, n = S.shape
+    v, dots = np.empty(p), np.empty(max(n, W.shape[1]))
+    for j in range(n):
+        norm = np.sqrt(np.sum(S[j:, j] ** 2))
+        if norm == 0.0:
+            continue                     # a zero column: R_jj = 0, refused below
+        alpha = -norm if S[j, j] >= 0.0 else norm
+        v[j:] = S[j:, j]
+        v[j] -= alpha
+        beta = 1.0 / (norm * (norm + abs(S[j, j])))          # 2 / |v|^2
+        _reflect(S, v, j, j, n, beta, dots)
+        _reflect(W, v, j, 0, W.shape[1], beta, dots)
+        S[j, j] = alpha
+    if not _full_rank(S, n):
+        return False
+    for j in range(n - 1, -1, -1):       # top rows <- R^-1 top rows
+        W[j] /= S[j, j]
+        for i in range(j):
+            if S[i, j] != 0.0:
+                W[i] -= S[i, j] * W[j]
+    return True
+
+
+@jit
+def _qr_eliminate_lapack(S, W) -> bool:
+    """:func:`qr_eliminate` by ``dgeqrf``, ``dormqr`` and ``dtrsm`` (Fortran copies)."""
+    (p, n), w = S.shape, W.shape[1]
+    Sf, Wf = np.asfortranarray(S), np.asfortranarray(W)
+    tau = np.empty(n)
+    lwork = 64 * max(n, w, 1)
+    work = np.empty(lwork)
+    ints = np.array([p, n, w, lwork, 0], np.int32)
+    dgeqrf(ints.ctypes, ints[1:].ctypes, Sf.ctypes, ints.ctypes, tau.ctypes, work.ctypes,
+           ints[3:].ctypes, ints[4:].ctypes)
+    chars = np.array([ord("L"), ord("T"), ord("U"), ord("N")], np.uint8)
+    dormqr(chars.ctypes, chars[1:].ctypes, ints.ctypes, ints[2:].ctypes, ints[1:].ctypes,
+           Sf.ctypes, ints.ctypes, tau.ctypes, Wf.ctypes, ints.ctypes, work.ctypes,
+           ints[3:].ctypes, ints[4:].ctypes)
+    if not _full_rank(Sf, n):
+        return False
+    one = np.ones(1)
+    dtrsm(chars.ctypes, chars[2:].ctypes, chars[3:].ctypes, chars[3:].ctypes,
+          ints[1:].ctypes, ints[2:].ctypes, one.ctypes, Sf.ctypes, ints.ctypes, Wf.ctypes,
+          ints.ctypes)
+    S[:] = Sf
+    W[:] = Wf
+    return True
+
+
+@jit
+def _reflect(A, v, j, c0, c1, beta, dots) -> None:
+    """``A[j:, c0:c1] <- (I - beta v v^T) A[j:, c0:c1]`` with ``v`` in ``v[j:]``."""
+    p = A.shape[0]
+    for c in range(c0, c1):
+        dots[c] = 0.0
+    for i in range(j, p):
+        vi = v[i]
+        for c in range(c0, c1):
+            dots[c] += vi * A[i, c]
+    for i in range(j, p):
+        f = beta * v[i]
+        for c in range(c0, c1):
+            A[i, c] -= f * dots[c]
+
+
+@jit
+def _full_rank(R, n) -> bool:
+    """Whether the upper triangle of ``R[:n, :n]`` has ``|R_jj| > n eps max |R_ii|``."""
+    d = np.abs(np.diag(R[:n, :n]))
+    return np.isfinite(d.max()) and d.min() > n * 2.220446049250313e-16 * d.max()
+
+
+@jit
+def gemm(C, A, B, alpha) -> None:
+    """``C += alpha A B`` by loops (no allocation, any strides): for the products of the
+    structured solves, where one dimension is a few border rows or right-hand sides."""
+    m, q = A.shape
+    r = B.shape[1]
+    if r < 8:                            # few columns: dot products along rows of A
+        for i in range(m):
+            for j in range(r):
+                acc = 0.0
+                for l in range(q):
+                    acc += A[i, l] * B[l, j]
+                C[i, j] += alpha * acc
+        return
+    for i in range(m):
+        for l in range(q):
+            f = alpha * A[i, l]
+            if f != 0.0:
+                for j in range(r):
+                    C[i, j] += f * B[l, j]
+
+
+@jit
+def band_solve(ab, piv, b, kl, ku) -> None:
+    """``b <- A^-1 b`` in place (``b``: ``(m, r)``, C-ordered) with LAPACK's band LU of
+    ``A`` (``dgbtrf``; ``ab``: its storage transposed, ``piv`` 1-based), as ``dgbtrs``
+    does but with whole rows of ``b`` at a time."""
+    m, r = b.shape
+    d = kl + ku                                  # the diagonal's place in a column
+    for j in range(m - 1):                       # L: the interchanges and multipliers
+        p = piv[j] - 1
+        if p != j:
+            for c in range(r):
+                b[j, c], b[p, c] = b[p, c], b[j, c]
+        for t in range(1, min(kl, m - 1 - j) + 1):
+            f = ab[j, d + t]
+            if f != 0.0:
+                for c in range(r):
+                    b[j + t, c] -= f * b[j, c]
+    for i in range(m - 1, -1, -1):               # U: kl + ku super-diagonals
+        for j in range(i + 1, min(m, i + d + 1)):
+            f = ab[j, d + i - j]
+            if f != 0.0:
+                for c in range(r):
+                    b[i, c] -= f * b[j, c]
+        u = ab[i, d]
+        for c in range(r):
+            b[i, c] /= u
