@@ -64,6 +64,17 @@ class Pointwise:
         self.m = ca.sparsify(m) if S is ca.SX else m
         self.pattern = self.fx.sparsity().unite(self.mvx.sparsity()).unite(self.m.sparsity())
 
+    def own_entries(self) -> dict:
+        """Per matrix (``Fx``, ``Mvx``, ``M``), the places among the ``pattern``'s
+        nonzeros of its own structural nonzeros (the others are zero)."""
+        rows, cols = self.pattern.get_triplet()
+        union = np.asarray(rows) * self.n + np.asarray(cols)
+        out = {}
+        for name, a in (("Fx", self.fx), ("Mvx", self.mvx), ("M", self.m)):
+            r, c = a.sparsity().get_triplet()
+            out[name] = np.flatnonzero(np.isin(union, np.asarray(r) * self.n + np.asarray(c)))
+        return out
+
     def values(self) -> ca.Function:
         """``(x, v, p) -> (F, M v)``."""
         return ca.Function("colloc_point_values", [self.x, self.v, self.p], [self.f, self.mv])
@@ -105,8 +116,10 @@ class PointKernel:
         self.n, self.n_par, self.K = self.pointwise.n, self.pointwise.n_par, K
         rows, cols = self.pointwise.pattern.get_triplet()
         self.rows, self.cols = np.asarray(rows), np.asarray(cols)
-        #: ``(rows, cols)`` as int64, for the compiled assembly
-        self.entries = (self.rows.astype(np.int64), self.cols.astype(np.int64))
+        #: per matrix, its own nonzeros: ``(places among the pattern's, rows, cols)``
+        #: (int64, for the compiled assembly; a constant mass has no ``Mvx`` entries)
+        self.entries = {name: (e, self.rows[e].astype(np.int64), self.cols[e].astype(np.int64))
+                        for name, e in self.pointwise.own_entries().items()}
         self.expand, self.cache_dir = vf.sym is ca.SX, cache_dir
         values = self.pointwise.values()
         self.backend = _backend(backend, vf, values)
@@ -311,8 +324,11 @@ class BlockCollocationSystem:
                                       ("M", M, Dk)):
             if name in kr.lifted:                # dense, row by row
                 _add_dense_blocks(blocks, values, weights, n, ncol)
-            else:
-                _add_blocks(blocks, values, *kr.entries, weights, n, ncol)
+            elif kr.entries[name][0].size:
+                own, prow, pcol = kr.entries[name]
+                if own.size < values.shape[1]:
+                    values = values[:, own]
+                _add_blocks(blocks, values, prow, pcol, weights, n, ncol)
         Gp = (Mvp - (hk * T)[:, None] * Fp).reshape(kr.K, len(cols), n)
         extra = np.concatenate([(-hk[:, None] * F)[:, :, None], Gp.transpose(0, 2, 1)], axis=2)
         return CollocationJacobian(n, ntst, ncol, blocks, extra.reshape(ntst, m, -1), c,

@@ -223,6 +223,9 @@ def band_solve(ab, piv, b, kl, ku) -> None:
     ``A`` (``dgbtrf``; ``ab``: its storage transposed, ``piv`` 1-based), as ``dgbtrs``
     does but with whole rows of ``b`` at a time."""
     m, r = b.shape
+    if r == 1:
+        _band_solve_column(ab, piv, b[:, 0], kl, ku)
+        return
     d = kl + ku                                  # the diagonal's place in a column
     for j in range(m - 1):                       # L: the interchanges and multipliers
         p = piv[j] - 1
@@ -243,3 +246,21 @@ def band_solve(ab, piv, b, kl, ku) -> None:
         u = ab[i, d]
         for c in range(r):
             b[i, c] /= u
+
+
+@jit
+def _band_solve_column(ab, piv, x, kl, ku) -> None:
+    """:func:`band_solve` for one right-hand side ``x`` (a vector)."""
+    m, d = x.size, kl + ku
+    for j in range(m - 1):
+        p = piv[j] - 1
+        if p != j:
+            x[j], x[p] = x[p], x[j]
+        xj = x[j]
+        for t in range(1, min(kl, m - 1 - j) + 1):
+            x[j + t] -= ab[j, d + t] * xj
+    for i in range(m - 1, -1, -1):
+        acc = x[i]
+        for j in range(i + 1, min(m, i + d + 1)):
+            acc -= ab[j, d + i - j] * x[j]
+        x[i] = acc / ab[i, d]

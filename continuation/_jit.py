@@ -19,7 +19,7 @@ from ._lapack import dgbtrf
 #: the first 16 hex digits of the SHA-256 of ``_dense.py`` that the functions here were
 #: compiled against; an edit of ``_dense.py`` must update it (a test checks), so that
 #: numba recompiles the callers of the edited kernels
-DENSE_SOURCE = "eddb8ac3f946359c"
+DENSE_SOURCE = "ad0e579afac42985"
 
 #: the compiled functions: nopython, cached on disk, releasing the GIL
 jit = njit(cache=True, nogil=True)
@@ -67,26 +67,33 @@ def band_interval_factors(blocks, extra, rows, cols, kl, ku):
         if ints[4] != 0:
             return lu, piv, Z, False
         for r in range(m):
-            rhs[r, :n], rhs[r, n:] = blocks[i, rows[r], :n], extra[i, rows[r]]
+            for c in range(n):
+                rhs[r, c] = blocks[i, rows[r], c]
+            for c in range(k):
+                rhs[r, n + c] = extra[i, rows[r], c]
         band_solve(ab, piv[i], rhs, kl, ku)
         for r in range(m):
-            Z[i, cols[r]] = rhs[r]
+            for c in range(n + k):
+                Z[i, cols[r], c] = rhs[r, c]
     return lu, piv, Z, True
 
 
 @jit
-def interval_solve(lu, piv, b, rows, cols, kl, ku) -> None:
+def interval_solve(lu, piv, b, rows, cols, kl, ku, work) -> None:
     """``b <- M^-1 b`` in place (``b``: ``(m, r)``) with the factors of
-    :func:`interval_factors` (``kl < 0``) or of :func:`band_interval_factors`."""
+    :func:`interval_factors` (``kl < 0``) or of :func:`band_interval_factors`
+    (``work``: like ``b``, overwritten)."""
     if kl < 0:
         lu_solve(lu, piv, b)
         return
-    bp = np.empty_like(b)
-    for j in range(b.shape[0]):
-        bp[j] = b[rows[j]]
-    band_solve(lu, piv, bp, kl, ku)
-    for j in range(b.shape[0]):
-        b[cols[j]] = bp[j]
+    m, r = b.shape
+    for j in range(m):
+        for c in range(r):
+            work[j, c] = b[rows[j], c]
+    band_solve(lu, piv, work, kl, ku)
+    for j in range(m):
+        for c in range(r):
+            b[cols[j], c] = work[j, c]
 
 
 #: the largest growth ``rho(|a1| |a0|)`` (:func:`_scaled_growth`) of a pair eliminated
@@ -260,8 +267,9 @@ def condensed_solve(lu, piv, band, Z, border_w, schedule, Qb, H, Zt, shares, flu
     p, N, r = m - n, ntst * m, b.shape[1]
     z = b[:N].copy().reshape(ntst, m, r)
     s = b[N:].copy()
+    work = np.empty((m, r))
     for i in range(ntst):
-        interval_solve(lu[i], piv[i], z[i], rows, cols, kl, ku)     # M_i^-1 r_i
+        interval_solve(lu[i], piv[i], z[i], rows, cols, kl, ku, work)   # M_i^-1 r_i
         gemm(s, border_w[i], z[i, :p], -1.0)
     v, y = chain_solve(schedule, Qb, H, Zt, shares, flu, fpiv,
                         np.ascontiguousarray(z[:, p:]), s)

@@ -302,7 +302,7 @@ def test_banded_interval_factors_and_solves_equal_dense_lapack():
         for r in (1, 4):
             b = rng.standard_normal((m, r))
             x = b.copy()
-            _jit.interval_solve(lu[i], piv[i], x, *band.args)
+            _jit.interval_solve(lu[i], piv[i], x, *band.args, np.empty_like(x))
             assert _rel(x, np.linalg.solve(M, b)) < 1e-11
     singular = blocks.copy()
     singular[2, :, n + 5] = 0.0
