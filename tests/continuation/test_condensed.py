@@ -349,3 +349,19 @@ def test_banded_condensation_equals_dense_lapack_and_the_sparse_branch():
     assert np.array_equal(a.iterations, b.iterations)
     assert _rel(a.par("mu"), b.par("mu")) < 1e-10 and _rel(a.x, b.x) < 1e-10
     assert _rel(np.array(a.eigenvalues), np.array(b.eigenvalues)) < 1e-9
+
+
+def test_a_band_is_taken_where_it_is_narrower_than_the_blocks_and_they_exceed_the_loops():
+    """Two-state cells coupled to their neighbours (distance 2, 11 off-diagonals at NCOL
+    = 4, storage 34): no band at 32 rows (plain loops) or where the storage exceeds the
+    rows, a band at 40 rows."""
+    from continuation._condensed import BAND_MIN_ROWS, interval_band
+
+    def chain(n):
+        pairs = [(i, i + d) for i in range(n) for d in (-2, -1, 0, 1, 2) if 0 <= i + d < n]
+        return np.array([a for a, _ in pairs]), np.array([b for _, b in pairs])
+    assert BAND_MIN_ROWS == 32
+    assert interval_band(8, 4, *chain(8)) is None                  # 32 rows
+    band = interval_band(10, 4, *chain(10))                         # 40 rows
+    assert (band.lower, band.upper) == (11, 11) and 2 * 11 + 11 + 1 <= 40
+    assert interval_band(8, 8, *chain(8)) is None        # 64 rows, storage 3 * 23 + 1
