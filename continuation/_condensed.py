@@ -40,6 +40,8 @@ from dataclasses import dataclass
 from functools import cached_property, lru_cache
 
 import numpy as np
+import scipy.sparse as sp
+from scipy.sparse.csgraph import reverse_cuthill_mckee
 
 from ._newton import factorize
 from ._sparse import layout
@@ -66,22 +68,23 @@ BAND_MIN_ROWS = 32
 
 @dataclass(frozen=True, eq=False)
 class IntervalBand:
-    """Rows and columns of the interval matrices ``M_i`` in an order that makes them
-    banded: ``M_i[rows][:, cols]`` has ``lower`` sub- and ``upper`` super-diagonals."""
+    """An order of the rows and the columns of the interval matrices ``M_i`` that makes
+    them banded: ``M_i[order][:, order]`` has ``lower`` sub- and ``upper``
+    super-diagonals (a row and a column at the same place are the same point and the
+    same node of one state)."""
 
-    rows: np.ndarray
-    cols: np.ndarray
+    order: np.ndarray
     lower: int
     upper: int
 
     @property
     def args(self) -> tuple:
-        """``(rows, cols, kl, ku)`` for the compiled solver."""
-        return self.rows, self.cols, self.lower, self.upper
+        """``(order, kl, ku)`` for the compiled solver."""
+        return self.order, self.lower, self.upper
 
 
 #: the compiled solver's band arguments for dense interval factors
-DENSE = (np.zeros(0, np.int64), np.zeros(0, np.int64), -1, -1)
+DENSE = (np.zeros(0, np.int64), -1, -1)
 
 
 def interval_band(n: int, ncol: int, prow: np.ndarray, pcol: np.ndarray):
@@ -91,8 +94,6 @@ def interval_band(n: int, ncol: int, prow: np.ndarray, pcol: np.ndarray):
     of the pattern, and each state's ``NCOL`` rows (points) and columns (nodes
     ``1 .. NCOL``) kept together: a state coupled to states at most ``d`` places away
     gives ``d NCOL + NCOL - 1`` off-diagonals."""
-    import scipy.sparse as sp
-    from scipy.sparse.csgraph import reverse_cuthill_mckee
     m = n * ncol
     if prow.size == 0 or m <= BAND_MIN_ROWS:
         return None
@@ -106,9 +107,10 @@ def interval_band(n: int, ncol: int, prow: np.ndarray, pcol: np.ndarray):
     upper = int(max(-reach.min(), 0)) * ncol + ncol - 1
     if 2 * lower + upper + 1 > m:
         return None
-    # position place[a] NCOL + k holds row k n + a (point k, state a); likewise columns
-    index = (np.arange(ncol)[None, :] * n + order[:, None]).ravel()
-    return IntervalBand(index, index.copy(), lower, upper)
+    # place[a] NCOL + k holds row k n + a (point k, state a) and column k n + a (node
+    # k + 1, state a)
+    return IntervalBand((np.arange(ncol)[None, :] * n + order[:, None]).ravel(), lower,
+                        upper)
 
 
 @dataclass(frozen=True, eq=False)
@@ -254,8 +256,7 @@ class CondensedLU:
         c = self.chain
         band = DENSE if self.J.band is None else self.J.band.args
         x = _compiled().condensed_solve(lu, piv, band, Z, self.border_w, c.schedule, c.Qb,
-                                        c.H,
-                                        c.Zt, *self.bordered,
+                                        c.H, c.Zt, *self.bordered,
                                         _c(b.reshape(b.shape[0], -1)))
         return x.reshape(b.shape)
 

@@ -44,8 +44,8 @@ def interval_factors(blocks, extra):
 
 
 @jit
-def band_interval_factors(blocks, extra, rows, cols, kl, ku):
-    """:func:`interval_factors` for banded ``M_i``: ``M_i[rows][:, cols]`` has ``kl``
+def band_interval_factors(blocks, extra, order, kl, ku):
+    """:func:`interval_factors` for banded ``M_i``: ``M_i[order][:, order]`` has ``kl``
     sub- and ``ku`` super-diagonals (every entry outside is zero), factorized by LAPACK
     in its band storage (``lu[i]``: ``(m, 2 kl + ku + 1)``, the transposed Fortran
     array); ``Z_i`` in the original order of the nodes."""
@@ -59,27 +59,27 @@ def band_interval_factors(blocks, extra, rows, cols, kl, ku):
     for i in range(ntst):
         ab = lu[i]
         for j in range(m):                       # column j of the permuted M_i
-            c = n + cols[j]
+            c = n + order[j]
             for r in range(max(0, j - ku), min(m, j + kl + 1)):
-                ab[j, kl + ku + r - j] = blocks[i, rows[r], c]
+                ab[j, kl + ku + r - j] = blocks[i, order[r], c]
         dgbtrf(ints.ctypes, ints.ctypes, ints[1:].ctypes, ints[2:].ctypes, ab.ctypes,
                ints[3:].ctypes, piv[i].ctypes, ints[4:].ctypes)
         if ints[4] != 0:
             return lu, piv, Z, False
         for r in range(m):
             for c in range(n):
-                rhs[r, c] = blocks[i, rows[r], c]
+                rhs[r, c] = blocks[i, order[r], c]
             for c in range(k):
-                rhs[r, n + c] = extra[i, rows[r], c]
+                rhs[r, n + c] = extra[i, order[r], c]
         band_solve(ab, piv[i], rhs, kl, ku)
         for r in range(m):
             for c in range(n + k):
-                Z[i, cols[r], c] = rhs[r, c]
+                Z[i, order[r], c] = rhs[r, c]
     return lu, piv, Z, True
 
 
 @jit
-def interval_solve(lu, piv, b, rows, cols, kl, ku, work) -> None:
+def interval_solve(lu, piv, b, order, kl, ku, work) -> None:
     """``b <- M^-1 b`` in place (``b``: ``(m, r)``) with the factors of
     :func:`interval_factors` (``kl < 0``) or of :func:`band_interval_factors`
     (``work``: like ``b``, overwritten)."""
@@ -89,11 +89,11 @@ def interval_solve(lu, piv, b, rows, cols, kl, ku, work) -> None:
     m, r = b.shape
     for j in range(m):
         for c in range(r):
-            work[j, c] = b[rows[j], c]
+            work[j, c] = b[order[j], c]
     band_solve(lu, piv, work, kl, ku)
     for j in range(m):
         for c in range(r):
-            b[cols[j], c] = work[j, c]
+            b[order[j], c] = work[j, c]
 
 
 #: the largest growth ``rho(|a1| |a0|)`` (:func:`_scaled_growth`) of a pair eliminated
@@ -263,9 +263,9 @@ def chain_solve(schedule, Qb, H, Zt, shares, flu, fpiv, z, s):
 def condensed_solve(lu, piv, band, Z, border_w, schedule, Qb, H, Zt, shares, flu, fpiv,
                     b):
     """``x`` with ``A x = b`` (``b``: ``(N + k, r)``) from the factors of
-    :class:`CondensedLU`; ``band``: ``(rows, cols, kl, ku)`` of the interval factors
+    :class:`CondensedLU`; ``band``: ``(order, kl, ku)`` of the interval factors
     (:func:`interval_solve`)."""
-    rows, cols, kl, ku = band
+    order, kl, ku = band
     ntst, m = lu.shape[0], lu.shape[1]
     n = Z.shape[2] - border_w.shape[1]
     p, N, r = m - n, ntst * m, b.shape[1]
@@ -273,7 +273,7 @@ def condensed_solve(lu, piv, band, Z, border_w, schedule, Qb, H, Zt, shares, flu
     s = b[N:].copy()
     work = np.empty((m, r))
     for i in range(ntst):
-        interval_solve(lu[i], piv[i], z[i], rows, cols, kl, ku, work)   # M_i^-1 r_i
+        interval_solve(lu[i], piv[i], z[i], order, kl, ku, work)   # M_i^-1 r_i
         gemm(s, border_w[i], z[i, :p], -1.0)
     v, y = chain_solve(schedule, Qb, H, Zt, shares, flu, fpiv,
                         np.ascontiguousarray(z[:, p:]), s)

@@ -266,8 +266,8 @@ def test_interval_band_holds_every_entry_of_the_interval_matrices(coupling):
     if coupling == "dense":
         assert band is None
         return
-    assert sorted(band.rows) == list(range(n * ncol)) == sorted(band.cols)
-    S = _block_pattern(n, ncol, prow, pcol)[band.rows][:, band.cols]
+    assert sorted(band.order) == list(range(n * ncol))
+    S = _block_pattern(n, ncol, prow, pcol)[band.order][:, band.order]
     i, j = np.nonzero(S)
     assert (i - j).max() <= band.lower and (j - i).max() <= band.upper
     if coupling == "chain":
