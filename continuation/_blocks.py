@@ -13,13 +13,13 @@ so their exact derivatives only need the vector field and its Jacobians at the
     d r_ik / d T   = -h_i F(u_k),
     d r_ik / d p   = d(M v)/dp |_(u_k, v = u'_k) - h_i T F_p(u_k),
 
-and the phase row ``c . U`` has the derivative ``c``. ``interval_jacobian`` gives the same
-matrix as dense interval blocks for the condensed Newton solver (``_condensed``). One mapped CasADi call
-evaluates ``F, M v, F_x, d(M v)/dx, M, F_p, d(M v)/dp`` at all points (the matrix
-blocks on the union ``S`` of their structural patterns); the matrix is assembled by
-NumPy on a sparsity pattern fixed per ``(NTST, NCOL)``: the CSC index arrays and the
-permutation from the assembly order to CSC order are computed once, each Jacobian
-is one kernel call, two broadcasts, one ``np.take`` and one CSC construction.
+and the phase row ``c . U`` has the derivative ``c``. ``interval_jacobian`` gives the
+same matrix by interval blocks for the condensed Newton solver (``_condensed``). One
+mapped CasADi call evaluates ``F, M v, F_x, d(M v)/dx, M, F_p, d(M v)/dp`` at all points
+(the matrix blocks on the union ``S`` of their structural patterns); the matrix is
+assembled by NumPy on a sparsity pattern fixed per ``(NTST, NCOL)``: the CSC index
+arrays and the permutation from the assembly order to CSC order are computed once, each
+Jacobian is one kernel call, two broadcasts, one ``np.take`` and one CSC construction.
 ``F_p`` and ``d(M v)/dp`` are only evaluated in the free parameter directions. The
 kernel runs in CasADi's virtual machine or as compiled C (``CollocationSettings.backend``,
 see :class:`PointKernel`).
@@ -32,7 +32,8 @@ import numpy as np
 import scipy.sparse as sp
 
 from ._collocation import collocation
-from ._condensed import CollocationJacobian, interval_band
+from ._condensed import CollocationJacobian
+from ._intervals import PointwiseTerm, interval_band
 from ._lazyjit import jit
 from ._lifted import LiftedBatch
 from ._sparse import Layout, layout
@@ -309,9 +310,10 @@ class BlockCollocationSystem:
         return self._layout(Gp.shape[1]).matrix(vals)
 
     def interval_jacobian(self, Y, P, D, par_columns) -> CollocationJacobian:
-        """The same matrix by dense interval blocks (``_condensed``): block ``(k, l)`` of
-        interval ``i`` is ``W_ik P[k, l] + M_ik Dm[k, l]``, accumulated from each matrix
-        on its pattern by a compiled loop."""
+        """The same matrix by interval blocks (``_condensed``): block ``(k, l)`` of
+        interval ``i`` is ``W_ik P[k, l] + M_ik Dm[k, l]``, kept as its pointwise terms
+        (each matrix on its own pattern), which the factorization assembles into the
+        layout it needs (dense or banded)."""
         U, T, h, c, hk = self._split(Y, D)
         x, v = self.points(U)
         kr, cols = self.kernel, tuple(par_columns)
@@ -319,20 +321,20 @@ class BlockCollocationSystem:
         n, ntst, ncol = kr.n, self.ntst, self.ncol
         m = n * ncol
         Pk, Dk = self._weights
-        blocks = np.zeros((ntst, m, m + n))
+        terms = []
         for name, values, weights in (("Fx", Fx, Pk * (-hk * T)[:, None]), ("Mvx", Mvx, Pk),
                                       ("M", M, Dk)):
             if name in kr.lifted:                # dense, row by row
-                _add_dense_blocks(blocks, values, weights, n, ncol)
+                terms.append(PointwiseTerm(values, weights))
             elif kr.entries[name][0].size:
                 own, prow, pcol = kr.entries[name]
                 if own.size < values.shape[1]:
                     values = values[:, own]
-                _add_blocks(blocks, values, prow, pcol, weights, n, ncol)
+                terms.append(PointwiseTerm(values, weights, prow, pcol))
         Gp = (Mvp - (hk * T)[:, None] * Fp).reshape(kr.K, len(cols), n)
         extra = np.concatenate([(-hk[:, None] * F)[:, :, None], Gp.transpose(0, 2, 1)], axis=2)
-        return CollocationJacobian(n, ntst, ncol, blocks, extra.reshape(ntst, m, -1), c,
-                                   self.band)
+        return CollocationJacobian(n, ntst, ncol, tuple(terms), extra.reshape(ntst, m, -1),
+                                   c, self.band)
 
     def fill(self) -> float:
         """Nonzero fraction of the interval blocks (of the pointwise pattern in ``n x n``)."""
@@ -367,31 +369,3 @@ def _collocation_points(U, P, Dm, n, ntst, ncol):
                     x[row, a] += pk * U[node + a]
                     v[row, a] += dk * U[node + a]
     return x, v
-
-
-@jit
-def _add_blocks(blocks, values, rows, cols, weights, n, ncol):
-    """``blocks[i, k n + a, l n + b] += weights[i NCOL + k, l] values[i NCOL + k, e]``
-    for the entries ``e = (a, b) = (rows[e], cols[e])`` of a matrix at every point."""
-    for point in range(values.shape[0]):
-        i, k = point // ncol, point % ncol
-        block = blocks[i]
-        for l in range(ncol + 1):
-            w = weights[point, l]
-            if w != 0.0:
-                for e in range(values.shape[1]):
-                    block[k * n + rows[e], l * n + cols[e]] += w * values[point, e]
-
-
-@jit
-def _add_dense_blocks(blocks, values, weights, n, ncol):
-    """:func:`_add_blocks` for matrices given dense, row by row (``values``: ``K x n n``)."""
-    for point in range(values.shape[0]):
-        i, k = point // ncol, point % ncol
-        for l in range(ncol + 1):
-            w = weights[point, l]
-            if w != 0.0:
-                for a in range(n):
-                    row, c = k * n + a, l * n
-                    for b in range(n):
-                        blocks[i, row, c + b] += w * values[point, a * n + b]

@@ -25,7 +25,7 @@ follow by back-substitution.
 All loops over intervals and pairs run compiled (``_jit``: numba; a point of a small
 system costs a few hundred microseconds, not the milliseconds of a Python loop over
 LAPACK calls). Where the pointwise pattern has a narrow band once its states are
-reordered (a chain of cells, a discretized PDE in one dimension: :func:`interval_band`),
+reordered (a chain of cells, a discretized PDE in one dimension: ``_intervals``),
 the ``M_i`` are factorized banded. The route pays for dense interval blocks, for small
 ones and for banded ones, and is chosen by :func:`condensed_pays`; large sparse blocks
 without a band stay on SuperLU of the whole matrix, which keeps their sparsity. An
@@ -40,9 +40,8 @@ from dataclasses import dataclass
 from functools import cached_property, lru_cache
 
 import numpy as np
-import scipy.sparse as sp
-from scipy.sparse.csgraph import reverse_cuthill_mckee
 
+from ._intervals import IntervalBand
 from ._newton import factorize
 from ._sparse import layout
 
@@ -60,67 +59,18 @@ def condensed_pays(rows: int, fill: float, banded: bool = False) -> bool:
     return rows <= CONDENSED_ROWS or fill >= CONDENSED_MIN_FILL or banded
 
 
-#: a band is used for interval matrices of more than ``BAND_MIN_ROWS`` rows (smaller ones
-#: are factorized by plain loops, ``_dense``) whose band storage ``2 kl + ku + 1`` is at
-#: most their size (measured at 40 rows with 34: the interval factors 1.35x faster)
-BAND_MIN_ROWS = 32
-
-
-@dataclass(frozen=True, eq=False)
-class IntervalBand:
-    """An order of the rows and the columns of the interval matrices ``M_i`` that makes
-    them banded: ``M_i[order][:, order]`` has ``lower`` sub- and ``upper``
-    super-diagonals (a row and a column at the same place are the same point and the
-    same node of one state)."""
-
-    order: np.ndarray
-    lower: int
-    upper: int
-
-    @property
-    def args(self) -> tuple:
-        """``(order, kl, ku)`` for the compiled solver."""
-        return self.order, self.lower, self.upper
-
-
 #: the compiled solver's band arguments for dense interval factors
 DENSE = (np.zeros(0, np.int64), -1, -1)
-
-
-def interval_band(n: int, ncol: int, prow: np.ndarray, pcol: np.ndarray):
-    """The :class:`IntervalBand` of interval matrices whose every ``n x n`` block (point
-    ``k``, node ``l``) has the pointwise pattern ``(prow, pcol)``, or None when it would
-    not pay (``BAND_MIN_ROWS``). The states are ordered by reverse Cuthill-McKee
-    of the pattern, and each state's ``NCOL`` rows (points) and columns (nodes
-    ``1 .. NCOL``) kept together: a state coupled to states at most ``d`` places away
-    gives ``d NCOL + NCOL - 1`` off-diagonals."""
-    m = n * ncol
-    if prow.size == 0 or m <= BAND_MIN_ROWS:
-        return None
-    pattern = sp.csr_matrix((np.ones(prow.size), (prow, pcol)), shape=(n, n))
-    order = np.asarray(reverse_cuthill_mckee(pattern + pattern.T + sp.eye(n),
-                                             symmetric_mode=True), dtype=np.int64)
-    place = np.empty(n, np.int64)
-    place[order] = np.arange(n)
-    reach = place[prow] - place[pcol]
-    lower = int(max(reach.max(), 0)) * ncol + ncol - 1
-    upper = int(max(-reach.min(), 0)) * ncol + ncol - 1
-    if 2 * lower + upper + 1 > m:
-        return None
-    # place[a] NCOL + k holds row k n + a (point k, state a) and column k n + a (node
-    # k + 1, state a)
-    return IntervalBand((np.arange(ncol)[None, :] * n + order[:, None]).ravel(), lower,
-                        upper)
 
 
 @dataclass(frozen=True, eq=False)
 class CollocationJacobian:
     """``G_X = [[B, E], [c, 0]]`` of the collocation system, by interval blocks.
 
-    blocks : ``(NTST, m, m + n)``, ``m = n NCOL``: the rows of interval ``i`` in its
-        nodes ``l = 0 .. NCOL`` (node ``NCOL`` is the next interval's first, wrapping);
-    extra : ``(NTST, m, k)``: the same rows in the columns of ``T`` and the free
-        parameters;
+    terms : the :class:`PointwiseTerm` whose sum are the interval blocks (``blocks``),
+        assembled into the layout that the factorization needs (dense, or banded);
+    extra : ``(NTST, m, k)``, ``m = n NCOL``: the rows of every interval in the columns
+        of ``T`` and the free parameters;
     phase : ``(NTST NCOL n,)``: the phase row ``c`` (zero in ``T`` and ``p``);
     band : an :class:`IntervalBand` of the ``M_i`` (factorized banded), or None (dense).
     """
@@ -128,7 +78,7 @@ class CollocationJacobian:
     n: int
     ntst: int
     ncol: int
-    blocks: np.ndarray
+    terms: tuple
     extra: np.ndarray
     phase: np.ndarray
     band: IntervalBand | None = None
@@ -137,6 +87,33 @@ class CollocationJacobian:
     def shape(self) -> tuple:
         N = self.n * self.ntst * self.ncol
         return (N + 1, N + self.extra.shape[2])
+
+    @cached_property
+    def blocks(self) -> np.ndarray:
+        """``(NTST, m, m + n)``: the rows of interval ``i`` in its nodes ``l = 0 .. NCOL``
+        (node ``NCOL`` is the next interval's first, wrapping), dense."""
+        n, ncol, jit = self.n, self.ncol, _compiled()
+        m = n * ncol
+        blocks = np.zeros((self.ntst, m, m + n))
+        for t in self.terms:
+            if t.rows is None:
+                jit.add_dense_blocks(blocks, t.values, t.weights, n, ncol)
+            else:
+                jit.add_blocks(blocks, t.values, t.rows, t.cols, t.weights, n, ncol)
+        return blocks
+
+    def band_blocks(self) -> tuple:
+        """``(ab, left)``: the ``M_i`` reordered by the band in LAPACK's band storage
+        (:func:`_jit.band_interval_factors`) and the first ``n`` columns of every interval
+        (node 0), rows reordered, assembled from the terms (no dense blocks)."""
+        b, n, ncol, jit = self.band, self.n, self.ncol, _compiled()
+        m = n * ncol
+        ab = np.zeros((self.ntst, m, 2 * b.lower + b.upper + 1))
+        left = np.zeros((self.ntst, m, n))
+        for t in self.terms:
+            jit.add_band_blocks(ab, left, t.values, t.rows, t.cols, t.weights, b.rank, ncol,
+                                b.lower + b.upper)
+        return ab, left
 
     def collocation_times(self, x: np.ndarray) -> np.ndarray:
         """``[B, E] x`` for ``x`` of shape ``(columns,)`` or ``(columns, r)``."""
@@ -161,11 +138,11 @@ class CollocationJacobian:
     def factors(self) -> tuple | None:
         """``(lu, piv, Z)``: the LU factors of every ``M_i`` and ``Z_i = M_i^-1 [B_i^L,
         E_i]`` (``(NTST, m, n + k)``); None if an ``M_i`` is singular."""
-        blocks, extra = _c(self.blocks), _c(self.extra)
+        extra = _c(self.extra)
         if self.band is None:
-            lu, piv, Z, ok = _compiled().interval_factors(blocks, extra)
+            lu, piv, Z, ok = _compiled().interval_factors(self.blocks, extra)
         else:
-            lu, piv, Z, ok = _compiled().band_interval_factors(blocks, extra,
+            lu, piv, Z, ok = _compiled().band_interval_factors(*self.band_blocks(), extra,
                                                                *self.band.args)
         return (lu, piv, Z) if ok else None
 

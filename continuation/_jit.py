@@ -44,38 +44,82 @@ def interval_factors(blocks, extra):
 
 
 @jit
-def band_interval_factors(blocks, extra, order, kl, ku):
-    """:func:`interval_factors` for banded ``M_i``: ``M_i[order][:, order]`` has ``kl``
-    sub- and ``ku`` super-diagonals (every entry outside is zero), factorized by LAPACK
-    in its band storage (``lu[i]``: ``(m, 2 kl + ku + 1)``, the transposed Fortran
-    array); ``Z_i`` in the original order of the nodes."""
-    ntst, m, width = blocks.shape
-    n, k = width - m, extra.shape[2]
-    lu = np.zeros((ntst, m, 2 * kl + ku + 1))
+def band_interval_factors(ab, left, extra, order, kl, ku):
+    """:func:`interval_factors` for banded ``M_i``, given in LAPACK's band storage by
+    :func:`add_band_blocks` (``ab``: ``M_i[order][:, order]``, whose every entry outside
+    ``kl`` sub- and ``ku`` super-diagonals is zero; factorized in place: ``lu[i]`` is
+    ``(m, 2 kl + ku + 1)``, the transposed Fortran array) and ``left`` (``B_i^L``, rows
+    in ``order``); ``Z_i`` in the original order of the nodes."""
+    ntst, m = ab.shape[0], ab.shape[1]
+    n, k = left.shape[2], extra.shape[2]
     piv = np.zeros((ntst, m), np.int32)
     Z = np.empty((ntst, m, n + k))
     rhs = np.empty((m, n + k))
     ints = np.array([m, kl, ku, 2 * kl + ku + 1, 0], np.int32)
     for i in range(ntst):
-        ab = lu[i]
-        for j in range(m):                       # column j of the permuted M_i
-            c = n + order[j]
-            for r in range(max(0, j - ku), min(m, j + kl + 1)):
-                ab[j, kl + ku + r - j] = blocks[i, order[r], c]
-        dgbtrf(ints.ctypes, ints.ctypes, ints[1:].ctypes, ints[2:].ctypes, ab.ctypes,
+        dgbtrf(ints.ctypes, ints.ctypes, ints[1:].ctypes, ints[2:].ctypes, ab[i].ctypes,
                ints[3:].ctypes, piv[i].ctypes, ints[4:].ctypes)
         if ints[4] != 0:
-            return lu, piv, Z, False
+            return ab, piv, Z, False
         for r in range(m):
             for c in range(n):
-                rhs[r, c] = blocks[i, order[r], c]
+                rhs[r, c] = left[i, r, c]
             for c in range(k):
                 rhs[r, n + c] = extra[i, order[r], c]
-        band_solve(ab, piv[i], rhs, kl, ku)
+        band_solve(ab[i], piv[i], rhs, kl, ku)
         for r in range(m):
             for c in range(n + k):
                 Z[i, order[r], c] = rhs[r, c]
-    return lu, piv, Z, True
+    return ab, piv, Z, True
+
+
+@jit
+def add_blocks(blocks, values, rows, cols, weights, n, ncol):
+    """``blocks[i, k n + a, l n + b] += weights[i NCOL + k, l] values[i NCOL + k, e]``
+    for the entries ``e = (a, b) = (rows[e], cols[e])`` of a matrix at every point."""
+    for point in range(values.shape[0]):
+        i, k = point // ncol, point % ncol
+        block = blocks[i]
+        for l in range(ncol + 1):
+            w = weights[point, l]
+            if w != 0.0:
+                for e in range(values.shape[1]):
+                    block[k * n + rows[e], l * n + cols[e]] += w * values[point, e]
+
+
+@jit
+def add_dense_blocks(blocks, values, weights, n, ncol):
+    """:func:`add_blocks` for matrices given dense, row by row (``values``: ``K x n n``)."""
+    for point in range(values.shape[0]):
+        i, k = point // ncol, point % ncol
+        for l in range(ncol + 1):
+            w = weights[point, l]
+            if w != 0.0:
+                for a in range(n):
+                    row, c = k * n + a, l * n
+                    for b in range(n):
+                        blocks[i, row, c + b] += w * values[point, a * n + b]
+
+
+@jit
+def add_band_blocks(ab, left, values, rows, cols, weights, rank, ncol, d):
+    """:func:`add_blocks` into the layout of :func:`band_interval_factors`: row ``k n + a``
+    (point ``k``, state ``a``) at ``rank[a] NCOL + k``, column ``l n + b`` (node
+    ``l >= 1``) at ``c = rank[b] NCOL + l - 1``, entry ``(r, c)`` of ``M_i`` at
+    ``ab[i, c, d + r - c]`` (``d = kl + ku``); node 0 into ``left[i, r, b]``."""
+    for point in range(values.shape[0]):
+        i, k = point // ncol, point % ncol
+        band, first = ab[i], left[i]
+        w = weights[point, 0]
+        if w != 0.0:
+            for e in range(values.shape[1]):
+                first[rank[rows[e]] * ncol + k, cols[e]] += w * values[point, e]
+        for l in range(1, ncol + 1):
+            w = weights[point, l]
+            if w != 0.0:
+                for e in range(values.shape[1]):
+                    r, c = rank[rows[e]] * ncol + k, rank[cols[e]] * ncol + l - 1
+                    band[c, d + r - c] += w * values[point, e]
 
 
 @jit

@@ -252,7 +252,7 @@ def test_interval_band_holds_every_entry_of_the_interval_matrices(coupling):
     no entry outside ``lower`` / ``upper`` off-diagonals (checked on the explicit
     pattern); a chain's band is its distance of coupling times NCOL, plus NCOL - 1; a
     dense pattern has no band."""
-    from continuation._condensed import interval_band
+    from continuation._intervals import interval_band
     n, ncol = 30, 4
     near = {"chain": (-2, -1, 0, 1, 2), "ring": (-1, 0, 1), "shuffled chain": (-1, 0, 1),
             "dense": tuple(range(-n + 1, n))}[coupling]
@@ -276,25 +276,81 @@ def test_interval_band_holds_every_entry_of_the_interval_matrices(coupling):
         assert band.lower <= 2 * ncol + ncol - 1     # a band of width 2 or less
 
 
+def _explicit_blocks(terms, n, ntst, ncol):
+    """The interval blocks of pointwise terms, assembled from each point's dense matrix:
+    block ``(k, l)`` of interval ``i`` is ``sum_t weights_t[i NCOL + k, l] A_t``."""
+    m = n * ncol
+    blocks = np.zeros((ntst, m, m + n))
+    for t in terms:
+        for point in range(ntst * ncol):
+            A = np.zeros((n, n))
+            if t.rows is None:
+                A[:] = t.values[point].reshape(n, n)
+            else:
+                A[t.rows, t.cols] = t.values[point]
+            i, k = divmod(point, ncol)
+            for l in range(ncol + 1):
+                blocks[i, k * n:(k + 1) * n, l * n:(l + 1) * n] += t.weights[point, l] * A
+    return blocks
+
+
+def _chain_terms(n, ntst, ncol, rng):
+    """A matrix on a nearest-neighbour pattern and one on its diagonal (a mass), with
+    random values and weights, as pointwise terms."""
+    from continuation._intervals import PointwiseTerm
+    pairs = [(i, i + d) for i in range(n) for d in (-1, 0, 1) if 0 <= i + d < n]
+    prow, pcol = np.array([a for a, _ in pairs]), np.array([b for _, b in pairs])
+    K, diag = ntst * ncol, np.arange(n)
+    return (prow, pcol), tuple(
+        PointwiseTerm(rng.standard_normal((K, r.size)), rng.standard_normal((K, ncol + 1)),
+                      r, c) for r, c in ((prow, pcol), (diag, diag)))
+
+
+def test_interval_blocks_are_the_sum_of_their_pointwise_terms():
+    """Dense blocks (terms on a pattern, and dense row by row) and the band layout
+    (``M_i`` reordered in LAPACK's band storage, node 0's columns) against the blocks
+    assembled from every point's dense matrix."""
+    from continuation._condensed import CollocationJacobian
+    from continuation._intervals import PointwiseTerm, interval_band
+    n, ncol, ntst = 12, 3, 4
+    m, rng = n * ncol, np.random.default_rng(1)
+    (prow, pcol), terms = _chain_terms(n, ntst, ncol, rng)
+    dense = PointwiseTerm(rng.standard_normal((ntst * ncol, n * n)),
+                          rng.standard_normal((ntst * ncol, ncol + 1)))
+    for ts in (terms, terms + (dense,)):
+        J = CollocationJacobian(n, ntst, ncol, ts, np.zeros((ntst, m, 1)), np.zeros(ntst * m))
+        assert _rel(J.blocks, _explicit_blocks(ts, n, ntst, ncol)) < 1e-15
+    band = interval_band(n, ncol, prow, pcol)
+    J = CollocationJacobian(n, ntst, ncol, terms, np.zeros((ntst, m, 1)), np.zeros(ntst * m),
+                            band)
+    ab, left = J.band_blocks()
+    explicit, o, d = _explicit_blocks(terms, n, ntst, ncol), band.order, band.lower + band.upper
+    r, c = np.nonzero(np.ones((m, m)))
+    inside = (r - c <= band.lower) & (c - r <= band.upper)
+    for i in range(ntst):
+        M = explicit[i, :, n:][o][:, o]
+        assert not M[~inside.reshape(m, m)].any()            # the band holds every entry
+        assert np.array_equal(ab[i, c[inside], d + r[inside] - c[inside]],
+                              M[r[inside], c[inside]])
+        assert np.array_equal(left[i], explicit[i, :, :n][o])
+
+
 def test_banded_interval_factors_and_solves_equal_dense_lapack():
     """The band route (LAPACK's band LU, our row-wise band solve, the permutations)
     against NumPy on the same interval matrices: the maps ``Z_i`` and solves of one and
     several right-hand sides; singular blocks are reported."""
     from continuation import _jit
-    from continuation._condensed import interval_band
+    from continuation._condensed import CollocationJacobian
+    from continuation._intervals import PointwiseTerm, interval_band
     n, ncol, ntst, k = 12, 3, 5, 2
-    m = n * ncol
-    pairs = [(i, i + d) for i in range(n) for d in (-1, 0, 1) if 0 <= i + d < n]
-    prow, pcol = np.array([a for a, _ in pairs]), np.array([b for _, b in pairs])
+    m, rng = n * ncol, np.random.default_rng(0)
+    (prow, pcol), terms = _chain_terms(n, ntst, ncol, rng)
     band = interval_band(n, ncol, prow, pcol)
     assert band is not None
-    rng = np.random.default_rng(0)
-    S = np.kron(np.ones((ncol, ncol + 1), bool),
-                np.isin(np.arange(n)[:, None] * n + np.arange(n), prow * n + pcol))
-    blocks = np.where(S, rng.standard_normal((ntst, m, m + n)), 0.0)
     extra = rng.standard_normal((ntst, m, k))
-    lu, piv, Z, ok = _jit.band_interval_factors(blocks, extra, *band.args)
-    assert ok
+    J = CollocationJacobian(n, ntst, ncol, terms, extra, np.zeros(ntst * m), band)
+    lu, piv, Z = J.factors
+    blocks = _explicit_blocks(terms, n, ntst, ncol)
     for i in range(ntst):
         M = blocks[i, :, n:]
         expected = np.linalg.solve(M, np.hstack([blocks[i, :, :n], extra[i]]))
@@ -304,9 +360,13 @@ def test_banded_interval_factors_and_solves_equal_dense_lapack():
             x = b.copy()
             _jit.interval_solve(lu[i], piv[i], x, *band.args, np.empty_like(x))
             assert _rel(x, np.linalg.solve(M, b)) < 1e-11
-    singular = blocks.copy()
-    singular[2, :, n + 5] = 0.0
-    assert not _jit.band_interval_factors(singular, extra, *band.args)[3]
+    first = terms[0]
+    values = first.values.copy()
+    values[2 * ncol:3 * ncol, pcol == 5] = 0.0          # column 5 of interval 2's nodes 1..
+    singular = (PointwiseTerm(values, first.weights * (np.arange(ncol + 1) > 0),
+                              first.rows, first.cols),)
+    J = CollocationJacobian(n, ntst, ncol, singular, extra, np.zeros(ntst * m), band)
+    assert J.factors is None
 
 
 def _oscillator_chain(n=24):
@@ -355,7 +415,7 @@ def test_a_band_is_taken_where_it_is_narrower_than_the_blocks_and_they_exceed_th
     """Two-state cells coupled to their neighbours (distance 2, 11 off-diagonals at NCOL
     = 4, storage 34): no band at 32 rows (plain loops) or where the storage exceeds the
     rows, a band at 40 rows."""
-    from continuation._condensed import BAND_MIN_ROWS, interval_band
+    from continuation._intervals import BAND_MIN_ROWS, interval_band
 
     def chain(n):
         pairs = [(i, i + d) for i in range(n) for d in (-2, -1, 0, 1, 2) if 0 <= i + d < n]
