@@ -30,13 +30,15 @@ def _controller() -> ThreadpoolController:
 @contextmanager
 def single_threaded():
     """Context manager: BLAS/OpenMP pools limited to one thread inside, restored after.
-    Inside another one (the driver's, around a whole run) it does nothing: a limit
-    costs about 40 us, more than the small eigenproblem of a point it guards."""
+    Inside another one (the driver's, around a whole run), or when every pool has one
+    thread already (``OPENBLAS_NUM_THREADS=1``), it does nothing: a limit costs 10-40
+    us, more than the small eigenproblem of a point it guards; the check costs 1 us."""
     global _depth
-    if _depth:
+    pools = _controller()
+    if _depth or all(pool.num_threads == 1 for pool in pools.lib_controllers):
         yield
         return
-    with _controller().limit(limits=1):
+    with pools.limit(limits=1):
         _depth += 1
         try:
             yield

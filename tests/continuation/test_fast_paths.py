@@ -234,3 +234,24 @@ def test_nested_single_threaded_contexts_limit_once_and_restore_once():
                 assert all(n == 1 for n in counts())
             assert all(n == 1 for n in counts())
         assert counts() == before
+
+
+def test_single_threaded_sets_no_limit_where_every_pool_has_one_thread(monkeypatch):
+    """Pools at one thread already (``OPENBLAS_NUM_THREADS=1``): nothing is limited or
+    restored (a limit costs more than a point's small eigenproblem); with two threads
+    the limit is set."""
+    from threadpoolctl import threadpool_limits
+
+    from continuation import _threads
+    calls = []
+    real = type(_threads._controller()).limit
+    monkeypatch.setattr(type(_threads._controller()), "limit",
+                        lambda self, **kw: calls.append(kw) or real(self, **kw))
+    with threadpool_limits(1):
+        with _threads.single_threaded():
+            pass
+    assert calls == []
+    with threadpool_limits(2):
+        with _threads.single_threaded():
+            pass
+    assert calls == [{"limits": 1}]
