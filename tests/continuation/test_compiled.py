@@ -105,13 +105,24 @@ def test_compiled_multipliers_equal_mx(models, cache, name):
 
 @needs_compiler
 def test_kernel_library_is_shared_by_meshes_and_processes(models, cache):
-    case = _cases(models)["van_der_pol"]
-    _problem(case, "compiled", ntst=6, ncol=4).jacobian(_problem(case, "mx", 6, 4).X0)
-    libraries = {p: p.stat().st_mtime_ns for p in cache.glob("*.so")}
+    """An MX field's point functions are compiled once and serve every number of points;
+    an SX field's map is compiled whole, once per number of points ``K``; a new process
+    loads what is cached and compiles nothing."""
+    def problem(name, ntst, ncol):
+        pr = _problem(_cases(models)[name], "compiled", ntst=ntst, ncol=ncol)
+        pr.jacobian(pr.X0)
+        return pr
+    problem("van_der_pol_mx", 6, 4)
     before = compilation.compile_count
-    other = _problem(case, "compiled", ntst=9, ncol=3)          # another K: same libraries
-    other.jacobian(other.X0)
+    problem("van_der_pol_mx", 9, 3)                 # another K: the same libraries
     assert compilation.compile_count == before
+    problem("van_der_pol", 6, 4)
+    before = compilation.compile_count
+    problem("van_der_pol", 8, 3)                    # K = 24 again: the same libraries
+    assert compilation.compile_count == before
+    problem("van_der_pol", 5, 4)                    # K = 20: its own map (values, Jacobians)
+    assert compilation.compile_count == before + 2
+    libraries = {p: p.stat().st_mtime_ns for p in cache.glob("*.so")}
     script = textwrap.dedent(f"""
         import sys; sys.path.insert(0, {str(pathlib.Path(__file__).parent)!r})
         import conftest, continuation as C
