@@ -128,16 +128,20 @@ class PointKernel:
                        for name, lifted in vf.lifted.items()}
         self.values = self._mapped(values)
         self._jacobians: dict = {}
+        self._seeded: dict = {}
 
     def jacobians(self, par_columns) -> "SeededKernel":
         """The mapped Jacobian kernel with parameter directions ``par_columns`` (one
         function per number of directions, the directions are an input)."""
         cols = tuple(int(c) for c in par_columns)
-        if len(cols) not in self._jacobians:
-            fun = self.pointwise.jacobians(len(cols), skip=tuple(self.lifted))
-            self._jacobians[len(cols)] = self._mapped(fun)
-        seed = np.eye(self.n_par)[:, list(cols)].ravel(order="F")
-        return SeededKernel(self._jacobians[len(cols)], seed, self._lifted_outputs)
+        if cols not in self._seeded:
+            if len(cols) not in self._jacobians:
+                fun = self.pointwise.jacobians(len(cols), skip=tuple(self.lifted))
+                self._jacobians[len(cols)] = self._mapped(fun)
+            seed = np.eye(self.n_par)[:, list(cols)].ravel(order="F")
+            self._seeded[cols] = SeededKernel(self._jacobians[len(cols)], seed,
+                                              self._lifted_outputs)
+        return self._seeded[cols]
 
     def _lifted_outputs(self, x, v, p, dense: bool = False) -> dict:
         """The lifted matrices at the points, on the pattern ``rows, cols`` (``K x s``),
@@ -294,8 +298,10 @@ class BlockCollocationSystem:
         U, T, h, c, hk = self._split(Y, D)
         x, v = self.points(U)
         F, Mv = self.kernel.evaluate(self.kernel.values, x, v, P)
-        r = Mv - (hk * T)[:, None] * F
-        return np.append(r.ravel(), c @ U)
+        out = np.empty(self.n_equations)
+        np.subtract(Mv, (hk * T)[:, None] * F, out=out[:-1].reshape(F.shape))
+        out[-1] = c @ U
+        return out
 
     def _pointwise(self, Y, P, D, par_columns) -> tuple:
         """``(hk, c, F, W, M, Gp)`` at the collocation points: ``W = d(M v)/dx - h T F_x``

@@ -180,16 +180,25 @@ def phase_coefficients(U_ref: np.ndarray, n: int, ntst: int, ncol: int) -> np.nd
     """``c`` with ``c . U = int_0^1 <u, v'> dt`` for the reference ``v = U_ref``.
 
     ``sum_i sum_k w_k <u(z_ik), v'(z_ik)> h_i``; ``h_i`` cancels against
-    ``v' = (1/h_i) sum_l Dm[k, l] v_il``.
+    ``v' = (1/h_i) sum_l Dm[k, l] v_il``, so the coefficients of interval ``i``'s nodes
+    are ``Q v_i`` with ``Q = P^T diag(w) Dm`` (:func:`phase_matrix`).
     """
-    col = collocation(ncol)
     v = interval_nodes(U_ref, n, ntst, ncol)               # (ntst, ncol+1, n)
-    dv = np.einsum("kl,ilj->ikj", col.Dm, v)                # (ntst, ncol, n)
-    c = np.einsum("k,kl,ikj->ilj", col.w, col.P, dv)       # (ntst, ncol+1, n)
+    c = phase_matrix(ncol) @ v                             # (ntst, ncol+1, n)
     out = c[:, :-1, :].copy()
     out[1:, 0, :] += c[:-1, -1, :]
     out[0, 0, :] += c[-1, -1, :]
     return out.reshape(-1)
+
+
+@lru_cache(maxsize=None)
+def phase_matrix(ncol: int) -> np.ndarray:
+    """``Q[l', l] = sum_k w_k P[k, l'] Dm[k, l]`` (read-only): the phase condition's
+    coefficients of the nodes ``l'`` of an interval from the reference's nodes ``l``."""
+    col = collocation(ncol)
+    Q = col.P.T @ (col.w[:, None] * col.Dm)
+    Q.flags.writeable = False
+    return Q
 
 
 def interval_function(vf, ncol: int) -> ca.Function:

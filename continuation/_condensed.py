@@ -169,9 +169,9 @@ class BorderedCollocation:
     @cached_property
     def border(self) -> np.ndarray:
         """All rows below the collocation rows: the phase row, then ``rows``."""
-        cols = self.shape[1]
-        phase = np.append(self.J.phase, np.zeros(cols - self.J.phase.size))
-        return np.vstack([phase, self.rows])
+        out = np.zeros((1 + self.rows.shape[0], self.shape[1]))
+        out[0, :self.J.phase.size], out[1:] = self.J.phase, self.rows
+        return out
 
     def __matmul__(self, x: np.ndarray) -> np.ndarray:
         return np.concatenate([self.J.collocation_times(x), self.border @ x])

@@ -156,3 +156,31 @@ def test_continuous_remesh_restarts_stay_on_the_cycles_and_save_corrections(mode
     corrected = runs[_CorrectedRestarts]
     per_step = lambda b: b.stats["newton_iterations"] / b.stats["steps"]
     assert per_step(branch) < per_step(corrected)
+
+
+@pytest.mark.parametrize("ncol", [2, 4, 7])
+def test_phase_coefficients_integrate_the_phase_condition_exactly(ncol):
+    """``c . U = int_0^1 <u, v'> dt`` for the piecewise polynomials through the node values
+    ``U`` and ``V`` on a non-uniform mesh; independent route: on each interval the
+    interpolating polynomials in the local time (Chebyshev series through the
+    ``NCOL + 1`` equispaced nodes) and their product integrated exactly, where the
+    code uses Gauss quadrature (exact for this degree)."""
+    from continuation._collocation import phase_coefficients
+    rng = np.random.default_rng(ncol)
+    n, ntst = 3, 7
+    mesh = np.concatenate([[0.0], np.sort(rng.random(ntst - 1)), [1.0]])
+    U, V = rng.standard_normal((2, ntst * ncol * n))
+    nodes = np.linspace(0.0, 1.0, ncol + 1)
+
+    def pieces(W):
+        w = np.vstack([W.reshape(-1, n), W[:n]])        # node NCOL of the last: node 0
+        return [[np.polynomial.Chebyshev.fit(nodes, w[i * ncol:(i + 1) * ncol + 1, j], ncol,
+                                             domain=[0, 1])
+                 for j in range(n)] for i in range(ntst)]
+    exact = 0.0
+    for pu, pv in zip(pieces(U), pieces(V)):            # dt = h ds, v'(t) = p_v'(s) / h
+        for a, b in zip(pu, pv):
+            integral = (a * b.deriv()).integ()
+            exact += integral(1.0) - integral(0.0)
+    c = phase_coefficients(V, n, ntst, ncol)
+    assert abs(c @ U - exact) < 1e-12 * max(1.0, abs(exact))
