@@ -21,7 +21,8 @@ class TimedLU:
     interval products (the refinement's residuals)."""
 
     #: the compiled linear-algebra functions of ``continuation._jit``
-    COMPILED = ("interval_factors", "band_interval_factors", "chain_reduce", "chain_border",
+    COMPILED = ("interval_factors", "band_interval_factors", "side_interval_factors",
+                "chain_reduce", "chain_border",
                 "chain_solve", "condensed_solve")
 
     def __init__(self):

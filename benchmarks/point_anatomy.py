@@ -42,6 +42,7 @@ TIMED = [
     ("continuation._lifted", "LiftedBatch.__call__", "kernels"),
     ("continuation._jit", "interval_factors", "algebra"),
     ("continuation._jit", "band_interval_factors", "algebra"),
+    ("continuation._jit", "side_interval_factors", "algebra"),
     ("continuation._jit", "chain_reduce", "algebra"),
     ("continuation._jit", "chain_border", "algebra"),
     ("continuation._jit", "condensed_solve", "algebra"),

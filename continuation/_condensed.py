@@ -42,6 +42,7 @@ from functools import cached_property, lru_cache
 import numpy as np
 
 from ._intervals import IntervalBand
+from ._lazyjit import SIDE_BY_SIDE, SMALL
 from ._newton import factorize
 from ._sparse import layout
 
@@ -59,8 +60,10 @@ def condensed_pays(rows: int, fill: float, banded: bool = False) -> bool:
     return rows <= CONDENSED_ROWS or fill >= CONDENSED_MIN_FILL or banded
 
 
-#: the compiled solver's band arguments for dense interval factors
+#: the compiled solver's band arguments for dense interval factors, one interval after
+#: the other (LAPACK, blocks of more than ``SMALL`` rows) or side by side (loops)
 DENSE = (np.zeros(0, np.int64), -1, -1)
+SIDE = (np.zeros(0, np.int64), SIDE_BY_SIDE, SIDE_BY_SIDE)
 
 
 @dataclass(frozen=True, eq=False)
@@ -134,16 +137,44 @@ class CollocationJacobian:
         """``[G_X; rows]`` (``rows``: one row or several, dense)."""
         return BorderedCollocation(self, np.atleast_2d(np.asarray(rows, dtype=float)))
 
+    def side_blocks(self) -> np.ndarray:
+        """``(m, m + n + k, NTST)``: ``[M_i, B_i^L]`` of every interval side by side
+        (:func:`_jit.side_interval_factors`; the last ``k`` columns left for ``E_i``),
+        assembled from the terms (no dense blocks)."""
+        n, ncol, jit = self.n, self.ncol, _compiled()
+        m = n * ncol
+        a = np.zeros((m, m + n + self.extra.shape[2], self.ntst))
+        for t in self.terms:
+            if t.rows is None:
+                jit.add_side_dense_blocks(a, t.values, t.weights, n, ncol)
+            else:
+                jit.add_side_blocks(a, t.values, t.rows, t.cols, t.weights, n, ncol)
+        return a
+
+    @property
+    def factor_layout(self) -> tuple:
+        """The compiled solver's arguments for the layout of :attr:`factors`: banded
+        (``band.args``), small dense blocks side by side (:data:`SIDE`, blocks of at most
+        ``SMALL`` rows: every operation runs over the intervals at once) or dense one
+        interval after the other (:data:`DENSE`, by LAPACK)."""
+        if self.band is not None:
+            return self.band.args
+        return SIDE if self.n * self.ncol <= SMALL else DENSE
+
     @cached_property
     def factors(self) -> tuple | None:
-        """``(lu, piv, Z)``: the LU factors of every ``M_i`` and ``Z_i = M_i^-1 [B_i^L,
-        E_i]`` (``(NTST, m, n + k)``); None if an ``M_i`` is singular."""
-        extra = _c(self.extra)
-        if self.band is None:
-            lu, piv, Z, ok = _compiled().interval_factors(self.blocks, extra)
-        else:
+        """``(lu, piv, Z)``: the LU factors of every ``M_i`` (in :attr:`factor_layout`)
+        and ``Z_i = M_i^-1 [B_i^L, E_i]`` (``(NTST, m, n + k)``); None if an ``M_i`` is
+        singular."""
+        extra, layout = _c(self.extra), self.factor_layout
+        if self.band is not None:
             lu, piv, Z, ok = _compiled().band_interval_factors(*self.band_blocks(), extra,
-                                                               *self.band.args)
+                                                               *layout)
+        elif layout is SIDE:
+            lu, piv, Z, ok = _compiled().side_interval_factors(self.side_blocks(), extra,
+                                                               self.n)
+        else:
+            lu, piv, Z, ok = _compiled().interval_factors(self.blocks, extra)
         return (lu, piv, Z) if ok else None
 
     @property
@@ -231,9 +262,8 @@ class CondensedLU:
         b = np.asarray(b, dtype=float)
         lu, piv, Z = self.J.factors
         c = self.chain
-        band = DENSE if self.J.band is None else self.J.band.args
-        x = _compiled().condensed_solve(lu, piv, band, Z, self.border_w, c.schedule, c.Qb,
-                                        c.H, c.Zt, *self.bordered,
+        x = _compiled().condensed_solve(lu, piv, self.J.factor_layout, Z, self.border_w,
+                                        c.schedule, c.Qb, c.H, c.Zt, *self.bordered,
                                         _c(b.reshape(b.shape[0], -1)))
         return x.reshape(b.shape)
 

@@ -13,13 +13,14 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from ._dense import band_solve, gemm, lu_factor, lu_solve, qr_eliminate
+from ._dense import band_solve, gemm, lu_factor, lu_solve, qr_eliminate, side_lu, side_solve
 from ._lapack import dgbtrf
+from ._lazyjit import SIDE_BY_SIDE
 
 #: the first 16 hex digits of the SHA-256 of ``_dense.py`` that the functions here were
 #: compiled against; an edit of ``_dense.py`` must update it (a test checks), so that
 #: numba recompiles the callers of the edited kernels
-DENSE_SOURCE = "ad0e579afac42985"
+DENSE_SOURCE = "7042a8d47b3e7ff3"
 
 #: the compiled functions: nopython, cached on disk, releasing the GIL
 jit = njit(cache=True, nogil=True)
@@ -71,6 +72,59 @@ def band_interval_factors(ab, left, extra, order, kl, ku):
             for c in range(n + k):
                 Z[i, order[r], c] = rhs[r, c]
     return ab, piv, Z, True
+
+
+@jit
+def side_interval_factors(a, extra, n):
+    """:func:`interval_factors` for the ``M_i`` side by side (``_dense.side_lu``): ``a``,
+    ``(m, m + n + k, NTST)``, holds ``[M_i, B_i^L]`` in its first ``m + n`` columns
+    (:func:`add_side_blocks`) and gets ``E_i = extra[i]`` in the last ``k``; returns
+    ``(a, piv, Z, ok)``, the factors in ``a`` and ``Z_i`` in the layout of
+    :func:`interval_factors`."""
+    m, w, ntst = a.shape
+    for i in range(ntst):
+        for r in range(m):
+            for c in range(w - m - n):
+                a[r, m + n + c, i] = extra[i, r, c]
+    piv = np.zeros((m, ntst), np.int32)
+    Z = np.empty((ntst, m, w - m))
+    if not side_lu(a, m, piv):
+        return a, piv, Z, False
+    for i in range(ntst):
+        for r in range(m):
+            for c in range(w - m):
+                Z[i, r, c] = a[r, m + c, i]
+    return a, piv, Z, True
+
+
+@jit
+def add_side_blocks(a, values, rows, cols, weights, n, ncol):
+    """:func:`add_blocks` into the layout of :func:`side_interval_factors`: row ``k n + a``
+    of interval ``i`` at ``a[k n + a, :, i]``, column ``l n + b`` at ``(l - 1) n + b`` for
+    the nodes ``l >= 1`` (the columns of ``M_i``), at ``m + b`` for node 0 (the intervals
+    innermost: contiguous writes)."""
+    m, ntst = n * ncol, a.shape[2]
+    for k in range(ncol):
+        for l in range(ncol + 1):
+            c0 = m if l == 0 else (l - 1) * n
+            for e in range(values.shape[1]):
+                out = a[k * n + rows[e], c0 + cols[e]]
+                for i in range(ntst):
+                    out[i] += weights[i * ncol + k, l] * values[i * ncol + k, e]
+
+
+@jit
+def add_side_dense_blocks(a, values, weights, n, ncol):
+    """:func:`add_side_blocks` for matrices given dense, row by row (``values``: ``K x n n``)."""
+    m, ntst = n * ncol, a.shape[2]
+    for k in range(ncol):
+        for l in range(ncol + 1):
+            c0 = m if l == 0 else (l - 1) * n
+            for r in range(n):
+                for b in range(n):
+                    out = a[k * n + r, c0 + b]
+                    for i in range(ntst):
+                        out[i] += weights[i * ncol + k, l] * values[i * ncol + k, r * n + b]
 
 
 @jit
@@ -308,16 +362,20 @@ def condensed_solve(lu, piv, band, Z, border_w, schedule, Qb, H, Zt, shares, flu
                     b):
     """``x`` with ``A x = b`` (``b``: ``(N + k, r)``) from the factors of
     :class:`CondensedLU`; ``band``: ``(order, kl, ku)`` of the interval factors
-    (:func:`interval_solve`)."""
+    (:func:`interval_solve`; ``kl`` :data:`SIDE_BY_SIDE`: of
+    :func:`side_interval_factors`)."""
     order, kl, ku = band
-    ntst, m = lu.shape[0], lu.shape[1]
+    ntst, m = Z.shape[0], Z.shape[1]
     n = Z.shape[2] - border_w.shape[1]
     p, N, r = m - n, ntst * m, b.shape[1]
     z = b[:N].copy().reshape(ntst, m, r)
     s = b[N:].copy()
     work = np.empty((m, r))
+    if kl == SIDE_BY_SIDE:
+        side_solve(lu, piv, z)                                     # every M_i^-1 r_i
     for i in range(ntst):
-        interval_solve(lu[i], piv[i], z[i], order, kl, ku, work)   # M_i^-1 r_i
+        if kl != SIDE_BY_SIDE:
+            interval_solve(lu[i], piv[i], z[i], order, kl, ku, work)   # M_i^-1 r_i
         gemm(s, border_w[i], z[i, :p], -1.0)
     v, y = chain_solve(schedule, Qb, H, Zt, shares, flu, fpiv,
                         np.ascontiguousarray(z[:, p:]), s)

@@ -15,6 +15,10 @@ from functools import wraps
 #: blocks of at most this many rows are handled by loops, larger ones by LAPACK/BLAS
 SMALL = 32
 
+#: the ``kl`` of the band arguments of ``_jit.condensed_solve`` for interval factors side
+#: by side (``_jit.side_interval_factors``; a band has ``kl >= 0``, dense factors -1)
+SIDE_BY_SIDE = -2
+
 
 def jit(fun):
     """``fun`` compiled by numba (cached on disk) at its first call."""

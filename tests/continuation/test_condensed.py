@@ -238,6 +238,47 @@ def test_dense_lu_kernels_equal_numpy_solves(m):
     assert not _dense.lu_factor(singular, np.zeros(m, np.int32))
 
 
+@pytest.mark.parametrize("n, ncol", [(1, 2), (2, 3), (4, 4), (8, 4)])
+def test_side_by_side_factors_and_solves_equal_numpy(n, ncol):
+    """Small interval matrices factorized side by side (every operation over the intervals
+    at once) against NumPy's solve of each: the maps ``Z_i`` and solves of one and
+    several right-hand sides, on matrices that need row exchanges (zero diagonals);
+    ``condensed_solve``'s layout for them (``SIDE``); an exactly singular ``M_i``
+    among regular ones is reported."""
+    from continuation import _jit
+    from continuation._condensed import SIDE, CollocationJacobian
+    from continuation._dense import side_solve
+    from continuation._intervals import PointwiseTerm
+    ntst, k, m = 9, 2, n * ncol
+    rng = np.random.default_rng(m)
+    dense = PointwiseTerm(rng.standard_normal((ntst * ncol, n * n)),
+                          rng.standard_normal((ntst * ncol, ncol + 1)))
+    terms = _chain_terms(n, ntst, ncol, rng)[1] + (dense,)     # on patterns, and dense
+    extra = rng.standard_normal((ntst, m, k))
+    J = CollocationJacobian(n, ntst, ncol, terms, extra, np.zeros(ntst * m))
+    assert J.factor_layout is SIDE
+    blocks = _explicit_blocks(terms, n, ntst, ncol)
+    a = J.side_blocks()
+    assert np.array_equal(a[:, :m + n, :], np.concatenate(
+        [blocks[:, :, n:], blocks[:, :, :n]], axis=2).transpose(1, 2, 0))
+    for i in range(ntst):                    # zero diagonals: row exchanges are needed
+        blocks[i, :, n:][np.diag_indices(m)] = 0.0
+        a[:, :m, i][np.diag_indices(m)] = 0.0
+    lu, piv, Z, ok = _jit.side_interval_factors(a.copy(), extra, n)
+    assert ok and np.any(piv != np.arange(m)[:, None])
+    b = rng.standard_normal((ntst, m, 4))
+    x1, x4 = b[:, :, :1].copy(), b.copy()
+    side_solve(lu, piv, x1)
+    side_solve(lu, piv, x4)
+    for i in range(ntst):
+        M, tol = blocks[i, :, n:], 1e-12 * np.linalg.cond(blocks[i, :, n:])
+        assert _rel(Z[i], np.linalg.solve(M, np.hstack([blocks[i, :, :n], extra[i]]))) < tol
+        assert _rel(x4[i], np.linalg.solve(M, b[i])) < tol
+        assert _rel(x1[i], np.linalg.solve(M, b[i, :, :1])) < tol
+    a[:, 0, 4] = 0.0                         # interval 4's first column: singular
+    assert not _jit.side_interval_factors(a, extra, n)[3]
+
+
 def _block_pattern(n, ncol, prow, pcol):
     """The structural pattern of an interval matrix ``M_i`` (``m x m``): every block
     (point ``k``, node ``l = 1 .. NCOL``) has the pointwise pattern."""
