@@ -6,7 +6,7 @@ overhead), larger ones by LAPACK and BLAS (``_lapack``), 2-3x faster there.
 
 They are called by the loops of ``_jit`` only. numba's disk cache notices edits of a
 function's own file only, so ``_jit`` records the hash of this file
-(``_jit.DENSE_SOURCE``, checked by a test): an edit here must update that line, which
+(``_jit.KERNEL_SOURCES``, checked by a test): an edit here must update its line, which
 recompiles the callers.
 """
 
@@ -265,103 +265,3 @@ def _band_solve_column(ab, piv, x, kl, ku) -> None:
             acc -= ab[j, d + i - j] * x[j]
         x[i] = acc / ab[i, d]
 
-
-# ---- small interval matrices side by side (the intervals along the last axis) ------------
-@jit
-def side_lu(a, m, piv) -> bool:
-    """The LU with partial pivoting of every ``a[:m, :m, i]`` in place, its row operations
-    applied to the columns ``a[:, m:, i]``, which then hold ``A_i^-1 a[:, m:, i]``.
-
-    ``a``: ``(m, w, N)``, the ``N`` matrices side by side, so that every operation runs
-    over the intervals in the innermost loop (contiguous: vectorized), where a loop over
-    the intervals would work on rows of a few elements; ``piv``: ``(m, N)`` int32, row
-    ``j`` was swapped with ``piv[j, i]`` at step ``j`` (the rows of ``L`` too, as LAPACK
-    does). False when a pivot is exactly zero."""
-    f = np.empty(a.shape[2])
-    for j in range(m):
-        if not _side_pivot(a, j, m, piv):
-            return False
-        aj = a[j]
-        for i in range(f.size):
-            f[i] = 1.0 / aj[j, i]
-        for r in range(j + 1, m):
-            ar = a[r]
-            mult = ar[j]
-            for i in range(f.size):
-                mult[i] *= f[i]
-            for c in range(j + 1, a.shape[1]):
-                x, y = ar[c], aj[c]
-                for i in range(f.size):
-                    x[i] -= mult[i] * y[i]
-    for r in range(m - 1, -1, -1):              # U^-1 on the columns beyond m
-        ar = a[r]
-        for c2 in range(r + 1, m):
-            u, below = ar[c2], a[c2]
-            for c in range(m, a.shape[1]):
-                x, y = ar[c], below[c]
-                for i in range(f.size):
-                    x[i] -= u[i] * y[i]
-        for c in range(m, a.shape[1]):
-            x, d = ar[c], ar[r]
-            for i in range(f.size):
-                x[i] /= d[i]
-    return True
-
-
-@jit
-def _side_pivot(a, j, m, piv) -> bool:
-    """Step ``j`` of :func:`side_lu`'s pivoting: in every matrix the row of the largest
-    ``|a[r, j]|``, ``r >= j``, swapped with row ``j`` (all columns); False if it is zero."""
-    N = a.shape[2]
-    big, p = np.abs(a[j, j]), np.full(N, j, np.int32)
-    for r in range(j + 1, m):
-        col = a[r, j]
-        for i in range(N):
-            if abs(col[i]) > big[i]:
-                big[i], p[i] = abs(col[i]), r
-    aj = a[j]
-    for i in range(N):
-        if big[i] == 0.0:
-            return False
-        piv[j, i] = p[i]
-        if p[i] != j:
-            ap = a[p[i]]
-            for c in range(a.shape[1]):
-                aj[c, i], ap[c, i] = ap[c, i], aj[c, i]
-    return True
-
-
-@jit
-def side_solve(a, piv, b) -> None:
-    """``b_i <- A_i^-1 b_i`` for every ``i`` with the factors of :func:`side_lu` (``a``:
-    ``(m, w, N)``, its first ``m`` columns); ``b``: ``(N, m, r)``, C-ordered."""
-    m, N, r = a.shape[0], a.shape[2], b.shape[2]
-    t = np.empty((m, N))
-    for c in range(r):
-        for j in range(m):
-            for i in range(N):
-                t[j, i] = b[i, j, c]
-        for j in range(m):
-            tj = t[j]
-            for i in range(N):
-                p = piv[j, i]
-                if p != j:
-                    tj[i], t[p, i] = t[p, i], tj[i]
-        for j in range(1, m):
-            tj, aj = t[j], a[j]
-            for l in range(j):
-                x, y = aj[l], t[l]
-                for i in range(N):
-                    tj[i] -= x[i] * y[i]
-        for j in range(m - 1, -1, -1):
-            tj, aj = t[j], a[j]
-            for l in range(j + 1, m):
-                x, y = aj[l], t[l]
-                for i in range(N):
-                    tj[i] -= x[i] * y[i]
-            d = aj[j]
-            for i in range(N):
-                tj[i] /= d[i]
-        for j in range(m):
-            for i in range(N):
-                b[i, j, c] = t[j, i]

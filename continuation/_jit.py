@@ -2,10 +2,10 @@
 the many small dense blocks of the condensed collocation solver (``_condensed``), where
 a Python loop over LAPACK calls costs more than their arithmetic: the interval LUs and
 maps (dense or banded), the pairwise reduction of the mesh-point chain and the solves.
-Every compiled function that calls another one lives in this module, on the dense
-kernels of ``_dense``: numba's cache is invalidated by edits of a function's own file
-only, hence :data:`DENSE_SOURCE` (leaves may live elsewhere: ``_lazyjit``). Imported at
-first use, so that ``import continuation`` does not import numba.
+Every compiled function that calls another one lives in this module, on the kernels
+of ``_dense`` and ``_side``: numba's cache is invalidated by edits of a function's own
+file only, hence :data:`KERNEL_SOURCES` (leaves may live elsewhere: ``_lazyjit``).
+Imported at first use, so that ``import continuation`` does not import numba.
 """
 
 from __future__ import annotations
@@ -13,14 +13,18 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from ._dense import band_solve, gemm, lu_factor, lu_solve, qr_eliminate, side_lu, side_solve
+from ._dense import band_solve, gemm, lu_factor, lu_solve, qr_eliminate
 from ._lapack import dgbtrf
 from ._lazyjit import SIDE_BY_SIDE
+from ._side import side_band_solve, side_lu, side_solve
 
-#: the first 16 hex digits of the SHA-256 of ``_dense.py`` that the functions here were
-#: compiled against; an edit of ``_dense.py`` must update it (a test checks), so that
-#: numba recompiles the callers of the edited kernels
-DENSE_SOURCE = "7042a8d47b3e7ff3"
+#: the first 16 hex digits of the SHA-256 of the kernels' files that the functions here
+#: were compiled against; an edit of one of them must update its line (a test checks),
+#: so that numba recompiles the callers of the edited kernels
+KERNEL_SOURCES = {
+    "_dense.py": "fb45ca632f632869",
+    "_side.py": "f211593479f5059a",
+}
 
 #: the compiled functions: nopython, cached on disk, releasing the GIL
 jit = njit(cache=True, nogil=True)
@@ -48,9 +52,11 @@ def interval_factors(blocks, extra):
 def band_interval_factors(ab, left, extra, order, kl, ku):
     """:func:`interval_factors` for banded ``M_i``, given in LAPACK's band storage by
     :func:`add_band_blocks` (``ab``: ``M_i[order][:, order]``, whose every entry outside
-    ``kl`` sub- and ``ku`` super-diagonals is zero; factorized in place: ``lu[i]`` is
+    ``kl`` sub- and ``ku`` super-diagonals is zero; factorized in place, each
     ``(m, 2 kl + ku + 1)``, the transposed Fortran array) and ``left`` (``B_i^L``, rows
-    in ``order``); ``Z_i`` in the original order of the nodes."""
+    in ``order``); ``Z_i`` in the original order of the nodes. The factors are returned
+    side by side, ``(m, 2 kl + ku + 1, NTST)`` and the pivots ``(m, NTST)``, for the
+    solves (``_dense.side_band_solve``)."""
     ntst, m = ab.shape[0], ab.shape[1]
     n, k = left.shape[2], extra.shape[2]
     piv = np.zeros((ntst, m), np.int32)
@@ -71,7 +77,12 @@ def band_interval_factors(ab, left, extra, order, kl, ku):
         for r in range(m):
             for c in range(n + k):
                 Z[i, order[r], c] = rhs[r, c]
-    return ab, piv, Z, True
+    side = np.empty((m, ab.shape[2], ntst))
+    for r in range(m):                           # reads strided, writes contiguous:
+        for q in range(ab.shape[2]):             # 3x faster than the other way
+            for i in range(ntst):
+                side[r, q, i] = ab[i, r, q]
+    return side, np.ascontiguousarray(piv.T), Z, True
 
 
 @jit
@@ -174,24 +185,6 @@ def add_band_blocks(ab, left, values, rows, cols, weights, rank, ncol, d):
                 for e in range(values.shape[1]):
                     r, c = rank[rows[e]] * ncol + k, rank[cols[e]] * ncol + l - 1
                     band[c, d + r - c] += w * values[point, e]
-
-
-@jit
-def interval_solve(lu, piv, b, order, kl, ku, work) -> None:
-    """``b <- M^-1 b`` in place (``b``: ``(m, r)``) with the factors of
-    :func:`interval_factors` (``kl < 0``) or of :func:`band_interval_factors`
-    (``work``: like ``b``, overwritten)."""
-    if kl < 0:
-        lu_solve(lu, piv, b)
-        return
-    m, r = b.shape
-    for j in range(m):
-        for c in range(r):
-            work[j, c] = b[order[j], c]
-    band_solve(lu, piv, work, kl, ku)
-    for j in range(m):
-        for c in range(r):
-            b[order[j], c] = work[j, c]
 
 
 #: the largest growth ``rho(|a1| |a0|)`` (:func:`_scaled_growth`) of a pair eliminated
@@ -361,21 +354,22 @@ def chain_solve(schedule, Qb, H, Zt, shares, flu, fpiv, z, s):
 def condensed_solve(lu, piv, band, Z, border_w, schedule, Qb, H, Zt, shares, flu, fpiv,
                     b):
     """``x`` with ``A x = b`` (``b``: ``(N + k, r)``) from the factors of
-    :class:`CondensedLU`; ``band``: ``(order, kl, ku)`` of the interval factors
-    (:func:`interval_solve`; ``kl`` :data:`SIDE_BY_SIDE`: of
-    :func:`side_interval_factors`)."""
+    :class:`CondensedLU`; ``band``: ``(order, kl, ku)`` of the interval factors: of
+    :func:`band_interval_factors` (``kl >= 0``), :func:`side_interval_factors` (``kl``
+    :data:`SIDE_BY_SIDE`) or :func:`interval_factors` (``kl = -1``)."""
     order, kl, ku = band
     ntst, m = Z.shape[0], Z.shape[1]
     n = Z.shape[2] - border_w.shape[1]
     p, N, r = m - n, ntst * m, b.shape[1]
     z = b[:N].copy().reshape(ntst, m, r)
     s = b[N:].copy()
-    work = np.empty((m, r))
-    if kl == SIDE_BY_SIDE:
-        side_solve(lu, piv, z)                                     # every M_i^-1 r_i
+    if kl == SIDE_BY_SIDE:                                          # every M_i^-1 r_i
+        side_solve(lu, piv, z)
+    elif kl >= 0:
+        side_band_solve(lu, piv, z, order, kl, ku)
     for i in range(ntst):
-        if kl != SIDE_BY_SIDE:
-            interval_solve(lu[i], piv[i], z[i], order, kl, ku, work)   # M_i^-1 r_i
+        if kl == -1:
+            lu_solve(lu[i], piv[i], z[i])
         gemm(s, border_w[i], z[i, :p], -1.0)
     v, y = chain_solve(schedule, Qb, H, Zt, shares, flu, fpiv,
                         np.ascontiguousarray(z[:, p:]), s)

@@ -154,12 +154,14 @@ def test_modules_and_functions_stay_small():
     assert statistics.median(lengths) <= 15
 
 
-def test_the_compiled_layer_records_the_dense_kernels_it_was_compiled_against():
+def test_the_compiled_layer_records_the_kernels_it_was_compiled_against():
     """numba's disk cache notices edits of a function's own file only: the loops of
-    ``continuation._jit`` call the kernels of ``continuation._dense``, so ``_jit`` holds
-    the hash of ``_dense.py`` (update ``DENSE_SOURCE`` after editing it, which makes numba
-    recompile the callers)."""
+    ``continuation._jit`` call the kernels of ``continuation._dense`` and
+    ``continuation._side``, so ``_jit`` holds the hash of each file (update its line in
+    ``KERNEL_SOURCES`` after editing it, which makes numba recompile the callers)."""
     import hashlib
-    from continuation import _dense, _jit
-    source = Path(_dense.__file__).read_bytes()
-    assert hashlib.sha256(source).hexdigest()[:16] == _jit.DENSE_SOURCE
+    from continuation import _jit
+    folder = Path(_jit.__file__).parent
+    assert sorted(_jit.KERNEL_SOURCES) == ["_dense.py", "_side.py"]
+    for name, recorded in _jit.KERNEL_SOURCES.items():
+        assert hashlib.sha256((folder / name).read_bytes()).hexdigest()[:16] == recorded

@@ -247,7 +247,7 @@ def test_side_by_side_factors_and_solves_equal_numpy(n, ncol):
     among regular ones is reported."""
     from continuation import _jit
     from continuation._condensed import SIDE, CollocationJacobian
-    from continuation._dense import side_solve
+    from continuation._side import side_solve
     from continuation._intervals import PointwiseTerm
     ntst, k, m = 9, 2, n * ncol
     rng = np.random.default_rng(m)
@@ -377,11 +377,12 @@ def test_interval_blocks_are_the_sum_of_their_pointwise_terms():
 
 
 def test_banded_interval_factors_and_solves_equal_dense_lapack():
-    """The band route (LAPACK's band LU, our row-wise band solve, the permutations)
-    against NumPy on the same interval matrices: the maps ``Z_i`` and solves of one and
-    several right-hand sides; singular blocks are reported."""
-    from continuation import _jit
+    """The band route (LAPACK's band LU, our row-wise band solve, the permutations, the
+    solves of every interval side by side) against NumPy on the same interval matrices:
+    the maps ``Z_i`` and solves of one and several right-hand sides, which need row
+    exchanges; singular blocks are reported."""
     from continuation._condensed import CollocationJacobian
+    from continuation._side import side_band_solve
     from continuation._intervals import PointwiseTerm, interval_band
     n, ncol, ntst, k = 12, 3, 5, 2
     m, rng = n * ncol, np.random.default_rng(0)
@@ -391,16 +392,18 @@ def test_banded_interval_factors_and_solves_equal_dense_lapack():
     extra = rng.standard_normal((ntst, m, k))
     J = CollocationJacobian(n, ntst, ncol, terms, extra, np.zeros(ntst * m), band)
     lu, piv, Z = J.factors
+    assert np.any(piv != np.arange(1, m + 1)[:, None])              # rows were exchanged
     blocks = _explicit_blocks(terms, n, ntst, ncol)
+    b = rng.standard_normal((ntst, m, 4))
+    x1, x4 = b[:, :, :1].copy(), b.copy()
+    side_band_solve(lu, piv, x1, *band.args)
+    side_band_solve(lu, piv, x4, *band.args)
     for i in range(ntst):
         M = blocks[i, :, n:]
         expected = np.linalg.solve(M, np.hstack([blocks[i, :, :n], extra[i]]))
         assert _rel(Z[i], expected) < 1e-11
-        for r in (1, 4):
-            b = rng.standard_normal((m, r))
-            x = b.copy()
-            _jit.interval_solve(lu[i], piv[i], x, *band.args, np.empty_like(x))
-            assert _rel(x, np.linalg.solve(M, b)) < 1e-11
+        assert _rel(x4[i], np.linalg.solve(M, b[i])) < 1e-11
+        assert _rel(x1[i], np.linalg.solve(M, b[i, :, :1])) < 1e-11
     first = terms[0]
     values = first.values.copy()
     values[2 * ncol:3 * ncol, pcol == 5] = 0.0          # column 5 of interval 2's nodes 1..
