@@ -95,15 +95,19 @@ class CollocationJacobian:
     def blocks(self) -> np.ndarray:
         """``(NTST, m, m + n)``: the rows of interval ``i`` in its nodes ``l = 0 .. NCOL``
         (node ``NCOL`` is the next interval's first, wrapping), dense."""
-        n, ncol, jit = self.n, self.ncol, _compiled()
-        m = n * ncol
-        blocks = np.zeros((self.ntst, m, m + n))
+        m, jit = self.n * self.ncol, _compiled()
+        return self._assembled(np.zeros((self.ntst, m, m + self.n)), jit.add_dense_blocks,
+                               jit.add_blocks)
+
+    def _assembled(self, out: np.ndarray, dense, on_pattern) -> np.ndarray:
+        """``out`` plus every term, added by the compiled kernel ``dense`` (a term given
+        row by row) or ``on_pattern`` (a term on its pattern) of the layout of ``out``."""
         for t in self.terms:
             if t.rows is None:
-                jit.add_dense_blocks(blocks, t.values, t.weights, n, ncol)
+                dense(out, t.values, t.weights, self.n, self.ncol)
             else:
-                jit.add_blocks(blocks, t.values, t.rows, t.cols, t.weights, n, ncol)
-        return blocks
+                on_pattern(out, t.values, t.rows, t.cols, t.weights, self.n, self.ncol)
+        return out
 
     def band_blocks(self) -> tuple:
         """``(ab, left)``: the ``M_i`` reordered by the band in LAPACK's band storage
@@ -141,15 +145,9 @@ class CollocationJacobian:
         """``(m, m + n + k, NTST)``: ``[M_i, B_i^L]`` of every interval side by side
         (:func:`_jit.side_interval_factors`; the last ``k`` columns left for ``E_i``),
         assembled from the terms (no dense blocks)."""
-        n, ncol, jit = self.n, self.ncol, _compiled()
-        m = n * ncol
-        a = np.zeros((m, m + n + self.extra.shape[2], self.ntst))
-        for t in self.terms:
-            if t.rows is None:
-                jit.add_side_dense_blocks(a, t.values, t.weights, n, ncol)
-            else:
-                jit.add_side_blocks(a, t.values, t.rows, t.cols, t.weights, n, ncol)
-        return a
+        m, jit = self.n * self.ncol, _compiled()
+        a = np.zeros((m, m + self.n + self.extra.shape[2], self.ntst))
+        return self._assembled(a, jit.add_side_dense_blocks, jit.add_side_blocks)
 
     @property
     def factor_layout(self) -> tuple:
