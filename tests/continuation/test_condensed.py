@@ -9,7 +9,7 @@ import pytest
 
 import continuation as C
 from continuation import _floquet
-from continuation._condensed import BorderedCollocation, Chain
+from continuation._condensed import BorderedCollocation, Chain, CondensedLU
 from continuation._newton import factorize
 from continuation._sparse import append_row
 
@@ -186,8 +186,10 @@ def test_a_singular_interval_falls_back_to_superlu_of_the_whole_matrix():
     prob = _problem(6, 3, "condensed")
     rng = np.random.default_rng(1)
     A = prob.bordered_jacobian(prob.X0, rng.standard_normal(prob.X0.size))
-    A.J.__dict__["maps"] = None                     # as if an M_i were singular
+    A.J.__dict__["factors"] = None                  # as if an M_i were singular
+    assert A.J.maps is None
     lu = A.factorize()
+    assert not isinstance(lu, CondensedLU)
     b = rng.standard_normal(prob.X0.size)
     assert _rel(np.linalg.solve(A.toarray(), b), lu.solve(b)) < 1e-11
 
