@@ -26,7 +26,8 @@ All loops over intervals and pairs run compiled (``_jit``: numba; a point of a s
 system costs a few hundred microseconds, not the milliseconds of a Python loop over
 LAPACK calls). Where the pointwise pattern has a narrow band once its states are
 reordered (a chain of cells, a discretized PDE in one dimension: ``_intervals``),
-the ``M_i`` are factorized banded. The route pays for dense interval blocks, for small
+the ``M_i`` are factorized banded; small dense ones (at most ``SMALL`` rows) side by
+side, every operation over all intervals at once (``_side``). The route pays for dense interval blocks, for small
 ones and for banded ones, and is chosen by :func:`condensed_pays`; large sparse blocks
 without a band stay on SuperLU of the whole matrix, which keeps their sparsity. An
 interval whose ``M_i`` is singular (not met in practice: ``M_i`` is the derivative part

@@ -56,7 +56,7 @@ def band_interval_factors(ab, left, extra, order, kl, ku):
     ``(m, 2 kl + ku + 1)``, the transposed Fortran array) and ``left`` (``B_i^L``, rows
     in ``order``); ``Z_i`` in the original order of the nodes. The factors are returned
     side by side, ``(m, 2 kl + ku + 1, NTST)`` and the pivots ``(m, NTST)``, for the
-    solves (``_dense.side_band_solve``)."""
+    solves (``_side.side_band_solve``)."""
     ntst, m = ab.shape[0], ab.shape[1]
     n, k = left.shape[2], extra.shape[2]
     piv = np.zeros((ntst, m), np.int32)
@@ -87,7 +87,7 @@ def band_interval_factors(ab, left, extra, order, kl, ku):
 
 @jit
 def side_interval_factors(a, extra, n):
-    """:func:`interval_factors` for the ``M_i`` side by side (``_dense.side_lu``): ``a``,
+    """:func:`interval_factors` for the ``M_i`` side by side (``_side.side_lu``): ``a``,
     ``(m, m + n + k, NTST)``, holds ``[M_i, B_i^L]`` in its first ``m + n`` columns
     (:func:`add_side_blocks`) and gets ``E_i = extra[i]`` in the last ``k``; returns
     ``(a, piv, Z, ok)``, the factors in ``a`` and ``Z_i`` in the layout of
