@@ -15,7 +15,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from ._lapack import dgeqrf, dgetrf, dgetrs, dormqr, dtrsm
+from ._lapack import dgemm, dgeqrf, dgetrf, dgetrs, dormqr, dtrsm
 from ._lazyjit import SMALL
 
 #: the compiled functions: nopython, cached on disk, releasing the GIL
@@ -195,12 +195,22 @@ def _full_rank(R, n) -> bool:
     return np.isfinite(d.max()) and d.min() > n * 2.220446049250313e-16 * d.max()
 
 
+#: products whose every dimension is at least this go to BLAS (``dgemm``), where its
+#: blocked kernels outrun the loops by more than the call costs
+GEMM_BLAS = 16
+
+
 @jit
 def gemm(C, A, B, alpha) -> None:
-    """``C += alpha A B`` by loops (no allocation, any strides): for the products of the
-    structured solves, where one dimension is a few border rows or right-hand sides."""
+    """``C += alpha A B``, by loops (no allocation, any strides) for the products of the
+    structured solves where one dimension is a few border rows or right-hand sides, by
+    BLAS where every dimension is at least :data:`GEMM_BLAS` and the rows are contiguous
+    (the products of transfer maps in the chain's reduction)."""
     m, q = A.shape
     r = B.shape[1]
+    if min(m, q, r) >= GEMM_BLAS and A.strides[1] == B.strides[1] == C.strides[1] == 8:
+        _dgemm(C, A, B, alpha)
+        return
     if r < 8:                            # few columns: dot products along rows of A
         for i in range(m):
             for j in range(r):
@@ -215,6 +225,18 @@ def gemm(C, A, B, alpha) -> None:
             if f != 0.0:
                 for j in range(r):
                     C[i, j] += f * B[l, j]
+
+
+@jit
+def _dgemm(C, A, B, alpha) -> None:
+    """:func:`gemm` by BLAS: the C-ordered rows are Fortran's columns, so ``C^T += alpha
+    B^T A^T``, each array with its row stride as leading dimension."""
+    ints = np.array([B.shape[1], A.shape[0], A.shape[1], B.strides[0] // 8,
+                     A.strides[0] // 8, C.strides[0] // 8], np.int32)
+    trans, scalars = np.array([ord("N")], np.uint8), np.array([alpha, 1.0])
+    dgemm(trans.ctypes, trans.ctypes, ints.ctypes, ints[1:].ctypes, ints[2:].ctypes,
+          scalars.ctypes, B.ctypes, ints[3:].ctypes, A.ctypes, ints[4:].ctypes,
+          scalars[1:].ctypes, C.ctypes, ints[5:].ctypes)
 
 
 @jit

@@ -240,6 +240,25 @@ def test_dense_lu_kernels_equal_numpy_solves(m):
     assert not _dense.lu_factor(singular, np.zeros(m, np.int32))
 
 
+@pytest.mark.parametrize("shape", [(3, 5, 2), (7, 4, 9), (16, 16, 16), (20, 17, 42),
+                                   (80, 80, 80)])
+def test_products_by_loops_and_by_blas_equal_numpy(shape):
+    """``gemm`` (``C += alpha A B``) against NumPy on views with row strides of their own,
+    by loops (a dimension below ``GEMM_BLAS = 16``, or columns not contiguous) and by
+    BLAS (the last three shapes with contiguous rows)."""
+    from continuation._dense import gemm
+    m, q, r = shape
+    rng = np.random.default_rng(m)
+    A = rng.standard_normal((m, q + 3))[:, 1:q + 1]
+    B = rng.standard_normal((q, r + 2))[:, :r]
+    C = rng.standard_normal((m, r))
+    for a, b in ((A, B), (A, np.asfortranarray(B))):      # rows contiguous or not
+        out = np.zeros((m, r + 5))[:, 2:r + 2]             # a view of its own strides
+        out[:] = C
+        gemm(out, a, b, -0.7)
+        assert _rel(C - 0.7 * a @ b, out) < 1e-14 * q
+
+
 @pytest.mark.parametrize("n, ncol", [(1, 2), (2, 3), (4, 4), (8, 4)])
 def test_side_by_side_factors_and_solves_equal_numpy(n, ncol):
     """Small interval matrices factorized side by side (every operation over the intervals
