@@ -27,8 +27,9 @@ system costs a few hundred microseconds, not the milliseconds of a Python loop o
 LAPACK calls). Where the pointwise pattern has a narrow band once its states are
 reordered (a chain of cells, a discretized PDE in one dimension: ``_intervals``),
 the ``M_i`` are factorized banded; small dense ones (at most ``SMALL`` rows) side by
-side, every operation over all intervals at once (``_side``). The route pays for dense interval blocks, for small
-ones and for banded ones, and is chosen by :func:`condensed_pays`; large sparse blocks
+side, every operation over all intervals at once (``_side``). The route pays for dense
+interval blocks, for small ones and for banded ones, and is chosen by
+:func:`condensed_pays`; large sparse blocks
 without a band stay on SuperLU of the whole matrix, which keeps their sparsity. An
 interval whose ``M_i`` is singular (not met in practice: ``M_i`` is the derivative part
 of the collocation equations, ``h T F_x`` is small against it) falls back to SuperLU of
@@ -101,13 +102,17 @@ class CollocationJacobian:
                                jit.add_blocks)
 
     def _assembled(self, out: np.ndarray, dense, on_pattern) -> np.ndarray:
-        """``out`` plus every term, added by the compiled kernel ``dense`` (a term given
-        row by row) or ``on_pattern`` (a term on its pattern) of the layout of ``out``."""
+        """``out`` plus every term, added by the compiled kernel ``on_pattern`` (a term on
+        its pattern) of the layout of ``out``, or ``dense`` (a term given row by row;
+        None: ``on_pattern`` on the full pattern, whose order is that of the rows)."""
+        n, ncol = self.n, self.ncol
         for t in self.terms:
-            if t.rows is None:
-                dense(out, t.values, t.weights, self.n, self.ncol)
+            if t.rows is not None:
+                on_pattern(out, t.values, t.rows, t.cols, t.weights, n, ncol)
+            elif dense is not None:
+                dense(out, t.values, t.weights, n, ncol)
             else:
-                on_pattern(out, t.values, t.rows, t.cols, t.weights, self.n, self.ncol)
+                on_pattern(out, t.values, *_full_pattern(n), t.weights, n, ncol)
         return out
 
     def band_blocks(self) -> tuple:
@@ -148,7 +153,7 @@ class CollocationJacobian:
         assembled from the terms (no dense blocks)."""
         m, jit = self.n * self.ncol, _compiled()
         a = np.zeros((m, m + self.n + self.extra.shape[2], self.ntst))
-        return self._assembled(a, jit.add_side_dense_blocks, jit.add_side_blocks)
+        return self._assembled(a, None, jit.add_side_blocks)
 
     @property
     def factor_layout(self) -> tuple:
@@ -344,6 +349,13 @@ def _schedule(N: int) -> np.ndarray:
     out = np.array(levels, dtype=np.int64).reshape(-1, 2)
     out.setflags(write=False)
     return out
+
+
+@lru_cache(maxsize=16)
+def _full_pattern(n: int) -> tuple:
+    """``(rows, cols)`` of every entry of an ``n x n`` matrix, row by row (int64)."""
+    rows, cols = np.divmod(np.arange(n * n, dtype=np.int64), n)
+    return rows, cols
 
 
 @lru_cache(maxsize=4)

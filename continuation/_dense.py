@@ -286,4 +286,3 @@ def _band_solve_column(ab, piv, x, kl, ku) -> None:
         for j in range(i + 1, min(m, i + d + 1)):
             acc -= ab[j, d + i - j] * x[j]
         x[i] = acc / ab[i, d]
-

@@ -22,7 +22,7 @@ from ._side import side_band_solve, side_lu, side_solve
 #: were compiled against; an edit of one of them must update its line (a test checks),
 #: so that numba recompiles the callers of the edited kernels
 KERNEL_SOURCES = {
-    "_dense.py": "5d4cf1385d183d46",
+    "_dense.py": "855dce5cbdd847c9",
     "_side.py": "f211593479f5059a",
 }
 
@@ -122,20 +122,6 @@ def add_side_blocks(a, values, rows, cols, weights, n, ncol):
                 out = a[k * n + rows[e], c0 + cols[e]]
                 for i in range(ntst):
                     out[i] += weights[i * ncol + k, l] * values[i * ncol + k, e]
-
-
-@jit
-def add_side_dense_blocks(a, values, weights, n, ncol):
-    """:func:`add_side_blocks` for matrices given dense, row by row (``values``: ``K x n n``)."""
-    m, ntst = n * ncol, a.shape[2]
-    for k in range(ncol):
-        for l in range(ncol + 1):
-            c0 = m if l == 0 else (l - 1) * n
-            for r in range(n):
-                for b in range(n):
-                    out = a[k * n + r, c0 + b]
-                    for i in range(ntst):
-                        out[i] += weights[i * ncol + k, l] * values[i * ncol + k, r * n + b]
 
 
 @jit
