@@ -7,13 +7,15 @@ B_H = 1 + A^2 + (d1 + d2) 2 (1 - cos(pi / (N + 1))); the cycle branch born there
 is continued in B for a fixed number of points with NTST = 50, NCOL = 4, uniform
 mesh (AUTO: IAD = 0), Floquet multipliers at every point (AUTO: ISP = 2).
 
-Printed per n and per tool: time per branch point, the last point's B, and the
+Printed per n and per tool: time per branch point (the median of ``--repeats`` runs of
+each tool taken in turn; the ratio ours/AUTO is the median of the runs' ratios, with
+their range: single runs swing by 30 % on a shared machine), the last point's B, and the
 errors of its period and of its four largest non-trivial multipliers against a
 reference solved by `continuation` with NTST = 200 at the same B (for AUTO: its
 point with the largest B inside the B range of our branch; AUTO prints multipliers
 with 6 significant digits, which bounds its multiplier error from below).
 
-    python benchmarks/bench_cycles.py --sizes 20 40 80 --points 20 [--no-auto]
+    python benchmarks/bench_cycles.py --sizes 20 40 80 --points 20 [--repeats 3] [--no-auto]
 
 AUTO-07p is optional (`apt-get install gfortran auto-07p`); without it only the
 `continuation` rows are printed.
@@ -235,33 +237,51 @@ def auto_point(res, B_max):
     return B, T, np.array([float(a) + 1j * float(b) for a, b in mult])
 
 
+def timed(n: int, args):
+    """``(run, res, ours, theirs)``: ``args.repeats`` runs of ours and of AUTO-07p taken in
+    turn (the machine is shared: a single pair of runs swings by 30 %), the per-point
+    times of each, and the last run of each for the errors; ``res`` None without AUTO."""
+    ours_t, auto_t, res = [], [], None
+    for _ in range(args.repeats):
+        run = ours(n, args.points, args.floquet)
+        ours_t.append(run["per_point"])
+        res = None if args.no_auto else auto(n, args.points)
+        if res is not None:
+            auto_t.append(res["per_point"])
+    return run, res, np.array(ours_t), np.array(auto_t)
+
+
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--sizes", type=int, nargs="+", default=[20, 40, 80])
     ap.add_argument("--points", type=int, default=20)
+    ap.add_argument("--repeats", type=int, default=3,
+                    help="runs of each tool, in turn; medians and the median ratio")
     ap.add_argument("--floquet", default="product", choices=["product", "pencil"])
     ap.add_argument("--no-auto", action="store_true")
     args = ap.parse_args(argv)
+    print(f"ms/point: median of {args.repeats} runs taken in turn with AUTO-07p; ratio: "
+          "median (min-max) of the per-run ratios")
     print("| n | tool | ms/point | last B | period error | multiplier error | note |")
     print("|---|---|---|---|---|---|---|")
     for n in args.sizes:
-        run = ours(n, args.points, args.floquet)
+        run, res, ours_t, auto_t = timed(n, args)
         X = run["steps"][-1].X
         B, T = run["cyc"].params(X)[1], run["cyc"].period(X)
         eT, emu = errors(T, run["mu"][-1], *reference(run, B))
-        print(f"| {n} | continuation ({args.floquet}) | {1e3 * run['per_point']:.1f} | "
+        print(f"| {n} | continuation ({args.floquet}) | {1e3 * np.median(ours_t):.1f} | "
               f"{B:.5f} | {eT:.1e} | {emu:.1e} | build {run['build']:.2f} s, "
               f"Newton it/point {run['newton']:.1f}, rejected {run['stats']['rejected_steps']}, "
               f"B_H err {abs(run['hopf_B'] - hopf_b(n)):.0e} |", flush=True)
-        res = None if args.no_auto else auto(n, args.points)
         if res is not None:
             B_a, T_a, mu_a = auto_point(res, B)
             eT, emu = errors(T_a, mu_a, *reference(run, B_a))
-            print(f"| {n} | AUTO-07p | {1e3 * res['per_point']:.1f} | {B_a:.5f} "
+            ratio = ours_t / auto_t
+            print(f"| {n} | AUTO-07p | {1e3 * np.median(auto_t):.1f} | {B_a:.5f} "
                   f"(last {res['points'][-1][1]:.5f}) | "
                   f"{eT:.1e} | {emu:.1e} | Fortran time {1e3 * res['fortran_per_point']:.1f}"
-                  f" ms/point; ratio ours/AUTO "
-                  f"{run['per_point'] / res['per_point']:.2f} |", flush=True)
+                  f" ms/point; ratio ours/AUTO {np.median(ratio):.2f} "
+                  f"({ratio.min():.2f}-{ratio.max():.2f}) |", flush=True)
 
 
 if __name__ == "__main__":
