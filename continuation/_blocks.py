@@ -27,14 +27,16 @@ see :class:`PointKernel`).
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import casadi as ca
 import numpy as np
 import scipy.sparse as sp
 
 from ._collocation import collocation
 from ._condensed import CollocationJacobian
-from ._intervals import PointwiseTerm, interval_band
-from ._lazyjit import jit
+from ._intervals import PointwiseTerm, interval_band, kinematic_rows
+from ._lazyjit import SMALL, jit
 from ._lifted import LiftedBatch
 from ._sparse import Layout, layout
 from .compilation import compiled_or_none, default_flags, has_compiler
@@ -349,8 +351,17 @@ class BlockCollocationSystem:
                 terms.append(PointwiseTerm(values, weights, prow, pcol))
         Gp = (Mvp - (hk * T)[:, None] * Fp).reshape(kr.K, len(cols), n)
         extra = np.concatenate([(-hk[:, None] * F)[:, :, None], Gp.transpose(0, 2, 1)], axis=2)
-        return CollocationJacobian(n, ntst, ncol, tuple(terms), extra.reshape(ntst, m, -1),
-                                   c, self.band)
+        J = CollocationJacobian(n, ntst, ncol, tuple(terms), extra.reshape(ntst, m, -1), c,
+                                self.band)
+        return J if self.band is not None or m <= SMALL else \
+            replace(J, kinematic=self._kinematic_rows(J))
+
+    def _kinematic_rows(self, J: CollocationJacobian):
+        """The kinematic rows of dense interval matrices, read once from the first
+        Jacobian's (``_intervals.kinematic_rows``; every factorization checks them)."""
+        if not hasattr(self, "_kinematic"):
+            self._kinematic = kinematic_rows(J.blocks, self.col.Dm)
+        return self._kinematic
 
     def fill(self) -> float:
         """Nonzero fraction of the interval blocks (of the pointwise pattern in ``n x n``)."""

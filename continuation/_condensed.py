@@ -43,7 +43,7 @@ from functools import cached_property, lru_cache
 
 import numpy as np
 
-from ._intervals import IntervalBand
+from ._intervals import IntervalBand, KinematicRows
 from ._lazyjit import SIDE_BY_SIDE, SMALL
 from ._newton import factorize
 from ._sparse import layout
@@ -66,6 +66,8 @@ def condensed_pays(rows: int, fill: float, banded: bool = False) -> bool:
 #: the other (LAPACK, blocks of more than ``SMALL`` rows) or side by side (loops)
 DENSE = (np.zeros(0, np.int64), -1, -1)
 SIDE = (np.zeros(0, np.int64), SIDE_BY_SIDE, SIDE_BY_SIDE)
+#: the kinematic arguments ``(order, nq, D)`` of ``_jit.interval_factors`` for none
+NO_KINEMATIC = (np.zeros(0, np.int64), 0, np.zeros((2, 0, 0)))
 
 
 @dataclass(frozen=True, eq=False)
@@ -78,6 +80,7 @@ class CollocationJacobian:
         of ``T`` and the free parameters;
     phase : ``(NTST NCOL n,)``: the phase row ``c`` (zero in ``T`` and ``p``);
     band : an :class:`IntervalBand` of the ``M_i`` (factorized banded), or None (dense).
+    kinematic : the :class:`KinematicRows` of dense ``M_i`` (eliminated by block), or None.
     """
 
     n: int
@@ -87,6 +90,7 @@ class CollocationJacobian:
     extra: np.ndarray
     phase: np.ndarray
     band: IntervalBand | None = None
+    kinematic: KinematicRows | None = None
 
     @property
     def shape(self) -> tuple:
@@ -159,27 +163,39 @@ class CollocationJacobian:
     def factor_layout(self) -> tuple:
         """The compiled solver's arguments for the layout of :attr:`factors`: banded
         (``band.args``), small dense blocks side by side (:data:`SIDE`, blocks of at most
-        ``SMALL`` rows: every operation runs over the intervals at once) or dense one
-        interval after the other (:data:`DENSE`, by LAPACK)."""
-        if self.band is not None:
-            return self.band.args
-        return SIDE if self.n * self.ncol <= SMALL else DENSE
+        ``SMALL`` rows: every operation runs over the intervals at once), dense with the
+        kinematic rows eliminated by block (``kinematic.args``, where every ``M_i`` has
+        them) or dense one interval after the other (:data:`DENSE`, by LAPACK)."""
+        return self._factorization[3]
 
-    @cached_property
+    @property
     def factors(self) -> tuple | None:
         """``(lu, piv, Z)``: the LU factors of every ``M_i`` (in :attr:`factor_layout`)
         and ``Z_i = M_i^-1 [B_i^L, E_i]`` (``(NTST, m, n + k)``); None if an ``M_i`` is
         singular."""
-        extra, layout = _c(self.extra), self.factor_layout
+        lu, piv, Z, _ = self._factorization
+        return None if lu is None else (lu, piv, Z)
+
+    @cached_property
+    def _factorization(self) -> tuple:
+        """``(lu, piv, Z, layout)``, the first three None if an ``M_i`` is singular."""
+        extra, jit = _c(self.extra), _compiled()
         if self.band is not None:
-            lu, piv, Z, ok = _compiled().band_interval_factors(*self.band_blocks(), extra,
-                                                               *layout)
-        elif layout is SIDE:
-            lu, piv, Z, ok = _compiled().side_interval_factors(self.side_blocks(), extra,
-                                                               self.n)
+            layout = self.band.args
+            *out, ok = jit.band_interval_factors(*self.band_blocks(), extra, *layout)
+        elif self.n * self.ncol <= SMALL:
+            layout = SIDE
+            *out, ok = jit.side_interval_factors(self.side_blocks(), extra, self.n)
         else:
-            lu, piv, Z, ok = _compiled().interval_factors(self.blocks, extra)
-        return (lu, piv, Z) if ok else None
+            layout, (*out, ok) = DENSE, (None, None, None, False)
+            if self.kinematic is not None:
+                layout = self.kinematic.args
+                *out, ok = jit.interval_factors(self.blocks, extra, layout[0], layout[2],
+                                                self.kinematic.D)
+            if not ok:                       # no kinematic rows, or an M_i without them
+                layout = DENSE
+                *out, ok = jit.interval_factors(self.blocks, extra, *NO_KINEMATIC)
+        return (*out, layout) if ok else (None, None, None, layout)
 
     @property
     def maps(self) -> np.ndarray | None:

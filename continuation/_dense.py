@@ -286,3 +286,109 @@ def _band_solve_column(ab, piv, x, kl, ku) -> None:
         for j in range(i + 1, min(m, i + d + 1)):
             acc -= ab[j, d + i - j] * x[j]
         x[i] = acc / ab[i, d]
+
+
+#: the relative rounding allowed between a kinematic row's entries and ``c D1``
+SCALE_TOL = 1e-15
+
+
+@jit
+def kinematic_factor(a, lu, piv, order, nq, D) -> bool:
+    """Block LU of an interval matrix ``a`` (``m x m``: row ``k n + s`` the point ``k``
+    and state ``s``, column ``l n + s`` the node ``l + 1``) whose rows of the positions
+    ``pos = order[:nq]`` are kinematic: ``c_j D1`` (``D1 = D[0]``, the derivative part,
+    ``NCOL x NCOL``; ``c_j`` a scale) in the position's own columns, anything ``V_j`` in
+    those of its velocity ``vel = order[nq:2 nq]``, zero elsewhere (checked; False if not
+    met, or if the Schur complement is singular). Then ``x_q = (D1^-1 b_q - W_j
+    x_vel) / c_j``, ``W_j = D1^-1 V_j``, and the other states ``order[2 nq:n + nq]``
+    (where ``order[n + nq:]`` places the velocities) solve ``S x_s = b_s - A_sq x_q(b)``:
+    one LU of ``(n - nq) NCOL`` rows instead of ``n NCOL``. ``lu`` (``m x m``,
+    contiguous) holds ``S`` (factorized), ``A_sq``, ``W``, ``D1^-1`` and ``1 / c``
+    (:func:`_kinematic_parts`), ``piv`` the pivots of ``S``."""
+    n, ncol = order.size - 2 * nq, D.shape[1]
+    S, Asq, W, Dinv, inv_c = _kinematic_parts(lu, n, nq, ncol)
+    ms, ns, Dinv[:] = S.shape[0], n - nq, D[1]
+    for j in range(nq):
+        inv_c[j] = D[0, 0, 0] / a[order[j], order[j]]
+        if not _kinematic_rows(a, order[j], order[nq + j], n, D[0], W[j]):
+            return False
+        V = W[j].copy()
+        W[j] = 0.0
+        gemm(W[j], D[1], V, inv_c[j])
+    for r in range(ms):                          # S and A_sq, in the order (node, state)
+        row, out, left = a[(r // ns) * n + order[2 * nq + r % ns]], S[r], Asq[r]
+        for l in range(ncol):
+            for t in range(ns):
+                out[l * ns + t] = row[l * n + order[2 * nq + t]]
+            for j in range(nq):
+                left[j * ncol + l] = row[l * n + order[j]]
+        for j in range(nq):                      # S[:, (l, vel_j)] -= A_sq[:, (j, :)] W_j
+            v = order[n + nq + j]
+            for l2 in range(ncol):
+                f = left[j * ncol + l2]
+                for l in range(ncol):
+                    out[l * ns + v] -= f * W[j, l2, l]
+    return lu_factor(S, piv[:ms])
+
+
+@jit
+def kinematic_solve(lu, piv, b, order, nq) -> None:
+    """``b <- A^-1 b`` in place (``b``: ``(m, r)``, C-ordered) with the factors of
+    :func:`kinematic_factor`."""
+    n, r = order.size - 2 * nq, b.shape[1]
+    ncol, ns = b.shape[0] // n, n - nq
+    S, Asq, W, Dinv, inv_c = _kinematic_parts(lu, n, nq, ncol)
+    xq, xs = np.zeros((ncol * nq, r)), np.empty((ncol * ns, r))
+    for t in range(ncol * ns):
+        xs[t] = b[(t // ns) * n + order[2 * nq + t % ns]]
+    for j in range(nq):                          # x_q = D1^-1 b_q / c, position by position
+        for l in range(ncol):
+            for k in range(ncol):
+                f = Dinv[l, k] * inv_c[j]
+                for c in range(r):
+                    xq[j * ncol + l, c] += f * b[k * n + order[j], c]
+    gemm(xs, Asq, xq, -1.0)
+    lu_solve(S, piv[:ncol * ns], xs)
+    for j in range(nq):                          # x_q -= W_j x_vel
+        for l in range(ncol):
+            for l2 in range(ncol):
+                f, v = W[j, l, l2], l2 * ns + order[n + nq + j]
+                for c in range(r):
+                    xq[j * ncol + l, c] -= f * xs[v, c]
+    for t in range(ncol * ns):
+        b[(t // ns) * n + order[2 * nq + t % ns]] = xs[t]
+    for t in range(ncol * nq):
+        b[(t % ncol) * n + order[t // ncol]] = xq[t]
+
+
+@jit
+def _kinematic_parts(lu, n, nq, ncol):
+    """``(S, A_sq, W, D1^-1, 1 / c)`` of :func:`kinematic_factor`, views of the
+    contiguous ``lu`` one after the other (``ms m + (nq + 1) NCOL^2 + nq <= m^2``
+    entries, ``ms = (n - nq) NCOL``, for ``n >= 3``)."""
+    flat, ms, mq = lu.reshape(-1), (n - nq) * ncol, nq * ncol
+    s, q, w, d = ms * ms, ms * mq, nq * ncol * ncol, ncol * ncol
+    return (flat[:s].reshape(ms, ms), flat[s:s + q].reshape(ms, mq),
+            flat[s + q:s + q + w].reshape(nq, ncol, ncol),
+            flat[s + q + w:s + q + w + d].reshape(ncol, ncol),
+            flat[s + q + w + d:s + q + w + d + nq])
+
+
+@jit
+def _kinematic_rows(a, p, v, n, D1, V) -> bool:
+    """Whether the rows ``k n + p`` of ``a`` read ``c D1`` in the columns of state ``p``
+    (``c = a[p, p] / D1[0, 0]``, to :data:`SCALE_TOL`) and are zero outside those of
+    state ``v``, whose entries go to ``V``."""
+    ncol, c = D1.shape[0], a[p, p] / D1[0, 0]
+    if c == 0.0 or not np.isfinite(c):
+        return False
+    for k in range(ncol):
+        row = a[k * n + p]
+        for l in range(ncol):
+            for s in range(n):
+                x, own = row[l * n + s], c * D1[k, l]
+                if s == v:
+                    V[k, l] = x
+                elif abs(x - own) > SCALE_TOL * abs(own) if s == p else x != 0.0:
+                    return False
+    return True

@@ -1,6 +1,8 @@
 """The interval matrices of a collocated cycle (``_condensed``): the pointwise terms
-whose sum they are, and the order of their rows and columns that makes them banded
-where the pointwise pattern allows (a chain of cells, a one-dimensional PDE).
+whose sum they are, the order of their rows and columns that makes them banded
+where the pointwise pattern allows (a chain of cells, a one-dimensional PDE), and their
+kinematic rows (a mechanical system's ``dq/dt = r``), which a block elimination takes
+out of their LU.
 """
 
 from __future__ import annotations
@@ -11,6 +13,8 @@ from functools import cached_property
 import numpy as np
 import scipy.sparse as sp
 from scipy.sparse.csgraph import reverse_cuthill_mckee
+
+from ._lazyjit import KINEMATIC
 
 #: a band is used for interval matrices of more than ``BAND_MIN_ROWS`` rows (smaller ones
 #: are factorized by plain loops, ``_dense``) whose band storage ``2 kl + ku + 1`` is at
@@ -72,6 +76,63 @@ def interval_band(n: int, ncol: int, prow: np.ndarray, pcol: np.ndarray):
     if 2 * lower + upper + 1 > m:
         return None
     return IntervalBand(order, ncol, lower, upper)
+
+
+@dataclass(frozen=True, eq=False)
+class KinematicRows:
+    """States ``positions[j]`` whose rows in the interval matrices are kinematic,
+    ``M_i`` at point ``k`` reading ``Dm[k, l]`` on the position at node ``l``, anything
+    on its velocity ``velocities[j]`` and nothing else (``d q/dt = r``, or ``g(r)``:
+    ``M`` row ``c e_q``, ``F`` a function of ``r`` alone), so that the positions at the
+    nodes ``1 .. NCOL`` follow from the velocities there (``_dense.kinematic_factor``).
+    ``D1 = Dm[:, 1:]``."""
+
+    positions: np.ndarray
+    velocities: np.ndarray
+    others: np.ndarray
+    D1: np.ndarray
+
+    @cached_property
+    def args(self) -> tuple:
+        """``(order, kl, ku)`` for the compiled solver: ``order`` the positions, their
+        velocities, the other states and the velocities' places among those, ``kl``
+        :data:`KINEMATIC`, ``ku`` the number of positions."""
+        places = np.searchsorted(self.others, self.velocities)
+        order = np.concatenate([self.positions, self.velocities, self.others, places])
+        return order.astype(np.int64), KINEMATIC, self.positions.size
+
+    @cached_property
+    def D(self) -> np.ndarray:
+        """``(D1, D1^-1)``, stacked."""
+        return np.stack([self.D1, np.linalg.inv(self.D1)])
+
+
+def kinematic_rows(blocks: np.ndarray, Dm: np.ndarray) -> KinematicRows | None:
+    """The :class:`KinematicRows` of the dense interval blocks ``blocks`` (``(NTST, m,
+    m + n)``, their nodes ``0 .. NCOL``, ``Dm``: the collocation's ``NCOL x (NCOL + 1)``
+    derivative weights), read from their entries exactly; None if they have none. A
+    state that is a velocity is not taken as a position."""
+    ntst, m, cols = blocks.shape
+    n, ncol = cols - m, Dm.shape[0]
+    M = blocks[:, :, n:].reshape(ntst, ncol, n, ncol, n)          # (i, k, a, l, s)
+    diagonal = np.diagonal(M, axis1=2, axis2=4)                      # (i, k, l, a)
+    scale = diagonal[0, 0, 0] / Dm[0, 1]
+    with np.errstate(invalid="ignore"):
+        own = np.all(np.abs(diagonal - scale * Dm[None, :, 1:, None]) <= 1e-15 *
+                     np.abs(diagonal), axis=(0, 1, 2)) & (scale != 0.0)
+    coupled = np.any(M != 0.0, axis=(0, 1, 3))                       # (a, s)
+    coupled[np.diag_indices(n)] = False
+    positions, velocities = [], []
+    for a in np.flatnonzero(own & (coupled.sum(axis=1) == 1)):
+        b = int(np.flatnonzero(coupled[a])[0])
+        if a not in velocities and b not in positions:
+            positions.append(int(a))
+            velocities.append(b)
+    if not positions:
+        return None
+    others = np.setdiff1d(np.arange(n), positions)
+    return KinematicRows(np.array(positions), np.array(velocities), others,
+                         np.ascontiguousarray(Dm[:, 1:]))
 
 
 @dataclass(frozen=True, eq=False)

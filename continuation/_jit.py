@@ -13,16 +13,17 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from ._dense import band_solve, gemm, lu_factor, lu_solve, qr_eliminate
+from ._dense import (band_solve, gemm, kinematic_factor, kinematic_solve, lu_factor,
+                     lu_solve, qr_eliminate)
 from ._lapack import dgbtrf
-from ._lazyjit import SIDE_BY_SIDE
+from ._lazyjit import KINEMATIC, SIDE_BY_SIDE
 from ._side import side_band_solve, side_lu, side_solve
 
 #: the first 16 hex digits of the SHA-256 of the kernels' files that the functions here
 #: were compiled against; an edit of one of them must update its line (a test checks),
 #: so that numba recompiles the callers of the edited kernels
 KERNEL_SOURCES = {
-    "_dense.py": "855dce5cbdd847c9",
+    "_dense.py": "88ccd6d8bc50f9ac",
     "_side.py": "f211593479f5059a",
 }
 
@@ -32,19 +33,28 @@ jit = njit(cache=True, nogil=True)
 
 # ---- the condensed solver of collocated cycles (``_condensed``) ---------------------------
 @jit
-def interval_factors(blocks, extra):
+def interval_factors(blocks, extra, order, nq, D):
     """``(lu, piv, Z, ok)``: the LU of every ``M_i = blocks[i, :, n:]`` and
-    ``Z_i = M_i^-1 [blocks[i, :, :n], extra[i]]``; ok False if an ``M_i`` is singular."""
+    ``Z_i = M_i^-1 [blocks[i, :, :n], extra[i]]``; ok False if an ``M_i`` is singular.
+    With ``nq`` kinematic rows (``order``, ``D``: :func:`_dense.kinematic_factor`) their
+    block LU, ok False also where an ``M_i`` lacks that structure."""
     ntst, m, cols = blocks.shape
     n, k = cols - m, extra.shape[2]
     lu, piv = np.empty((ntst, m, m)), np.zeros((ntst, m), np.int32)
     Z = np.empty((ntst, m, n + k))
     for i in range(ntst):
-        lu[i] = blocks[i, :, n:]
-        if not lu_factor(lu[i], piv[i]):
+        if nq:
+            ok = kinematic_factor(blocks[i, :, n:], lu[i], piv[i], order, nq, D)
+        else:
+            lu[i] = blocks[i, :, n:]
+            ok = lu_factor(lu[i], piv[i])
+        if not ok:
             return lu, piv, Z, False
         Z[i, :, :n], Z[i, :, n:] = blocks[i, :, :n], extra[i]
-        lu_solve(lu[i], piv[i], Z[i])
+        if nq:
+            kinematic_solve(lu[i], piv[i], Z[i], order, nq)
+        else:
+            lu_solve(lu[i], piv[i], Z[i])
     return lu, piv, Z, True
 
 
@@ -347,7 +357,8 @@ def condensed_solve(lu, piv, band, Z, border_w, schedule, Qb, H, Zt, shares, flu
     """``x`` with ``A x = b`` (``b``: ``(N + k, r)``) from the factors of
     :class:`CondensedLU`; ``band``: ``(order, kl, ku)`` of the interval factors: of
     :func:`band_interval_factors` (``kl >= 0``), :func:`side_interval_factors` (``kl``
-    :data:`SIDE_BY_SIDE`) or :func:`interval_factors` (``kl = -1``)."""
+    :data:`SIDE_BY_SIDE`) or :func:`interval_factors` (``kl = -1``; :data:`KINEMATIC`
+    with kinematic rows, ``ku`` of them)."""
     order, kl, ku = band
     ntst, m = Z.shape[0], Z.shape[1]
     n = Z.shape[2] - border_w.shape[1]
@@ -361,6 +372,8 @@ def condensed_solve(lu, piv, band, Z, border_w, schedule, Qb, H, Zt, shares, flu
     for i in range(ntst):
         if kl == -1:
             lu_solve(lu[i], piv[i], z[i])
+        elif kl == KINEMATIC:
+            kinematic_solve(lu[i], piv[i], z[i], order, ku)
         gemm(s, border_w[i], z[i, :p], -1.0)
     v, y = chain_solve(schedule, Qb, H, Zt, shares, flu, fpiv,
                         np.ascontiguousarray(z[:, p:]), s)

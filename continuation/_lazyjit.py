@@ -19,6 +19,10 @@ SMALL = 32
 #: by side (``_jit.side_interval_factors``; a band has ``kl >= 0``, dense factors -1)
 SIDE_BY_SIDE = -2
 
+#: the ``kl`` of those band arguments for dense interval factors with kinematic rows
+#: eliminated by block (``_dense.kinematic_factor``; ``ku``: their number)
+KINEMATIC = -3
+
 
 def jit(fun):
     """``fun`` compiled by numba (cached on disk) at its first call."""

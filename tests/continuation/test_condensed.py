@@ -186,7 +186,7 @@ def test_a_singular_interval_falls_back_to_superlu_of_the_whole_matrix():
     prob = _problem(6, 3, "condensed")
     rng = np.random.default_rng(1)
     A = prob.bordered_jacobian(prob.X0, rng.standard_normal(prob.X0.size))
-    A.J.__dict__["factors"] = None                  # as if an M_i were singular
+    A.J.__dict__["_factorization"] = (None,) * 4    # as if an M_i were singular
     assert A.J.maps is None
     lu = A.factorize()
     assert not isinstance(lu, CondensedLU)
