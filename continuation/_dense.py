@@ -339,8 +339,10 @@ def kinematic_solve(lu, piv, b, order, nq) -> None:
     ncol, ns = b.shape[0] // n, n - nq
     S, Asq, W, Dinv, inv_c = _kinematic_parts(lu, n, nq, ncol)
     xq, xs = np.zeros((ncol * nq, r)), np.empty((ncol * ns, r))
-    for t in range(ncol * ns):
-        xs[t] = b[(t // ns) * n + order[2 * nq + t % ns]]
+    for t in range(ncol * ns):                   # (element loops: no view per row)
+        row = (t // ns) * n + order[2 * nq + t % ns]
+        for c in range(r):
+            xs[t, c] = b[row, c]
     for j in range(nq):                          # x_q = D1^-1 b_q / c, position by position
         for l in range(ncol):
             for k in range(ncol):
@@ -356,9 +358,13 @@ def kinematic_solve(lu, piv, b, order, nq) -> None:
                 for c in range(r):
                     xq[j * ncol + l, c] -= f * xs[v, c]
     for t in range(ncol * ns):
-        b[(t // ns) * n + order[2 * nq + t % ns]] = xs[t]
+        row = (t // ns) * n + order[2 * nq + t % ns]
+        for c in range(r):
+            b[row, c] = xs[t, c]
     for t in range(ncol * nq):
-        b[(t % ncol) * n + order[t // ncol]] = xq[t]
+        row = (t % ncol) * n + order[t // ncol]
+        for c in range(r):
+            b[row, c] = xq[t, c]
 
 
 @jit
