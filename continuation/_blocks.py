@@ -129,8 +129,9 @@ class PointKernel:
         self.lifted = {name: LiftedBatch(lifted, K, self._compiled(lifted.D))
                        for name, lifted in vf.lifted.items()}
         self.values = self._mapped(values)
-        self._jacobians: dict = {}
-        self._seeded: dict = {}
+        self._jacobians, self._seeded = {}, {}
+        #: the kinematic rows of the dense interval matrices per NCOL (any mesh)
+        self.kinematic: dict = {}
 
     def jacobians(self, par_columns) -> "SeededKernel":
         """The mapped Jacobian kernel with parameter directions ``par_columns`` (one
@@ -357,11 +358,11 @@ class BlockCollocationSystem:
             replace(J, kinematic=self._kinematic_rows(J))
 
     def _kinematic_rows(self, J: CollocationJacobian):
-        """The kinematic rows of dense interval matrices, read once from the first
-        Jacobian's (``_intervals.kinematic_rows``; every factorization checks them)."""
-        if not hasattr(self, "_kinematic"):
-            self._kinematic = kinematic_rows(J.blocks, self.col.Dm)
-        return self._kinematic
+        """The kinematic rows of dense interval matrices, read once per kernel and NCOL
+        from the first Jacobian's (``_intervals.kinematic_rows``; checked at every LU)."""
+        if self.ncol not in self.kernel.kinematic:
+            self.kernel.kinematic[self.ncol] = kinematic_rows(J.blocks, self.col.Dm)
+        return self.kernel.kinematic[self.ncol]
 
     def fill(self) -> float:
         """Nonzero fraction of the interval blocks (of the pointwise pattern in ``n x n``)."""
