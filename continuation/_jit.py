@@ -149,17 +149,23 @@ def add_blocks(blocks, values, rows, cols, weights, n, ncol):
 
 
 @jit
-def add_dense_blocks(blocks, values, weights, n, ncol):
-    """:func:`add_blocks` for matrices given dense, row by row (``values``: ``K x n n``)."""
-    for point in range(values.shape[0]):
+def set_dense_blocks(blocks, values, weights, n, ncol):
+    """``blocks[i, k n + a, l n + b] = sum_t weights[t][i NCOL + k, l] values[t][i NCOL +
+    k, a n + b]`` for the matrices of the terms ``t`` given dense, row by row (``values``,
+    ``weights``: tuples): every entry written once, the row kept in cache between terms."""
+    for point in range(values[0].shape[0]):
         i, k = point // ncol, point % ncol
         for l in range(ncol + 1):
-            w = weights[point, l]
-            if w != 0.0:
-                for a in range(n):
-                    row, c = k * n + a, l * n
-                    for b in range(n):
-                        blocks[i, row, c + b] += w * values[point, a * n + b]
+            for a in range(n):
+                row, c = blocks[i, k * n + a], l * n
+                w = weights[0][point, l]
+                for b in range(n):
+                    row[c + b] = w * values[0][point, a * n + b]
+                for t in range(1, len(values)):
+                    w = weights[t][point, l]
+                    if w != 0.0:
+                        for b in range(n):
+                            row[c + b] += w * values[t][point, a * n + b]
 
 
 @jit
