@@ -1,7 +1,8 @@
 """Dense kernels of the compiled layer (numba, cached on disk), for C-ordered arrays:
 :func:`lu_factor` / :func:`lu_solve`, :func:`qr_eliminate` (the elimination of one
-unknown block from a pair of equations), :func:`gemm` and :func:`band_solve` (with
-LAPACK's band LU). Blocks of at most ``SMALL`` rows by plain loops (no per-call
+unknown block from a pair of equations), :func:`gemm`, :func:`band_solve` (with
+LAPACK's band LU) and :func:`kinematic_factor` / :func:`kinematic_solve` (an interval
+matrix's LU with its kinematic rows eliminated by block). Blocks of at most ``SMALL`` rows by plain loops (no per-call
 overhead), larger ones by LAPACK and BLAS (``_lapack``), 2-3x faster there.
 
 They are called by the loops of ``_jit`` only. numba's disk cache notices edits of a
@@ -299,12 +300,11 @@ def kinematic_factor(a, lu, piv, order, nq, D) -> bool:
     ``pos = order[:nq]`` are kinematic: ``c_j D1`` (``D1 = D[0]``, the derivative part,
     ``NCOL x NCOL``; ``c_j`` a scale) in the position's own columns, anything ``V_j`` in
     those of its velocity ``vel = order[nq:2 nq]``, zero elsewhere (checked; False if not
-    met, or if the Schur complement is singular). Then ``x_q = (D1^-1 b_q - W_j
-    x_vel) / c_j``, ``W_j = D1^-1 V_j``, and the other states ``order[2 nq:n + nq]``
-    (where ``order[n + nq:]`` places the velocities) solve ``S x_s = b_s - A_sq x_q(b)``:
-    one LU of ``(n - nq) NCOL`` rows instead of ``n NCOL``. ``lu`` (``m x m``,
-    contiguous) holds ``S`` (factorized), ``A_sq``, ``W``, ``D1^-1`` and ``1 / c``
-    (:func:`_kinematic_parts`), ``piv`` the pivots of ``S``."""
+    met, or if the Schur complement is singular). Then ``x_q = D1^-1 b_q / c_j - W_j
+    x_vel``, ``W_j = D1^-1 V_j / c_j``, and the other states ``order[2 nq:n + nq]`` (the
+    velocities at ``order[n + nq:]`` among them) solve ``S x_s = b_s - A_sq x_q(b)``: an
+    LU of ``(n - nq) NCOL`` rows, not ``n NCOL``. ``lu`` (``m x m``, contiguous) holds
+    ``S`` (factorized), ``A_sq``, ``W``, ``D1^-1``, ``1 / c``; ``piv`` the pivots of S."""
     n, ncol = order.size - 2 * nq, D.shape[1]
     S, Asq, W, Dinv, inv_c = _kinematic_parts(lu, n, nq, ncol)
     ms, ns, Dinv[:] = S.shape[0], n - nq, D[1]

@@ -1,7 +1,8 @@
 """The compiled layer: numba functions, cached on disk (``cache=True``), for the loops over
 the many small dense blocks of the condensed collocation solver (``_condensed``), where
 a Python loop over LAPACK calls costs more than their arithmetic: the interval LUs and
-maps (dense or banded), the pairwise reduction of the mesh-point chain and the solves.
+maps (dense, banded, or with kinematic rows eliminated), the pairwise reduction of the
+mesh-point chain and the solves.
 Every compiled function that calls another one lives in this module, on the kernels
 of ``_dense`` and ``_side``: numba's cache is invalidated by edits of a function's own
 file only, hence :data:`KERNEL_SOURCES` (leaves may live elsewhere: ``_lazyjit``).
@@ -23,7 +24,7 @@ from ._side import side_band_solve, side_lu, side_solve
 #: were compiled against; an edit of one of them must update its line (a test checks),
 #: so that numba recompiles the callers of the edited kernels
 KERNEL_SOURCES = {
-    "_dense.py": "fe0f93e8cb30e87d",
+    "_dense.py": "b06f9d1b997a4a3a",
     "_side.py": "f211593479f5059a",
 }
 
