@@ -125,3 +125,14 @@ def models():
         guckenheimer_holmes_a=guckenheimer_holmes_a, mass_model=mass_model,
         van_der_pol=van_der_pol, van_der_pol_guess=van_der_pol_guess, corrected=corrected,
         benchmark=benchmark, half_twisted=half_twisted)
+
+
+def van_der_pol_ring(n=6):
+    """``n / 2`` Van der Pol oscillators ``u' = v``, ``v' = mu (1 - u^2) v - u + k (mean -
+    u)`` coupled all-to-all (dense interval blocks, no band), ``p = (mu, k)``."""
+    x, p = ca.SX.sym("x", n), ca.SX.sym("p", 2)
+    u, v = x[0::2], x[1::2]
+    mean = ca.sum1(u) / (n // 2)
+    f = ca.vertcat(*[ca.vertcat(v[i], p[0] * (1 - u[i] ** 2) * v[i] - u[i]
+                                + p[1] * (mean - u[i])) for i in range(n // 2)])
+    return ca.Function("F", [x, p], [f])

@@ -13,20 +13,12 @@ from continuation._condensed import BorderedCollocation, Chain, CondensedLU
 from continuation._newton import factorize
 from continuation._sparse import append_row
 
+from .conftest import van_der_pol_ring as _ring
+
 
 def _rel(a, b) -> float:
     a, b = np.asarray(a), np.asarray(b)
     return float(np.max(np.abs(a - b)) / max(np.max(np.abs(a)), 1e-300))
-
-
-def _ring(n=6):
-    """n Van der Pol-like oscillators coupled all-to-all (dense blocks), p = (mu, k)."""
-    x, p = ca.SX.sym("x", n), ca.SX.sym("p", 2)
-    u, v = x[0::2], x[1::2]
-    mean = ca.sum1(u) / (n // 2)
-    f = ca.vertcat(*[ca.vertcat(v[i], p[0] * (1 - u[i] ** 2) * v[i] - u[i]
-                                + p[1] * (mean - u[i])) for i in range(n // 2)])
-    return ca.Function("F", [x, p], [f])
 
 
 def _mass(n=6):

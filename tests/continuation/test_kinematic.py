@@ -11,8 +11,11 @@ import continuation as C
 from continuation import _jit
 from continuation._collocation import collocation
 from continuation._condensed import DENSE, CollocationJacobian
+from continuation._dense import kinematic_solve
 from continuation._intervals import PointwiseTerm, kinematic_rows
 from continuation._lazyjit import KINEMATIC
+
+from .conftest import van_der_pol_ring
 
 
 def _rel(a, b) -> float:
@@ -55,14 +58,8 @@ def test_kinematic_rows_are_found_exactly(ncol):
 def test_a_velocity_is_not_taken_as_a_position():
     """``x_0' = x_1, x_1' = x_2`` (a third-order chain): only one of the two is eliminated,
     so that every position's velocity stays among the unknowns of the Schur complement."""
-    rng, ncol = np.random.default_rng(1), 4
-    blocks = _blocks(6, [0], [1], ncol, 3, rng)
-    blocks = _blocks(6, [1], [2], ncol, 3, rng) * 0 + blocks
-    Dm = collocation(ncol).Dm
-    M = blocks.reshape(3, ncol, 6, ncol + 1, 6)
-    M[:, :, 1] = 0.0
-    M[:, :, 1, :, 1], M[:, :, 1, :, 2] = 100.0 * Dm, 0.5
-    found = kinematic_rows(blocks, Dm)
+    blocks = _blocks(6, [0, 1], [1, 2], 4, 3, np.random.default_rng(1))
+    found = kinematic_rows(blocks, collocation(4).Dm)
     assert found.positions.tolist() == [0] and found.velocities.tolist() == [1]
 
 
@@ -90,7 +87,6 @@ def test_the_block_elimination_solves_like_lapack(n, positions, velocities):
         assert _rel(Z[i], np.linalg.solve(M, np.hstack([blocks[i, :, :n], extra[i]]))) < tol
         for r in (1, 4):
             x = b[i, :, :r].copy()
-            from continuation._dense import kinematic_solve
             kinematic_solve(lu[i], piv[i], x, order, nq)
             assert _rel(x, np.linalg.solve(M, b[i, :, :r])) < tol
 
@@ -118,17 +114,6 @@ def test_an_interval_without_the_structure_falls_back_to_dense_factors():
             < 1e-13 * np.linalg.cond(M)
 
 
-def _ring(n):
-    """``n / 2`` Van der Pol oscillators ``u' = v``, ``v' = mu (1 - u^2) v - u + k (mean -
-    u)`` coupled all-to-all (dense interval matrices, no band), ``p = (mu, k)``."""
-    x, p = ca.SX.sym("x", n), ca.SX.sym("p", 2)
-    u, v = x[0::2], x[1::2]
-    mean = ca.sum1(u) / (n // 2)
-    f = ca.vertcat(*[ca.vertcat(v[i], p[0] * (1 - u[i] ** 2) * v[i] - u[i]
-                                + p[1] * (mean - u[i])) for i in range(n // 2)])
-    return ca.Function("F", [x, p], [f])
-
-
 def _inertia(n):
     """A mass on the velocity rows only, ``1 + 0.1 u_i^2`` on the diagonal and ``0.05``
     coupling every velocity (the position rows stay ``e_u``)."""
@@ -144,7 +129,7 @@ def _inertia(n):
 def _problem(solver, mass, n=10):
     guess = lambda t: np.column_stack([2 * np.cos(2 * np.pi * t), -2 * np.sin(2 * np.pi * t)]
                                       * (n // 2))
-    return C.CycleProblem(_ring(n), guess, 6.6, {"mu": 1.0, "k": 0.2}, "mu",
+    return C.CycleProblem(van_der_pol_ring(n), guess, 6.6, {"mu": 1.0, "k": 0.2}, "mu",
                           M=_inertia(n) if mass else None,
                           settings=C.CollocationSettings(ntst=12, ncol=4,
                                                          linear_solver=solver))
