@@ -35,8 +35,8 @@ import scipy.sparse as sp
 
 from ._collocation import collocation
 from ._condensed import CollocationJacobian
-from ._intervals import PointwiseTerm, interval_band, kinematic_rows
-from ._lazyjit import SMALL, jit
+from ._intervals import KINEMATIC_MIN_ROWS, PointwiseTerm, interval_band, kinematic_rows
+from ._lazyjit import jit
 from ._lifted import LiftedBatch
 from ._sparse import Layout, layout
 from .compilation import compiled_or_none, default_flags, has_compiler
@@ -354,7 +354,7 @@ class BlockCollocationSystem:
         extra = np.concatenate([(-hk[:, None] * F)[:, :, None], Gp.transpose(0, 2, 1)], axis=2)
         J = CollocationJacobian(n, ntst, ncol, tuple(terms), extra.reshape(ntst, m, -1), c,
                                 self.band)
-        return J if self.band is not None or m <= SMALL else \
+        return J if self.band is not None or m <= KINEMATIC_MIN_ROWS else \
             replace(J, kinematic=self._kinematic_rows(J))
 
     def _kinematic_rows(self, J: CollocationJacobian):

@@ -201,7 +201,7 @@ def test_the_position_rows_leave_the_interval_lus():
     from continuation._newton import factorize
     from continuation._sparse import append_row
     from fsicas.linear.hopf import flutter_problem
-    scene = fsicas.Scene(mstar=1.0, modes=4)
+    scene = fsicas.Scene(mstar=1.0, modes=6)             # 14 states: 56-row intervals
     model = build_model(scene)
     hopf = critical_velocity(scene, model)
     eq = flutter_problem(scene, model, hopf.ustar / 2)
@@ -213,8 +213,8 @@ def test_the_position_rows_leave_the_interval_lus():
     tau = rng.standard_normal(X.size)
     A = prob.bordered_jacobian(X, tau)
     lu = factorize(A)
-    assert A.J.kinematic.positions.tolist() == [4, 5, 6, 7]
-    assert A.J.kinematic.velocities.tolist() == [0, 1, 2, 3]
+    assert A.J.kinematic.positions.tolist() == [6, 7, 8, 9, 10, 11]
+    assert A.J.kinematic.velocities.tolist() == [0, 1, 2, 3, 4, 5]
     assert A.J.factor_layout[1] == KINEMATIC
     dense = append_row(C.CycleProblem.jacobian(prob, X), tau).toarray()
     b = rng.standard_normal((X.size, 2))

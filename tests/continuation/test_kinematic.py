@@ -126,7 +126,7 @@ def _inertia(n):
     return ca.Function("M", [x, p], [M])
 
 
-def _problem(solver, mass, n=10):
+def _problem(solver, mass, n=14):
     guess = lambda t: np.column_stack([2 * np.cos(2 * np.pi * t), -2 * np.sin(2 * np.pi * t)]
                                       * (n // 2))
     return C.CycleProblem(van_der_pol_ring(n), guess, 6.6, {"mu": 1.0, "k": 0.2}, "mu",
@@ -137,7 +137,7 @@ def _problem(solver, mass, n=10):
 
 @pytest.mark.parametrize("mass", [False, True])
 def test_branches_with_kinematic_rows_eliminated_equal_the_sparse_solver(mass):
-    """Van der Pol oscillators (40-row dense interval matrices, half of their rows
+    """Seven Van der Pol oscillators (56-row dense interval matrices, half of their rows
     kinematic), with a state-dependent mass on the velocities: the condensed solves
     against LAPACK on the sparse route's matrix, and a branch against SuperLU's (points,
     Newton iterations, multipliers)."""
@@ -149,8 +149,8 @@ def test_branches_with_kinematic_rows_eliminated_equal_the_sparse_solver(mass):
     tau = rng.standard_normal(X.size)
     A = prob.bordered_jacobian(X, tau)
     lu = factorize(A)
-    assert A.J.kinematic.positions.tolist() == [0, 2, 4, 6, 8]
-    assert A.J.kinematic.velocities.tolist() == [1, 3, 5, 7, 9]
+    assert A.J.kinematic.positions.tolist() == [0, 2, 4, 6, 8, 10, 12]
+    assert A.J.kinematic.velocities.tolist() == [1, 3, 5, 7, 9, 11, 13]
     assert A.J.factor_layout[1] == KINEMATIC
     dense = append_row(C.CycleProblem.jacobian(prob, X), tau).toarray()
     for b in (rng.standard_normal(X.size), rng.standard_normal((X.size, 3))):
@@ -162,3 +162,13 @@ def test_branches_with_kinematic_rows_eliminated_equal_the_sparse_solver(mass):
     assert np.array_equal(a.iterations, b.iterations)
     assert _rel(b.par("mu"), a.par("mu")) < 1e-10 and _rel(b.x, a.x) < 1e-10
     assert _rel(np.array(b.eigenvalues), np.array(a.eigenvalues)) < 1e-9
+
+
+def test_small_interval_matrices_keep_the_plain_lu():
+    """At most ``KINEMATIC_MIN_ROWS`` rows (five oscillators, 40 rows) the elimination
+    does not pay: the plain LU."""
+    from continuation._intervals import KINEMATIC_MIN_ROWS
+    prob = _problem("condensed", False, n=10)
+    assert 10 * 4 <= KINEMATIC_MIN_ROWS
+    A = prob.bordered_jacobian(prob.X0, np.ones(prob.X0.size))
+    assert A.J.kinematic is None and A.J.factor_layout is DENSE
