@@ -192,7 +192,7 @@ class CollocationJacobian:
             layout = SIDE
             *out, ok = jit.side_interval_factors(self.side_blocks(), extra, self.n)
         else:
-            layout, (*out, ok) = DENSE, (None, None, None, False)
+            ok = False
             if self.kinematic is not None:
                 layout = self.kinematic.args
                 *out, ok = jit.interval_factors(self.blocks, extra, layout[0], layout[2],

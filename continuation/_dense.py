@@ -1,9 +1,9 @@
 """Dense kernels of the compiled layer (numba, cached on disk), for C-ordered arrays:
 :func:`lu_factor` / :func:`lu_solve`, :func:`qr_eliminate` (the elimination of one
 unknown block from a pair of equations), :func:`gemm`, :func:`band_solve` (with
-LAPACK's band LU) and :func:`kinematic_factor` / :func:`kinematic_solve` (an interval
-matrix's LU with its kinematic rows eliminated by block). Blocks of at most ``SMALL`` rows by plain loops (no per-call
-overhead), larger ones by LAPACK and BLAS (``_lapack``), 2-3x faster there.
+LAPACK's band LU), :func:`kinematic_factor` / :func:`kinematic_solve` (an LU with the
+kinematic rows eliminated by block). Blocks of at most ``SMALL`` rows by plain loops
+(no per-call overhead), larger ones by LAPACK and BLAS (``_lapack``), 2-3x faster.
 
 They are called by the loops of ``_jit`` only. numba's disk cache notices edits of a
 function's own file only, so ``_jit`` records the hash of this file
@@ -17,7 +17,7 @@ import numpy as np
 from numba import njit
 
 from ._lapack import dgemm, dgeqrf, dgetrf, dgetrs, dormqr, dtrsm
-from ._lazyjit import SMALL
+from ._lazyjit import SCALE_TOL, SMALL
 
 #: the compiled functions: nopython, cached on disk, releasing the GIL
 jit = njit(cache=True, nogil=True)
@@ -289,10 +289,6 @@ def _band_solve_column(ab, piv, x, kl, ku) -> None:
         x[i] = acc / ab[i, d]
 
 
-#: the relative rounding allowed between a kinematic row's entries and ``c D1``
-SCALE_TOL = 1e-15
-
-
 @jit
 def kinematic_factor(a, lu, piv, order, nq, D) -> bool:
     """Block LU of an interval matrix ``a`` (``m x m``: row ``k n + s`` the point ``k``
@@ -395,6 +391,8 @@ def _kinematic_rows(a, p, v, n, D1, V) -> bool:
                 x, own = row[l * n + s], c * D1[k, l]
                 if s == v:
                     V[k, l] = x
-                elif abs(x - own) > SCALE_TOL * abs(own) if s == p else x != 0.0:
-                    return False
+                elif s == p and abs(x - own) > SCALE_TOL * abs(own):
+                    return False        # not c D1 on the position's own columns
+                elif s != p and x != 0.0:
+                    return False        # a third state
     return True

@@ -14,7 +14,7 @@ import numpy as np
 import scipy.sparse as sp
 from scipy.sparse.csgraph import reverse_cuthill_mckee
 
-from ._lazyjit import KINEMATIC
+from ._lazyjit import KINEMATIC, SCALE_TOL
 
 #: a band is used for interval matrices of more than ``BAND_MIN_ROWS`` rows (smaller ones
 #: are factorized by plain loops, ``_dense``) whose band storage ``2 kl + ku + 1`` is at
@@ -124,7 +124,7 @@ def kinematic_rows(blocks: np.ndarray, Dm: np.ndarray) -> KinematicRows | None:
     diagonal = np.diagonal(M, axis1=2, axis2=4)                      # (i, k, l, a)
     scale = diagonal[0, 0, 0] / Dm[0, 1]
     with np.errstate(invalid="ignore"):
-        own = np.all(np.abs(diagonal - scale * Dm[None, :, 1:, None]) <= 1e-15 *
+        own = np.all(np.abs(diagonal - scale * Dm[None, :, 1:, None]) <= SCALE_TOL *
                      np.abs(diagonal), axis=(0, 1, 2)) & (scale != 0.0)
     coupled = np.any(M != 0.0, axis=(0, 1, 3))                       # (a, s)
     coupled[np.diag_indices(n)] = False

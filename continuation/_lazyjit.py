@@ -23,6 +23,10 @@ SIDE_BY_SIDE = -2
 #: eliminated by block (``_dense.kinematic_factor``; ``ku``: their number)
 KINEMATIC = -3
 
+#: the relative rounding allowed between a kinematic row's entries on its own position
+#: and ``c Dm`` (``_intervals.kinematic_rows``, ``_dense.kinematic_factor``)
+SCALE_TOL = 1e-15
+
 
 def jit(fun):
     """``fun`` compiled by numba (cached on disk) at its first call."""
