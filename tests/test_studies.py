@@ -241,3 +241,19 @@ def test_shipped_example_studies_load():
     assert len(onset.points) == 200 and onset.physical == "soft_palate"
     assert len(fig4.points) == 105 and fig4.analysis == "outcome"
     assert 0.1 * 0.999 < min(p["mstar"] for p in fig4.points) < 0.1 * 1.001
+
+
+def test_summary_of_a_table_is_its_median_and_spread():
+    """0, 1, ..., 100: median 50, 5th and 95th percentiles 5 and 95 (closed form);
+    failed rows, booleans and the index enter no statistic; text columns are counted."""
+    from fsicas.studies import summarize
+    rows = [{"index": i, "found": True, "flow": float(i), "kind": "flutter" if i % 4 else
+             "divergence", "error": None} for i in range(101)]
+    rows.append({"index": 101, "flow": 1e9, "error": "no steady state"})
+    s = summarize(rows)
+    assert (s["points"], s["failed"]) == (102, 1)
+    assert set(s["columns"]) == {"flow", "kind"}
+    flow = s["columns"]["flow"]
+    assert (flow["count"], flow["median"], flow["p05"], flow["p95"], flow["min"], flow["max"]) \
+        == (101, 50.0, 5.0, 95.0, 0.0, 100.0)
+    assert s["columns"]["kind"]["values"] == {"divergence": 26, "flutter": 75}

@@ -7,7 +7,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from ..studies import check_table_path, load_study, run_study
+from ..studies import check_table_path, load_study, run_study, summarize
 from ..workers import dask_executor
 from .meta import cli_meta, record
 from .progress import reporter
@@ -45,7 +45,7 @@ def _cmd_study(args) -> dict:
         rows = run_study(study, table, workers=args.workers, progress=progress.bars)
     errors = sum(1 for r in rows if r["error"])
     return {"study": study.to_json(), "table": str(table), "rows": len(rows),
-            "errors": errors, "meta": cli_meta(args)}
+            "errors": errors, "summary": summarize(rows), "meta": cli_meta(args)}
 
 
 def _print_study(result: dict) -> None:
@@ -54,3 +54,19 @@ def _print_study(result: dict) -> None:
     print(f"  {result['rows']} points of the {s['analysis']} analysis in {result['table']}"
           + (f" ({result['errors']} could not be computed: see their 'error' column)"
              if result["errors"] else ""))
+    _print_summary(result["summary"])
+
+
+def _print_summary(summary: dict) -> None:
+    """Each numeric column: its median, 5 %-95 % spread and extremes; each text column's
+    values with their counts."""
+    numeric = {k: c for k, c in summary["columns"].items() if "median" in c}
+    if numeric:
+        width = max(map(len, numeric))
+        print(f"  {'':{width}}  {'median':>11}  {'5 % - 95 %':>25}  {'min - max':>25}")
+    for name, c in numeric.items():
+        print(f"  {name:{width}}  {c['median']:11.4g}  {c['p05']:11.4g} - {c['p95']:<11.4g}"
+              f"  {c['min']:11.4g} - {c['max']:<11.4g}".rstrip())
+    for name, c in summary["columns"].items():
+        if "values" in c:
+            print(f"  {name}: " + ", ".join(f"{k} {n}" for k, n in c["values"].items()))
