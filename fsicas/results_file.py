@@ -10,7 +10,10 @@ depend on (scene, settings); the other lines are one record each. Opening the fi
   off before anything is appended;
 - writes the header into a new or empty file, and refuses a file whose header differs
   (naming the differing keys) or that has records but no header, so results made with
-  other settings are never mixed or reused.
+  other settings are never mixed or reused;
+- refuses, before it writes or cuts a byte, anything that is not a results file: a
+  folder, a FIFO or a device, or a file whose first line is not a header record (a
+  user's notes, a figure), which is left exactly as it was.
 
 Each record is appended by one ``write`` of the whole line to a file opened with
 ``O_APPEND``, so a record is either in the file whole or (after a kill) repaired away.
@@ -26,12 +29,39 @@ try:
 except ImportError:  # pragma: no cover - not POSIX
     fcntl = None
 
-__all__ = ["ResultsFile", "read_records"]
+__all__ = ["ResultsFile", "read_records", "is_results_file", "check_results_path"]
+
+_HEADER_START = b'{"header"'
 
 
 def _normal(value):
     """``value`` as JSON would give it back (tuples as lists, ...)."""
     return json.loads(json.dumps(value))
+
+
+def is_results_file(path) -> bool:
+    """Whether ``path`` is a regular file that is empty or starts with a header record
+    (also a header torn by a kill, which opening repairs)."""
+    path = Path(path)
+    if not path.is_file():
+        return False
+    with open(path, "rb") as fh:
+        start = fh.read(len(_HEADER_START))
+    return start == b"" or start == _HEADER_START
+
+
+def check_results_path(path) -> None:
+    """ValueError, before any write, if an existing ``path`` is not a results file."""
+    path = Path(path)
+    if not path.exists() and not path.is_symlink():
+        return
+    if not path.is_file():
+        raise ValueError(f"{path} is not a regular file (a folder, a FIFO or a device): "
+                         "name a new file for the results")
+    if not is_results_file(path):
+        raise ValueError(f"{path} exists and is not a results file of fsicas: it has no "
+                         "header record on its first line saying how its contents were "
+                         "made; it was left as it is: name a new file for the results")
 
 
 def read_records(path) -> tuple[dict | None, list[dict]]:
@@ -66,6 +96,7 @@ class ResultsFile:
         self._fd = None
 
     def __enter__(self) -> "ResultsFile":
+        check_results_path(self.path)
         self.path.parent.mkdir(parents=True, exist_ok=True)
         self._fd = os.open(self.path, os.O_RDWR | os.O_CREAT | os.O_APPEND, 0o644)
         try:

@@ -7,6 +7,7 @@ files; the options of each command. The analyses are replaced by a tripwire, so 
 that got past validation fails loudly instead of computing.
 """
 import json
+import os
 
 import pytest
 
@@ -147,3 +148,63 @@ def test_broken_scene_files_refused_before_work(capsys, tripwire, tmp_path):
 def test_at_least_150_inputs_are_tried():
     scene = sum(len(v) for v in SCENE_CASES.values()) * len(COMMANDS)
     assert scene + len(COMMAND_CASES) + 10 >= 150
+
+
+PNG = b"\x89PNG\r\n\x1a\n" + bytes(range(64))
+
+
+def _foreign_outputs(tmp_path):
+    """(argv, the file it must leave as it was, its bytes) for outputs fsicas did not make."""
+    notes = b"my notes\nline two\nlast line without newline"
+    study = tmp_path / "s.toml"
+    study.write_text('analysis = "onset"\n[grid]\nmstar = [1.0]\n')
+    cases = [(["map", "--ustar", "6", "--mstar", "1", "--out", "notes.txt"], "notes.txt", notes),
+             (["map", "--ustar", "6", "--mstar", "1", "--out", "fig.png"], "fig.png", PNG),
+             (["lco", "--mstar", "1", "--out", "notes.txt"], "notes.txt", notes),
+             (["grazing", "--mstar", "1", "--out", "notes.json"], "notes.json", notes),
+             (["sound", "--physical", "soft_palate", "--out", "song.wav"], "song.wav", notes),
+             (["study", str(study), "--out", "table.csv"], "table.csv", b"a,b\n1,2\n"),
+             (["study", str(study), "--out", "t2.csv"], "t2.jsonl", notes)]
+    return cases
+
+
+def test_an_output_fsicas_did_not_make_is_refused_and_left_as_it_was(capsys, tripwire, tmp_path):
+    for argv, name, content in _foreign_outputs(tmp_path):
+        (tmp_path / name).write_bytes(content)
+        check_refused(capsys, argv, "left as it is")
+        assert (tmp_path / name).read_bytes() == content, argv
+
+
+def test_a_fifo_or_folder_as_results_file_is_refused_without_blocking(capsys, tripwire, tmp_path):
+    os.mkfifo(tmp_path / "pipe.jsonl")
+    check_refused(capsys, ["map", "--ustar", "6", "--mstar", "1", "--out", "pipe.jsonl"],
+                  "not a regular file")
+    (tmp_path / "folder.png").mkdir()
+    check_refused(capsys, ["eig", "--mstar", "1", "--ustar", "6", "--plot", "folder"], "folder")
+
+
+def test_results_file_refuses_foreign_files_and_repairs_a_torn_header(tmp_path):
+    from fsicas.results_file import ResultsFile
+    foreign = tmp_path / "fig.png"
+    foreign.write_bytes(PNG)
+    with pytest.raises(ValueError, match="not a results file"):
+        ResultsFile(foreign, {"a": 1}).__enter__()
+    assert foreign.read_bytes() == PNG
+    torn = tmp_path / "torn.jsonl"
+    torn.write_bytes(b'{"header": {"a"')            # killed while writing its header
+    with ResultsFile(torn, {"a": 1}) as out:
+        out.append({"x": 1})
+    assert torn.read_text() == '{"header": {"a": 1}}\n{"x": 1}\n'
+
+
+def test_outputs_fsicas_made_are_reused(capsys, tmp_path, monkeypatch):
+    """An own JSON result is overwritten; an own results file resumed (no work here:
+    the map's one point is already in it)."""
+    from fsicas.cli.outputs import check_outputs
+    import argparse
+    own = tmp_path / "branch.json"
+    own.write_text(json.dumps({"points": [], "meta": {"fsicas": "0.1.0"}}))
+    check_outputs(argparse.Namespace(command="lco", out=str(own), plot=None))
+    wav = tmp_path / "snore.wav"
+    wav.write_bytes(b"RIFF\x24\x00\x00\x00WAVEfmt ")
+    check_outputs(argparse.Namespace(command="sound", out=str(wav), plot=None))

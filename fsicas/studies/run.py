@@ -19,7 +19,7 @@ from pathlib import Path
 from tqdm import tqdm
 
 from ..provenance import provenance
-from ..results_file import ResultsFile
+from ..results_file import ResultsFile, check_results_path
 from ..workers import local_pool
 from .analyses import study_point
 from .spec import Study
@@ -44,7 +44,20 @@ def check_table_path(table) -> Path:
         raise ValueError(f"--out {str(table)!r}: the folder {str(table.parent)!r} does not exist")
     if table.suffix == ".parquet":
         _pyarrow()
+    if table.exists() and not _is_table(table):
+        raise ValueError(f"--out {str(table)!r}: the file exists and is not a table of a "
+                         "fsicas study; it was left as it is: name a new file")
+    check_results_path(results_path(table))
     return table
+
+
+def _is_table(path: Path) -> bool:
+    """A regular file that is empty or starts as :func:`write_table` writes it."""
+    if not path.is_file():
+        return False
+    with open(path, "rb") as fh:
+        head = fh.read(4)
+    return head in (b"", b"PAR1") or head.startswith(b"# {")
 
 
 def run_study(study: Study, table, *, workers: int | None = None,
