@@ -42,3 +42,6 @@ def read_toml(path, label: str) -> dict:
         raise ValueError(f"{label} {path}: cannot be read ({err.strerror})") from None
     except (tomllib.TOMLDecodeError, UnicodeDecodeError) as err:
         raise ValueError(f"{label} {path}: not valid TOML ({err})") from None
+    except RecursionError:
+        raise ValueError(f"{label} {path}: nested too deeply to be a scene or physical "
+                         "file (arrays or tables inside one another hundreds of times)") from None

@@ -77,21 +77,29 @@ def _registry():
     return pint.UnitRegistry()
 
 
-_NUMBER_FIRST = re.compile(r"^\s*[-+]?(\d|\.\d)")
+#: A quantity as written: one number (``3``, ``-2.5``, ``1e-3``), then a unit whose only
+#: digits are small powers (``m^3/s``, ``kg/m**3``). No arithmetic: pint evaluates
+#: expressions, and ``10**10**8`` would run for hours before anything is said.
+_QUANTITY = re.compile(r"^\s*(?P<number>[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?)"
+                       r"\s*(?P<unit>(?:[A-Za-zµμΩ°%_ ()*/.]|(?:\^|\*\*)-?\d{1,2}(?!\d))*)\s*$")
+_MAX_TEXT = 100
 
 
 def _quantity(text: str, what: str, hint: str = "a number with a unit, e.g. 3 kPa"):
     """Pint quantity of ``text`` (a number, then its unit); ValueError naming ``what``
-    if it does not parse."""
-    if not _NUMBER_FIRST.match(text):
-        raise ValueError(f"{what}: cannot read {text!r}: give {hint}")
+    if it does not parse or is not a finite value."""
+    match = _QUANTITY.match(text) if len(text) <= _MAX_TEXT else None
+    if match is None:
+        raise ValueError(f"{what}: cannot read {text!r}: give {hint} (one number, then a "
+                         "unit: 3e3 Pa, not 3 * 10**3 Pa)")
+    number = float(match["number"])
+    if not math.isfinite(number):
+        raise ValueError(f"{what}: {text!r} is not a finite value")
     try:
-        q = _registry().Quantity(text.strip())
+        q = number * _registry().Unit(match["unit"].strip() or "dimensionless")
     except Exception as err:    # pint raises many kinds (tokenize, syntax, undefined unit)
         reason = f" ({err})" if str(err) else ""
         raise ValueError(f"{what}: cannot read {text!r}{reason}; give {hint}") from None
-    if not math.isfinite(float(q.magnitude)):
-        raise ValueError(f"{what}: {text!r} is not a finite value")
     return q
 
 
@@ -101,13 +109,17 @@ def parse_quantity(value, unit: str, what: str) -> float:
     if isinstance(value, bool) or not isinstance(value, (int, float, str)):
         raise ValueError(f"{what} must be a number (SI) or a string with a unit, got {value!r}")
     if not isinstance(value, str):
-        return float(value)
-    q = _quantity(value, what)
-    try:
-        return float(q.to(unit or "dimensionless").magnitude)
-    except Exception:   # pint's DimensionalityError
-        raise ValueError(f"{what}: {value!r} is not in units of {unit or 'a pure number'} "
-                         f"(it is {q.dimensionality})") from None
+        number = float(value)
+    else:
+        q = _quantity(value, what)
+        try:
+            number = float(q.to(unit or "dimensionless").magnitude)
+        except Exception:   # pint's DimensionalityError
+            raise ValueError(f"{what}: {value!r} is not in units of {unit or 'a pure number'} "
+                             f"(it is {q.dimensionality})") from None
+    if not math.isfinite(number):
+        raise ValueError(f"{what}: {value!r} is not a finite value in {unit or 'a pure number'}")
+    return number
 
 
 @dataclass(frozen=True)
@@ -182,6 +194,20 @@ def load_physical(source: str) -> "Physical":
 
 
 # -- the physical configuration ----------------------------------------------------------
+#: Keys whose values must be > 0, and those that must be >= 0.
+_POSITIVE = ("E", "rho_s", "e", "L", "b", "H1", "H2", "gap", "rho_f", "viscosity")
+_NON_NEGATIVE = ("friction", "zeta")
+
+
+def _check_signs(values: dict, label: str) -> None:
+    """ValueError naming the first key of ``values`` of the wrong sign."""
+    for key, value in values.items():
+        if (key in _POSITIVE and not value > 0) or (key in _NON_NEGATIVE and not value >= 0):
+            bound = "> 0" if key in _POSITIVE else ">= 0"
+            raise ValueError(f"{label}: {key} ({MEANING[key]}) must be {bound}, got {value:g} "
+                             f"{KEYS[key]}".rstrip())
+
+
 def _heights(values: dict, label: str) -> tuple[float, float]:
     if "gap" in values and ("H1" in values or "H2" in values):
         raise ValueError(f"{label}: give either gap (each channel) or H1 and H2, not both")
@@ -225,6 +251,7 @@ class Physical:
                              f"({', '.join(MEANING[k] for k in missing)})")
         if "friction" in values and "viscosity" in values:
             raise ValueError(f"{label}: give friction or viscosity, not both")
+        _check_signs(values, label)
         H1, H2 = _heights(values, label)
         flow = None if "flow" not in table else parse_flow(table["flow"], f"{label}: flow")
         return cls(label, description, values, H1, H2, flow, dict(scene_fields or {}), dict(table))

@@ -95,9 +95,19 @@ class Scales:
                              "(Timoshenko included); give a longer L or a thinner e")
         if b < e:
             raise ValueError(f"b = {b} m is narrower than the thickness e = {e} m: not a plate")
-        D = E * e**3 / (12.0 * (1.0 - nu**2))
-        return cls(length=L, time=L**2 * math.sqrt(rho_s * e / D), pressure=D / L**3,
-                   width=b, fluid_density=rho_f, beam_mass_per_area=rho_s * e, gap=H1 + H2)
+        try:
+            D = E * e**3 / (12.0 * (1.0 - nu**2))
+            scales = dict(length=L, time=L**2 * math.sqrt(rho_s * e / D), pressure=D / L**3,
+                          width=b, fluid_density=rho_f, beam_mass_per_area=rho_s * e, gap=H1 + H2)
+        except (OverflowError, ZeroDivisionError):
+            scales = {"time": math.inf}
+        bad = [k for k, v in scales.items() if not (math.isfinite(v) and v > 0)]
+        if bad:
+            raise ValueError(f"the physical values give a {bad[0]} scale of "
+                             f"{scales[bad[0]]:g}, beyond what a float holds: E = {E:g} Pa, "
+                             f"e = {e:g} m, L = {L:g} m, rho_s = {rho_s:g} kg/m^3; give "
+                             "values in SI units of a real beam")
+        return cls(**scales)
 
 
 def thick_beam_message(e: float, L: float) -> str:

@@ -208,3 +208,70 @@ def test_outputs_fsicas_made_are_reused(capsys, tmp_path, monkeypatch):
     wav = tmp_path / "snore.wav"
     wav.write_bytes(b"RIFF\x24\x00\x00\x00WAVEfmt ")
     check_outputs(argparse.Namespace(command="sound", out=str(wav), plot=None))
+
+
+def _physical_file(tmp_path, name, **values):
+    lines = ['preset = "soft_palate"', "[physical]"] + [f"{k} = {v}" for k, v in values.items()]
+    (tmp_path / name).write_text("\n".join(lines) + "\n")
+    return name
+
+
+def test_hostile_physical_input_gets_a_clear_error_at_once(capsys, tripwire, tmp_path):
+    """Arithmetic that would overflow or run for hours in the unit parser, values beyond
+    a float, a zero viscosity, nesting that exhausts the recursion: exit 2, no traceback."""
+    import time
+    cases = [(["onset", "--physical", _physical_file(tmp_path, "a.toml", E='"3 * 10**400 Pa"')],
+              "one number, then a unit"),
+             (["onset", "--physical", _physical_file(tmp_path, "b.toml", L='"1e300 m"')],
+              "beyond what a float holds"),
+             (["onset", "--physical", "soft_palate", "--flow", "1 * 10**10**8 m/s"], "--flow"),
+             (["onset", "--physical", "soft_palate", "--flow", "1e999 m/s"], "--flow"),
+             (["onset", "--physical", _physical_file(tmp_path, "c.toml", E="-3000")], "E"),
+             (["onset", "--physical", _physical_file(tmp_path, "d.toml", zeta="-0.1")], "zeta")]
+    deep = "a = " + "[" * 5000 + "]" * 5000 + "\n"
+    (tmp_path / "deep.toml").write_text(deep)
+    cases += [(["onset", "--physical", "deep.toml"], "nested too deeply"),
+              (["steady", "--scene", "deep.toml"], "nested too deeply")]
+    for argv, named in cases:
+        start = time.perf_counter()
+        check_refused(capsys, argv, named)
+        assert time.perf_counter() - start < 10, argv
+
+
+def test_a_zero_viscosity_is_refused_naming_it(capsys, tripwire, tmp_path):
+    text = (tmp_path / "v.toml")
+    text.write_text('[physical]\nE = "3 kPa"\nnu = 0.45\nrho_s = "1040 kg/m^3"\ne = "2.5 mm"\n'
+                    'L = "30 mm"\nb = "30 mm"\ngap = "2 mm"\nrho_f = "1.2 kg/m^3"\n'
+                    'viscosity = 0\nflow = "20 L/min"\n')
+    check_refused(capsys, ["onset", "--physical", "v.toml"], "viscosity (dynamic viscosity")
+
+
+def test_units_as_written_still_read():
+    from fsicas.physical import parse_flow, parse_quantity
+    assert parse_quantity("3 kPa", "Pa", "E") == 3000.0
+    assert parse_quantity("1040 kg/m^3", "kg/m^3", "rho") == 1040.0
+    assert parse_quantity("1.8e-5 Pa*s", "Pa*s", "mu") == 1.8e-5
+    assert abs(parse_flow("20L/min").value - 20e-3 / 60) < 1e-15
+    assert abs(parse_flow("3e-4 m**3/s").value - 3e-4) < 1e-15
+    assert parse_flow("1.2m/s").kind == "velocity"
+
+
+def test_a_closed_pipe_and_ctrl_c_end_the_command_quietly(tmp_path):
+    """``| head`` closes stdout: no traceback, exit 141; SIGINT: one line, exit 130."""
+    import signal
+    import subprocess
+    import sys
+    import time
+    cmd = [sys.executable, "-m", "fsicas.cli", "modes", "--modes", "50", "--json"]
+    reader = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+    reader.stdout.close()                            # the reader is gone before the output
+    assert reader.wait(timeout=120) == 141
+    assert b"Traceback" not in reader.stderr.read()
+    run = subprocess.Popen([sys.executable, "-m", "fsicas.cli", "boundary", "--mstar",
+                            "0.01:100:400"], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                           text=True)
+    time.sleep(8)
+    run.send_signal(signal.SIGINT)
+    out, err = run.communicate(timeout=60)
+    assert run.returncode == 130 and "Traceback" not in err
+    assert err.strip().splitlines()[-1].startswith("fsicas: interrupted")

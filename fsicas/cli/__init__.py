@@ -7,7 +7,8 @@ Exit status: 0 when the command succeeded; 1 when it ran to the end but its resu
 reports a failure (``"status": "failed"``: a time integration whose gap closed or whose
 solver failed, a continuation whose corrector failed), the result still printed; 2 for
 bad input or an analysis that could not start (the error on stderr, or as
-``{"error": ...}`` with ``--json``).
+``{"error": ...}`` with ``--json``); 130 after Ctrl-C (one line on stderr); 141 when the
+reader of stdout went away (``| head``), silently.
 Every JSON printed carries a ``"meta"`` object (versions, UTC time, the command line,
 the scene, the settings and the units of each field; :mod:`fsicas.cli.meta`).
 ``--quiet`` and ``--verbose`` (before or after the command) set what is told on stderr
@@ -20,6 +21,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import os
 import re
 import sys
 import time
@@ -45,7 +47,8 @@ from .sound import add_sound_command
 from .study import add_study_command
 from .timedomain import add_time_commands
 
-__all__ = ["main", "build_parser", "EXIT_OK", "EXIT_FAILED_RESULT", "EXIT_ERROR"]
+__all__ = ["main", "build_parser", "EXIT_OK", "EXIT_FAILED_RESULT", "EXIT_ERROR",
+           "EXIT_INTERRUPTED", "EXIT_BROKEN_PIPE"]
 
 #: Commands that write figures whether or not ``--plot`` is given.
 _ALWAYS_PLOTTING = frozenset({"paper"})
@@ -135,11 +138,26 @@ def _notes(caught) -> list:
 
 #: Exit statuses (module docstring).
 EXIT_OK, EXIT_FAILED_RESULT, EXIT_ERROR = 0, 1, 2
+EXIT_INTERRUPTED, EXIT_BROKEN_PIPE = 130, 141     # 128 + SIGINT, 128 + SIGPIPE, as shells say
 
 
 def main(argv=None) -> int:
     """Run one command; its exit status (:data:`EXIT_OK`, :data:`EXIT_FAILED_RESULT`,
-    :data:`EXIT_ERROR`; module docstring)."""
+    :data:`EXIT_ERROR`; module docstring). Ctrl-C ends it with one line and
+    :data:`EXIT_INTERRUPTED` (results files keep every point finished); a reader of its
+    output that goes away (``| head``) ends it quietly with :data:`EXIT_BROKEN_PIPE`."""
+    try:
+        return _main(argv)
+    except KeyboardInterrupt:
+        print("fsicas: interrupted; the points already saved are kept (run the same command "
+              "again to resume)", file=sys.stderr)
+        return EXIT_INTERRUPTED
+    except BrokenPipeError:
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())   # no second error
+        return EXIT_BROKEN_PIPE
+
+
+def _main(argv) -> int:
     argv = list(sys.argv[1:] if argv is None else argv)
     args = build_parser().parse_args(_negative_values_attached(argv))
     args.argv = argv
