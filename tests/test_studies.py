@@ -257,3 +257,19 @@ def test_summary_of_a_table_is_its_median_and_spread():
     assert (flow["count"], flow["median"], flow["p05"], flow["p95"], flow["min"], flow["max"]) \
         == (101, 50.0, 5.0, 95.0, 0.0, 100.0)
     assert s["columns"]["kind"]["values"] == {"divergence": 26, "flutter": 75}
+
+
+@pytest.mark.parametrize("body, named", [
+    ('analysis = "outcome"\n[settings]\nt_end = -1\n[grid]\nustar = [6.0]', "t_end"),
+    ('analysis = "outcome"\n[settings]\nt_end = "abc"\n[grid]\nustar = [6.0]', "t_end"),
+    ('analysis = "outcome"\n[settings]\nrtol = 0.5\n[grid]\nustar = [6.0]', "rtol"),
+    ('analysis = "onset"\n[settings]\nustar_max = inf\n[grid]\nmstar = [1.0]', "ustar_max"),
+    ('analysis = "onset"\n[scene]\nmodes = 10000\n[grid]\nmstar = [1.0]', "modes"),
+    ('analysis = "sound"\n[grid]\nustar = [6.0]', "physical"),
+])
+def test_nonsense_settings_are_refused_when_the_study_is_read(tmp_path, body, named):
+    """Not one error row per point after the pool has started: refused by load_study."""
+    path = tmp_path / "s.toml"
+    path.write_text(body + "\n")
+    with pytest.raises(ValueError, match=named):
+        load_study(path)

@@ -37,12 +37,15 @@ from __future__ import annotations
 import hashlib
 import itertools
 import json
+import math
 from dataclasses import dataclass, field
 
 import numpy as np
 
 from ..checks import read_toml
 from ..physical import KEYS, load_physical, parse_flow, parse_quantity
+from ..scene import Scene
+from ..timedomain.integrators import Settings
 
 __all__ = ["Study", "load_study", "ANALYSES", "SETTINGS", "DISTRIBUTIONS"]
 
@@ -107,6 +110,7 @@ def load_study(path) -> Study:
     if bad:
         raise ValueError(f"{label}: [settings] {bad} are not settings of {analysis!r}; allowed: "
                          f"{', '.join(SETTINGS[analysis])}")
+    _check_values(analysis, physical, scene, settings, label)
     if ("grid" in doc) == ("sample" in doc):
         raise ValueError(f"{label}: give either a [grid] or a [sample] table")
     unit = _units(physical)
@@ -114,6 +118,28 @@ def load_study(path) -> Study:
         _sample(doc["sample"], unit, label)
     return Study(label, str(doc.get("description", "")), analysis, physical, scene,
                  settings, tuple(points))
+
+
+def _check_values(analysis: str, physical, scene: dict, settings: dict, label: str) -> None:
+    """The [scene] and [settings] values checked as the analyses will use them, when the
+    file is read (not as an error row per point): ValueError naming the key."""
+    if analysis == "sound" and physical is None:
+        raise ValueError(f"{label}: the sound analysis needs physical = ... (the sound "
+                         "pressure in Pa at a distance in m)")
+    for key, value in settings.items():
+        if isinstance(value, bool) or not isinstance(value, (int, float)) \
+                or not math.isfinite(value) or value <= 0:
+            raise ValueError(f"{label}: [settings] {key} must be a number > 0, got {value!r}")
+    if analysis != "onset":
+        try:
+            Settings(rtol=settings["rtol"], atol=settings["atol"], dt_out=settings["dt_out"],
+                     chunk=max(1.0, settings["dt_out"]))
+        except ValueError as err:
+            raise ValueError(f"{label}: [settings] {err}") from None
+    try:
+        Scene(**scene)
+    except (ValueError, TypeError) as err:
+        raise ValueError(f"{label}: [scene] {err}") from None
 
 
 def _table(doc: dict, key: str, label: str) -> dict:
