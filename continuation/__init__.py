@@ -42,7 +42,7 @@ from ._equilibrium import EquilibriumProblem, hopf_point
 from ._lyapunov import first_lyapunov
 from ._palc import ContinuationIterator, Step, correct
 from ._problem import Problem
-from ._settings import (CollocationSettings, ContinuationSettings, EigenSettings,
+from ._settings import (MAX_NTST, CollocationSettings, ContinuationSettings, EigenSettings,
                         NewtonSettings, PALC, ShootingSettings)
 from ._shooting import ShootingProblem
 from ._symbolic import BufferedFunction
@@ -51,7 +51,7 @@ from ._symmetric import keeps_symmetry, locate_symmetry_breaking, symmetric_mult
 from ._vectorfield import VectorField
 
 __all__ = [
-    "Branch", "BufferedFunction", "Event", "Status", "CollocationSettings", "Condition", "CycleCurveProblem",
+    "MAX_NTST", "Branch", "BufferedFunction", "Event", "Status", "CollocationSettings", "Condition", "CycleCurveProblem",
     "CycleFold", "Extremum", "NeimarkSacker", "PeriodDoubling", "locate_cycle", "ContinuationIterator", "ContinuationSettings",
     "CycleProblem", "EigenSettings", "ShootingProblem", "ShootingSettings", "cycle_from_hopf",
     "cycle_from_bp", "cycle_from_pd",

@@ -205,11 +205,17 @@ def kernel_backend(backend: str | None) -> str:
     return env or BACKENDS[0]
 
 
+MAX_NTST = 5000
+"""The most mesh intervals of a collocated cycle: beyond it one Newton step of a system of
+a few states already takes minutes and gigabytes; a cycle that needs more is better
+split by shooting or its mesh adapted (``adapt_every``)."""
+
+
 @dataclass(frozen=True)
 class CollocationSettings:
     """Orthogonal collocation of periodic orbits.
 
-    ntst : number of mesh intervals (>= 2); ncol : Gauss-Legendre collocation
+    ntst : number of mesh intervals (2 to :data:`MAX_NTST`); ncol : Gauss-Legendre collocation
     points per interval (2 to 7). floquet : 'pencil' (QZ of the block-cyclic
     pencil of the condensed transfer matrices), 'product' (eigenvalues of
     their product) or 'auto' (pencil while ``n * ntst <= pencil_max``).
@@ -261,8 +267,9 @@ class CollocationSettings:
             raise ValueError("CollocationSettings.adapt_every must be an integer >= 0, got "
                              f"{self.adapt_every!r}")
         _positive(self, "unstable_tol")
-        if self.ntst < 2:
-            raise ValueError(f"CollocationSettings.ntst must be >= 2, got {self.ntst}")
+        if not 2 <= self.ntst <= MAX_NTST:
+            raise ValueError(f"CollocationSettings.ntst must be in 2..{MAX_NTST}, got "
+                             f"{self.ntst}")
         if not 2 <= self.ncol <= 7:
             raise ValueError(f"CollocationSettings.ncol must be in 2..7, got {self.ncol}")
         if self.floquet not in ("auto", "pencil", "product"):

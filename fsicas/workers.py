@@ -11,7 +11,7 @@ import time
 from concurrent.futures import ProcessPoolExecutor
 from contextlib import contextmanager
 
-__all__ = ["die_with_parent", "local_pool", "dask_executor"]
+__all__ = ["die_with_parent", "local_pool", "dask_executor", "DASK_CONNECT_TIMEOUT"]
 
 
 def die_with_parent(parent: int) -> None:
@@ -41,10 +41,21 @@ def local_pool(workers: int | None = None) -> ProcessPoolExecutor:
 @contextmanager
 def dask_executor(address: str):
     """The ``concurrent.futures`` executor of the Dask scheduler at ``address`` (the
-    'parallel' extra), closed on exit; ValueError when Dask is not installed."""
+    'parallel' extra), closed on exit; ValueError when Dask is not installed or the
+    scheduler does not answer within :data:`DASK_CONNECT_TIMEOUT` seconds."""
     try:
         from distributed import Client
     except ImportError:
         raise ValueError("--dask needs Dask: pip install -e '.[parallel]'") from None
-    with Client(address) as client:
+    try:
+        client = Client(address, timeout=DASK_CONNECT_TIMEOUT)
+    except (OSError, TimeoutError, ValueError) as err:
+        raise ValueError(f"--dask {address}: no Dask scheduler answered there within "
+                         f"{DASK_CONNECT_TIMEOUT:g} s ({type(err).__name__}: {err}); start one "
+                         "(dask scheduler) or check the address") from None
+    with client:
         yield client.get_executor()
+
+
+#: Seconds to wait for a Dask scheduler to answer before giving up.
+DASK_CONNECT_TIMEOUT = 10.0

@@ -275,3 +275,27 @@ def test_a_closed_pipe_and_ctrl_c_end_the_command_quietly(tmp_path):
     out, err = run.communicate(timeout=60)
     assert run.returncode == 130 and "Traceback" not in err
     assert err.strip().splitlines()[-1].startswith("fsicas: interrupted")
+
+
+@pytest.mark.parametrize("argv, named", [
+    (["simulate", "--mstar", "1", "--ustar", "6", "--dt-out", "1e-9", "--t-end", "10"], "GiB"),
+    (["simulate", "--mstar", "1", "--ustar", "6", "--t-end", "1e12", "--full"], "--t-end"),
+    (["simulate", "--ustar", "9", "--schedule", "breath", "--breath-period", "1e-300",
+      "--t-end", "1"], "--breath-period"),
+    (["lco", "--mstar", "1", "--ntst", "100000"], "ntst must be at most"),
+    (["lco", "--mstar", "1", "--through-contact", "--impact-ntst", "100000"], "ntst"),
+], ids=["dt-out", "t-end", "breath-period", "ntst", "impact-ntst"])
+def test_sizes_that_cannot_fit_are_refused_with_the_way_round(capsys, tripwire, argv, named):
+    """Each of these ran for hours or exhausted the memory; refused with the limit."""
+    check_refused(capsys, argv, named)
+
+
+def test_an_unreachable_dask_scheduler_fails_fast_and_clearly(capsys, tripwire, monkeypatch):
+    pytest.importorskip("distributed")
+    import time
+    from fsicas import workers
+    monkeypatch.setattr(workers, "DASK_CONNECT_TIMEOUT", 2.0)
+    start = time.perf_counter()
+    check_refused(capsys, ["map", "--ustar", "6", "--mstar", "1", "--dask", "tcp://127.0.0.1:1",
+                           "--out", "m.jsonl"], "no Dask scheduler answered")
+    assert time.perf_counter() - start < 30

@@ -9,6 +9,8 @@ from __future__ import annotations
 
 import math
 
+import continuation as C
+
 from ..cycles.collocation import CycleSettings, cycle_branch
 from ..cycles.impacting import ImpactSettings, impacting_branch, pre_contact_start
 from ..cycles.impacting_collocation import (CollocationImpactSettings,
@@ -84,6 +86,10 @@ def _cmd_cycles(args) -> dict:
             raise ValueError(f"--{name.replace('_', '-')} must be >= 1, got {getattr(args, name)}")
     if args.special_ntst < 0:
         raise ValueError(f"--special-ntst must be >= 0 (0: off), got {args.special_ntst}")
+    for name in ("ntst", "impact_ntst", "special_ntst"):
+        if getattr(args, name) > C.MAX_NTST:
+            raise ValueError(f"--{name.replace('_', '-')} must be at most {C.MAX_NTST}, got "
+                             f"{getattr(args, name)}")
     if args.through_contact:
         scene = scene.replace(contact_stiffness=args.contact_stiffness or THROUGH_STIFFNESS,
                               contact_eps=args.contact_eps or THROUGH_EPS,

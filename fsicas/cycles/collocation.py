@@ -90,6 +90,8 @@ class CycleSettings:
         if not isinstance(self.stop_at_contact, bool):
             raise ValueError(f"CycleSettings.stop_at_contact must be a bool, "
                              f"got {self.stop_at_contact!r}")
+        if self.ntst > C.MAX_NTST:
+            raise ValueError(f"ntst must be at most {C.MAX_NTST}, got {self.ntst}")
 
 
 @dataclass(frozen=True)

@@ -123,6 +123,9 @@ class CollocationImpactSettings:
         if not isinstance(self.detect, bool):
             raise ValueError("CollocationImpactSettings.detect must be a bool, got "
                              f"{self.detect!r}")
+        if max(self.ntst, self.refine_ntst) > C.MAX_NTST:
+            raise ValueError(f"ntst and refine_ntst must be at most {C.MAX_NTST}, got "
+                             f"{self.ntst} and {self.refine_ntst}")
         if not (isinstance(self.max_turn, (int, float)) and 0 <= self.max_turn <= np.pi):
             raise ValueError("CollocationImpactSettings.max_turn must be an angle in [0, pi] "
                              f"(0: off), got {self.max_turn!r}")

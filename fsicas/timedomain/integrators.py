@@ -39,6 +39,7 @@ import scipy.integrate
 from tqdm import tqdm
 
 from ..checks import finite_number, require
+from .limits import check_size
 from .breathing import PressureSchedule
 from .rhs import compiled_route
 from ..model.assembly import Model
@@ -244,8 +245,8 @@ def simulate(model: Model, steady: SteadyState, t_end: float, *, settings: Setti
     of the integrated time on stderr. Bad input raises ValueError before any work;
     solver failures give ``status="failed"``.
     """
-    require(finite_number("t_end", t_end) > 0, f"t_end must be > 0, got {t_end}")
     schedule = schedule or PressureSchedule.constant(steady.scene.ustar)
+    check_size(model.n_state, t_end, settings.dt_out, schedule)
     x0 = initial_state(model, steady, perturbation) if x0 is None else _checked_x0(model, x0)
     n_chunks = max(1, math.ceil(t_end / settings.chunk - 1e-9))
     span = t_end / n_chunks
