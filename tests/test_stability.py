@@ -219,7 +219,7 @@ def test_modal_truncation_too_short_is_warned():
     too; a resolved onset (N = 10, M* = 1, mode 3) is not."""
     import warnings
     from fsicas.linear.hopf import ModalTruncationWarning, warn_if_truncated
-    with pytest.warns(ModalTruncationWarning, match="no flutter onset below U\\* = 40"):
+    with pytest.warns(ModalTruncationWarning, match="no onset of instability below U\\* = 40"):
         assert critical_velocity(Scene(modes=4, mstar=50.0), ustar_max=40.0) is None
     scene = Scene(modes=10, mstar=1.0)
     with warnings.catch_warnings():

@@ -1,8 +1,8 @@
-"""CLI command ``fsicas onset``: the flutter onset (the snoring threshold of a soft
-palate) on the linear analysis of :func:`fsicas.linear.hopf.critical_velocity`, in
-physical units with ``--physical`` (docs/units.md): onset airflow (m/s, L/min),
-frequency (Hz), pressure drop (Pa), sub- or supercritical, and the margin to the given
-(or the input's default) airflow.
+"""CLI command ``fsicas onset``: the onset of instability (the snoring threshold of a
+soft palate) on the linear analysis of :func:`fsicas.linear.hopf.critical_velocity`,
+flutter or static divergence (``kind``), in physical units with ``--physical``
+(docs/units.md): onset airflow (m/s, L/min), frequency (Hz), pressure drop (Pa), sub- or
+supercritical, and the margin to the given (or the input's default) airflow.
 """
 from __future__ import annotations
 
@@ -16,8 +16,8 @@ __all__ = ["add_onset_command"]
 
 #: Default search bound in U*, raised to 1.5 times the reference flow's U* above it.
 USTAR_MAX = 40.0
-_HOPF_KEYS = ("mstar", "ustar_crit", "pressure_drop", "omega", "freq_ratio", "l1",
-              "criticality", "dominant_mode")
+_HOPF_KEYS = ("kind", "mstar", "ustar_crit", "pressure_drop", "omega", "freq_ratio", "l1",
+              "criticality", "dominant_mode", "bifurcation", "symmetry_breaking")
 
 
 def add_onset_command(sub) -> None:
@@ -50,7 +50,7 @@ def _cmd_onset(args) -> dict:
         args.friction is None and "friction" not in given[0].scene_fields
     scene, hopf, reynolds = onset_at_own_flow(scene, build_model(scene), ustar_max,
                                               given[0] if by_viscosity else None)
-    found = {k: v for k, v in hopf.to_json().items() if k in _HOPF_KEYS} if hopf else \
+    found = {k: hopf.to_json().get(k) for k in _HOPF_KEYS} if hopf else \
         {k: (scene.mstar if k == "mstar" else None) for k in _HOPF_KEYS}
     out = {"found": hopf is not None, **found, "ustar_reference": reference,
            "ustar_max": ustar_max, "friction": scene.friction, "hstar": scene.hstar,
@@ -70,7 +70,16 @@ def _print_onset(result: dict) -> None:
     if ph is not None:
         print(f"{ph['source']}: {ph['description']}" if ph["description"] else ph["source"])
     if not result["found"]:
-        print(f"no flutter onset below U* = {result['ustar_max']:g} (M* = {result['mstar']:.4g})")
+        print(f"no onset of instability below U* = {result['ustar_max']:g} "
+              f"(M* = {result['mstar']:.4g})")
+    elif result["kind"] == "divergence":
+        print(f"static divergence at U*_c = {result['ustar_crit']:.6g} (M* = "
+              f"{result['mstar']:.4g}): a real eigenvalue crosses zero at a "
+              f"{result['bifurcation']} of the steady branch"
+              + (" (symmetry breaking: the beam is pushed towards one wall)"
+                 if result["symmetry_breaking"] else "")
+              + f", dominant mode {result['dominant_mode']}, pressure drop "
+              f"{result['pressure_drop']:.6g}")
     elif ph is None:
         print(f"flutter onset at U*_c = {result['ustar_crit']:.6g} (M* = {result['mstar']:.4g}), "
               f"omega = {result['omega']:.6g} ({result['freq_ratio']:.4g} x omega_1), "

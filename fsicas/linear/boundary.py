@@ -25,8 +25,8 @@ import numpy as np
 import continuation as C
 
 from .adapter import LOG_M, PI, TIME_SCALE, flutter_field
-from .hopf import (Criticality, CriticalVelocityError, HopfCurve, HopfPoint, hopf_point_from,
-                   hopf_points, trace_hopf_curve)
+from .curves import HopfCurve, trace_hopf_curve
+from .hopf import Criticality, CriticalVelocityError, HopfPoint, hopf_point_from, hopf_points
 from .stability import eigenvalues
 from .steady import steady_state
 from .switches import locate_switch
