@@ -75,3 +75,37 @@ def test_a_steady_failure_beyond_the_onset_does_not_hide_it():
     lo, hi = onset.ustar * 0.99, onset.ustar * 1.01
     assert rate(lo) < 0 < rate(hi)
     assert scipy.optimize.brentq(rate, lo, hi, xtol=1e-13) == pytest.approx(onset.ustar, rel=1e-8)
+
+
+@pytest.fixture(scope="module")
+def diverging_boundary(diverging):
+    from fsicas.linear.boundary import stability_boundary
+    model, _ = diverging
+    return model, stability_boundary(DIVERGING, [1.0, 30.0, 100.0], model)
+
+
+def test_the_boundary_holds_the_divergence_curve(diverging_boundary):
+    """Above M* ~ 10 the boundary is the divergence: each point at the sign change of
+    det dF/dx (bisected directly), and M* U*^2 constant along it (the steady problem
+    depends on M* U*^2 only: a closed-form scaling)."""
+    model, b = diverging_boundary
+    p30, p100 = b.points[1], b.points[2]
+    assert p30.kind == p100.kind == "divergence" and p30.refined and p30.omega == 0.0
+    direct = _bisect_det(DIVERGING, model, 1.2, 1.45)
+    assert p30.ustar_crit == pytest.approx(direct, rel=1e-9, abs=0)
+    assert 100.0 * p100.ustar_crit ** 2 == pytest.approx(30.0 * direct ** 2, rel=1e-9)
+    assert b.points[0].kind == "flutter"
+    assert any(c.kind == "divergence" for c in b.curves)
+    assert b.to_json()["points"][1]["kind"] == "divergence"
+
+
+def test_the_switch_to_divergence_is_where_the_onset_changes_kind(diverging_boundary):
+    model, b = diverging_boundary
+    (switch,) = [s for s in b.switches if s.omega_above == 0.0]
+    """A fold of the flutter window (U* jumps): the onsets on either side, by
+    one-parameter continuations, change kind there (U*_below ~ sqrt distance to the fold)."""
+    below = critical_velocity(DIVERGING.replace(mstar=switch.mstar * (1 - 1e-5)), model)
+    above = critical_velocity(DIVERGING.replace(mstar=switch.mstar * (1 + 1e-5)), model)
+    assert below.kind == "flutter" and above.kind == "divergence"
+    assert below.ustar == pytest.approx(switch.ustar_below, rel=5e-3)
+    assert above.ustar == pytest.approx(switch.ustar_above, rel=1e-4)

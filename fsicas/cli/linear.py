@@ -39,7 +39,7 @@ def add_linear_commands(sub) -> None:
 
 
 def _add_boundary_command(sub) -> None:
-    p = sub.add_parser("boundary", help="flutter boundary U*_c(M*) from Hopf-curve continuation")
+    p = sub.add_parser("boundary", help="stability boundary U*_c(M*) (flutter and divergence) from curve continuation")
     add_scene_options(p, mstar=False)
     p.add_argument("--mstar", dest="mstar_values", metavar="LIST_OR_RANGE",
                    help="0.1,1,10 or lo:hi:count (log-spaced); required unless --physical "
@@ -85,13 +85,15 @@ def _cmd_boundary(args) -> dict:
               else parse_range(args.mstar_values, "mstar", log=True))
     record(args, scene, mstar_values=mstars)
     say = reporter(args)
-    say.stage(f"flutter boundary at {len(mstars)} M* in [{min(mstars):g}, {max(mstars):g}], "
+    say.stage(f"stability boundary at {len(mstars)} M* in [{min(mstars):g}, {max(mstars):g}], "
               f"U* < {args.ustar_max:g}, N = {scene.modes}")
     model = build_model(scene)
     boundary = stability_boundary(scene, mstars, model, ustar_max=args.ustar_max,
                                   refine=not args.no_refine)
+    kinds = [c.kind for c in boundary.curves]
     say.stats(f"{len(boundary.points)} points, {len(boundary.switches)} mode switches, "
-              f"{len(boundary.curves)} Hopf curves traced")
+              f"{kinds.count('flutter')} Hopf and {kinds.count('divergence')} divergence "
+              "curves traced")
     if args.plot:
         plot_boundary(boundary, args.plot)
         stem = args.plot.rsplit(".", 1)

@@ -1,12 +1,16 @@
-"""Stability boundary in the (M*, U*) plane as the lower envelope of Hopf curves.
+"""Stability boundary in the (M*, U*) plane as the lower envelope of the curves of onsets:
+Hopf curves (flutter) and divergence curves (a real eigenvalue crosses zero).
 
-1. Seeds: at a few M* (one per decade by default) every Hopf point of the steady branch
-   up to ``ustar_max`` is found by continuation in U* (:func:`fsicas.linear.hopf.hopf_points`).
-2. Each Hopf point not already on a traced curve starts a two-parameter continuation of
-   its Hopf curve in (log10 M*, Δp/M*), both ways, inside the window.
+1. Seeds: at a few M* (one per decade by default) every Hopf point and every divergence
+   of the steady branch up to ``ustar_max`` is found by continuation in U*
+   (:func:`fsicas.linear.hopf.onset_points`).
+2. Each one not already on a traced curve starts its curve (:mod:`fsicas.linear.curves`):
+   a two-parameter continuation of the Hopf curve in (log10 M*, Δp/M*), or the
+   divergence followed in log10 M*, both ways, inside the window.
 3. At each requested M*, the boundary is the lowest U* over all curves (the first loss of
-   stability along U*). Each point is then refined by a one-parameter Hopf location at that
-   M*, started just below the envelope, which also gives its l1 (criticality).
+   stability along U*, ``kind`` "flutter" or "divergence"). Each point is then refined at
+   that M* (a one-parameter Hopf location, started just below the envelope, which also
+   gives its l1, or the divergence solved there).
 4. Where the lowest branch changes (scanned along the traced curves), two curves cross
    (a double-Hopf point: U* continuous, the frequency jumps) or a curve folds back in M*
    (U* jumps). Its position is bisected on the traced curves (linear between exact Hopf
@@ -22,23 +26,21 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-import continuation as C
-
-from .adapter import LOG_M, PI, TIME_SCALE, flutter_field
-from .curves import HopfCurve, trace_hopf_curve
-from .hopf import Criticality, CriticalVelocityError, HopfPoint, hopf_point_from, hopf_points
+from .curves import OnsetCurve, onset_on_curve, trace_divergence_curve, trace_hopf_curve
+from .hopf import Criticality, CriticalVelocityError, Onset, first_onset, onset_points
 from .stability import eigenvalues
 from .steady import steady_state
 from .switches import locate_switch
 from ..model.assembly import Model, build_model
 from ..scene import Scene
 
-__all__ = ["BoundaryPoint", "HopfCurve", "ModeSwitch", "StabilityBoundary",
+__all__ = ["BoundaryPoint", "OnsetCurve", "ModeSwitch", "StabilityBoundary",
            "stability_boundary"]
 
 @dataclass(frozen=True)
 class BoundaryPoint(Mapping):
-    """The stability boundary at one M*: the lowest Hopf curve there.
+    """The stability boundary at one M*: the lowest curve of onsets there, of ``kind``
+    "flutter" or "divergence" (then omega = freq_ratio = 0, no l1).
 
     Also a read-only mapping of its JSON (:meth:`to_json`): ``point["ustar_crit"]``,
     ``"l1" in point`` (only after a refinement) read as on the CLI's JSON.
@@ -61,12 +63,14 @@ class BoundaryPoint(Mapping):
     l1: float | None = None
     criticality: Criticality | None = None
     dominant_mode: int | None = None
+    kind: str | None = None
 
     def to_json(self) -> dict:
-        """``fsicas boundary --json`` point: mstar, ustar_crit, omega, freq_ratio, branch;
+        """``fsicas boundary --json`` point: mstar, kind, ustar_crit, omega, freq_ratio, branch;
         where a curve was found also refined (and missed when true), and after a refinement
         l1, criticality and dominant_mode."""
-        out = {"mstar": self.mstar, "ustar_crit": self.ustar_crit, "omega": self.omega,
+        out = {"mstar": self.mstar, "kind": self.kind, "ustar_crit": self.ustar_crit,
+               "omega": self.omega,
                "freq_ratio": self.freq_ratio, "branch": self.branch}
         if self.ustar_crit is None:
             return out
@@ -74,7 +78,9 @@ class BoundaryPoint(Mapping):
         if self.missed:
             out["missed"] = True
         if self.refined:
-            out.update(l1=self.l1, criticality=self.criticality, dominant_mode=self.dominant_mode)
+            out.update(dominant_mode=self.dominant_mode)
+            if self.kind == "flutter":
+                out.update(l1=self.l1, criticality=self.criticality)
         return out
 
     def __getitem__(self, key: str):
@@ -109,14 +115,15 @@ class ModeSwitch:
 class StabilityBoundary:
     scene: Scene
     points: list[BoundaryPoint]
-    curves: list[HopfCurve] = field(repr=False)
+    curves: list[OnsetCurve] = field(repr=False)
     switches: list[ModeSwitch]
     wall_time: float
 
     def to_json(self) -> dict:
         return {"points": [p.to_json() for p in self.points],
                 "switches": [vars(s) for s in self.switches],
-                "curves": [{"branch": c.index, "mstar": c.mstar.tolist(), "ustar": c.ustar.tolist(),
+                "curves": [{"branch": c.index, "kind": c.kind, "mstar": c.mstar.tolist(),
+                            "ustar": c.ustar.tolist(),
                             "omega": c.omega.tolist()} for c in self.curves],
                 "wall_time": self.wall_time}
 
@@ -124,7 +131,7 @@ class StabilityBoundary:
 def stability_boundary(scene: Scene, mstars, model: Model | None = None,
                        ustar_max: float = 40.0, seeds=None, refine: bool = True,
                        headroom: float = 1.3, full_curves: bool = False) -> StabilityBoundary:
-    """The flutter boundary U*_c(M*) at ``mstars`` with its curves and mode switches.
+    """The stability boundary U*_c(M*) at ``mstars`` with its curves and mode switches.
 
     Curves are traced below ``headroom`` times the highest onset found at the seeds; a
     Hopf curve that stays above that everywhere cannot be the lowest one. Each half of a
@@ -140,9 +147,9 @@ def stability_boundary(scene: Scene, mstars, model: Model | None = None,
     seeds = _default_seeds(lo, hi) if seeds is None else np.asarray(seeds, float)
     window = (lo - 0.05, hi + 0.05)
     ceiling, found = _seed_points(scene, model, seeds, ustar_max, headroom)
-    search = lambda m: hopf_points(scene.replace(mstar=float(m)), model, ustar_max,
-                                   ustar_stop=1.05 * ceiling)
-    curves: list[HopfCurve] = []
+    search = lambda m: onset_points(scene.replace(mstar=float(m)), model, ustar_max,
+                                    ustar_stop=1.05 * ceiling)
+    curves: list[OnsetCurve] = []
     cut = None if full_curves else headroom
     _add_curves(scene, model, curves, found, window, ceiling, cut)
     points = [_boundary_point(scene, model, curves, m, refine) for m in mstars]
@@ -167,10 +174,11 @@ def _seed_points(scene, model, seeds, ustar_max, headroom):
     search found one: only the highest seed (usually the highest onset) gets a separate
     first-onset search, and a search is repeated only when a later seed raises the
     ceiling above where it stopped."""
-    search = lambda i, top, **kw: hopf_points(scene.replace(mstar=float(seeds[i])), model,
-                                              ustar_max, ustar_stop=top, **kw)
+    search = lambda i, top: onset_points(scene.replace(mstar=float(seeds[i])), model,
+                                         ustar_max, ustar_stop=top)
+    first = lambda i: [first_onset(scene.replace(mstar=float(seeds[i])), model, ustar_max)]
     onsets, found, last = {}, {}, len(seeds) - 1
-    _note_onset(onsets, last, search(last, ustar_max, first_only=True))
+    _note_onset(onsets, last, first(last))
     while True:
         ceiling = min(ustar_max, headroom * max(onsets.values(), default=ustar_max))
         todo = [i for i in range(len(seeds)) if i not in found or found[i][0] < 1.05 * ceiling]
@@ -181,28 +189,33 @@ def _seed_points(scene, model, seeds, ustar_max, headroom):
             if found[i][1]:
                 onsets.setdefault(i, found[i][1][0].ustar)
             elif i not in onsets and 1.05 * ceiling < ustar_max:   # its onset is higher
-                _note_onset(onsets, i, search(i, ustar_max, first_only=True))
+                _note_onset(onsets, i, first(i))
     if not onsets:
-        raise CriticalVelocityError(f"no flutter below U* = {ustar_max} at any seed M* {seeds}")
+        raise CriticalVelocityError(f"no onset below U* = {ustar_max} at any seed M* {seeds}")
     return ceiling, [found[i][1] for i in range(len(seeds))]
 
 
 def _note_onset(onsets: dict, i: int, points) -> None:
-    if points:
+    if points and points[0] is not None:
         onsets[i] = points[0].ustar
 
 
 def _add_curves(scene, model, curves, found, window, ceiling, cut) -> None:
-    """Trace the Hopf curve of every found point below ``ceiling`` not yet on a curve;
-    with ``cut`` each half ends where it can no longer be lowest (:func:`_envelope_stop`)."""
+    """Trace the curve of every found onset below ``ceiling`` not yet on a curve; with
+    ``cut`` each half ends where it can no longer be lowest (:func:`_envelope_check`)."""
     envelope = _Envelope(curves)
-    make_stop = None if cut is None else lambda: _envelope_stop(envelope, scene.hstar, cut)
+    check = None if cut is None else lambda: _envelope_check(envelope, cut)
     for points in found:
         for h in points:
             if h.ustar <= ceiling and not any(_on_curve(c, h) for c in curves):
                 first = curves[-1].pieces[-1] + 1 if curves else 0
+                if h.kind == "divergence":
+                    curves.append(trace_divergence_curve(scene, model, h, len(curves), window,
+                                                         ceiling, first, check))
+                    continue
+                stop = None if check is None else lambda: _hopf_stop(check(), scene.hstar)
                 curves.append(trace_hopf_curve(scene, model, h, len(curves), window, ceiling,
-                                               first, make_stop))
+                                               first, stop))
 
 
 class _Envelope:
@@ -241,15 +254,13 @@ class _Envelope:
         return float(u[k]), float(w[k]), int(self._pieces[self._at(log_m)[0][k]])
 
 
-def _envelope_stop(envelope: _Envelope, hstar: float, headroom: float):
-    """``continuation`` stop predicate of one half of a Hopf curve: it ends when the half
-    rises (U* increasing) above ``headroom`` times the lowest curve traced before at its
-    M*. A stretch that high cannot be the lowest curve, like one above the ceiling."""
+def _envelope_check(envelope: _Envelope, headroom: float):
+    """``check(ustar, log10_mstar)`` of one half of a curve: true (a message) when the
+    half rises (U* increasing) above ``headroom`` times the lowest curve traced before at
+    its M*. A stretch that high cannot be the lowest curve, like one above the ceiling."""
     last = []
 
-    def stop(problem, X):
-        n = problem.vf.n
-        u, log_m = float(X[n - 2: n].sum() / hstar), float(X[len(X) - 1])
+    def check(u: float, log_m: float):
         rising, last[:] = bool(last) and u > last[0], [u]
         if not rising:
             return False
@@ -257,6 +268,14 @@ def _envelope_stop(envelope: _Envelope, hstar: float, headroom: float):
         return bool(us.size) and u > headroom * us.min() and \
             f"rose above {headroom:g} x the lowest traced curve"
 
+    return check
+
+
+def _hopf_stop(check, hstar: float):
+    """``check`` as a ``continuation`` stop predicate of a Hopf curve's half."""
+    def stop(problem, X):
+        n = problem.vf.n
+        return check(float(X[n - 2: n].sum() / hstar), float(X[len(X) - 1]))
     return stop
 
 
@@ -265,9 +284,9 @@ def _default_seeds(lo: float, hi: float) -> np.ndarray:
     return np.logspace(lo, hi, count)
 
 
-def _on_curve(curve: HopfCurve, h: HopfPoint, rtol: float = 2e-2) -> bool:
-    """Does Hopf point h lie on the traced curve (same U* and frequency at its M*)?"""
-    return any(abs(u - h.ustar) <= rtol * h.ustar and abs(w - h.omega) <= rtol * h.omega
+def _on_curve(curve: OnsetCurve, h: Onset, rtol: float = 2e-2) -> bool:
+    """Does onset h lie on the traced curve (same kind, U* and frequency at its M*)?"""
+    return curve.kind == h.kind and any(abs(u - h.ustar) <= rtol * h.ustar and abs(w - h.omega) <= rtol * h.omega
                for u, w, _ in curve.crossings(math.log10(h.mstar)))
 
 
@@ -281,31 +300,18 @@ def _boundary_point(scene, model, curves, mstar, refine) -> BoundaryPoint:
     if not refine:
         return point
     curve = next(c for c in curves if piece in set(c.pieces.tolist()))
-    h = _refine(scene, model, mstar, *curve.guess(log_m, piece))
-    if h == "unstable":
-        return replace(point, missed=True)
+    point = replace(point, kind=curve.kind)
+    h = onset_on_curve(scene, model, curve, piece, log_m)
     if h is None:
         return point
-    return replace(point, ustar_crit=h.ustar, omega=h.omega, freq_ratio=h.freq_ratio, l1=h.l1,
-                   criticality=h.criticality, dominant_mode=h.dominant_mode, refined=True)
-
-
-def _refine(scene, model, mstar, x, params, omega):
-    """Newton on the Hopf system at ``mstar`` from the interpolated curve point; then
-    check that the steady state just below is stable (``"unstable"``: a Hopf curve below
-    this one was missed). None if Newton fails."""
-    names = flutter_field(model).par_names
-    values = dict(zip(names, params))
-    values[LOG_M] = math.log10(mstar)
-    problem = C.EquilibriumProblem(flutter_field(model), x, values, PI)
-    located = C.hopf_point(problem, x, omega / TIME_SCALE)
-    if located.status != "converged" or located.data.get("omega", 0.0) <= 0:
-        return None
-    h = hopf_point_from(model, scene, located)
     below = scene.replace(mstar=float(mstar), ustar=0.99 * h.ustar)
     if eigenvalues(model, steady_state(below, model))[0].real > 0:
-        return "unstable"
-    return h
+        return replace(point, missed=True)   # a curve below this one was not traced
+    point = replace(point, ustar_crit=h.ustar, omega=h.omega, freq_ratio=h.freq_ratio,
+                    dominant_mode=h.dominant_mode, refined=True)
+    if h.kind == "flutter":
+        point = replace(point, l1=h.l1, criticality=h.criticality)
+    return point
 
 
 def _switches(curves, lo: float, hi: float) -> list[ModeSwitch]:
@@ -316,16 +322,32 @@ def _switches(curves, lo: float, hi: float) -> list[ModeSwitch]:
     lowest = [envelope.lowest(lm) for lm in grid]
     for k in range(len(grid) - 1):
         a, b = lowest[k], lowest[k + 1]
-        if a is None or b is None or a[2] == b[2]:
-            continue
-        lo, hi = _switch_bracket(envelope, a[2], grid[k], grid[k + 1])
-        ua, wa, _ = envelope.lowest(lo)
-        ub, wb, _ = envelope.lowest(hi)
-        if abs(ua - ub) < 1e-2 * ub and abs(wa - wb) < 1e-2 * wb:
-            continue     # the same branch traced twice (two pieces overlapping): no switch
-        out.append(ModeSwitch(float(10 ** (0.5 * (lo + hi))), float(ua), float(ub),
-                              a[2], b[2], float(wa), float(wb)))
+        if a is not None and b is not None and a[2] != b[2]:
+            out += _cell_switches(envelope, a[2], b[2], grid[k], grid[k + 1])
     return out
+
+
+def _cell_switches(envelope, piece: int, end: int, lo: float, hi: float) -> list[ModeSwitch]:
+    """The switches inside one grid cell [lo, hi] from ``piece`` (lowest at lo) to
+    ``end`` (lowest at hi), one after the other: a change to another trace of the same
+    branch (two pieces overlapping: same U* and frequency) is no switch, but the cell is
+    searched on from there."""
+    out = []
+    for _ in range(MAX_CELL_CHANGES):
+        lo, hi_k = _switch_bracket(envelope, piece, lo, hi)
+        ua, wa, _ = envelope.lowest(lo)
+        ub, wb, above = envelope.lowest(hi_k)
+        if abs(ua - ub) > 1e-2 * ub or abs(wa - wb) > 1e-2 * max(wa, wb):
+            out.append(ModeSwitch(float(10 ** (0.5 * (lo + hi_k))), float(ua), float(ub),
+                                  piece, above, float(wa), float(wb)))
+        if above == end:
+            break
+        piece, lo = above, hi_k
+    return out
+
+
+#: Changes of the lowest piece searched inside one grid cell of the switch scan.
+MAX_CELL_CHANGES = 8
 
 
 def _switch_bracket(envelope, piece: int, lo: float, hi: float) -> tuple[float, float]:

@@ -1,5 +1,12 @@
-"""Curves of onsets in the (M*, U*) plane: a located Hopf point continued in (Π, log10 M*)
-on the Hopf system (:class:`HopfCurve`, the curves of :mod:`fsicas.linear.boundary`).
+"""Curves of onsets in the (M*, U*) plane (:class:`OnsetCurve`, the curves of
+:mod:`fsicas.linear.boundary`):
+
+- a Hopf curve: a located Hopf point continued in (Π, log10 M*) on the Hopf system;
+- a divergence curve: a located divergence followed in log10 M* in steps of
+  :data:`DIVERGENCE_STEP` decades, each point solved at its M* on the sign change of the
+  real eigenvalue nearest 0 (:func:`fsicas.linear.divergence.divergence_at`), from the
+  log-log extrapolation of the last two. It ends where none is bracketed near the
+  extrapolation (two divergences merge: the window of divergence closes).
 """
 from __future__ import annotations
 
@@ -12,18 +19,24 @@ import continuation as C
 
 from ..model.assembly import Model
 from ..scene import Scene
-from .adapter import LOG_M, PI, PI_SCALE, TIME_SCALE
-from .hopf import HopfPoint, dominant_mode, flutter_problem
+from .adapter import LOG_M, PI, PI_SCALE, TIME_SCALE, flutter_field
+from .divergence import DivergencePoint, divergence_at
+from .hopf import HopfPoint, Onset, dominant_mode, flutter_problem, hopf_point_from
 
-__all__ = ["HopfCurve", "trace_hopf_curve"]
+__all__ = ["OnsetCurve", "trace_hopf_curve", "trace_divergence_curve", "onset_on_curve",
+           "DIVERGENCE_STEP"]
+
+#: Step of a divergence curve in log10 M*.
+DIVERGENCE_STEP = 0.05
 
 
 @dataclass(frozen=True)
-class HopfCurve:
-    """A traced Hopf curve: arrays along the curve (ordered by arclength). ``status``:
-    "bound" when both halves ran to the window's bounds (or were ended by the tracing's
-    ``stop`` predicate), else the library's status of the half that stopped first
-    (``message`` says why)."""
+class OnsetCurve:
+    """A traced curve of onsets of one ``kind``: "flutter" (Hopf points) or "divergence"
+    (``omega`` = 0; no ``states``, ``params``); arrays along the curve (ordered by
+    arclength). ``status``: "bound" when both halves ran to the window's bounds (or were
+    ended by the tracing's ``stop`` predicate), else the status of the half that stopped
+    first (``message`` says why)."""
 
     index: int
     mstar: np.ndarray
@@ -35,6 +48,7 @@ class HopfCurve:
     states: np.ndarray = field(default=None, repr=False)   # steady states along the curve
     params: np.ndarray = field(default=None, repr=False)   # adapter parameters along it
     message: str = ""
+    kind: str = "flutter"
 
     def guess(self, log_m: float, piece: int) -> tuple[np.ndarray, np.ndarray, float]:
         """Interpolated (state, params, omega) on ``piece`` at log10 M* = log_m."""
@@ -76,7 +90,7 @@ class HopfCurve:
 
 
 def trace_hopf_curve(scene: Scene, model: Model, h: HopfPoint, index: int, window, ustar_max: float,
-                     first_piece: int = 0, make_stop=None) -> HopfCurve:
+                     first_piece: int = 0, make_stop=None) -> OnsetCurve:
     """Continue the Hopf curve through h both ways inside the (log10 M*, U*) window
     (log10 M* in ``window``, U* up to ``ustar_max``), in (Π, log10 M*). ``make_stop()``
     (optional) returns for each half a ``continuation`` stop predicate that may end it
@@ -104,7 +118,7 @@ def trace_hopf_curve(scene: Scene, model: Model, h: HopfPoint, index: int, windo
     names = lower.par_names
     modes = join(lower.columns["mode"], upper.columns["mode"])[keep].astype(int)
     lm = params[:, names.index(LOG_M)]
-    return HopfCurve(index, 10 ** lm, x[:, -2:].sum(axis=1) / scene.hstar, omega * TIME_SCALE,
+    return OnsetCurve(index, 10 ** lm, x[:, -2:].sum(axis=1) / scene.hstar, omega * TIME_SCALE,
                      modes, status, int(first_piece), x, params, message)
 
 
@@ -128,3 +142,67 @@ def _pi_max(h: HopfPoint, ustar_max: float) -> float:
     """Π bound equivalent to U* <= ustar_max, scaled from the Hopf point (Π ∝ U*^2)."""
     pi_h = h.pressure_drop / (h.mstar * PI_SCALE)
     return pi_h * (ustar_max / h.ustar) ** 2
+
+
+def trace_divergence_curve(scene: Scene, model: Model, d: DivergencePoint, index: int, window,
+                           ustar_max: float, first_piece: int = 0, make_check=None) -> OnsetCurve:
+    """Follow the divergence ``d`` both ways in log10 M* inside ``window``, up to U* =
+    ``ustar_max`` (module docstring). ``make_check()`` (optional) returns for each half a
+    ``check(ustar, log10_mstar)`` that ends it where it returns a true value (a message)."""
+    halves, status, message = [], "bound", ""
+    for direction in (-1, 1):
+        points, why, text = _divergence_half(scene, model, d, direction, window, ustar_max,
+                                             make_check() if make_check else None)
+        if why not in ("bound", "stopped") and status == "bound":
+            status, message = why, text
+        halves.append(points)
+    points = halves[0][::-1] + halves[1][1:]
+    column = lambda name: np.array([getattr(p, name) for p in points], dtype=float)
+    return OnsetCurve(index, column("mstar"), column("ustar"), np.zeros(len(points)),
+                      column("dominant_mode").astype(int), status, int(first_piece),
+                      message=message, kind="divergence")
+
+
+def _divergence_half(scene, model, d, direction, window, ustar_max, check):
+    """The points of one half of a divergence curve, why it ended and the message."""
+    points = [d]
+    while True:
+        lm = np.log10([p.mstar for p in points[-2:]])
+        edge = window[0] if direction < 0 else window[1]
+        if lm[-1] == edge:
+            return points, "bound", ""
+        step = direction * DIVERGENCE_STEP
+        nxt = min(lm[-1] + step, edge) if direction > 0 else max(lm[-1] + step, edge)
+        u = np.log([p.ustar for p in points[-2:]])
+        slope = (u[-1] - u[0]) / (lm[-1] - lm[0]) if len(points) > 1 else 0.0
+        guess = float(np.exp(u[-1] + slope * (nxt - lm[-1])))
+        p = divergence_at(scene.replace(mstar=float(10 ** nxt)), model, guess)
+        if p is None:
+            return points, "failed", (f"no divergence bracketed near U* = {guess:.6g} at "
+                                      f"M* = {10 ** nxt:.6g}")
+        points.append(p)
+        why = check(p.ustar, nxt) if check else False
+        if p.ustar > ustar_max or why:
+            return points, "stopped", why or ""
+
+
+def onset_on_curve(scene: Scene, model: Model, curve: OnsetCurve, piece: int,
+                   log_m: float) -> Onset | None:
+    """The exact onset of ``piece`` of ``curve`` at log10 M* = ``log_m``, from the curve's
+    interpolation there: Newton on the Hopf system in Π (flutter), or the divergence
+    solved in U* (:func:`fsicas.linear.divergence.divergence_at`); None if that fails.
+    ValueError when the piece does not reach log_m."""
+    at = scene.replace(mstar=float(10 ** log_m))
+    if curve.kind == "divergence":
+        guess = [u for u, _, k in curve.crossings(log_m) if k == piece]
+        if not guess:
+            raise ValueError(f"piece {piece} does not reach log10 M* = {log_m}")
+        return divergence_at(at, model, guess[0])
+    x, params, omega = curve.guess(log_m, piece)
+    vf = flutter_field(model)
+    values = dict(zip(vf.par_names, params))
+    values[LOG_M] = float(log_m)
+    located = C.hopf_point(C.EquilibriumProblem(vf, x, values, PI), x, omega / TIME_SCALE)
+    if located.status != "converged" or located.data.get("omega", 0.0) <= 0:
+        return None
+    return hopf_point_from(model, at, located)

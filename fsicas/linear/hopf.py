@@ -29,6 +29,7 @@ from .steady import SteadyStateError, steady_state
 
 __all__ = ["Criticality", "HopfPoint", "Onset", "CriticalVelocityError", "ModalTruncationWarning",
            "flutter_problem", "steady_branch", "hopf_points", "first_hopf", "critical_velocity",
+           "first_onset", "onset_points",
            "ONSET_KINDS", "dominant_mode", "hopf_point_from", "eigenvector_q"]
 
 #: Sign of the first Lyapunov coefficient at a Hopf point: l1 < 0 "supercritical" (a small
@@ -233,11 +234,18 @@ def critical_velocity(scene: Scene, model: Model | None = None, ustar_max: float
     whatever its kind (``.kind``): a Hopf point (``"flutter"``, a :class:`HopfPoint`) or a
     real eigenvalue crossing zero (``"divergence"``, a :class:`DivergencePoint`); None
     if the branch stays stable. A :class:`ModalTruncationWarning` when the modes kept may
-    not resolve it.
+    not resolve it."""
+    onset = first_onset(scene, model, ustar_max, ustar_start)
+    warn_if_truncated(scene, onset, ustar_max)
+    return onset
+
+
+def first_onset(scene: Scene, model: Model | None = None, ustar_max: float = 40.0,
+                ustar_start: float = 0.2) -> Onset | None:
+    """:func:`critical_velocity` without the truncation warning.
 
     The branch stops past its first special point; where that one leaves the branch
-    stable (a Hopf point of an already unstable pair cannot be one, but a branch point
-    rejected on re-evaluation can), the search goes on from there."""
+    stable (a branch point rejected on re-evaluation can), the search goes on from there."""
     model = model or build_model(scene)
     start = ustar_start
     for _ in range(MAX_RESTARTS):
@@ -250,8 +258,27 @@ def critical_velocity(scene: Scene, model: Model | None = None, ustar_max: float
         onset = None
     if onset is None:
         _lost(scene, branch, ustar_max)
-    warn_if_truncated(scene, onset, ustar_max)
     return onset
+
+
+def onset_points(scene: Scene, model: Model | None = None, ustar_max: float = 40.0,
+                 ustar_start: float = 0.2, *, ustar_stop: float | None = None) -> list[Onset]:
+    """Every Hopf point and every located divergence of the steady branch for U* in
+    (ustar_start, ustar_max), in order of U* (``ustar_stop`` as in :func:`hopf_points`):
+    where the branch loses or regains stability, or an unstable one changes."""
+    model = model or build_model(scene)
+    branch = steady_branch(scene, model, ustar_max, ustar_start, ustar_stop=ustar_stop)
+    points = [_onset_from(model, scene, p) for p in branch.special_points
+              if p.kind == "hopf" or (p.kind in DIVERGENCE_KINDS and p.status == "converged")]
+    _lost(scene, branch, ustar_max)
+    return sorted((p for p in points if p.ustar <= ustar_max), key=lambda p: p.ustar)
+
+
+def _onset_from(model: Model, scene: Scene, point) -> Onset:
+    """The HopfPoint or DivergencePoint of a special point of the steady branch."""
+    if point.kind == "hopf":
+        return hopf_point_from(model, scene, point)
+    return divergence_point_from(model, scene, point)
 
 
 #: Restarts of the onset search past special points that leave the branch stable.
@@ -273,7 +300,4 @@ def _first_loss(model: Model, scene: Scene, branch: C.Branch) -> Onset | None:
             f"{branch.x[step - 1, -2:].sum() / scene.hstar:.6g} and "
             f"{branch.x[step, -2:].sum() / scene.hstar:.6g} (M* = {scene.mstar:g}) but no "
             "Hopf, branch or fold point was located there")
-    first = min(found, key=lambda p: p.x[-2:].sum())
-    if first.kind == "hopf":
-        return hopf_point_from(model, scene, first)
-    return divergence_point_from(model, scene, first)
+    return _onset_from(model, scene, min(found, key=lambda p: p.x[-2:].sum()))

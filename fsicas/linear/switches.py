@@ -27,6 +27,7 @@ from scipy.optimize import brentq, minimize_scalar
 import continuation as C
 
 from .adapter import LOG_M, PI, TIME_SCALE, flutter_field
+from .curves import onset_on_curve
 
 __all__ = ["locate_switch"]
 
@@ -51,16 +52,12 @@ def _curve_of(curves, piece):
 
 
 def _onset(scene, model, curves, piece, log_m) -> tuple[float, float]:
-    """(U*, omega) of the Hopf point of ``piece`` at log10 M* = log_m: Newton on the
-    Hopf system in Π from the curve's interpolated guess (ValueError if none)."""
-    x, params, omega = _curve_of(curves, piece).guess(log_m, piece)
-    vf = flutter_field(model)
-    values = dict(zip(vf.par_names, params))
-    values[LOG_M] = float(log_m)
-    point = C.hopf_point(C.EquilibriumProblem(vf, x, values, PI), x, omega / TIME_SCALE)
-    if point.status != "converged" or point.data.get("omega", 0.0) <= 0:
+    """(U*, omega) of the onset of ``piece`` at log10 M* = log_m, solved from the curve's
+    interpolated guess (:func:`fsicas.linear.curves.onset_on_curve`; ValueError if none)."""
+    h = onset_on_curve(scene, model, _curve_of(curves, piece), piece, log_m)
+    if h is None:
         raise ValueError(f"no onset on piece {piece} at log10 M* = {log_m}")
-    return float(point.x[-2:].sum() / scene.hstar), float(point.data["omega"]) * TIME_SCALE
+    return float(h.ustar), float(h.omega)
 
 
 def _crossing(scene, model, curves, switch):
@@ -87,6 +84,9 @@ def _sign_change(gap, lm0) -> tuple[float, float]:
 
 def _fold(scene, model, curves, switch):
     curve = _curve_of(curves, switch.branch_below)
+    if curve.kind != "flutter":
+        raise ValueError("a divergence curve ends where no divergence is bracketed: its end "
+                         "stays bracketed")
     names = flutter_field(model).par_names
     lm_s, pi_s = curve.params[:, names.index(LOG_M)], curve.params[:, names.index(PI)]
     j = _turning_sample(curve, switch.branch_below, math.log10(switch.mstar))

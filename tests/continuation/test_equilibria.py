@@ -308,6 +308,22 @@ def test_narrow_unstable_window_is_resolved_by_the_eigenvalue_step_limit():
     assert np.allclose(hopf, [0.99, 1.01], atol=1e-10, rtol=0)
 
 
+def test_narrow_window_of_divergence_is_resolved_by_the_eigenvalue_step_limit():
+    """A real eigenvalue a = eps - (mu - 1)^2 of the trivial branch of x' = a x - x^3,
+    y' = mu - y: positive only for |mu - 1| < 0.01 (two pitchforks, det F_x changes sign
+    twice), inside steps of 0.3. Without the limit the window is jumped over; with it
+    both branch points are found at their known values 1 -+ 0.01."""
+    x, p = ca.SX.sym("x", 2), ca.SX.sym("p", 1)
+    a = 1e-4 - (p[0] - 1) ** 2
+    F = ca.Function("F", [x, p], [ca.vertcat(a * x[0] - x[0] ** 3, p[0] - x[1])])
+    run = lambda **kw: C.continuation(C.EquilibriumProblem(F, [0.0, 0.0], {"mu": 0.0}, "mu"),
+                                      settings=settings(ds=0.3, ds_max=0.3, max_steps=40,
+                                                        bounds={"mu": (0.0, 2.0)}, **kw))
+    assert run(eigen_step=0.0).special("bp") == []
+    bps = sorted(b.params["mu"] for b in run().special("bp") if b.status == "converged")
+    assert np.allclose(bps, [0.99, 1.01], atol=1e-9, rtol=0)
+
+
 def test_eigenvalue_step_limit_costs_few_steps_on_a_plain_crossing():
     """a = mu - 1 (one crossing, no window): the limit lets the step cross at once, so
     the branch takes at most two more points than without it (no Zeno shrinking)."""
