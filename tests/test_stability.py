@@ -175,6 +175,29 @@ def test_boundary_is_continuous_between_switches(boundary):
             assert abs(q["ustar_crit"] - p["ustar_crit"]) < 0.5 * p["ustar_crit"]
 
 
+def test_the_boundary_does_not_depend_on_how_mstar_is_sampled(boundary):
+    """[0.1, 1, 10] gives the switches of 9 points in the same range (to 1e-6), and its
+    envelope between the samples (the exact onset on its lowest curve) is the onset of
+    an independent one-parameter search at M* = 4.4, 5, 7, where a curve traced from no
+    seed (U*_c 10.44, 10.27, 10.39) lies below the one the samples saw (up to 14.1)."""
+    from fsicas.linear.curves import Envelope, onset_on_curve
+    dense, model = boundary
+    sparse = stability_boundary(dense.scene, [0.1, 1.0, 10.0], model)
+    assert len(sparse.switches) == len(dense.switches) == 4
+    for a, b in zip(sparse.switches, dense.switches):
+        assert a.located and b.located
+        for key in ("mstar", "ustar_below", "ustar_above", "omega_below", "omega_above"):
+            assert getattr(a, key) == pytest.approx(getattr(b, key), rel=1e-6), key
+    envelope = Envelope(sparse.curves)
+    for m in (4.4, 5.0, 7.0):
+        _, _, piece = envelope.lowest(np.log10(m))
+        curve = next(c for c in sparse.curves if piece in set(c.pieces.tolist()))
+        on_curve = onset_on_curve(dense.scene, model, curve, piece, np.log10(m))
+        direct = critical_velocity(dense.scene.replace(mstar=m), model)
+        assert on_curve.ustar == pytest.approx(direct.ustar, rel=1e-6)
+        assert 10.2 < direct.ustar < 10.5
+
+
 def test_bad_requests_fail_clearly():
     with pytest.raises(ValueError, match="mstars"):
         stability_boundary(Scene(modes=3), [0.0, 1.0])

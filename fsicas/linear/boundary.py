@@ -26,11 +26,12 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from .curves import OnsetCurve, onset_on_curve, trace_divergence_curve, trace_hopf_curve
+from .curves import (Envelope, OnsetCurve, onset_on_curve, trace_divergence_curve,
+                     trace_hopf_curve)
 from .hopf import Criticality, CriticalVelocityError, Onset, first_onset, onset_points
 from .stability import eigenvalues
-from .steady import steady_state
-from .switches import locate_switch
+from .steady import SteadyStateError, steady_state
+from .switches import ModeSwitch, located_switches
 from ..model.assembly import Model, build_model
 from ..scene import Scene
 
@@ -94,24 +95,6 @@ class BoundaryPoint(Mapping):
 
 
 @dataclass(frozen=True)
-class ModeSwitch:
-    """Where the lowest Hopf branch changes with M*: at a crossing of two Hopf curves
-    (a double-Hopf point: ustar_below = ustar_above, the frequency jumps) or at a fold of
-    a curve in M* (the boundary itself jumps from ustar_below to ustar_above)."""
-
-    mstar: float
-    ustar_below: float
-    ustar_above: float
-    branch_below: int
-    branch_above: int
-    omega_below: float
-    omega_above: float
-    #: solved on its defining equation (:mod:`fsicas.linear.switches`), else bracketed
-    #: on the traced curves
-    located: bool = False
-
-
-@dataclass(frozen=True)
 class StabilityBoundary:
     scene: Scene
     points: list[BoundaryPoint]
@@ -153,15 +136,49 @@ def stability_boundary(scene: Scene, mstars, model: Model | None = None,
     cut = None if full_curves else headroom
     _add_curves(scene, model, curves, found, window, ceiling, cut)
     points = [_boundary_point(scene, model, curves, m, refine) for m in mstars]
-    for _ in range(3):   # a refinement that starts unstable reveals a curve the seeds missed
-        missed = [p.mstar for p in points if p.missed]
+    searched = set()
+    for _ in range(MAX_RESEEDS):   # curves the seeds missed: searched where they show
+        missed = {p.mstar for p in points if p.missed} | \
+            set(_unstable_below(scene, model, curves, lo, hi, ceiling))
+        missed -= searched
         if not missed:
             break
-        found = [search(m) for m in missed]
-        _add_curves(scene, model, curves, found, window, ceiling, cut)
+        searched |= missed
+        _add_curves(scene, model, curves, [search(m) for m in sorted(missed)], window,
+                    ceiling, cut)
         points = [_boundary_point(scene, model, curves, m, refine) for m in mstars]
-    switches = [locate_switch(scene, model, curves, sw) for sw in _switches(curves, lo, hi)]
+    switches = located_switches(scene, model, curves, lo, hi)
     return StabilityBoundary(scene, points, curves, switches, time.perf_counter() - start)
+
+
+#: Rounds of searches for curves the seeds missed.
+MAX_RESEEDS = 4
+#: Spacing in decades of the grid of log10 M* (its multiples, whatever the requested M*)
+#: on which the steady state just below the envelope is checked to be stable.
+CHECK_STEP = 0.01
+
+
+def _unstable_below(scene, model, curves, lo: float, hi: float, ceiling: float) -> list:
+    """M* in the middle of each run of grid points (:data:`CHECK_STEP`) in [lo, hi] where
+    the steady state at 0.99 x the envelope (x the ceiling where no curve passes) is
+    unstable: a lower curve was not traced there."""
+    envelope, grid = Envelope(curves), _check_grid(lo, hi)
+    bad = np.zeros(grid.size, dtype=bool)
+    for k, lm in enumerate(grid):
+        lowest = envelope.lowest(lm)
+        at = scene.replace(mstar=float(10 ** lm), ustar=0.99 * (lowest[0] if lowest else ceiling))
+        try:
+            bad[k] = eigenvalues(model, steady_state(at, model))[0].real > 0
+        except SteadyStateError:
+            continue
+    edges = np.flatnonzero(np.diff(np.r_[False, bad, False].astype(int)))
+    return [float(10 ** grid[(a + b - 1) // 2]) for a, b in zip(edges[::2], edges[1::2])]
+
+
+def _check_grid(lo: float, hi: float) -> np.ndarray:
+    """The multiples of :data:`CHECK_STEP` in [lo, hi], and lo and hi."""
+    inner = np.arange(math.ceil(lo / CHECK_STEP), math.floor(hi / CHECK_STEP) + 1) * CHECK_STEP
+    return np.unique(np.r_[lo, inner[(inner > lo) & (inner < hi)], hi])
 
 
 def _seed_points(scene, model, seeds, ustar_max, headroom):
@@ -203,11 +220,11 @@ def _note_onset(onsets: dict, i: int, points) -> None:
 def _add_curves(scene, model, curves, found, window, ceiling, cut) -> None:
     """Trace the curve of every found onset below ``ceiling`` not yet on a curve; with
     ``cut`` each half ends where it can no longer be lowest (:func:`_envelope_check`)."""
-    envelope = _Envelope(curves)
+    envelope = Envelope(curves)
     check = None if cut is None else lambda: _envelope_check(envelope, cut)
     for points in found:
         for h in points:
-            if h.ustar <= ceiling and not any(_on_curve(c, h) for c in curves):
+            if h.ustar <= ceiling and not any(_on_curve(scene, model, c, h) for c in curves):
                 first = curves[-1].pieces[-1] + 1 if curves else 0
                 if h.kind == "divergence":
                     curves.append(trace_divergence_curve(scene, model, h, len(curves), window,
@@ -218,43 +235,7 @@ def _add_curves(scene, model, curves, found, window, ceiling, cut) -> None:
                                                first, stop))
 
 
-class _Envelope:
-    """The segments of all traced curves stacked (in curve order), for their crossings
-    at one log10 M*; restacked when curves are added."""
-
-    def __init__(self, curves: list):
-        self.curves, self._count, self._ends = curves, -1, None
-
-    def _at(self, log_m: float):
-        """Indices of the segments that cross log_m, and the interpolation weights."""
-        if self._count != len(self.curves):
-            parts = [c.segments for c in self.curves]
-            self._ends = [np.concatenate([p[k][j] for p in parts]) for k in range(3) for j in (0, 1)]
-            self._pieces = np.concatenate([c.pieces for c in self.curves])
-            self._count = len(self.curves)
-        a, b = self._ends[:2]
-        i = np.flatnonzero(((a - log_m) * (b - log_m) <= 0) & (a != b))
-        return i, (log_m - a[i]) / (b[i] - a[i])
-
-    def crossings(self, log_m: float) -> tuple[np.ndarray, np.ndarray]:
-        """U* and omega of every traced curve at log10 M* = log_m (linear interpolation)."""
-        if not self.curves:
-            return np.zeros(0), np.zeros(0)
-        i, t = self._at(log_m)
-        _, _, ua, ub, wa, wb = self._ends
-        return ua[i] + t * (ub[i] - ua[i]), wa[i] + t * (wb[i] - wa[i])
-
-    def lowest(self, log_m: float):
-        """(U*, omega, piece) of the lowest crossing at log_m (the first of equal ones),
-        or None."""
-        u, w = self.crossings(log_m)
-        if not u.size:
-            return None
-        k = int(np.argmin(u))
-        return float(u[k]), float(w[k]), int(self._pieces[self._at(log_m)[0][k]])
-
-
-def _envelope_check(envelope: _Envelope, headroom: float):
+def _envelope_check(envelope: Envelope, headroom: float):
     """``check(ustar, log10_mstar)`` of one half of a curve: true (a message) when the
     half rises (U* increasing) above ``headroom`` times the lowest curve traced before at
     its M*. A stretch that high cannot be the lowest curve, like one above the ceiling."""
@@ -284,15 +265,22 @@ def _default_seeds(lo: float, hi: float) -> np.ndarray:
     return np.logspace(lo, hi, count)
 
 
-def _on_curve(curve: OnsetCurve, h: Onset, rtol: float = 2e-2) -> bool:
-    """Does onset h lie on the traced curve (same kind, U* and frequency at its M*)?"""
-    return curve.kind == h.kind and any(abs(u - h.ustar) <= rtol * h.ustar and abs(w - h.omega) <= rtol * h.omega
-               for u, w, _ in curve.crossings(math.log10(h.mstar)))
+def _on_curve(scene, model, curve: OnsetCurve, h: Onset, rtol: float = 0.1) -> bool:
+    """Does onset h lie on the traced curve? Its kind, and a crossing at its M* within
+    ``rtol`` in U* and frequency (the curve's interpolation: ~1 % off between samples,
+    more near a fold) whose exact onset (:func:`onset_on_curve`) is h to 1e-6."""
+    log_m = math.log10(h.mstar)
+    near = [k for u, w, k in curve.crossings(log_m) if abs(u - h.ustar) <= rtol * h.ustar
+            and abs(w - h.omega) <= rtol * max(h.omega, 1e-300)]
+    if curve.kind != h.kind or not near:
+        return False
+    exact = (onset_on_curve(scene, model, curve, k, log_m) for k in near)
+    return any(e is not None and abs(e.ustar - h.ustar) <= 1e-6 * h.ustar for e in exact)
 
 
 def _boundary_point(scene, model, curves, mstar, refine) -> BoundaryPoint:
     log_m = math.log10(mstar)
-    lowest = _Envelope(curves).lowest(log_m)
+    lowest = Envelope(curves).lowest(log_m)
     if lowest is None:
         return BoundaryPoint(float(mstar))
     u, w, piece = lowest
@@ -312,53 +300,3 @@ def _boundary_point(scene, model, curves, mstar, refine) -> BoundaryPoint:
     if h.kind == "flutter":
         point = replace(point, l1=h.l1, criticality=h.criticality)
     return point
-
-
-def _switches(curves, lo: float, hi: float) -> list[ModeSwitch]:
-    """Every change of the lowest piece on [lo, hi] (log10 M*), scanned on a fine grid of
-    the traced curves (no new solves) and bisected to round-off in log10 M*."""
-    out, envelope = [], _Envelope(curves)
-    grid = np.linspace(lo, hi, 801)
-    lowest = [envelope.lowest(lm) for lm in grid]
-    for k in range(len(grid) - 1):
-        a, b = lowest[k], lowest[k + 1]
-        if a is not None and b is not None and a[2] != b[2]:
-            out += _cell_switches(envelope, a[2], b[2], grid[k], grid[k + 1])
-    return out
-
-
-def _cell_switches(envelope, piece: int, end: int, lo: float, hi: float) -> list[ModeSwitch]:
-    """The switches inside one grid cell [lo, hi] from ``piece`` (lowest at lo) to
-    ``end`` (lowest at hi), one after the other: a change to another trace of the same
-    branch (two pieces overlapping: same U* and frequency) is no switch, but the cell is
-    searched on from there."""
-    out = []
-    for _ in range(MAX_CELL_CHANGES):
-        lo, hi_k = _switch_bracket(envelope, piece, lo, hi)
-        ua, wa, _ = envelope.lowest(lo)
-        ub, wb, above = envelope.lowest(hi_k)
-        if abs(ua - ub) > 1e-2 * ub or abs(wa - wb) > 1e-2 * max(wa, wb):
-            out.append(ModeSwitch(float(10 ** (0.5 * (lo + hi_k))), float(ua), float(ub),
-                                  piece, above, float(wa), float(wb)))
-        if above == end:
-            break
-        piece, lo = above, hi_k
-    return out
-
-
-#: Changes of the lowest piece searched inside one grid cell of the switch scan.
-MAX_CELL_CHANGES = 8
-
-
-def _switch_bracket(envelope, piece: int, lo: float, hi: float) -> tuple[float, float]:
-    """Bisect [lo, hi] (``piece`` lowest at lo, not at hi) to where the lowest piece
-    changes: a crossing of two Hopf curves, or the fold in M* that ends ``piece``."""
-    for _ in range(50):
-        mid = 0.5 * (lo + hi)
-        lowest = envelope.lowest(mid)
-        if lowest is not None and lowest[2] == piece:
-            lo = mid
-        else:
-            hi = mid
-    return lo, hi
-

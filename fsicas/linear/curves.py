@@ -23,8 +23,8 @@ from .adapter import LOG_M, PI, PI_SCALE, TIME_SCALE, flutter_field
 from .divergence import DivergencePoint, divergence_at
 from .hopf import HopfPoint, Onset, dominant_mode, flutter_problem, hopf_point_from
 
-__all__ = ["OnsetCurve", "trace_hopf_curve", "trace_divergence_curve", "onset_on_curve",
-           "DIVERGENCE_STEP"]
+__all__ = ["OnsetCurve", "Envelope", "trace_hopf_curve", "trace_divergence_curve",
+           "onset_on_curve", "DIVERGENCE_STEP"]
 
 #: Step of a divergence curve in log10 M*.
 DIVERGENCE_STEP = 0.05
@@ -206,3 +206,39 @@ def onset_on_curve(scene: Scene, model: Model, curve: OnsetCurve, piece: int,
     if located.status != "converged" or located.data.get("omega", 0.0) <= 0:
         return None
     return hopf_point_from(model, at, located)
+
+
+class Envelope:
+    """The segments of all traced curves stacked (in curve order), for their crossings
+    at one log10 M*; restacked when curves are added."""
+
+    def __init__(self, curves: list):
+        self.curves, self._count, self._ends = curves, -1, None
+
+    def _at(self, log_m: float):
+        """Indices of the segments that cross log_m, and the interpolation weights."""
+        if self._count != len(self.curves):
+            parts = [c.segments for c in self.curves]
+            self._ends = [np.concatenate([p[k][j] for p in parts]) for k in range(3) for j in (0, 1)]
+            self._pieces = np.concatenate([c.pieces for c in self.curves])
+            self._count = len(self.curves)
+        a, b = self._ends[:2]
+        i = np.flatnonzero(((a - log_m) * (b - log_m) <= 0) & (a != b))
+        return i, (log_m - a[i]) / (b[i] - a[i])
+
+    def crossings(self, log_m: float) -> tuple[np.ndarray, np.ndarray]:
+        """U* and omega of every traced curve at log10 M* = log_m (linear interpolation)."""
+        if not self.curves:
+            return np.zeros(0), np.zeros(0)
+        i, t = self._at(log_m)
+        _, _, ua, ub, wa, wb = self._ends
+        return ua[i] + t * (ub[i] - ua[i]), wa[i] + t * (wb[i] - wa[i])
+
+    def lowest(self, log_m: float):
+        """(U*, omega, piece) of the lowest crossing at log_m (the first of equal ones),
+        or None."""
+        u, w = self.crossings(log_m)
+        if not u.size:
+            return None
+        k = int(np.argmin(u))
+        return float(u[k]), float(w[k]), int(self._pieces[self._at(log_m)[0][k]])
