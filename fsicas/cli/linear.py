@@ -5,6 +5,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..linear.boundary import stability_boundary
+from ..linear.truncation import with_enough_modes
 from ..linear.stability import linear_stability
 from ..linear.steady import steady_state
 from ..model.assembly import build_model
@@ -80,6 +81,8 @@ def _cmd_eig(args) -> dict:
 def _cmd_boundary(args) -> dict:
     if args.mstar_values is None and args.physical is None:
         raise ValueError("--mstar is required (a list or lo:hi:count), unless --physical")
+    auto = args.modes == "auto"
+    args.modes = None if auto else args.modes
     scene = scene_from_args(args)
     mstars = ([scene.mstar] if args.mstar_values is None
               else parse_range(args.mstar_values, "mstar", log=True))
@@ -87,9 +90,13 @@ def _cmd_boundary(args) -> dict:
     say = reporter(args)
     say.stage(f"stability boundary at {len(mstars)} M* in [{min(mstars):g}, {max(mstars):g}], "
               f"U* < {args.ustar_max:g}, N = {scene.modes}")
+    trace = lambda sc: stability_boundary(sc, mstars, build_model(sc), ustar_max=args.ustar_max,
+                                          refine=not args.no_refine)
+    if auto:
+        scene, boundary = with_enough_modes(scene, lambda sc: ((b := trace(sc)), b.truncation))
+    else:
+        boundary = trace(scene)
     model = build_model(scene)
-    boundary = stability_boundary(scene, mstars, model, ustar_max=args.ustar_max,
-                                  refine=not args.no_refine)
     kinds = [c.kind for c in boundary.curves]
     say.stats(f"{len(boundary.points)} points, {len(boundary.switches)} mode switches, "
               f"{kinds.count('flutter')} Hopf and {kinds.count('divergence')} divergence "

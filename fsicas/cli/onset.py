@@ -7,6 +7,7 @@ supercritical, and the margin to the given (or the input's default) airflow.
 from __future__ import annotations
 
 from ..linear.onset import onset_at_own_flow
+from ..linear.truncation import with_enough_modes
 from ..model.assembly import build_model
 from ..physical_report import onset_json, scales_json
 from ..scene import MAX_ABS_USTAR
@@ -17,13 +18,14 @@ __all__ = ["add_onset_command"]
 #: Default search bound in U*, raised to 1.5 times the reference flow's U* above it.
 USTAR_MAX = 40.0
 _HOPF_KEYS = ("kind", "mstar", "ustar_crit", "pressure_drop", "omega", "freq_ratio", "l1",
-              "criticality", "dominant_mode", "bifurcation", "symmetry_breaking")
+              "criticality", "dominant_mode", "bifurcation", "symmetry_breaking", "truncation")
 
 
 def add_onset_command(sub) -> None:
     """Add the ``onset`` subcommand."""
-    p = sub.add_parser("onset", help="flutter onset (snoring threshold): airflow, frequency, "
-                       "pressure drop, criticality; in physical units with --physical")
+    p = sub.add_parser("onset", help="onset of instability (snoring threshold), flutter or "
+                       "divergence: airflow, frequency, pressure drop, criticality; in physical "
+                       "units with --physical")
     add_scene_options(p)
     p.add_argument("--ustar-max", type=float, default=None,
                    help=f"search the onset below this U* (default {USTAR_MAX:g}, or 1.5 times "
@@ -42,14 +44,21 @@ def _search_bound(args, reference: float | None) -> float:
 
 def _cmd_onset(args) -> dict:
     given = physical_from_args(args)
+    auto = args.modes == "auto"
+    args.modes = None if auto else args.modes
     scene = scene_from_args(args)
     has_flow = args.ustar is not None if given is None else given[1] is not None
     reference = scene.ustar if has_flow else None
     ustar_max = _search_bound(args, reference)
     by_viscosity = given is not None and "viscosity" in given[0].values and \
         args.friction is None and "friction" not in given[0].scene_fields
-    scene, hopf, reynolds = onset_at_own_flow(scene, build_model(scene), ustar_max,
-                                              given[0] if by_viscosity else None)
+    find = lambda sc: onset_at_own_flow(sc, build_model(sc), ustar_max,
+                                        given[0] if by_viscosity else None)
+    if auto:
+        scene, (_, hopf, reynolds) = with_enough_modes(scene, lambda sc: (
+            (found := find(sc)), found[1].truncation if found[1] else 0.0))
+    else:
+        scene, hopf, reynolds = find(scene)
     found = {k: hopf.to_json().get(k) for k in _HOPF_KEYS} if hopf else \
         {k: (scene.mstar if k == "mstar" else None) for k in _HOPF_KEYS}
     out = {"found": hopf is not None, **found, "ustar_reference": reference,

@@ -21,6 +21,7 @@ from __future__ import annotations
 
 import math
 import time
+import warnings
 from collections.abc import Mapping
 from dataclasses import dataclass, field, replace
 
@@ -28,10 +29,12 @@ import numpy as np
 
 from .curves import (Envelope, OnsetCurve, onset_on_curve, trace_divergence_curve,
                      trace_hopf_curve)
-from .hopf import Criticality, CriticalVelocityError, Onset, first_onset, onset_points
+from .hopf import (Criticality, CriticalVelocityError, ModalTruncationWarning, Onset,
+                   first_onset, onset_points)
 from .stability import eigenvalues
 from .steady import SteadyStateError, steady_state
 from .switches import ModeSwitch, located_switches
+from .truncation import TRUNCATION_RTOL, finer_modes, truncation_error
 from ..model.assembly import Model, build_model
 from ..scene import Scene
 
@@ -65,6 +68,8 @@ class BoundaryPoint(Mapping):
     criticality: Criticality | None = None
     dominant_mode: int | None = None
     kind: str | None = None
+    #: after a refinement: relative change of U*_c with twice the modes
+    truncation: float | None = None
 
     def to_json(self) -> dict:
         """``fsicas boundary --json`` point: mstar, kind, ustar_crit, omega, freq_ratio, branch;
@@ -79,7 +84,7 @@ class BoundaryPoint(Mapping):
         if self.missed:
             out["missed"] = True
         if self.refined:
-            out.update(dominant_mode=self.dominant_mode)
+            out.update(dominant_mode=self.dominant_mode, truncation=self.truncation)
             if self.kind == "flutter":
                 out.update(l1=self.l1, criticality=self.criticality)
         return out
@@ -101,9 +106,18 @@ class StabilityBoundary:
     curves: list[OnsetCurve] = field(repr=False)
     switches: list[ModeSwitch]
     wall_time: float
+    #: the refined points whose truncation error exceeds its tolerance, said once
+    warnings: list = field(default_factory=list)
+
+    @property
+    def truncation(self) -> float:
+        """The largest truncation error of the refined points (inf where one was not
+        estimated, 0 without refined points)."""
+        return max((math.inf if p.truncation is None else p.truncation
+                    for p in self.points if p.refined), default=0.0)
 
     def to_json(self) -> dict:
-        return {"points": [p.to_json() for p in self.points],
+        return {"points": [p.to_json() for p in self.points], "warnings": self.warnings,
                 "switches": [vars(s) for s in self.switches],
                 "curves": [{"branch": c.index, "kind": c.kind, "mstar": c.mstar.tolist(),
                             "ustar": c.ustar.tolist(),
@@ -148,7 +162,24 @@ def stability_boundary(scene: Scene, mstars, model: Model | None = None,
                     ceiling, cut)
         points = [_boundary_point(scene, model, curves, m, refine) for m in mstars]
     switches = located_switches(scene, model, curves, lo, hi)
-    return StabilityBoundary(scene, points, curves, switches, time.perf_counter() - start)
+    return StabilityBoundary(scene, points, curves, switches, time.perf_counter() - start,
+                             _truncation_warnings(scene, points))
+
+
+def _truncation_warnings(scene: Scene, points) -> list:
+    """One warning (also a ModalTruncationWarning) naming the refined points whose
+    truncation error is above :data:`TRUNCATION_RTOL` or was not estimated."""
+    bad = [p for p in points if p.refined and (p.truncation is None
+                                               or p.truncation > TRUNCATION_RTOL)]
+    if not bad:
+        return []
+    where = ", ".join(f"{p.mstar:.4g} ({'?' if p.truncation is None else f'{p.truncation:.2g}'})"
+                      for p in bad)
+    note = (f"{len(bad)} boundary points move with twice the modes (N = {scene.modes} -> "
+            f"{finer_modes(scene.modes)}) by more than {TRUNCATION_RTOL:g} (relative): at "
+            f"M* = {where}; raise modes (--modes auto)")
+    warnings.warn(note, ModalTruncationWarning, stacklevel=3)
+    return [note]
 
 
 #: Rounds of searches for curves the seeds missed.
@@ -295,8 +326,10 @@ def _boundary_point(scene, model, curves, mstar, refine) -> BoundaryPoint:
     below = scene.replace(mstar=float(mstar), ustar=0.99 * h.ustar)
     if eigenvalues(model, steady_state(below, model))[0].real > 0:
         return replace(point, missed=True)   # a curve below this one was not traced
+    error = truncation_error(scene.replace(mstar=float(mstar)), model, h)
     point = replace(point, ustar_crit=h.ustar, omega=h.omega, freq_ratio=h.freq_ratio,
-                    dominant_mode=h.dominant_mode, refined=True)
+                    dominant_mode=h.dominant_mode, refined=True,
+                    truncation=None if math.isnan(error) else error)
     if h.kind == "flutter":
         point = replace(point, l1=h.l1, criticality=h.criticality)
     return point

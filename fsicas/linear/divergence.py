@@ -46,6 +46,8 @@ class DivergencePoint:
     precision: float
     x: np.ndarray = field(repr=False)
     point: object = field(repr=False, default=None)
+    #: relative change of U* with twice the modes (:mod:`fsicas.linear.truncation`)
+    truncation: float = float("nan")
 
     kind: ClassVar[str] = "divergence"
     #: a static loss of stability: no frequency (kept for code written for both kinds)
@@ -56,7 +58,8 @@ class DivergencePoint:
         return {"kind": self.kind, "mstar": self.mstar, "ustar_crit": self.ustar,
                 "pressure_drop": self.pressure_drop, "omega": 0.0, "freq_ratio": 0.0,
                 "bifurcation": self.bifurcation, "symmetry_breaking": self.symmetry_breaking,
-                "dominant_mode": self.dominant_mode}
+                "dominant_mode": self.dominant_mode,
+                "truncation": None if np.isnan(self.truncation) else self.truncation}
 
 
 def null_vector(model: Model, x, p) -> np.ndarray:

@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import math
 import warnings
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import ClassVar, Literal
 
 import numpy as np
@@ -25,6 +25,7 @@ from ..scene import Scene
 from .adapter import LOG_M, PI, PI_SCALE, TIME_SCALE, dense, flutter_field, pi_of
 from .divergence import DIVERGENCE_KINDS, DivergencePoint, divergence_point_from
 from .stability import generalized_eigen
+from .truncation import truncation_error, truncation_warning
 from .steady import SteadyStateError, steady_state
 
 __all__ = ["Criticality", "HopfPoint", "Onset", "CriticalVelocityError", "ModalTruncationWarning",
@@ -46,20 +47,22 @@ class ModalTruncationWarning(UserWarning):
     bound, or the flutter mode is the last mode kept (more modes may move it)."""
 
 
+def _finite(value: float) -> float | None:
+    return None if math.isnan(value) else value
+
+
 def warn_if_truncated(scene: Scene, hopf, ustar_max: float) -> None:
     """A :class:`ModalTruncationWarning` when ``hopf`` (the onset found with
-    ``scene.modes`` modes below ``ustar_max``) may be an artefact of the truncation."""
+    ``scene.modes`` modes below ``ustar_max``) may be an artefact of the truncation:
+    none found, or its truncation error (``hopf.truncation``) above the tolerance."""
     if hopf is None:
         warnings.warn(f"no onset of instability below U* = {ustar_max:g} (the search bound) at M* = "
                       f"{scene.mstar:g} with N = {scene.modes} modes: either it lies higher or "
                       "the modes kept do not resolve it (the flutter mode rises with M*); "
                       "check with a higher bound and more modes",
                       ModalTruncationWarning, stacklevel=3)
-    elif hopf.dominant_mode >= scene.modes:
-        warnings.warn(f"the {hopf.kind} mode at M* = {scene.mstar:g} is mode {hopf.dominant_mode}, "
-                      f"the last of the N = {scene.modes} kept: the onset U*_c = "
-                      f"{hopf.ustar:.4g} is not resolved by this truncation; raise modes",
-                      ModalTruncationWarning, stacklevel=3)
+    elif (note := truncation_warning(scene, hopf, hopf.truncation)) is not None:
+        warnings.warn(note, ModalTruncationWarning, stacklevel=3)
 
 
 @dataclass(frozen=True)
@@ -76,6 +79,8 @@ class HopfPoint:
     precision: float
     x: np.ndarray = field(repr=False)
     point: object = field(repr=False, default=None)
+    #: relative change of U* with twice the modes (:mod:`fsicas.linear.truncation`)
+    truncation: float = math.nan
 
     kind: ClassVar[str] = "flutter"
 
@@ -93,7 +98,7 @@ class HopfPoint:
                 "pressure_drop": self.pressure_drop,
                 "omega": self.omega, "freq_ratio": self.freq_ratio, "l1": self.l1,
                 "criticality": self.criticality,
-                "dominant_mode": self.dominant_mode}
+                "dominant_mode": self.dominant_mode, "truncation": _finite(self.truncation)}
 
 
 #: The onset of instability of the steady branch: flutter or divergence (``.kind``).
@@ -233,9 +238,13 @@ def critical_velocity(scene: Scene, model: Model | None = None, ustar_max: float
     """The onset: the first loss of stability of the steady branch below ``ustar_max``,
     whatever its kind (``.kind``): a Hopf point (``"flutter"``, a :class:`HopfPoint`) or a
     real eigenvalue crossing zero (``"divergence"``, a :class:`DivergencePoint`); None
-    if the branch stays stable. A :class:`ModalTruncationWarning` when the modes kept may
-    not resolve it."""
+    if the branch stays stable. Its ``truncation``: the relative change of U*_c with
+    twice the modes (:mod:`fsicas.linear.truncation`); a :class:`ModalTruncationWarning`
+    when that exceeds its tolerance or no onset is found."""
+    model = model or build_model(scene)
     onset = first_onset(scene, model, ustar_max, ustar_start)
+    if onset is not None:
+        onset = replace(onset, truncation=truncation_error(scene, model, onset))
     warn_if_truncated(scene, onset, ustar_max)
     return onset
 

@@ -30,7 +30,7 @@ from .adapter import LOG_M, PI, TIME_SCALE, flutter_field
 from .curves import Envelope, onset_on_curve
 
 __all__ = ["ModeSwitch", "find_switches", "locate_switch", "located_switches",
-           "MAX_CELL_CHANGES", "FOLD_STEP"]
+           "MAX_CELL_CHANGES", "FOLD_STEP", "SAME_SWITCH_RTOL"]
 
 #: log10 M* half-widths tried for the bracket of a crossing around its bracketed
 #: position (the smallest where both curves exist and their onsets change order)
@@ -107,7 +107,8 @@ def _switch_bracket(envelope, piece: int, lo: float, hi: float) -> tuple[float, 
 def located_switches(scene, model, curves, lo: float, hi: float) -> list[ModeSwitch]:
     """The switches of :func:`find_switches` on [lo, hi] (log10 M*), each located
     (:func:`locate_switch`), those of one branch dropped, and one of each found twice
-    (two traces of one curve bracket the same fold: same M* and U* to 1e-8)."""
+    (two traces of one curve bracket the same fold: same M* and U* to
+    :data:`SAME_SWITCH_RTOL`; a fold's U* is solved to about 1e-8)."""
     out = []
     for switch in find_switches(curves, lo, hi):
         sw = locate_switch(scene, model, curves, switch)
@@ -117,7 +118,7 @@ def located_switches(scene, model, curves, lo: float, hi: float) -> list[ModeSwi
 
 
 def _same_switch(a: ModeSwitch, b: ModeSwitch) -> bool:
-    close = lambda x, y: abs(x - y) <= 1e-8 * max(abs(x), abs(y))
+    close = lambda x, y: abs(x - y) <= SAME_SWITCH_RTOL * max(abs(x), abs(y))
     return a.located and b.located and close(a.mstar, b.mstar) and \
         close(a.ustar_below, b.ustar_below) and close(a.ustar_above, b.ustar_above)
 
@@ -221,6 +222,8 @@ def _beyond(scene, model, curves, lm: float, sign: float) -> tuple[int, float, f
         return (piece, *_onset(scene, model, curves, piece, past))
 
 
+#: Relative distance below which two located switches are one.
+SAME_SWITCH_RTOL = 1e-6
 #: Distance in decades of M* past a fold where the next curve is taken.
 FOLD_STEP = 1e-9
 
