@@ -109,3 +109,30 @@ def test_the_switch_to_divergence_is_where_the_onset_changes_kind(diverging_boun
     assert below.kind == "flutter" and above.kind == "divergence"
     assert below.ustar == pytest.approx(switch.ustar_below, rel=5e-3)
     assert above.ustar == pytest.approx(switch.ustar_above, rel=1e-4)
+
+
+def test_the_deflected_branch_of_the_pitchfork(diverging):
+    """At M* = 30 the deflected states join the two pitchforks of the window of
+    divergence: the branch ends at the second one (det dF/dx bisected directly); its
+    states and their mirrors R x are steady (residual of F), stable (direct eigenvalues)
+    where the straight state is unstable, and near the first pitchfork tip^2 grows
+    linearly in U* (the pitchfork normal form)."""
+    from fsicas.linear.deflected import deflected_branch
+    from fsicas.linear.stability import generalized_eigen
+    model, onset = diverging
+    branch = deflected_branch(DIVERGING, model, onset, ustar_max=4.0)
+    assert branch.status == "event" and branch.stable.all()
+    closing = _bisect_det(DIVERGING, model, 1.5, 1.7)
+    assert branch.ustar.min() > onset.ustar and branch.ustar.max() < closing
+    assert abs(branch.ustar[-1] - closing) < 1e-3 * closing
+    assert 0.015 < np.abs(branch.tip_deflection).max() < 0.02
+    R = model.mirror
+    for k in np.linspace(0, len(branch.ustar) - 1, 5).astype(int):
+        x = branch.states[k]
+        p = model.parameters(DIVERGING, pressure_drop=branch.pressure_drop[k])
+        assert max(np.abs(np.array(model.rhs(x, p))).max(),
+                   np.abs(np.array(model.rhs(R @ x, p))).max()) < 1e-8
+        lam, _ = generalized_eigen(model.jac_rhs(x, p), model.mass(x, p))
+        assert lam[0].real < 0
+    ratio = branch.tip_deflection[1:4] ** 2 / (branch.ustar[1:4] - onset.ustar)
+    assert np.ptp(ratio) < 0.05 * ratio.mean()

@@ -6,6 +6,7 @@ supercritical, and the margin to the given (or the input's default) airflow.
 """
 from __future__ import annotations
 
+from ..linear.deflected import deflected_branch
 from ..linear.onset import onset_at_own_flow
 from ..linear.truncation import with_enough_modes
 from ..model.assembly import build_model
@@ -64,6 +65,9 @@ def _cmd_onset(args) -> dict:
     out = {"found": hopf is not None, **found, "ustar_reference": reference,
            "ustar_max": ustar_max, "friction": scene.friction, "hstar": scene.hstar,
            "modes": scene.modes}
+    if hopf is not None and hopf.kind == "divergence" and hopf.symmetry_breaking:
+        out["deflected"] = deflected_branch(scene, build_model(scene), hopf,
+                                            ustar_max).to_json()
     if given is not None:
         physical, _ = given
         out["physical"] = {"source": physical.source, "description": physical.description,
@@ -89,6 +93,7 @@ def _print_onset(result: dict) -> None:
                  if result["symmetry_breaking"] else "")
               + f", dominant mode {result['dominant_mode']}, pressure drop "
               f"{result['pressure_drop']:.6g}")
+        _print_deflected(result.get("deflected"))
     elif ph is None:
         print(f"flutter onset at U*_c = {result['ustar_crit']:.6g} (M* = {result['mstar']:.4g}), "
               f"omega = {result['omega']:.6g} ({result['freq_ratio']:.4g} x omega_1), "
@@ -97,6 +102,17 @@ def _print_onset(result: dict) -> None:
         _print_physical_onset(result, ph)
     for note in result.get("warnings", []):
         print(f"warning: {note}")
+
+
+def _print_deflected(branch: dict | None) -> None:
+    """The deflected steady states born at a pitchfork, in a sentence."""
+    if not branch or not branch["ustar"]:
+        return
+    u, stable = branch["ustar"], branch["stable"]
+    verdict = "stable" if all(stable) else f"unstable at {stable.count(False)} of {len(u)} points"
+    print(f"  deflected steady states (a mirror pair) for U* in [{min(u):.6g}, {max(u):.6g}]: "
+          f"{verdict}; largest tip deflection {max(map(abs, branch['tip_deflection'])):.4g} L"
+          + (" (they end at a second branch point)" if branch["status"] == "event" else ""))
 
 
 def _print_physical_onset(result: dict, ph: dict) -> None:
