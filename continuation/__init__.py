@@ -16,6 +16,7 @@ Public API (everything else is private)::
     cycle_from_hopf(problem, hopf_point, *, dp=1e-3, settings=None) -> CycleProblem
     cycle_from_pd(cycle_problem, pd_point, *, amplitude=1e-2, settings=None) -> CycleProblem
     cycle_from_bp(cycle_problem, bp_point, *, amplitude=1e-2) -> CycleProblem   # pitchfork
+    equilibrium_from_bp(problem, bp_point, *, amplitude=1e-2) -> EquilibriumProblem   # pitchfork
     CycleCurveProblem(cycle_problem, X, free, condition)   # a cycle with one more equation:
     locate_cycle(cycle_problem, X, condition) -> (problem, NewtonResult)   # curve / located
     Extremum(rows, offset, level), CycleFold(), PeriodDoubling(), NeimarkSacker()   # conditions
@@ -46,7 +47,7 @@ from ._settings import (MAX_NTST, CollocationSettings, ContinuationSettings, Eig
                         NewtonSettings, PALC, ShootingSettings)
 from ._shooting import ShootingProblem
 from ._symbolic import BufferedFunction
-from ._switching import cycle_from_bp, cycle_from_hopf, cycle_from_pd
+from ._switching import cycle_from_bp, cycle_from_hopf, cycle_from_pd, equilibrium_from_bp
 from ._symmetric import keeps_symmetry, locate_symmetry_breaking, symmetric_multipliers
 from ._vectorfield import VectorField
 
@@ -54,7 +55,7 @@ __all__ = [
     "MAX_NTST", "Branch", "BufferedFunction", "Event", "Status", "CollocationSettings", "Condition", "CycleCurveProblem",
     "CycleFold", "Extremum", "NeimarkSacker", "PeriodDoubling", "locate_cycle", "ContinuationIterator", "ContinuationSettings",
     "CycleProblem", "EigenSettings", "ShootingProblem", "ShootingSettings", "cycle_from_hopf",
-    "cycle_from_bp", "cycle_from_pd",
+    "cycle_from_bp", "cycle_from_pd", "equilibrium_from_bp",
     "EquilibriumProblem", "FoldCurveProblem", "HopfCurveProblem", "Lifted", "NewtonSettings",
     "PALC", "Problem", "SpecialPoint", "Step", "VectorField", "continuation", "correct", "observing",
     "first_lyapunov", "hopf_point", "keeps_symmetry", "locate_symmetry_breaking",

@@ -90,19 +90,22 @@ def _inverse_iteration(A, iterations: int, seed: int) -> np.ndarray:
 def step_limit(ev_a: np.ndarray, ev_b: np.ndarray, ds: float, overshoot: float,
                imag_tol: float) -> float:
     """The largest next arclength step that, by the rate of the last step, carries no
-    complex eigenvalue further than ``overshoot`` times its distance past the imaginary
-    axis: at most ``(1 + overshoot)`` times the predicted step to its crossing.
+    eigenvalue further than ``overshoot`` times its distance past the imaginary axis: at
+    most ``(1 + overshoot)`` times the predicted step to its crossing.
 
-    Each complex eigenvalue ``lambda_b`` (``Im > imag_tol``) at the new point is paired
-    with the nearest one at the previous point ``lambda_a`` (one step ``ds`` back); when
-    it moves towards the axis (``d = |Re lambda_b - Re lambda_a| > 0`` with
-    ``|Re lambda_b| < |Re lambda_a|``) its crossing is predicted ``|Re lambda_b| ds / d``
-    ahead. A pair that keeps its course is crossed in one step (the count changes and the
-    Hopf point is located); a pair that would cross and cross back within a long step (a
-    narrow window of instability, or of stability) is met inside the window instead of
-    jumped over. Motions at round-off level (``d <= 1e-10 (1 + |lambda_b|)``) are ignored;
+    Each eigenvalue ``lambda_b`` of the upper half plane (``Im >= -imag_tol``: the complex
+    ones with ``Im > 0`` and the real ones) at the new point is paired with the nearest
+    one at the previous point ``lambda_a`` (one step ``ds`` back); when it moves towards
+    the axis (``d = |Re lambda_b - Re lambda_a| > 0`` with ``|Re lambda_b| < |Re
+    lambda_a|``) its crossing is predicted ``|Re lambda_b| ds / d`` ahead. An eigenvalue
+    that keeps its course is crossed in one step (the count changes and the Hopf or
+    branch point is located); one that would cross and cross back within a long step (a
+    narrow window of instability, or of stability; a real one: a window of static
+    divergence between two branch points) is met inside the window instead of jumped
+    over. Motions at round-off level (``d <= 1e-10 (1 + |lambda_b|)``) are ignored;
     ``inf`` when nothing limits the step."""
-    a, b = ev_a[ev_a.imag > imag_tol], ev_b[ev_b.imag > imag_tol]
+    upper = lambda ev: ev[ev.imag >= -imag_tol]
+    a, b = upper(ev_a), upper(ev_b)
     if not a.size or not b.size:
         return np.inf
     nearest = a[np.argmin(np.abs(b[:, None] - a[None, :]), axis=1)]

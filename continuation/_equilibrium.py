@@ -121,12 +121,20 @@ class EquilibriumProblem(Problem):
     builder = staticmethod(equilibrium_system)
     verified_kinds = ("hopf",)
 
+    #: the start corrector's row (None: the parameter is fixed); set by branch switching
+    start_direction = None
+
     def __init__(self, F, x0, params: Mapping[str, float], active: str, *, M=None):
         vf = make_field(F, M, params)
         p0 = param_vector(vf, params)
         x = state_vector(vf, x0)
         super().__init__(vf, (active,), np.append(x, p0[vf.par_index(active)]), p0)
         self.active, self._last = active, None
+
+    def start_row(self) -> np.ndarray:
+        if self.start_direction is None:
+            return super().start_row()
+        return np.asarray(self.start_direction, dtype=float)
 
     def jacobian(self, X):
         """``G_X``, kept for :meth:`matrices` at the same ``X`` (first n columns: ``J``)."""

@@ -158,7 +158,7 @@ def onset_json(sc: Scales, hopf: dict | None, reference_ustar: float | None,
         out = {**flow_json(sc, None, "onset_"), "frequency_hz": None, "pressure_drop_pa": None,
                "criticality": None}
     else:
-        out = {**_onset_point(sc, hopf), "criticality": hopf["criticality"]}
+        out = {**_onset_point(sc, hopf), "criticality": hopf.get("criticality")}
         out.pop("mstar")
         out.pop("fluid_density_kg_m3")
     out.update(flow_json(sc, reference_ustar, "reference_"), margin_flow_l_min=None,

@@ -182,7 +182,7 @@ def test_analysis_warnings_are_in_the_json(capsys, tmp_path):
     code, out = run_json(capsys, ["map", "--modes", "4", "--mstar", "50:50:1", "--ustar", "4:4:1",
                                   "--t-end", "0.5", "--workers", "1",
                                   "--out", str(tmp_path / "m.jsonl"), "--json"])
-    assert code == 0 and any("no flutter onset below U* = 6" in w for w in out["warnings"])
+    assert code == 0 and any("no onset of instability below U* = 6" in w for w in out["warnings"])
 
 
 def test_version_and_helpful_scene_options(capsys):

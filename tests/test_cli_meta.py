@@ -141,7 +141,7 @@ def test_verbose_tells_stages_and_solver_statistics(capsys):
     code, out, err = run(capsys, ["--verbose", "boundary", "--modes", "3", "--mstar", "1", "--json"])
     lines = err.splitlines()
     assert code == 0 and all(line.startswith("fsicas boundary [") for line in lines)
-    assert "flutter boundary at 1 M*" in lines[0] and lines[-1].endswith("] done")
+    assert "stability boundary at 1 M*" in lines[0] and lines[-1].endswith("] done")
     assert any("continuation equilibrium:" in line and "Newton iterations" in line for line in lines)
     code, out, err = run(capsys, ["boundary", "--modes", "3", "--mstar", "1", "--json", "-q"])
     assert code == 0 and err == "" and out["points"]

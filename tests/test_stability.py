@@ -1,4 +1,6 @@
 """Linear stability: eigenvalues, Hopf onset, boundary, criticality, against independent routes."""
+import warnings
+
 import casadi as ca
 import numpy as np
 import pytest
@@ -175,6 +177,29 @@ def test_boundary_is_continuous_between_switches(boundary):
             assert abs(q["ustar_crit"] - p["ustar_crit"]) < 0.5 * p["ustar_crit"]
 
 
+def test_the_boundary_does_not_depend_on_how_mstar_is_sampled(boundary):
+    """[0.1, 1, 10] gives the switches of 9 points in the same range (to 1e-6), and its
+    envelope between the samples (the exact onset on its lowest curve) is the onset of
+    an independent one-parameter search at M* = 4.4, 5, 7, where a curve traced from no
+    seed (U*_c 10.44, 10.27, 10.39) lies below the one the samples saw (up to 14.1)."""
+    from fsicas.linear.curves import Envelope, onset_on_curve
+    dense, model = boundary
+    sparse = stability_boundary(dense.scene, [0.1, 1.0, 10.0], model)
+    assert len(sparse.switches) == len(dense.switches) == 4
+    for a, b in zip(sparse.switches, dense.switches):
+        assert a.located and b.located
+        for key in ("mstar", "ustar_below", "ustar_above", "omega_below", "omega_above"):
+            assert getattr(a, key) == pytest.approx(getattr(b, key), rel=1e-6), key
+    envelope = Envelope(sparse.curves)
+    for m in (4.4, 5.0, 7.0):
+        _, _, piece = envelope.lowest(np.log10(m))
+        curve = next(c for c in sparse.curves if piece in set(c.pieces.tolist()))
+        on_curve = onset_on_curve(dense.scene, model, curve, piece, np.log10(m))
+        direct = critical_velocity(dense.scene.replace(mstar=m), model)
+        assert on_curve.ustar == pytest.approx(direct.ustar, rel=1e-6)
+        assert 10.2 < direct.ustar < 10.5
+
+
 def test_bad_requests_fail_clearly():
     with pytest.raises(ValueError, match="mstars"):
         stability_boundary(Scene(modes=3), [0.0, 1.0])
@@ -215,16 +240,43 @@ def test_onset_is_the_first_crossing_in_a_narrow_window_band(mstar):
 
 def test_modal_truncation_too_short_is_warned():
     """N = 4 at M* = 50 finds no onset below U* = 40 (N = 20 has U*_c ~ 18.5): a
-    ModalTruncationWarning says so; the flutter mode being the last mode kept is warned
-    too; a resolved onset (N = 10, M* = 1, mode 3) is not."""
+    ModalTruncationWarning says so; a resolved onset (N = 10, M* = 1) is not warned."""
     import warnings
-    from fsicas.linear.hopf import ModalTruncationWarning, warn_if_truncated
-    with pytest.warns(ModalTruncationWarning, match="no flutter onset below U\\* = 40"):
+    from fsicas.linear.hopf import ModalTruncationWarning
+    with pytest.warns(ModalTruncationWarning, match="no onset of instability below U\\* = 40"):
         assert critical_velocity(Scene(modes=4, mstar=50.0), ustar_max=40.0) is None
-    scene = Scene(modes=10, mstar=1.0)
     with warnings.catch_warnings():
         warnings.simplefilter("error", ModalTruncationWarning)
-        hopf = critical_velocity(scene)
-    assert hopf.dominant_mode == 3
-    with pytest.warns(ModalTruncationWarning, match="mode 3, the last of the N = 3 kept"):
-        warn_if_truncated(Scene(modes=3, mstar=1.0), hopf, 40.0)
+        assert critical_velocity(Scene(modes=10, mstar=1.0)).truncation < 1e-4
+
+
+@pytest.mark.parametrize("mstar", [1.0, 30.0])
+def test_truncation_estimate_is_the_error_against_many_more_modes(mstar):
+    """The onset's truncation estimate (N = 10 against 20, relocated from the N = 10 point)
+    is its error against an independent search with N = 40 (from U* = 0.2): 1.2e-5 at
+    M* = 1; at M* = 30 the N = 10 onset is 6 % low (a spurious higher-mode branch), and
+    the estimate says so and warns."""
+    from fsicas.linear.hopf import ModalTruncationWarning
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        onset = critical_velocity(Scene(modes=10, mstar=mstar))
+    reference = critical_velocity(Scene(modes=40, mstar=mstar)).ustar
+    error = abs(onset.ustar - reference) / reference
+    assert onset.truncation == pytest.approx(error, rel=0.05)
+    flagged = [w for w in caught if issubclass(w.category, ModalTruncationWarning)]
+    assert bool(flagged) == (mstar == 30.0) and (mstar == 1.0 or error > 0.05)
+
+
+def test_modes_auto_picks_the_modes_the_tolerance_needs(capsys):
+    """``fsicas onset --modes auto`` at M* = 30: N = 10 is 6 % low, so N = 20 is taken,
+    within 1e-3 of an independent search with N = 40; ``--modes auto`` elsewhere is
+    refused by the scene check."""
+    import json
+    from fsicas.cli import main
+    assert main(["onset", "--mstar", "30", "--modes", "auto", "--json"]) == 0
+    out = json.loads(capsys.readouterr().out)
+    reference = critical_velocity(Scene(modes=40, mstar=30.0)).ustar
+    assert out["modes"] == 20 and out["truncation"] < 1e-2 and not out.get("warnings")
+    assert out["ustar_crit"] == pytest.approx(reference, rel=1e-3)
+    assert main(["eig", "--modes", "auto", "--json"]) == 2
+    assert "modes must be an integer" in capsys.readouterr().out

@@ -5,6 +5,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..linear.boundary import stability_boundary
+from ..linear.truncation import with_enough_modes
 from ..linear.stability import linear_stability
 from ..linear.steady import steady_state
 from ..model.assembly import build_model
@@ -39,7 +40,7 @@ def add_linear_commands(sub) -> None:
 
 
 def _add_boundary_command(sub) -> None:
-    p = sub.add_parser("boundary", help="flutter boundary U*_c(M*) from Hopf-curve continuation")
+    p = sub.add_parser("boundary", help="stability boundary U*_c(M*) (flutter and divergence) from curve continuation")
     add_scene_options(p, mstar=False)
     p.add_argument("--mstar", dest="mstar_values", metavar="LIST_OR_RANGE",
                    help="0.1,1,10 or lo:hi:count (log-spaced); required unless --physical "
@@ -80,18 +81,26 @@ def _cmd_eig(args) -> dict:
 def _cmd_boundary(args) -> dict:
     if args.mstar_values is None and args.physical is None:
         raise ValueError("--mstar is required (a list or lo:hi:count), unless --physical")
+    auto = args.modes == "auto"
+    args.modes = None if auto else args.modes
     scene = scene_from_args(args)
     mstars = ([scene.mstar] if args.mstar_values is None
               else parse_range(args.mstar_values, "mstar", log=True))
     record(args, scene, mstar_values=mstars)
     say = reporter(args)
-    say.stage(f"flutter boundary at {len(mstars)} M* in [{min(mstars):g}, {max(mstars):g}], "
+    say.stage(f"stability boundary at {len(mstars)} M* in [{min(mstars):g}, {max(mstars):g}], "
               f"U* < {args.ustar_max:g}, N = {scene.modes}")
+    trace = lambda sc: stability_boundary(sc, mstars, build_model(sc), ustar_max=args.ustar_max,
+                                          refine=not args.no_refine)
+    if auto:
+        scene, boundary = with_enough_modes(scene, lambda sc: ((b := trace(sc)), b.truncation))
+    else:
+        boundary = trace(scene)
     model = build_model(scene)
-    boundary = stability_boundary(scene, mstars, model, ustar_max=args.ustar_max,
-                                  refine=not args.no_refine)
+    kinds = [c.kind for c in boundary.curves]
     say.stats(f"{len(boundary.points)} points, {len(boundary.switches)} mode switches, "
-              f"{len(boundary.curves)} Hopf curves traced")
+              f"{kinds.count('flutter')} Hopf and {kinds.count('divergence')} divergence "
+              "curves traced")
     if args.plot:
         plot_boundary(boundary, args.plot)
         stem = args.plot.rsplit(".", 1)

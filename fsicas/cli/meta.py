@@ -46,7 +46,8 @@ UNITS = {
     "eig": {"eigenvalues": "[re, im], " + _RATE, "ustar": _BRANCH["ustar"],
             "pressure_drop": _PRESSURE},
     "boundary": {"points": "mstar, ustar_crit, freq_ratio " + _RATIO + "; omega " + _RATE +
-                 "; l1 nondimensional", "switches": "mstar, ustar " + _RATIO},
+                 "; l1 nondimensional; truncation relative", "switches": "mstar, ustar " +
+                 _RATIO},
     "simulate": {"period": _TIME, "frequency": _RATE, "tip_amplitude": _LENGTH,
                  "first_contact_time": _TIME, "contact_positions": _LENGTH,
                  "first_contact_position": _LENGTH, "t_end_reached": _TIME,
@@ -66,7 +67,9 @@ UNITS = {
                 "seeds": "mstar " + _RATIO},
     "onset": {"mstar": _RATIO, "ustar_crit": _BRANCH["ustar"], "pressure_drop": _PRESSURE,
               "omega": _RATE, "freq_ratio": _RATIO + " (omega / omega_1)",
-              "ustar_reference": _BRANCH["ustar"], "ustar_max": _BRANCH["ustar"]},
+              "ustar_reference": _BRANCH["ustar"], "ustar_max": _BRANCH["ustar"],
+              "truncation": _RATIO + " (relative change of ustar_crit with twice the modes)",
+              "deflected": "ustar " + _RATIO + "; tip_deflection " + _LENGTH},
     "paper": {"omega_invacuo": _RATE, "steady": f"pressure_drop, closed_form {_PRESSURE}; "
               f"Q {_FLOW}", "boundary": "as fsicas boundary: omega " + _RATE,
               "variants": "ustar_crit, freq_ratio " + _RATIO, "impact_map": "counts",

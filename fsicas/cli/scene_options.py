@@ -15,7 +15,8 @@ __all__ = ["SCENE_OPTIONS", "BEAM_OPTIONS", "add_scene_options", "add_beam_optio
 #: CLI option (``--quad-nodes`` for ``quad_nodes``) -> type, one per Scene field.
 SCENE_OPTIONS = {
     "mstar": float, "ustar": float, "hstar": float, "friction": float, "k0": float,
-    "kl": float, "zeta": float, "modes": int, "quad_nodes": int,
+    "kl": float, "zeta": float, "modes": lambda text: text if text == "auto" else int(text),
+    "quad_nodes": int,
     "contact_stiffness": float, "contact_eps": float,
 }
 
@@ -29,7 +30,8 @@ SCENE_HELP = {
     "k0": "singular head loss at the inlet, >= 0",
     "kl": "singular head loss at the outlet, >= 0",
     "zeta": "modal damping ratio (every mode), >= 0",
-    "modes": "number of beam modes N, in [1, 200]",
+    "modes": "number of beam modes N, in [1, 200]; onset, boundary: also auto (N doubled "
+             "from 10 until the onsets move by less than 1e-2 with twice the modes)",
     "quad_nodes": "Gauss-Legendre nodes of the flow integrals, in [2N, 2000]",
     "contact_stiffness": "wall-contact stiffness k* (per unit length, relative to the first "
                          "mode's), > 0",

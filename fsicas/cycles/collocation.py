@@ -41,7 +41,7 @@ import numpy as np
 import continuation as C
 
 from ..linear.adapter import PI, flutter_field, pi_of
-from ..linear.hopf import CriticalVelocityError, HopfPoint, critical_velocity, flutter_problem
+from ..linear.hopf import CriticalVelocityError, HopfPoint, first_hopf, flutter_problem
 from ..model.accuracy import QUADRATURE_TOL, adequate_model
 from ..model.assembly import Model, build_model
 from ..scene import Scene
@@ -197,7 +197,7 @@ def continue_cycles(scene: Scene, model: Model | None = None, *, ustar_max: floa
     """:func:`cycle_branch` as a :class:`CycleRun` (the start of the curves of cycles in
     (M*, U*), :mod:`fsicas.cycles.curves`)."""
     model = model or build_model(scene)
-    hopf = hopf or critical_velocity(scene, model, ustar_max=ustar_max)
+    hopf = hopf or first_hopf(scene, model, ustar_max=ustar_max)
     if hopf is None:
         raise CriticalVelocityError(f"no Hopf point below U* = {ustar_max:g} at M* = {scene.mstar:g}")
     collocation = C.CollocationSettings(ntst=settings.ntst, ncol=settings.ncol, floquet="product",

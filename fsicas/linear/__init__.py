@@ -2,7 +2,7 @@
 sensitivities and the palate design built on them, and the stability boundary in
 (M*, U*), through the generic ``continuation`` library."""
 
-from .boundary import HopfCurve, ModeSwitch, StabilityBoundary, stability_boundary
+from .boundary import OnsetCurve, ModeSwitch, StabilityBoundary, stability_boundary
 from .design import Change, Design, design_for_flow
 from .elasticity import DesignError, PalateSensitivity, Sensitivity, palate_sensitivity
 from .hopf import CriticalVelocityError, HopfPoint, critical_velocity, hopf_points
@@ -11,7 +11,7 @@ from .sensitivity import OnsetSensitivity, onset_sensitivity
 from .stability import LinearStability, eigenvalues, linear_stability
 from .steady import SteadyState, SteadyStateError, steady_state, straight_pressure_drop
 
-__all__ = ["HopfCurve", "ModeSwitch", "StabilityBoundary", "stability_boundary",
+__all__ = ["OnsetCurve", "ModeSwitch", "StabilityBoundary", "stability_boundary",
            "CriticalVelocityError", "HopfPoint", "critical_velocity", "hopf_points", "onset_at_own_flow",
            "LinearStability", "eigenvalues", "linear_stability", "SteadyState",
            "SteadyStateError", "steady_state", "straight_pressure_drop", "OnsetSensitivity",

@@ -1,12 +1,16 @@
-"""Stability boundary in the (M*, U*) plane as the lower envelope of Hopf curves.
+"""Stability boundary in the (M*, U*) plane as the lower envelope of the curves of onsets:
+Hopf curves (flutter) and divergence curves (a real eigenvalue crosses zero).
 
-1. Seeds: at a few M* (one per decade by default) every Hopf point of the steady branch
-   up to ``ustar_max`` is found by continuation in U* (:func:`fsicas.linear.hopf.hopf_points`).
-2. Each Hopf point not already on a traced curve starts a two-parameter continuation of
-   its Hopf curve in (log10 M*, Δp/M*), both ways, inside the window.
+1. Seeds: at a few M* (one per decade by default) every Hopf point and every divergence
+   of the steady branch up to ``ustar_max`` is found by continuation in U*
+   (:func:`fsicas.linear.hopf.onset_points`).
+2. Each one not already on a traced curve starts its curve (:mod:`fsicas.linear.curves`):
+   a two-parameter continuation of the Hopf curve in (log10 M*, Δp/M*), or the
+   divergence followed in log10 M*, both ways, inside the window.
 3. At each requested M*, the boundary is the lowest U* over all curves (the first loss of
-   stability along U*). Each point is then refined by a one-parameter Hopf location at that
-   M*, started just below the envelope, which also gives its l1 (criticality).
+   stability along U*, ``kind`` "flutter" or "divergence"). Each point is then refined at
+   that M* (a one-parameter Hopf location, started just below the envelope, which also
+   gives its l1, or the divergence solved there).
 4. Where the lowest branch changes (scanned along the traced curves), two curves cross
    (a double-Hopf point: U* continuous, the frequency jumps) or a curve folds back in M*
    (U* jumps). Its position is bisected on the traced curves (linear between exact Hopf
@@ -17,28 +21,30 @@ from __future__ import annotations
 
 import math
 import time
+import warnings
 from collections.abc import Mapping
 from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-import continuation as C
-
-from .adapter import LOG_M, PI, TIME_SCALE, flutter_field
-from .hopf import (Criticality, CriticalVelocityError, HopfCurve, HopfPoint, hopf_point_from,
-                   hopf_points, trace_hopf_curve)
+from .curves import (Envelope, OnsetCurve, onset_on_curve, trace_divergence_curve,
+                     trace_hopf_curve)
+from .hopf import (Criticality, CriticalVelocityError, ModalTruncationWarning, Onset,
+                   first_onset, onset_points)
 from .stability import eigenvalues
-from .steady import steady_state
-from .switches import locate_switch
+from .steady import SteadyStateError, steady_state
+from .switches import ModeSwitch, located_switches
+from .truncation import TRUNCATION_RTOL, finer_modes, truncation_error
 from ..model.assembly import Model, build_model
 from ..scene import Scene
 
-__all__ = ["BoundaryPoint", "HopfCurve", "ModeSwitch", "StabilityBoundary",
+__all__ = ["BoundaryPoint", "OnsetCurve", "ModeSwitch", "StabilityBoundary",
            "stability_boundary"]
 
 @dataclass(frozen=True)
 class BoundaryPoint(Mapping):
-    """The stability boundary at one M*: the lowest Hopf curve there.
+    """The stability boundary at one M*: the lowest curve of onsets there, of ``kind``
+    "flutter" or "divergence" (then omega = freq_ratio = 0, no l1).
 
     Also a read-only mapping of its JSON (:meth:`to_json`): ``point["ustar_crit"]``,
     ``"l1" in point`` (only after a refinement) read as on the CLI's JSON.
@@ -61,12 +67,16 @@ class BoundaryPoint(Mapping):
     l1: float | None = None
     criticality: Criticality | None = None
     dominant_mode: int | None = None
+    kind: str | None = None
+    #: after a refinement: relative change of U*_c with twice the modes
+    truncation: float | None = None
 
     def to_json(self) -> dict:
-        """``fsicas boundary --json`` point: mstar, ustar_crit, omega, freq_ratio, branch;
+        """``fsicas boundary --json`` point: mstar, kind, ustar_crit, omega, freq_ratio, branch;
         where a curve was found also refined (and missed when true), and after a refinement
         l1, criticality and dominant_mode."""
-        out = {"mstar": self.mstar, "ustar_crit": self.ustar_crit, "omega": self.omega,
+        out = {"mstar": self.mstar, "kind": self.kind, "ustar_crit": self.ustar_crit,
+               "omega": self.omega,
                "freq_ratio": self.freq_ratio, "branch": self.branch}
         if self.ustar_crit is None:
             return out
@@ -74,7 +84,9 @@ class BoundaryPoint(Mapping):
         if self.missed:
             out["missed"] = True
         if self.refined:
-            out.update(l1=self.l1, criticality=self.criticality, dominant_mode=self.dominant_mode)
+            out.update(dominant_mode=self.dominant_mode, truncation=self.truncation)
+            if self.kind == "flutter":
+                out.update(l1=self.l1, criticality=self.criticality)
         return out
 
     def __getitem__(self, key: str):
@@ -88,35 +100,27 @@ class BoundaryPoint(Mapping):
 
 
 @dataclass(frozen=True)
-class ModeSwitch:
-    """Where the lowest Hopf branch changes with M*: at a crossing of two Hopf curves
-    (a double-Hopf point: ustar_below = ustar_above, the frequency jumps) or at a fold of
-    a curve in M* (the boundary itself jumps from ustar_below to ustar_above)."""
-
-    mstar: float
-    ustar_below: float
-    ustar_above: float
-    branch_below: int
-    branch_above: int
-    omega_below: float
-    omega_above: float
-    #: solved on its defining equation (:mod:`fsicas.linear.switches`), else bracketed
-    #: on the traced curves
-    located: bool = False
-
-
-@dataclass(frozen=True)
 class StabilityBoundary:
     scene: Scene
     points: list[BoundaryPoint]
-    curves: list[HopfCurve] = field(repr=False)
+    curves: list[OnsetCurve] = field(repr=False)
     switches: list[ModeSwitch]
     wall_time: float
+    #: the refined points whose truncation error exceeds its tolerance, said once
+    warnings: list = field(default_factory=list)
+
+    @property
+    def truncation(self) -> float:
+        """The largest truncation error of the refined points (inf where one was not
+        estimated, 0 without refined points)."""
+        return max((math.inf if p.truncation is None else p.truncation
+                    for p in self.points if p.refined), default=0.0)
 
     def to_json(self) -> dict:
-        return {"points": [p.to_json() for p in self.points],
+        return {"points": [p.to_json() for p in self.points], "warnings": self.warnings,
                 "switches": [vars(s) for s in self.switches],
-                "curves": [{"branch": c.index, "mstar": c.mstar.tolist(), "ustar": c.ustar.tolist(),
+                "curves": [{"branch": c.index, "kind": c.kind, "mstar": c.mstar.tolist(),
+                            "ustar": c.ustar.tolist(),
                             "omega": c.omega.tolist()} for c in self.curves],
                 "wall_time": self.wall_time}
 
@@ -124,7 +128,7 @@ class StabilityBoundary:
 def stability_boundary(scene: Scene, mstars, model: Model | None = None,
                        ustar_max: float = 40.0, seeds=None, refine: bool = True,
                        headroom: float = 1.3, full_curves: bool = False) -> StabilityBoundary:
-    """The flutter boundary U*_c(M*) at ``mstars`` with its curves and mode switches.
+    """The stability boundary U*_c(M*) at ``mstars`` with its curves and mode switches.
 
     Curves are traced below ``headroom`` times the highest onset found at the seeds; a
     Hopf curve that stays above that everywhere cannot be the lowest one. Each half of a
@@ -140,21 +144,72 @@ def stability_boundary(scene: Scene, mstars, model: Model | None = None,
     seeds = _default_seeds(lo, hi) if seeds is None else np.asarray(seeds, float)
     window = (lo - 0.05, hi + 0.05)
     ceiling, found = _seed_points(scene, model, seeds, ustar_max, headroom)
-    search = lambda m: hopf_points(scene.replace(mstar=float(m)), model, ustar_max,
-                                   ustar_stop=1.05 * ceiling)
-    curves: list[HopfCurve] = []
+    search = lambda m: onset_points(scene.replace(mstar=float(m)), model, ustar_max,
+                                    ustar_stop=1.05 * ceiling)
+    curves: list[OnsetCurve] = []
     cut = None if full_curves else headroom
     _add_curves(scene, model, curves, found, window, ceiling, cut)
     points = [_boundary_point(scene, model, curves, m, refine) for m in mstars]
-    for _ in range(3):   # a refinement that starts unstable reveals a curve the seeds missed
-        missed = [p.mstar for p in points if p.missed]
+    searched = set()
+    for _ in range(MAX_RESEEDS):   # curves the seeds missed: searched where they show
+        missed = {p.mstar for p in points if p.missed} | \
+            set(_unstable_below(scene, model, curves, lo, hi, ceiling))
+        missed -= searched
         if not missed:
             break
-        found = [search(m) for m in missed]
-        _add_curves(scene, model, curves, found, window, ceiling, cut)
+        searched |= missed
+        _add_curves(scene, model, curves, [search(m) for m in sorted(missed)], window,
+                    ceiling, cut)
         points = [_boundary_point(scene, model, curves, m, refine) for m in mstars]
-    switches = [locate_switch(scene, model, curves, sw) for sw in _switches(curves, lo, hi)]
-    return StabilityBoundary(scene, points, curves, switches, time.perf_counter() - start)
+    switches = located_switches(scene, model, curves, lo, hi)
+    return StabilityBoundary(scene, points, curves, switches, time.perf_counter() - start,
+                             _truncation_warnings(scene, points))
+
+
+def _truncation_warnings(scene: Scene, points) -> list:
+    """One warning (also a ModalTruncationWarning) naming the refined points whose
+    truncation error is above :data:`TRUNCATION_RTOL` or was not estimated."""
+    bad = [p for p in points if p.refined and (p.truncation is None
+                                               or p.truncation > TRUNCATION_RTOL)]
+    if not bad:
+        return []
+    where = ", ".join(f"{p.mstar:.4g} ({'?' if p.truncation is None else f'{p.truncation:.2g}'})"
+                      for p in bad)
+    note = (f"{len(bad)} boundary points move with twice the modes (N = {scene.modes} -> "
+            f"{finer_modes(scene.modes)}) by more than {TRUNCATION_RTOL:g} (relative): at "
+            f"M* = {where}; raise modes (--modes auto)")
+    warnings.warn(note, ModalTruncationWarning, stacklevel=3)
+    return [note]
+
+
+#: Rounds of searches for curves the seeds missed.
+MAX_RESEEDS = 4
+#: Spacing in decades of the grid of log10 M* (its multiples, whatever the requested M*)
+#: on which the steady state just below the envelope is checked to be stable.
+CHECK_STEP = 0.01
+
+
+def _unstable_below(scene, model, curves, lo: float, hi: float, ceiling: float) -> list:
+    """M* in the middle of each run of grid points (:data:`CHECK_STEP`) in [lo, hi] where
+    the steady state at 0.99 x the envelope (x the ceiling where no curve passes) is
+    unstable: a lower curve was not traced there."""
+    envelope, grid = Envelope(curves), _check_grid(lo, hi)
+    bad = np.zeros(grid.size, dtype=bool)
+    for k, lm in enumerate(grid):
+        lowest = envelope.lowest(lm)
+        at = scene.replace(mstar=float(10 ** lm), ustar=0.99 * (lowest[0] if lowest else ceiling))
+        try:
+            bad[k] = eigenvalues(model, steady_state(at, model))[0].real > 0
+        except SteadyStateError:
+            continue
+    edges = np.flatnonzero(np.diff(np.r_[False, bad, False].astype(int)))
+    return [float(10 ** grid[(a + b - 1) // 2]) for a, b in zip(edges[::2], edges[1::2])]
+
+
+def _check_grid(lo: float, hi: float) -> np.ndarray:
+    """The multiples of :data:`CHECK_STEP` in [lo, hi], and lo and hi."""
+    inner = np.arange(math.ceil(lo / CHECK_STEP), math.floor(hi / CHECK_STEP) + 1) * CHECK_STEP
+    return np.unique(np.r_[lo, inner[(inner > lo) & (inner < hi)], hi])
 
 
 def _seed_points(scene, model, seeds, ustar_max, headroom):
@@ -167,10 +222,11 @@ def _seed_points(scene, model, seeds, ustar_max, headroom):
     search found one: only the highest seed (usually the highest onset) gets a separate
     first-onset search, and a search is repeated only when a later seed raises the
     ceiling above where it stopped."""
-    search = lambda i, top, **kw: hopf_points(scene.replace(mstar=float(seeds[i])), model,
-                                              ustar_max, ustar_stop=top, **kw)
+    search = lambda i, top: onset_points(scene.replace(mstar=float(seeds[i])), model,
+                                         ustar_max, ustar_stop=top)
+    first = lambda i: [first_onset(scene.replace(mstar=float(seeds[i])), model, ustar_max)]
     onsets, found, last = {}, {}, len(seeds) - 1
-    _note_onset(onsets, last, search(last, ustar_max, first_only=True))
+    _note_onset(onsets, last, first(last))
     while True:
         ceiling = min(ustar_max, headroom * max(onsets.values(), default=ustar_max))
         todo = [i for i in range(len(seeds)) if i not in found or found[i][0] < 1.05 * ceiling]
@@ -181,75 +237,42 @@ def _seed_points(scene, model, seeds, ustar_max, headroom):
             if found[i][1]:
                 onsets.setdefault(i, found[i][1][0].ustar)
             elif i not in onsets and 1.05 * ceiling < ustar_max:   # its onset is higher
-                _note_onset(onsets, i, search(i, ustar_max, first_only=True))
+                _note_onset(onsets, i, first(i))
     if not onsets:
-        raise CriticalVelocityError(f"no flutter below U* = {ustar_max} at any seed M* {seeds}")
+        raise CriticalVelocityError(f"no onset below U* = {ustar_max} at any seed M* {seeds}")
     return ceiling, [found[i][1] for i in range(len(seeds))]
 
 
 def _note_onset(onsets: dict, i: int, points) -> None:
-    if points:
+    if points and points[0] is not None:
         onsets[i] = points[0].ustar
 
 
 def _add_curves(scene, model, curves, found, window, ceiling, cut) -> None:
-    """Trace the Hopf curve of every found point below ``ceiling`` not yet on a curve;
-    with ``cut`` each half ends where it can no longer be lowest (:func:`_envelope_stop`)."""
-    envelope = _Envelope(curves)
-    make_stop = None if cut is None else lambda: _envelope_stop(envelope, scene.hstar, cut)
+    """Trace the curve of every found onset below ``ceiling`` not yet on a curve; with
+    ``cut`` each half ends where it can no longer be lowest (:func:`_envelope_check`)."""
+    envelope = Envelope(curves)
+    check = None if cut is None else lambda: _envelope_check(envelope, cut)
     for points in found:
         for h in points:
-            if h.ustar <= ceiling and not any(_on_curve(c, h) for c in curves):
+            if h.ustar <= ceiling and not any(_on_curve(scene, model, c, h) for c in curves):
                 first = curves[-1].pieces[-1] + 1 if curves else 0
+                if h.kind == "divergence":
+                    curves.append(trace_divergence_curve(scene, model, h, len(curves), window,
+                                                         ceiling, first, check))
+                    continue
+                stop = None if check is None else lambda: _hopf_stop(check(), scene.hstar)
                 curves.append(trace_hopf_curve(scene, model, h, len(curves), window, ceiling,
-                                               first, make_stop))
+                                               first, stop))
 
 
-class _Envelope:
-    """The segments of all traced curves stacked (in curve order), for their crossings
-    at one log10 M*; restacked when curves are added."""
-
-    def __init__(self, curves: list):
-        self.curves, self._count, self._ends = curves, -1, None
-
-    def _at(self, log_m: float):
-        """Indices of the segments that cross log_m, and the interpolation weights."""
-        if self._count != len(self.curves):
-            parts = [c.segments for c in self.curves]
-            self._ends = [np.concatenate([p[k][j] for p in parts]) for k in range(3) for j in (0, 1)]
-            self._pieces = np.concatenate([c.pieces for c in self.curves])
-            self._count = len(self.curves)
-        a, b = self._ends[:2]
-        i = np.flatnonzero(((a - log_m) * (b - log_m) <= 0) & (a != b))
-        return i, (log_m - a[i]) / (b[i] - a[i])
-
-    def crossings(self, log_m: float) -> tuple[np.ndarray, np.ndarray]:
-        """U* and omega of every traced curve at log10 M* = log_m (linear interpolation)."""
-        if not self.curves:
-            return np.zeros(0), np.zeros(0)
-        i, t = self._at(log_m)
-        _, _, ua, ub, wa, wb = self._ends
-        return ua[i] + t * (ub[i] - ua[i]), wa[i] + t * (wb[i] - wa[i])
-
-    def lowest(self, log_m: float):
-        """(U*, omega, piece) of the lowest crossing at log_m (the first of equal ones),
-        or None."""
-        u, w = self.crossings(log_m)
-        if not u.size:
-            return None
-        k = int(np.argmin(u))
-        return float(u[k]), float(w[k]), int(self._pieces[self._at(log_m)[0][k]])
-
-
-def _envelope_stop(envelope: _Envelope, hstar: float, headroom: float):
-    """``continuation`` stop predicate of one half of a Hopf curve: it ends when the half
-    rises (U* increasing) above ``headroom`` times the lowest curve traced before at its
-    M*. A stretch that high cannot be the lowest curve, like one above the ceiling."""
+def _envelope_check(envelope: Envelope, headroom: float):
+    """``check(ustar, log10_mstar)`` of one half of a curve: true (a message) when the
+    half rises (U* increasing) above ``headroom`` times the lowest curve traced before at
+    its M*. A stretch that high cannot be the lowest curve, like one above the ceiling."""
     last = []
 
-    def stop(problem, X):
-        n = problem.vf.n
-        u, log_m = float(X[n - 2: n].sum() / hstar), float(X[len(X) - 1])
+    def check(u: float, log_m: float):
         rising, last[:] = bool(last) and u > last[0], [u]
         if not rising:
             return False
@@ -257,6 +280,14 @@ def _envelope_stop(envelope: _Envelope, hstar: float, headroom: float):
         return bool(us.size) and u > headroom * us.min() and \
             f"rose above {headroom:g} x the lowest traced curve"
 
+    return check
+
+
+def _hopf_stop(check, hstar: float):
+    """``check`` as a ``continuation`` stop predicate of a Hopf curve's half."""
+    def stop(problem, X):
+        n = problem.vf.n
+        return check(float(X[n - 2: n].sum() / hstar), float(X[len(X) - 1]))
     return stop
 
 
@@ -265,15 +296,22 @@ def _default_seeds(lo: float, hi: float) -> np.ndarray:
     return np.logspace(lo, hi, count)
 
 
-def _on_curve(curve: HopfCurve, h: HopfPoint, rtol: float = 2e-2) -> bool:
-    """Does Hopf point h lie on the traced curve (same U* and frequency at its M*)?"""
-    return any(abs(u - h.ustar) <= rtol * h.ustar and abs(w - h.omega) <= rtol * h.omega
-               for u, w, _ in curve.crossings(math.log10(h.mstar)))
+def _on_curve(scene, model, curve: OnsetCurve, h: Onset, rtol: float = 0.1) -> bool:
+    """Does onset h lie on the traced curve? Its kind, and a crossing at its M* within
+    ``rtol`` in U* and frequency (the curve's interpolation: ~1 % off between samples,
+    more near a fold) whose exact onset (:func:`onset_on_curve`) is h to 1e-6."""
+    log_m = math.log10(h.mstar)
+    near = [k for u, w, k in curve.crossings(log_m) if abs(u - h.ustar) <= rtol * h.ustar
+            and abs(w - h.omega) <= rtol * max(h.omega, 1e-300)]
+    if curve.kind != h.kind or not near:
+        return False
+    exact = (onset_on_curve(scene, model, curve, k, log_m) for k in near)
+    return any(e is not None and abs(e.ustar - h.ustar) <= 1e-6 * h.ustar for e in exact)
 
 
 def _boundary_point(scene, model, curves, mstar, refine) -> BoundaryPoint:
     log_m = math.log10(mstar)
-    lowest = _Envelope(curves).lowest(log_m)
+    lowest = Envelope(curves).lowest(log_m)
     if lowest is None:
         return BoundaryPoint(float(mstar))
     u, w, piece = lowest
@@ -281,62 +319,17 @@ def _boundary_point(scene, model, curves, mstar, refine) -> BoundaryPoint:
     if not refine:
         return point
     curve = next(c for c in curves if piece in set(c.pieces.tolist()))
-    h = _refine(scene, model, mstar, *curve.guess(log_m, piece))
-    if h == "unstable":
-        return replace(point, missed=True)
+    point = replace(point, kind=curve.kind)
+    h = onset_on_curve(scene, model, curve, piece, log_m)
     if h is None:
         return point
-    return replace(point, ustar_crit=h.ustar, omega=h.omega, freq_ratio=h.freq_ratio, l1=h.l1,
-                   criticality=h.criticality, dominant_mode=h.dominant_mode, refined=True)
-
-
-def _refine(scene, model, mstar, x, params, omega):
-    """Newton on the Hopf system at ``mstar`` from the interpolated curve point; then
-    check that the steady state just below is stable (``"unstable"``: a Hopf curve below
-    this one was missed). None if Newton fails."""
-    names = flutter_field(model).par_names
-    values = dict(zip(names, params))
-    values[LOG_M] = math.log10(mstar)
-    problem = C.EquilibriumProblem(flutter_field(model), x, values, PI)
-    located = C.hopf_point(problem, x, omega / TIME_SCALE)
-    if located.status != "converged" or located.data.get("omega", 0.0) <= 0:
-        return None
-    h = hopf_point_from(model, scene, located)
     below = scene.replace(mstar=float(mstar), ustar=0.99 * h.ustar)
     if eigenvalues(model, steady_state(below, model))[0].real > 0:
-        return "unstable"
-    return h
-
-
-def _switches(curves, lo: float, hi: float) -> list[ModeSwitch]:
-    """Every change of the lowest piece on [lo, hi] (log10 M*), scanned on a fine grid of
-    the traced curves (no new solves) and bisected to round-off in log10 M*."""
-    out, envelope = [], _Envelope(curves)
-    grid = np.linspace(lo, hi, 801)
-    lowest = [envelope.lowest(lm) for lm in grid]
-    for k in range(len(grid) - 1):
-        a, b = lowest[k], lowest[k + 1]
-        if a is None or b is None or a[2] == b[2]:
-            continue
-        lo, hi = _switch_bracket(envelope, a[2], grid[k], grid[k + 1])
-        ua, wa, _ = envelope.lowest(lo)
-        ub, wb, _ = envelope.lowest(hi)
-        if abs(ua - ub) < 1e-2 * ub and abs(wa - wb) < 1e-2 * wb:
-            continue     # the same branch traced twice (two pieces overlapping): no switch
-        out.append(ModeSwitch(float(10 ** (0.5 * (lo + hi))), float(ua), float(ub),
-                              a[2], b[2], float(wa), float(wb)))
-    return out
-
-
-def _switch_bracket(envelope, piece: int, lo: float, hi: float) -> tuple[float, float]:
-    """Bisect [lo, hi] (``piece`` lowest at lo, not at hi) to where the lowest piece
-    changes: a crossing of two Hopf curves, or the fold in M* that ends ``piece``."""
-    for _ in range(50):
-        mid = 0.5 * (lo + hi)
-        lowest = envelope.lowest(mid)
-        if lowest is not None and lowest[2] == piece:
-            lo = mid
-        else:
-            hi = mid
-    return lo, hi
-
+        return replace(point, missed=True)   # a curve below this one was not traced
+    error = truncation_error(scene.replace(mstar=float(mstar)), model, h)
+    point = replace(point, ustar_crit=h.ustar, omega=h.omega, freq_ratio=h.freq_ratio,
+                    dominant_mode=h.dominant_mode, refined=True,
+                    truncation=None if math.isnan(error) else error)
+    if h.kind == "flutter":
+        point = replace(point, l1=h.l1, criticality=h.criticality)
+    return point

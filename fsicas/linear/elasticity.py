@@ -78,7 +78,7 @@ class PalateSensitivity:
     def to_json(self) -> dict:
         return {"onset_flow_l_min": self.onset_flow * 60e3,
                 "onset_velocity_m_s": self.onset_velocity, "frequency_hz": self.frequency,
-                "ustar_crit": self.hopf.ustar, "mstar": self.scene.mstar,
+                "kind": self.hopf.kind, "ustar_crit": self.hopf.ustar, "mstar": self.scene.mstar,
                 "dominant_mode": self.hopf.dominant_mode,
                 "sensitivities": {k: s.to_json() for k, s in self.parameters.items()}}
 
@@ -89,7 +89,7 @@ def palate_sensitivity(physical: Physical, *, ustar_max: float = USTAR_MAX,
     doc); ``overrides``: nondimensional Scene fields (modes, ...) as in
     :meth:`Physical.scene`. DesignError when there is no onset below ``ustar_max``."""
     scene, model, hopf = physical_onset(physical, overrides, ustar_max)
-    s = onset_sensitivity(scene, model, hopf)
+    s = onset_sensitivity(scene, model, _flutter(physical, hopf))
     v = dict(physical.values)
     v.update(H1=physical.H1, H2=physical.H2)
     pi_u, pi_w = _nondimensional(s, v, scene)
@@ -177,7 +177,8 @@ def physical_scene(physical: Physical, flow: Flow | None, overrides: dict) -> Sc
 
 
 def physical_onset(physical: Physical, overrides: dict, ustar_max, model: Model | None = None):
-    """``(scene, model, first Hopf point)`` of ``physical``; with a viscosity, at the
+    """``(scene, model, onset)`` of ``physical`` (the first loss of stability, flutter or
+    divergence); with a viscosity, at the
     onset's own friction. ``model`` is reused when it has the scene's structure.
     DesignError when there is no onset below ``ustar_max``."""
     scene = physical_scene(physical, None, overrides)
@@ -186,9 +187,18 @@ def physical_onset(physical: Physical, overrides: dict, ustar_max, model: Model 
     viscous = viscous_friction(physical, overrides)
     scene, hopf, _ = onset_at_own_flow(scene, model, ustar_max, physical if viscous else None)
     if hopf is None:
-        raise DesignError(f"{physical.source}: no flutter onset below U* = {ustar_max:g}; "
+        raise DesignError(f"{physical.source}: no onset of instability below U* = {ustar_max:g}; "
                           "nothing to design")
     return scene, model, hopf
+
+
+def _flutter(physical: Physical, onset) -> HopfPoint:
+    """``onset`` if it is a flutter onset; DesignError for a static divergence."""
+    if onset.kind != "flutter":
+        raise DesignError(f"{physical.source}: the onset at U* = {onset.ustar:.6g} is a static "
+                          "divergence (a real eigenvalue crosses zero); the sensitivities are "
+                          "those of a flutter onset (a Hopf point)")
+    return onset
 
 
 def _fits(model: Model, scene: Scene) -> bool:

@@ -1,20 +1,20 @@
-"""Flutter onset: Hopf points of the steady branch in U*, through ``continuation``.
+"""The onset: the first loss of stability of the steady branch in U*, through
+``continuation`` — a Hopf point (flutter) or a real eigenvalue crossing zero (static
+divergence, :mod:`fsicas.linear.divergence`).
 
 The model is handed to the library through the adapter of :mod:`fsicas.linear.adapter`
 (parameters Π = Δp/(M* PI_SCALE) and log10 M*, time in units of T/TIME_SCALE). The
 steady branch is continued in Π from a small U*; each Hopf point found is located by the
 library (Newton on the Hopf system), with its first Lyapunov coefficient l1 (< 0:
 supercritical, a small stable cycle is born; > 0: subcritical, a jump to large amplitude
-with hysteresis). A located Hopf point is continued in (Π, log10 M*) as a Hopf curve
-(:func:`trace_hopf_curve`, the curves of :mod:`fsicas.linear.boundary`).
+with hysteresis). The curves of onsets in (M*, U*) are in :mod:`fsicas.linear.curves`.
 """
 from __future__ import annotations
 
 import math
 import warnings
-from dataclasses import dataclass, field
-from functools import cached_property
-from typing import Literal
+from dataclasses import dataclass, field, replace
+from typing import ClassVar, Literal
 
 import numpy as np
 
@@ -23,12 +23,15 @@ import continuation as C
 from ..model.assembly import Model, build_model
 from ..scene import Scene
 from .adapter import LOG_M, PI, PI_SCALE, TIME_SCALE, dense, flutter_field, pi_of
+from .divergence import DIVERGENCE_KINDS, DivergencePoint, divergence_point_from
 from .stability import generalized_eigen
-from .steady import steady_state
+from .truncation import truncation_error, truncation_warning
+from .steady import SteadyStateError, steady_state
 
-__all__ = ["Criticality", "HopfPoint", "CriticalVelocityError", "ModalTruncationWarning", "flutter_problem", "hopf_points",
-           "critical_velocity", "dominant_mode", "hopf_point_from", "eigenvector_q", "HopfCurve",
-           "trace_hopf_curve"]
+__all__ = ["Criticality", "HopfPoint", "Onset", "CriticalVelocityError", "ModalTruncationWarning",
+           "flutter_problem", "steady_branch", "hopf_points", "first_hopf", "critical_velocity",
+           "first_onset", "onset_points",
+           "ONSET_KINDS", "dominant_mode", "hopf_point_from", "eigenvector_q"]
 
 #: Sign of the first Lyapunov coefficient at a Hopf point: l1 < 0 "supercritical" (a small
 #: stable cycle is born), l1 > 0 "subcritical" (a jump to large amplitude, hysteresis).
@@ -44,20 +47,22 @@ class ModalTruncationWarning(UserWarning):
     bound, or the flutter mode is the last mode kept (more modes may move it)."""
 
 
-def warn_if_truncated(scene: Scene, hopf: "HopfPoint | None", ustar_max: float) -> None:
+def _finite(value: float) -> float | None:
+    return None if math.isnan(value) else value
+
+
+def warn_if_truncated(scene: Scene, hopf, ustar_max: float) -> None:
     """A :class:`ModalTruncationWarning` when ``hopf`` (the onset found with
-    ``scene.modes`` modes below ``ustar_max``) may be an artefact of the truncation."""
+    ``scene.modes`` modes below ``ustar_max``) may be an artefact of the truncation:
+    none found, or its truncation error (``hopf.truncation``) above the tolerance."""
     if hopf is None:
-        warnings.warn(f"no flutter onset below U* = {ustar_max:g} (the search bound) at M* = "
+        warnings.warn(f"no onset of instability below U* = {ustar_max:g} (the search bound) at M* = "
                       f"{scene.mstar:g} with N = {scene.modes} modes: either it lies higher or "
                       "the modes kept do not resolve it (the flutter mode rises with M*); "
                       "check with a higher bound and more modes",
                       ModalTruncationWarning, stacklevel=3)
-    elif hopf.dominant_mode >= scene.modes:
-        warnings.warn(f"the flutter mode at M* = {scene.mstar:g} is mode {hopf.dominant_mode}, "
-                      f"the last of the N = {scene.modes} kept: the onset U*_c = "
-                      f"{hopf.ustar:.4g} is not resolved by this truncation; raise modes",
-                      ModalTruncationWarning, stacklevel=3)
+    elif (note := truncation_warning(scene, hopf, hopf.truncation)) is not None:
+        warnings.warn(note, ModalTruncationWarning, stacklevel=3)
 
 
 @dataclass(frozen=True)
@@ -74,6 +79,10 @@ class HopfPoint:
     precision: float
     x: np.ndarray = field(repr=False)
     point: object = field(repr=False, default=None)
+    #: relative change of U* with twice the modes (:mod:`fsicas.linear.truncation`)
+    truncation: float = math.nan
+
+    kind: ClassVar[str] = "flutter"
 
     @property
     def supercritical(self) -> bool:
@@ -85,10 +94,15 @@ class HopfPoint:
         return "supercritical" if self.supercritical else "subcritical"
 
     def to_json(self) -> dict:
-        return {"mstar": self.mstar, "ustar_crit": self.ustar, "pressure_drop": self.pressure_drop,
+        return {"kind": self.kind, "mstar": self.mstar, "ustar_crit": self.ustar,
+                "pressure_drop": self.pressure_drop,
                 "omega": self.omega, "freq_ratio": self.freq_ratio, "l1": self.l1,
                 "criticality": self.criticality,
-                "dominant_mode": self.dominant_mode}
+                "dominant_mode": self.dominant_mode, "truncation": _finite(self.truncation)}
+
+
+#: The onset of instability of the steady branch: flutter or divergence (``.kind``).
+Onset = HopfPoint | DivergencePoint
 
 
 def flutter_problem(scene: Scene, model: Model, ustar_start: float) -> C.EquilibriumProblem:
@@ -143,6 +157,52 @@ def eigenvector_q(model: Model, x, params, omega) -> np.ndarray:
     return vec[n:2 * n, k]
 
 
+def steady_branch(scene: Scene, model: Model, ustar_max: float, ustar_start: float = 0.2, *,
+                  stop_at: tuple = (), ustar_stop: float | None = None) -> C.Branch:
+    """The steady branch continued in Π from ``ustar_start`` towards ``ustar_max`` (its
+    special points located), ended at ``ustar_stop`` (< ustar_max, with the steps of
+    ``ustar_max``) or past the first special point of a kind in ``stop_at``.
+
+    The Π bound is the steady state's at ``ustar_max``; where no steady state is found
+    there (the branch may fold or be lost above the onset), it is extrapolated as
+    ``Π ∝ U*^2`` from the start, with a margin, and points above ``ustar_max`` are not
+    used by the callers. CriticalVelocityError when the start is already unstable."""
+    if not 0 < ustar_start < ustar_max:
+        raise ValueError(f"need 0 < ustar_start < ustar_max, got {ustar_start}, {ustar_max}")
+    problem = flutter_problem(scene, model, ustar_start)
+    pi_max = _pi_bound(scene, model, ustar_max, problem.X0[-1], ustar_start)
+    pi_stop = None if ustar_stop is None or ustar_stop >= ustar_max else \
+        _pi_bound(scene, model, ustar_stop, problem.X0[-1], ustar_start)
+    branch = C.continuation(problem, settings=_settings(problem.X0[-1], pi_max, stop_at=stop_at,
+                                                        pi_stop=pi_stop))
+    if branch.n_unstable is not None and len(branch.n_unstable) and branch.n_unstable[0] > 0:
+        raise CriticalVelocityError(
+            f"the steady state is already unstable at U* = {ustar_start:g} (M* = {scene.mstar:g}); "
+            "lower ustar_start")
+    return branch
+
+
+def _pi_bound(scene: Scene, model: Model, ustar: float, pi_start: float, ustar_start: float) -> float:
+    """Π at ``ustar``: the steady state's, or (none found there) the margin
+    :data:`PI_MARGIN` times ``pi_start (ustar / ustar_start)^2``."""
+    try:
+        return pi_of(scene, model, ustar)
+    except SteadyStateError:
+        return PI_MARGIN * pi_start * (ustar / ustar_start) ** 2
+
+
+#: Margin of the extrapolated Π bound (:func:`_pi_bound`) over ``Π ∝ U*^2``.
+PI_MARGIN = 1.5
+
+
+def _lost(scene: Scene, branch: C.Branch, ustar_max: float) -> None:
+    """CriticalVelocityError when the branch was lost (the corrector failed) below
+    ``ustar_max``."""
+    if branch.status == "failed" and branch.x[-1, -2:].sum() / scene.hstar < ustar_max:
+        raise CriticalVelocityError(f"steady branch lost at M* = {scene.mstar:g}, U* = "
+                                    f"{branch.x[-1, -2:].sum() / scene.hstar:.6g}: {branch.message}")
+
+
 def hopf_points(scene: Scene, model: Model | None = None, ustar_max: float = 40.0,
                 ustar_start: float = 0.2, *, first_only: bool = False,
                 ustar_stop: float | None = None) -> list[HopfPoint]:
@@ -151,142 +211,102 @@ def hopf_points(scene: Scene, model: Model | None = None, ustar_max: float = 40.
     holds the Hopf points of that step only). ``ustar_stop`` (< ustar_max) ends the
     branch there, with the steps of ``ustar_max``: the Hopf points below it are those of
     the full search (same steps), the ones above it are not searched."""
-    if not 0 < ustar_start < ustar_max:
-        raise ValueError(f"need 0 < ustar_start < ustar_max, got {ustar_start}, {ustar_max}")
     model = model or build_model(scene)
-    problem = flutter_problem(scene, model, ustar_start)
-    pi_max = pi_of(scene, model, ustar_max)
-    pi_stop = None if ustar_stop is None or ustar_stop >= ustar_max else \
-        pi_of(scene, model, ustar_stop)
-    stop_at = ("hopf",) if first_only else ()
-    branch = C.continuation(problem, settings=_settings(problem.X0[-1], pi_max, stop_at=stop_at,
-                                                        pi_stop=pi_stop))
-    if branch.status == "failed":
-        raise CriticalVelocityError(f"steady branch lost at M* = {scene.mstar:g}: {branch.message}")
-    if branch.n_unstable is not None and len(branch.n_unstable) and branch.n_unstable[0] > 0:
-        raise CriticalVelocityError(
-            f"the steady state is already unstable at U* = {ustar_start:g} (M* = {scene.mstar:g}); "
-            "lower ustar_start")
-    return [hopf_point_from(model, scene, h) for h in branch.special("hopf")]
+    branch = steady_branch(scene, model, ustar_max, ustar_start,
+                           stop_at=("hopf",) if first_only else (), ustar_stop=ustar_stop)
+    points = [hopf_point_from(model, scene, h) for h in branch.special("hopf")]
+    points = [h for h in points if h.ustar <= ustar_max]
+    if not (first_only and points):
+        _lost(scene, branch, ustar_max)
+    return points
+
+
+def first_hopf(scene: Scene, model: Model | None = None, ustar_max: float = 40.0,
+               ustar_start: float = 0.2) -> HopfPoint | None:
+    """The first Hopf point of the steady branch below ``ustar_max`` (None if none),
+    whether or not the steady state lost its stability statically before it."""
+    points = hopf_points(scene, model, ustar_max, ustar_start, first_only=True)
+    return points[0] if points else None
+
+
+#: The special points of the steady branch where it may lose its stability.
+ONSET_KINDS = ("hopf", *DIVERGENCE_KINDS)
 
 
 def critical_velocity(scene: Scene, model: Model | None = None, ustar_max: float = 40.0,
-                      ustar_start: float = 0.2) -> HopfPoint | None:
-    """The first Hopf point (flutter onset) of the steady branch, or None below ustar_max;
-    a :class:`ModalTruncationWarning` when the modes kept may not resolve it."""
-    points = hopf_points(scene, model, ustar_max, ustar_start, first_only=True)
-    hopf = points[0] if points else None
-    warn_if_truncated(scene, hopf, ustar_max)
-    return hopf
+                      ustar_start: float = 0.2) -> Onset | None:
+    """The onset: the first loss of stability of the steady branch below ``ustar_max``,
+    whatever its kind (``.kind``): a Hopf point (``"flutter"``, a :class:`HopfPoint`) or a
+    real eigenvalue crossing zero (``"divergence"``, a :class:`DivergencePoint`); None
+    if the branch stays stable. Its ``truncation``: the relative change of U*_c with
+    twice the modes (:mod:`fsicas.linear.truncation`); a :class:`ModalTruncationWarning`
+    when that exceeds its tolerance or no onset is found."""
+    model = model or build_model(scene)
+    onset = first_onset(scene, model, ustar_max, ustar_start)
+    if onset is not None:
+        onset = replace(onset, truncation=truncation_error(scene, model, onset))
+    warn_if_truncated(scene, onset, ustar_max)
+    return onset
 
 
-@dataclass(frozen=True)
-class HopfCurve:
-    """A traced Hopf curve: arrays along the curve (ordered by arclength). ``status``:
-    "bound" when both halves ran to the window's bounds (or were ended by the tracing's
-    ``stop`` predicate), else the library's status of the half that stopped first
-    (``message`` says why)."""
+def first_onset(scene: Scene, model: Model | None = None, ustar_max: float = 40.0,
+                ustar_start: float = 0.2) -> Onset | None:
+    """:func:`critical_velocity` without the truncation warning.
 
-    index: int
-    mstar: np.ndarray
-    ustar: np.ndarray
-    omega: np.ndarray
-    dominant_mode: np.ndarray
-    status: C.Status
-    first_piece: int = 0
-    states: np.ndarray = field(default=None, repr=False)   # steady states along the curve
-    params: np.ndarray = field(default=None, repr=False)   # adapter parameters along it
-    message: str = ""
-
-    def guess(self, log_m: float, piece: int) -> tuple[np.ndarray, np.ndarray, float]:
-        """Interpolated (state, params, omega) on ``piece`` at log10 M* = log_m."""
-        lm = np.log10(self.mstar)
-        for i in np.flatnonzero(self.pieces == piece):   # pieces are per segment
-            a, b = lm[i], lm[i + 1]
-            if (a - log_m) * (b - log_m) <= 0 and a != b:
-                t = (log_m - a) / (b - a)
-                mix = lambda arr: arr[i] + t * (arr[i + 1] - arr[i])
-                return mix(self.states), mix(self.params), float(mix(self.omega))
-        raise ValueError(f"piece {piece} does not reach log10 M* = {log_m}")
-
-    @property
-    def pieces(self) -> np.ndarray:
-        """Branch id of each segment (length = points - 1): a new id after every fold in M*
-        (the lower envelope jumps between pieces, even of one curve)."""
-        return self._pieces.copy()
-
-    @cached_property
-    def _pieces(self) -> np.ndarray:
-        step = np.sign(np.diff(np.log10(self.mstar)))
-        turns = np.concatenate([[0], np.cumsum(step[1:] * step[:-1] < 0)])
-        return self.first_piece + turns
-
-    @cached_property
-    def segments(self) -> tuple:
-        """Ends of the segments in log10 M*, U* and omega (arrays of length points - 1)."""
-        lm = np.log10(self.mstar)
-        ends = lambda arr: (arr[:-1], arr[1:])
-        return ends(lm), ends(self.ustar), ends(self.omega)
-
-    def crossings(self, log_m: float) -> list[tuple[float, float, int]]:
-        """(U*, omega, piece) where the curve passes log10 M* = log_m (linear interpolation)."""
-        (a, b), (ua, ub), (wa, wb) = self.segments
-        i = np.flatnonzero(((a - log_m) * (b - log_m) <= 0) & (a != b))
-        t = (log_m - a[i]) / (b[i] - a[i])
-        u, w = ua[i] + t * (ub[i] - ua[i]), wa[i] + t * (wb[i] - wa[i])
-        return [(float(uk), float(wk), int(pk)) for uk, wk, pk in zip(u, w, self._pieces[i])]
+    The branch stops past its first special point; where that one leaves the branch
+    stable (a branch point rejected on re-evaluation can), the search goes on from there."""
+    model = model or build_model(scene)
+    start = ustar_start
+    for _ in range(MAX_RESTARTS):
+        branch = steady_branch(scene, model, ustar_max, start, stop_at=ONSET_KINDS)
+        onset = _first_loss(model, scene, branch)
+        if onset is not None or branch.status != "stopped":
+            break
+        start = float(branch.x[-1, -2:].sum() / scene.hstar)
+    if onset is not None and onset.ustar > ustar_max:
+        onset = None
+    if onset is None:
+        _lost(scene, branch, ustar_max)
+    return onset
 
 
-def trace_hopf_curve(scene: Scene, model: Model, h: HopfPoint, index: int, window, ustar_max: float,
-                     first_piece: int = 0, make_stop=None) -> HopfCurve:
-    """Continue the Hopf curve through h both ways inside the (log10 M*, U*) window
-    (log10 M* in ``window``, U* up to ``ustar_max``), in (Π, log10 M*). ``make_stop()``
-    (optional) returns for each half a ``continuation`` stop predicate that may end it
-    earlier."""
-    problem = flutter_problem(scene.replace(mstar=h.mstar), model, ustar_start=0.2)
-    pi_max = _pi_max(h, ustar_max)
-    halves, status, message = [], "bound", ""
-    for direction in (-1, 1):
-        settings = C.ContinuationSettings(
-            ds=0.05, ds_min=1e-8, ds_max=0.3, max_steps=300, direction=direction,
-            bounds={LOG_M: window, PI: (0.0, pi_max)}, detect=False, compute_eigenvalues=False,
-            newton=C.NewtonSettings(tol=1e-8))   # curve points only guide; points are refined
-        branch = C.continuation(C.HopfCurveProblem.from_point(problem, h.point, LOG_M),
-                                settings=settings, record=_mode_recorder(model),
-                                stop=make_stop() if make_stop else None)
-        if branch.status not in ("bound", "stopped") and status == "bound":
-            status, message = branch.status, branch.message
-        halves.append(branch)
-    lower, upper = halves
-    join = lambda a, b: np.concatenate([a[::-1], b[1:]])
-    x, params = join(lower.x, upper.x), join(lower.params, upper.params)
-    kappa = join(lower.columns["kappa"], upper.columns["kappa"])
-    keep = kappa > 0           # neutral-saddle stretches are not Hopf points
-    x, params, omega = x[keep], params[keep], np.sqrt(kappa[keep])
-    names = lower.par_names
-    modes = join(lower.columns["mode"], upper.columns["mode"])[keep].astype(int)
-    lm = params[:, names.index(LOG_M)]
-    return HopfCurve(index, 10 ** lm, x[:, -2:].sum(axis=1) / scene.hstar, omega * TIME_SCALE,
-                     modes, status, int(first_piece), x, params, message)
+def onset_points(scene: Scene, model: Model | None = None, ustar_max: float = 40.0,
+                 ustar_start: float = 0.2, *, ustar_stop: float | None = None) -> list[Onset]:
+    """Every Hopf point and every located divergence of the steady branch for U* in
+    (ustar_start, ustar_max), in order of U* (``ustar_stop`` as in :func:`hopf_points`):
+    where the branch loses or regains stability, or an unstable one changes."""
+    model = model or build_model(scene)
+    branch = steady_branch(scene, model, ustar_max, ustar_start, ustar_stop=ustar_stop)
+    points = [_onset_from(model, scene, p) for p in branch.special_points
+              if p.kind == "hopf" or (p.kind in DIVERGENCE_KINDS and p.status == "converged")]
+    _lost(scene, branch, ustar_max)
+    return sorted((p for p in points if p.ustar <= ustar_max), key=lambda p: p.ustar)
 
 
-def _mode_recorder(model):
-    """``record`` hook of a Hopf curve: the dominant mode of the eigenvector
-    ``q = v - i w / omega`` of ``i omega`` carried by the unknowns ``X = (x, v, w, kappa,
-    ...)`` (0 where ``kappa <= 0``), instead of an eigen-decomposition per point."""
-    n = model.n_modes
-
-    def record(problem, X):
-        m, kappa = problem.vf.n, X[3 * problem.vf.n]
-        if kappa <= 0:
-            return {"mode": 0.0}
-        q = X[m: 2 * m] - 1j * X[2 * m: 3 * m] / np.sqrt(kappa)
-        return {"mode": float(dominant_mode(model, q[n: 2 * n]))}
-
-    return record
+def _onset_from(model: Model, scene: Scene, point) -> Onset:
+    """The HopfPoint or DivergencePoint of a special point of the steady branch."""
+    if point.kind == "hopf":
+        return hopf_point_from(model, scene, point)
+    return divergence_point_from(model, scene, point)
 
 
-def _pi_max(h: HopfPoint, ustar_max: float) -> float:
-    """Π bound equivalent to U* <= ustar_max, scaled from the Hopf point (Π ∝ U*^2)."""
-    pi_h = h.pressure_drop / (h.mstar * PI_SCALE)
-    return pi_h * (ustar_max / h.ustar) ** 2
+#: Restarts of the onset search past special points that leave the branch stable.
+MAX_RESTARTS = 20
+
+
+def _first_loss(model: Model, scene: Scene, branch: C.Branch) -> Onset | None:
+    """The special point (the lowest in U* of those in that step) of the first step
+    after which the branch has an unstable eigenvalue; None if it stays stable.
+    CriticalVelocityError when no special point was located in that step."""
+    unstable = np.flatnonzero(branch.n_unstable > 0)
+    if not unstable.size:
+        return None
+    step = int(unstable[0])
+    found = [p for p in branch.special_points if p.index == step and p.kind in ONSET_KINDS]
+    if not found:
+        raise CriticalVelocityError(
+            f"the steady state loses its stability between U* = "
+            f"{branch.x[step - 1, -2:].sum() / scene.hstar:.6g} and "
+            f"{branch.x[step, -2:].sum() / scene.hstar:.6g} (M* = {scene.mstar:g}) but no "
+            "Hopf, branch or fold point was located there")
+    return _onset_from(model, scene, min(found, key=lambda p: p.x[-2:].sum()))

@@ -1,4 +1,5 @@
-"""The flutter onset of a physical configuration whose friction depends on the flow.
+"""The onset (flutter or divergence) of a physical configuration whose friction depends
+on the flow.
 
 With a viscosity instead of a fixed friction (``fsicas.physical``), the Fanning f of
 Eq. (15) depends on the Reynolds number of the airflow, so the onset is that of the
@@ -9,7 +10,7 @@ from __future__ import annotations
 
 from ..physical import Flow, Physical
 from ..scene import Scene
-from .hopf import HopfPoint, critical_velocity
+from .hopf import Onset, critical_velocity
 
 __all__ = ["onset_at_own_flow", "FRICTION_STEPS", "FRICTION_RTOL"]
 
@@ -18,11 +19,12 @@ FRICTION_STEPS, FRICTION_RTOL = 12, 1e-6
 
 
 def onset_at_own_flow(scene: Scene, model, ustar_max: float, physical: Physical | None = None
-                      ) -> tuple[Scene, HopfPoint | None, float | None]:
-    """The first Hopf point of ``scene`` below ``ustar_max``; with ``physical`` (whose
+                      ) -> tuple[Scene, Onset | None, float | None]:
+    """The onset of ``scene`` below ``ustar_max`` (:func:`critical_velocity`: the first
+    loss of stability, ``.kind`` "flutter" or "divergence"); with ``physical`` (whose
     friction comes from a viscosity) the friction is taken at the onset's own flow, from
-    the scene's, by fixed-point steps. Returns the scene with that friction, the Hopf
-    point (None if there is none) and the Reynolds number of the last step (None without
+    the scene's, by fixed-point steps. Returns the scene with that friction, the onset
+    (None if there is none) and the Reynolds number of the last step (None without
     ``physical``)."""
     hopf = critical_velocity(scene, model, ustar_max)
     reynolds = None

@@ -1,8 +1,9 @@
 """Figures of the linear analysis (paper Figs. 2 and 3), the eigenvalue map and the
 boundary variants.
 
-The flutter boundary is drawn branch by branch (:func:`branch_lines`): each stretch on
-which one Hopf branch is the lowest runs through the traced Hopf curve's points and the
+The stability boundary is drawn branch by branch (:func:`branch_lines`): each stretch on
+which one branch of onsets is the lowest (a Hopf branch: flutter, solid; a divergence
+branch: dashed) runs through the traced curve's points and the
 boundary samples up to the located mode switches at its ends, so no line joins two
 branches across a switch; at a fold in M* the jump of U*_c is a dotted connector. A
 branch's colour is that of its dominant in-vacuo mode (the same mode, the same colour,
@@ -35,7 +36,8 @@ CURVE_GREY, LINK_GREY = "0.82", "0.35"
 
 @dataclass(frozen=True)
 class BranchLine:
-    """One stretch of the flutter boundary on which Hopf branch ``branch`` is the lowest:
+    """One stretch of the stability boundary on which ``branch`` is the lowest, of ``kind``
+    "flutter" (a Hopf branch) or "divergence" (omega = 0):
     ``mstar``, ``ustar``, ``omega`` (rad per unit T) along it, ordered by M*, ending at the
     located switches (``start``/``end``: the :class:`~fsicas.linear.boundary.ModeSwitch`
     at each end, None at the ends of the sampled range). ``samples``: the boundary points
@@ -49,6 +51,7 @@ class BranchLine:
     samples: list = field(default_factory=list)
     start: object = None
     end: object = None
+    kind: str = "flutter"
 
 
 def _onsets(boundary: StabilityBoundary) -> list:
@@ -128,8 +131,10 @@ def branch_lines(boundary: StabilityBoundary) -> list[BranchLine]:
             continue
         rows = rows[np.argsort(rows[:, 0], kind="stable")]
         mode = _stretch_mode(boundary, pieces, samples)
+        kind = next((c.kind for c in boundary.curves if branch in set(c.pieces.tolist())),
+                    "flutter")
         lines.append(BranchLine(int(branch), mode, rows[:, 0], rows[:, 1], rows[:, 2], samples,
-                                start, end))
+                                start, end, kind))
     return lines
 
 
@@ -175,8 +180,10 @@ def mode_color(mode: int | None, fallback: int = 0) -> str:
 
 
 def _omega_1(boundary) -> float:
-    p = next(p for p in boundary.points if p["ustar_crit"] is not None)
-    return p["omega"] / p["freq_ratio"]
+    """omega_1 from a flutter point of the boundary (1 if it has none)."""
+    p = next((p for p in boundary.points if p["ustar_crit"] is not None and p["freq_ratio"]),
+             None)
+    return p["omega"] / p["freq_ratio"] if p else 1.0
 
 
 def _scene_words(scene) -> str:
@@ -187,9 +194,10 @@ def _scene_words(scene) -> str:
 
 @styled
 def plot_boundary(boundary: StabilityBoundary, path=None):
-    """Fig. 2: the critical velocity U*_c(M*) over all traced Hopf curves (left), the
-    frequency at onset omega / omega_1 (middle), both drawn per branch up to the mode
-    switches and coloured by the flutter mode, and the first Lyapunov coefficient l1
+    """Fig. 2: the critical velocity U*_c(M*) over all traced curves of onsets (left;
+    Hopf curves solid, divergence curves dashed), the frequency at onset omega / omega_1
+    (middle; 0 for divergence), both drawn per branch up to the mode switches and
+    coloured by the dominant mode, and the first Lyapunov coefficient l1
     along the boundary (right; > 0: subcritical). Returns the Figure."""
     fig, axes = subplots(1, 3, figsize=(7.6, 2.7))
     left, mid, crit = axes[0]
@@ -198,7 +206,7 @@ def plot_boundary(boundary: StabilityBoundary, path=None):
     _criticality_panel(crit, _onsets(boundary))
     u = np.concatenate([line.ustar for line in lines]) if lines else np.ones(1)
     left.set(xscale="log", xlabel=MSTAR, ylabel=USTAR_C, ylim=(0, 1.25 * u.max()),
-             title="flutter boundary")
+             title="stability boundary")
     mid.set(xscale="log", xlabel=MSTAR, ylabel=RATIO, title="frequency at onset")
     fig.legend(*_legend_entries(left), loc="outside right upper")
     fig.suptitle(_scene_words(boundary.scene))
@@ -219,15 +227,19 @@ def _onset_panels(left, mid, boundary: StabilityBoundary, lines: list[BranchLine
     """U*_c (over the grey Hopf curves) and omega / omega_1 against M*, one line per
     stretch, samples as dots, folds' jumps dotted, the marked points lettered,
     subcritical points crossed."""
-    for k, c in enumerate(boundary.curves):
-        left.plot(c.mstar, c.ustar, color=CURVE_GREY, lw=0.6, zorder=1,
-                  label="traced Hopf curves" if k == 0 else None)
-    w1 = _omega_1(boundary) if lines else 1.0
+    for kind, style, words in (("flutter", "-", "traced Hopf curves"),
+                               ("divergence", "--", "traced divergence curves")):
+        for k, c in enumerate(c for c in boundary.curves if c.kind == kind):
+            left.plot(c.mstar, c.ustar, style, color=CURVE_GREY, lw=0.6, zorder=1,
+                      label=words if k == 0 else None)
+    w1 = _omega_1(boundary)
     for k, line in enumerate(lines):
         color = mode_color(line.mode, k)
         label = f"mode {line.mode}" if line.mode else f"branch {line.branch}"
+        style = "--" if line.kind == "divergence" else "-"
         for ax, y in ((left, line.ustar), (mid, line.omega / w1)):
-            ax.plot(line.mstar, y, color=color, lw=1.5, label=label, gid=f"branch {line.branch}")
+            ax.plot(line.mstar, y, style, color=color, lw=1.5, label=label,
+                    gid=f"branch {line.branch}")
             m = [p["mstar"] for p in line.samples]
             s = [p["ustar_crit"] if ax is left else p["freq_ratio"] for p in line.samples]
             ax.plot(m, s, "o", ms=2.2, color=color, zorder=3)
@@ -334,10 +346,10 @@ def plot_boundary_variants(curves: dict, path=None):
     left, right = axes[0]
     for k, (label, boundary) in enumerate(curves.items()):
         color, lines = PALETTE[k % len(PALETTE)], branch_lines(boundary)
-        w1 = _omega_1(boundary) if lines else 1.0
+        w1 = _omega_1(boundary)
         for j, line in enumerate(lines):
             for ax, y in ((left, line.ustar), (right, line.omega / w1)):
-                ax.plot(line.mstar, y, color=color, label=_math(label) if j == 0 else None,
+                ax.plot(line.mstar, y, "--" if line.kind == "divergence" else "-", color=color, label=_math(label) if j == 0 else None,
                         gid=f"{label}: branch {line.branch}")
                 ax.plot([p["mstar"] for p in line.samples],
                         [(p["ustar_crit"] if ax is left else p["freq_ratio"]) for p in line.samples],

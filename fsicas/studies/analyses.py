@@ -58,9 +58,9 @@ def _onset(study: Study, point: dict) -> dict:
                                        physical if viscous else None)
     row = {"found": hopf is not None, "mstar": scene.mstar, "hstar": scene.hstar,
            "friction": scene.friction}
-    keys = ("ustar_crit", "omega", "pressure_drop", "freq_ratio", "l1", "criticality",
+    keys = ("kind", "ustar_crit", "omega", "pressure_drop", "freq_ratio", "l1", "criticality",
             "dominant_mode")
-    row.update({k: (hopf.to_json()[k] if hopf else None) for k in keys})
+    row.update({k: (hopf.to_json().get(k) if hopf else None) for k in keys})
     if physical is not None:
         sc = scene.scales
         row.update(onset_flow_l_min=sc.l_per_min(hopf.ustar) if hopf else None,

@@ -308,6 +308,22 @@ def test_narrow_unstable_window_is_resolved_by_the_eigenvalue_step_limit():
     assert np.allclose(hopf, [0.99, 1.01], atol=1e-10, rtol=0)
 
 
+def test_narrow_window_of_divergence_is_resolved_by_the_eigenvalue_step_limit():
+    """A real eigenvalue a = eps - (mu - 1)^2 of the trivial branch of x' = a x - x^3,
+    y' = mu - y: positive only for |mu - 1| < 0.01 (two pitchforks, det F_x changes sign
+    twice), inside steps of 0.3. Without the limit the window is jumped over; with it
+    both branch points are found at their known values 1 -+ 0.01."""
+    x, p = ca.SX.sym("x", 2), ca.SX.sym("p", 1)
+    a = 1e-4 - (p[0] - 1) ** 2
+    F = ca.Function("F", [x, p], [ca.vertcat(a * x[0] - x[0] ** 3, p[0] - x[1])])
+    run = lambda **kw: C.continuation(C.EquilibriumProblem(F, [0.0, 0.0], {"mu": 0.0}, "mu"),
+                                      settings=settings(ds=0.3, ds_max=0.3, max_steps=40,
+                                                        bounds={"mu": (0.0, 2.0)}, **kw))
+    assert run(eigen_step=0.0).special("bp") == []
+    bps = sorted(b.params["mu"] for b in run().special("bp") if b.status == "converged")
+    assert np.allclose(bps, [0.99, 1.01], atol=1e-9, rtol=0)
+
+
 def test_eigenvalue_step_limit_costs_few_steps_on_a_plain_crossing():
     """a = mu - 1 (one crossing, no window): the limit lets the step cross at once, so
     the branch takes at most two more points than without it (no Zeno shrinking)."""
@@ -375,3 +391,26 @@ def test_max_turn_bounds_the_angle_between_successive_tangents():
     bounded, br = turns(0.2)
     assert free.max() > 0.5
     assert bounded.max() <= 0.2 + 1e-9 and br.stats["rejected_steps"] > 0
+
+
+@pytest.mark.parametrize("amplitude", [0.05, -0.05])
+def test_switching_at_a_pitchfork_follows_the_symmetry_breaking_branch(amplitude):
+    """x' = mu x - x^3, y' = mu - y: the trivial branch has a pitchfork at mu = 0; the
+    switched branch is x = +-sqrt(mu) (closed form), stable, on the side of the
+    amplitude's sign."""
+    x, p = ca.SX.sym("x", 2), ca.SX.sym("p", 1)
+    F = ca.Function("F", [x, p], [ca.vertcat(p[0] * x[0] - x[0] ** 3, p[0] - x[1])])
+    problem = C.EquilibriumProblem(F, [0.0, -1.0], {"mu": -1.0}, "mu")
+    trivial = C.continuation(problem, settings=settings(ds=0.1, ds_max=0.1, max_steps=40,
+                                                        bounds={"mu": (-1.0, 1.0)}))
+    (bp,) = [b for b in trivial.special("bp") if b.status == "converged"]
+    assert abs(bp.params["mu"]) < 1e-10
+    new = C.equilibrium_from_bp(problem, bp, amplitude=amplitude)
+    branch = C.continuation(new, settings=settings(ds=0.05, ds_max=0.1, max_steps=40,
+                                                   bounds={"mu": (-1.0, 1.0)}))
+    mu, u = branch.par("mu"), branch.x[:, 0]
+    assert branch.status == "bound" and mu[-1] > 0.9
+    assert np.allclose(u, np.sign(amplitude) * np.sqrt(mu), atol=1e-8, rtol=0)   # corrector tol
+    assert np.all(branch.n_unstable == 0)
+    with pytest.raises(ValueError, match="amplitude"):
+        C.equilibrium_from_bp(problem, bp, amplitude=0.0)
