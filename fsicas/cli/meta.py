@@ -68,8 +68,7 @@ UNITS = {
     "onset": {"mstar": _RATIO, "ustar_crit": _BRANCH["ustar"], "pressure_drop": _PRESSURE,
               "omega": _RATE, "freq_ratio": _RATIO + " (omega / omega_1)",
               "ustar_reference": _BRANCH["ustar"], "ustar_max": _BRANCH["ustar"],
-              "truncation": _RATIO + " (relative change of ustar_crit with twice the modes)",
-              "deflected": "ustar " + _RATIO + "; tip_deflection " + _LENGTH},
+              "truncation": _RATIO + " (relative change of ustar_crit with twice the modes)"},
     "paper": {"omega_invacuo": _RATE, "steady": f"pressure_drop, closed_form {_PRESSURE}; "
               f"Q {_FLOW}", "boundary": "as fsicas boundary: omega " + _RATE,
               "variants": "ustar_crit, freq_ratio " + _RATIO, "impact_map": "counts",

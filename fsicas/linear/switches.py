@@ -1,18 +1,21 @@
-"""Mode switches of the flutter boundary located on their defining equations.
+"""Mode switches of the stability boundary: found on the traced curves, located on their
+defining equations.
 
-The envelope of the traced Hopf curves (:mod:`fsicas.linear.boundary`) brackets each
-switch between curve samples. Here each one is solved for, with every evaluation an
-exact Hopf point (Newton on the Hopf system, :func:`continuation.hopf_point`), not an
-interpolation of the samples:
+:func:`find_switches` scans the envelope of the traced curves (:class:`Envelope`) on 801
+points of log10 M* and bisects each change of the lowest piece between curve samples.
+Each one is then solved for (:func:`located_switches`), with every evaluation an exact
+onset (Newton on the Hopf system, :func:`continuation.hopf_point`, or a divergence solved
+in U*), not an interpolation of the samples:
 
-- a **crossing** of two Hopf curves (a double-Hopf point: the same steady state has two
-  imaginary pairs, U*_c is continuous, the frequency jumps) is the root in log10 M* of
+- a **crossing** of two curves (a double-Hopf point: the same steady state has two
+  imaginary pairs; or a Hopf and a divergence curve; U*_c is continuous, the frequency
+  jumps) is the root in log10 M* of
   ``U*_a(M*) - U*_b(M*)``, the onsets of the two curves at that M* (Brent's method);
 - a **fold** of a curve in M* (the window of instability between its two Hopf points
   closes, U*_c jumps) is the extremum of log10 M* along the curve, parametrized by the
   pressure drop Π near the fold: log10 M*(Π) is the Hopf point at fixed Π with log10 M*
-  free (bounded Brent search); the U* above it is the exact onset of the next curve
-  there.
+  free (bounded Brent search); the U* above it is the exact onset of the lowest curve
+  just past it.
 
 A switch whose solve fails keeps its bracketed value (``located = False``).
 """

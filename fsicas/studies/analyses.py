@@ -59,7 +59,7 @@ def _onset(study: Study, point: dict) -> dict:
     row = {"found": hopf is not None, "mstar": scene.mstar, "hstar": scene.hstar,
            "friction": scene.friction}
     keys = ("kind", "ustar_crit", "omega", "pressure_drop", "freq_ratio", "l1", "criticality",
-            "dominant_mode")
+            "dominant_mode", "truncation")
     row.update({k: (hopf.to_json().get(k) if hopf else None) for k in keys})
     if physical is not None:
         sc = scene.scales
