@@ -287,3 +287,17 @@ def test_timoshenko_palate_elasticity_of_thickness():
     fd = _log_derivative(lambda v: _physical_onset({**table, "e": v}), s.value)
     assert s.value * fd[0] == pytest.approx(s.flow, abs=1e-5)
     assert np.isfinite(s.frequency)
+
+
+def test_the_design_warns_about_its_own_palate_only(palate):
+    """The search's trial palates are not the answer: one validity warning, of the design
+    (H* = 2 gap / L), not one per trial."""
+    from fsicas.physical import PhysicalValidityWarning
+    physical, _ = palate
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        d = design_for_flow(physical, parse_flow("10L/min"), "gap", modes=MODES)
+    notes = {str(w.message) for w in caught if issubclass(w.category, PhysicalValidityWarning)}
+    hstar = 2 * d.after / physical.values["L"]
+    assert hstar > 0.2 and notes == {n for n in notes if f"H* = (H1 + H2)/L = {hstar:.3g}" in n}
+    assert len(notes) == 1

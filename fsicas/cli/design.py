@@ -86,7 +86,13 @@ def _print_design(result: dict) -> None:
         per = "" if s["value"] else f"   (per unit: {s['flow_per_unit']:+.4g} / unit of {name})"
         print(f"    {name:<8} {s['meaning']:<28} {s['flow_elasticity']:+8.3f} %"
               f"{s['frequency_elasticity']:+14.3f} %{per}")
-    d = result["design"]
+    _print_plan(result["design"])
+    for note in dict.fromkeys(result.get("warnings", [])):
+        print(f"warning: {note}")
+
+
+def _print_plan(d: dict | None) -> None:
+    """The design, its onset afterwards and its check by eigenvalues."""
     if d is None:
         return
     if d["note"]:

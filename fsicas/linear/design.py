@@ -20,6 +20,7 @@ The answer is verified by the eigenvalues of the steady state at the design: sta
 from __future__ import annotations
 
 import math
+import warnings
 from dataclasses import dataclass, replace
 
 from scipy.optimize import brentq
@@ -28,7 +29,7 @@ from .elasticity import (USTAR_MAX, DesignError, PalateSensitivity, palate_sensi
                          physical_onset, physical_scene)
 from .stability import linear_stability
 from ..model.assembly import build_model
-from ..physical import KEYS, Flow, Physical
+from ..physical import KEYS, Flow, Physical, PhysicalValidityWarning
 
 __all__ = ["Change", "Design", "design_for_flow", "parse_vary", "with_values", "ALIASES",
            "DESIGN_STEP", "DESIGN_MAX_FACTOR", "VERIFY_MARGIN"]
@@ -169,9 +170,11 @@ def design_for_flow(physical: Physical, target: Flow, vary, *, ustar_max: float 
         return _design(physical, weights, start, start, base, base, q_target, overrides, 0,
                        "the onset is already above the target: no change needed")
     path = _Path(physical, weights, start, base, q_target, ustar_max, overrides)
-    lo, hi = path.bracket()
-    s = brentq(lambda s: path.onset(s) - q_target, lo, hi, xtol=1e-13 * max(abs(hi), 1e-6),
-               rtol=1e-12)
+    with warnings.catch_warnings():      # the search's trial palates: only the design's count
+        warnings.simplefilter("ignore", PhysicalValidityWarning)
+        lo, hi = path.bracket()
+        s = brentq(lambda s: path.onset(s) - q_target, lo, hi, xtol=1e-13 * max(abs(hi), 1e-6),
+                   rtol=1e-12)
     after = path.values(s)
     designed = with_values(physical, after)
     bound = max(ustar_max, 2.0 * path.ustar_of(designed))
