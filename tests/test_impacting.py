@@ -159,7 +159,8 @@ def test_peak_force_and_flow_reduction_against_a_time_integration(through_contac
     """The branch's impact measures (shooting samples) against an IDAS integration of the
     same cycle over one period from its state (another integrator and sampling): peak
     force to 1e-2 (the sampled maximum of a sharp impact), mean flow to 1e-5."""
-    from fsicas.model.contact import contact_load, reference_force
+    from fsicas.model.contact import reference_force
+    from fsicas.model.patch import penetration
     scene, branch = through_contact
     before, last = branch.points[0], branch.points[-1]
     assert before.impacts == 0 and before.peak_force == 0.0
@@ -171,7 +172,7 @@ def test_peak_force_and_flow_reduction_against_a_time_integration(through_contac
     traj = simulate(model, st, last.period, x0=last.state,
                     settings=Settings(rtol=1e-10, atol=1e-12, dt_out=last.period / 20000,
                                       chunk=last.period))
-    _, total = contact_load(model, traj.x)
+    total = penetration(model, traj.x).load
     assert total.max() / reference_force(model) == pytest.approx(last.peak_force, rel=1e-2)
     flow = traj.x[:, -2:].sum(axis=1)
     mean = np.trapezoid(flow, traj.t) / (traj.t[-1] - traj.t[0])

@@ -28,6 +28,7 @@ import continuation as C
 from ..linear.adapter import LOG_M, PI, PI_SCALE, TIME_SCALE, steady_ustar
 from ..model import contact
 from ..model.accuracy import quadrature_error
+from ..model.patch import penetration
 
 __all__ = ["Gauge", "PolynomialExtrema", "PolynomialGauge", "PERIOD_COLUMN", "model_parameters"]
 
@@ -92,7 +93,7 @@ class Gauge:
         ``flow_reduction``: 1 - the time mean of Q1 + Q2 (quadrature ``weights`` of the
         samples) over the steady flow at the same pressure drop (call after
         :meth:`common`, which finds that steady state)."""
-        _, total = contact.contact_load(self.model, x)
+        total = penetration(self.model, x).load
         flow = np.asarray(x)[:, -2:].sum(axis=1)
         mean = float(np.dot(weights, flow) / np.sum(weights))
         return {"peak_force": float(total.max() / contact.reference_force(self.model)),
