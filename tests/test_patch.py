@@ -98,3 +98,35 @@ def test_equations_impact_term_against_a_fine_rule(model):
         term = np.array(model.rhs(x, p)).ravel()[:n] - np.array(model.rhs(x, free)).ravel()[:n]
         reference = trapezoid(fine_density(model, x)[0] * phi)
         assert np.max(np.abs(term - reference)) < 1e-3 * np.max(np.abs(reference))
+
+
+@pytest.mark.slow
+def test_run_measures_against_a_fine_rule():
+    """M* = 1, U* = 7, k* = 1e8, eps/H = 1e-2 (N = 10, the default rule): the outcome's
+    peak force, contact positions and impacts per cycle, measured on its last 4 cycles
+    with a 100 001-point trapezoid rule (1000x the former grid's), and its first contact
+    time located on that grid: within 1 %, equal, equal, to 1e-9."""
+    from scipy.interpolate import BarycentricInterpolator
+    from scipy.optimize import brentq
+
+    from fsicas.timedomain.run import run_case
+    run = run_case(SCENE, 4.0, quadrature_tol=None)
+    o, tr, m = run.outcome, run.trajectory, run.model
+    assert o.outcome == "impacting_lco"
+    xs = np.linspace(0.0, 1.0, 100_001)
+    window = (tr.t >= o.t_settled - 4 * o.period - 1e-9) & (tr.t <= o.t_settled)
+    density = np.abs(fine_density(m, tr.x[window], xs))
+    load = trapezoid(density, xs)
+    assert o.max_impact_force == pytest.approx(load.max() / contact.reference_force(m), rel=1e-2)
+    on = load > 0
+    starts, ends = np.flatnonzero(on & ~np.r_[False, on[:-1]]), np.flatnonzero(on & ~np.r_[on[1:], False])
+    assert o.impacts_per_cycle == starts.size / 4
+    deepest = {round(float(xs[np.argmax(density[a:b + 1].max(axis=0))]), 3) for a, b in zip(starts, ends)}
+    assert o.contact_positions == sorted(deepest)
+    n, eps = m.n_modes, SCENE.contact_gap
+    phi = m.basis_at(xs).phi
+    min_gap = lambda x: np.min(SCENE.hstar / 2 - np.abs(np.atleast_2d(x)[:, n:2 * n] @ phi))
+    k = int(np.argmax([min_gap(x) <= eps for x in tr.x]))
+    state = BarycentricInterpolator(tr.t[k - 3:k + 1], tr.x[k - 3:k + 1])
+    t_c = brentq(lambda s: min_gap(state(s)) - eps, tr.t[k - 1], tr.t[k], xtol=1e-13)
+    assert o.first_contact_time == pytest.approx(t_c, abs=1e-9)
