@@ -43,6 +43,8 @@ class Gauge:
         self.model = model
         self.eps = model.scene.contact_gap
         self.x_eq = np.asarray(x_eq, dtype=float)
+        #: the largest quadrature error measured, with its states and parameters
+        self.worst = (0.0, None, None)
         self._kept = {}
 
     def common(self, problem, X) -> dict:
@@ -65,9 +67,14 @@ class Gauge:
 
     def quadrature_error(self, problem, X) -> float:
         """:func:`fsicas.model.accuracy.quadrature_error` over the cycle (kept for the
-        last X)."""
-        return self.kept("quadrature_error", problem, X, lambda: quadrature_error(
-            self.model, self.states(problem, X), model_parameters(self.model, problem, X)))
+        last X; the largest so far in :attr:`worst`)."""
+        def compute():
+            states, p = self.states(problem, X), model_parameters(self.model, problem, X)
+            error = quadrature_error(self.model, states, p)
+            if error > self.worst[0]:
+                self.worst = (error, states, p)
+            return error
+        return self.kept("quadrature_error", problem, X, compute)
 
     @staticmethod
     def states(problem, X) -> np.ndarray:
