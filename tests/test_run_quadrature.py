@@ -1,5 +1,8 @@
-"""Quadrature control of time integration: a contact-free cycle near a wall is repeated
-on enough nodes, and its amplitude then equals that of a fixed fine rule."""
+"""Quadrature control of time integration: a contact-free cycle near a wall, and an
+impacting run, are repeated on enough nodes, and then agree with a fixed fine rule."""
+from dataclasses import replace
+
+import numpy as np
 import pytest
 
 from fsicas.timedomain.impact_map import MAP_SCENE
@@ -46,3 +49,43 @@ def test_auto_tolerance_follows_the_settling_tolerance(near_wall):
     loose = run_case(near_wall, 30.0, settings=Settings(rtol=1e-8, atol=1e-10, dt_out=2e-3, chunk=1.0))
     assert loose.outcome.outcome == "lco" and loose.model.scene.n_quad == 40
     assert 1e-6 < loose.quadrature_error < 1e-5
+
+
+IMPACTING = MAP_SCENE.replace(mstar=1.0, ustar=8.5, modes=4, contact=True, contact_stiffness=1e8,
+                              contact_eps=1e-2)
+IMPACT_SETTINGS = Settings(method="idas", rtol=1e-8, atol=1e-10, dt_out=2e-4, chunk=0.25)
+
+
+@pytest.fixture(scope="module")
+def impacting_runs():
+    """N = 4, U* = 8.5, k* = 1e8, eps/H = 1e-2 from a large perturbation: impacts from
+    t = 0.5 on; the run controlled (default), on the default 28 nodes, and on twice the
+    nodes the control chose."""
+    once = lambda scene, tol: run_case(scene, 0.7, settings=IMPACT_SETTINGS, perturbation=0.3,
+                                       stop_early=False, quadrature_tol=tol)
+    controlled = once(IMPACTING, "auto")
+    fine = IMPACTING.replace(quad_nodes=2 * controlled.model.scene.n_quad)
+    return controlled, once(IMPACTING, None), once(fine, None)
+
+
+def test_impacting_run_is_repeated_on_enough_nodes(impacting_runs):
+    """The control applies to runs with the contact law: the controlled run's tip agrees
+    with that of twice its nodes far better than the default rule's does."""
+    controlled, plain, fine = impacting_runs
+    assert controlled.outcome.contact
+    assert controlled.quadrature_tol == pytest.approx(1e-5)
+    assert controlled.model.scene.n_quad > 28 >= plain.model.scene.n_quad
+    assert controlled.quadrature_error <= 1e-5 < plain.quadrature_error
+    assert controlled.status == "success" and controlled.warnings == []
+    scale = IMPACTING.hstar / 2
+    error = lambda run: np.max(np.abs(run.trajectory.tip - fine.trajectory.tip)) / scale
+    assert error(controlled) < 1e-3 * error(plain)
+
+
+def test_estimate_above_its_tolerance_is_not_success(impacting_runs):
+    """A run held to a tolerance its estimate exceeds says "unconverged", with a warning."""
+    _, plain, _ = impacting_runs
+    assert plain.status == "success" and plain.quadrature_tol is None
+    strict = replace(plain, quadrature_tol=plain.quadrature_error / 2)
+    assert strict.status == "unconverged" and strict.to_json()["status"] == "unconverged"
+    assert "exceeds its tolerance" in strict.warnings[0] and strict.to_json()["warnings"]

@@ -177,7 +177,8 @@ def _main(argv) -> int:
         return EXIT_ERROR
     notes = _notes(caught)
     if notes:
-        result = {**result, "warnings": notes}
+        own = result.get("warnings") or []
+        result = {**result, "warnings": own + [n for n in notes if n not in own]}
     if args.json:
         print(json.dumps({**result, "meta": result.get("meta") or cli_meta(args)}))
     else:

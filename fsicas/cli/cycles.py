@@ -29,7 +29,7 @@ __all__ = ["add_cycle_commands"]
 _POINT_KEYS = ("kind", "ustar", "period", "frequency", "tip_amplitude", "gap_ratio", "stable",
                "quadrature_error", "quadrature_nodes")
 _IMPACT_KEYS = ("ustar", "period", "tip_amplitude", "min_gap", "gap_ratio", "impacts",
-                "peak_force", "flow_reduction", "stable")
+                "peak_force", "flow_reduction", "stable", "quadrature_error", "quadrature_nodes")
 #: the collocation error indicator above which the impacting mesh is reported too coarse
 #: (at N = 20 NTST = 200 reached 1-2 and its branch was not trusted; NTST = 400 kept
 #: 1e-2-4e-2 and agreed with time integration to 1e-7, docs/cycles.md)

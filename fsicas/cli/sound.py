@@ -97,6 +97,9 @@ def _cmd_sound(args) -> dict:
     out = {**sound.to_json(), "outcome": outcome, "status": traj.status,
            "message": traj.message, "t_end_reached": float(traj.t[-1]),
            "contact": scene.contact, "out": args.out, "plot": args.plot}
+    if not args.breath:     # the run's quadrature, controlled (docs/simulate.md)
+        out.update(status=run.status, quadrature_error=run.quadrature_error,
+                   quadrature_nodes=run.model.scene.n_quad, quadrature_tol=run.quadrature_tol)
     if args.out:
         out["wav_pa_per_count"] = write_wav(sound, args.out)
     if args.plot:

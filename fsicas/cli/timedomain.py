@@ -81,7 +81,7 @@ def _cmd_simulate(args) -> dict:
     run = run_case(scene, args.t_end, settings=settings, schedule=_schedule(args, scene),
                    perturbation=args.perturbation, stop_early=not args.full, progress=say.bars)
     say.stats(f"{run.trajectory.steps} steps, outcome {run.outcome.outcome}, status "
-              f"{run.trajectory.status}, {run.wall_time:.2f} s")
+              f"{run.status}, {run.wall_time:.2f} s")
     if args.plot:
         plot_run(run, args.plot)
         if run.outcome.period is not None:

@@ -28,6 +28,7 @@ import continuation as C
 from ..linear.adapter import LOG_M, PI, PI_SCALE, TIME_SCALE, steady_ustar
 from ..model import contact
 from ..model.accuracy import quadrature_error
+from ..model.patch import penetration
 
 __all__ = ["Gauge", "PolynomialExtrema", "PolynomialGauge", "PERIOD_COLUMN", "model_parameters"]
 
@@ -42,6 +43,8 @@ class Gauge:
         self.model = model
         self.eps = model.scene.contact_gap
         self.x_eq = np.asarray(x_eq, dtype=float)
+        #: the largest quadrature error measured, with its states and parameters
+        self.worst = (0.0, None, None)
         self._kept = {}
 
     def common(self, problem, X) -> dict:
@@ -64,9 +67,14 @@ class Gauge:
 
     def quadrature_error(self, problem, X) -> float:
         """:func:`fsicas.model.accuracy.quadrature_error` over the cycle (kept for the
-        last X)."""
-        return self.kept("quadrature_error", problem, X, lambda: quadrature_error(
-            self.model, self.states(problem, X), model_parameters(self.model, problem, X)))
+        last X; the largest so far in :attr:`worst`)."""
+        def compute():
+            states, p = self.states(problem, X), model_parameters(self.model, problem, X)
+            error = quadrature_error(self.model, states, p)
+            if error > self.worst[0]:
+                self.worst = (error, states, p)
+            return error
+        return self.kept("quadrature_error", problem, X, compute)
 
     @staticmethod
     def states(problem, X) -> np.ndarray:
@@ -92,7 +100,7 @@ class Gauge:
         ``flow_reduction``: 1 - the time mean of Q1 + Q2 (quadrature ``weights`` of the
         samples) over the steady flow at the same pressure drop (call after
         :meth:`common`, which finds that steady state)."""
-        _, total = contact.contact_load(self.model, x)
+        total = penetration(self.model, x).load
         flow = np.asarray(x)[:, -2:].sum(axis=1)
         mean = float(np.dot(weights, flow) / np.sum(weights))
         return {"peak_force": float(total.max() / contact.reference_force(self.model)),

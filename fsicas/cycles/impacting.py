@@ -101,6 +101,8 @@ class ImpactPoint(CycleMeasures):
     #: relative error of the equations from the flow quadrature over the cycle
     #: (:mod:`fsicas.model.accuracy`; NaN where not measured)
     quadrature_error: float = float("nan")
+    #: quadrature nodes (``scene.n_quad``) of the model the point was computed on
+    quadrature_nodes: int | None = None
     #: the largest total impact load over the cycle / the reference force of Fig. 9, and
     #: 1 - the cycle's mean flow over the steady flow at the same pressure drop
     #: (:meth:`fsicas.cycles.gauge.Gauge.impact_measures`; NaN where not measured)

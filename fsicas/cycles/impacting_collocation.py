@@ -9,37 +9,28 @@ intervals concentrate at the impacts, where the solution's higher derivatives ar
 large; NTST is fixed during a run (a few hundred intervals).
 
 Start: a cycle's state at phase 0, its period and pressure drop, as for
-:func:`fsicas.cycles.impacting.impacting_branch` (a contact-free collocation cycle shortly
-before contact, :func:`~fsicas.cycles.impacting.pre_contact_start`; a shooting point; or
-the settled cycle of a time integration, :func:`~fsicas.cycles.impacting.cycle_from_trajectory`).
-One period is integrated from the state (CVODES) and sampled densely; the start mesh is
-equidistributed on that guess (``mesh_passes`` passes, each on the guess itself, not on
-the previous polynomial), so a start with impacts is resolved before the first Newton
-step.
+:func:`fsicas.cycles.impacting.impacting_branch`; one period is integrated from it
+(CVODES) and the start mesh equidistributed on that guess (``mesh_passes`` passes), so
+a start with impacts is resolved before the first Newton step.
 
-Per point the same measures as the shooting route (:class:`ImpactPoint`: U*, Δp,
-period, tip half-amplitude, min gap and its ratio to eps, contact intervals per period,
-peak impact force, flow-rate reduction, Floquet multipliers and stability, wall time),
-plus NTST and the library's a-posteriori error indicator.
+Per point the measures of the shooting route (:class:`ImpactPoint`) plus NTST and the
+library's a-posteriori error indicator; extrema of the collocation polynomial, exact in
+t, contact intervals counted on ``samples`` points per mesh interval. Quadrature: a
+branch whose points' estimate exceeds ``quadrature_tol`` (default
+``IMPACT_QUADRATURE_TOL``) is computed once more on the adequate model of its worst cycle.
 
-Special cycles (``detect``): folds of cycles, period doublings and Neimark-Sacker
-points, detected from the tangent and the multipliers, located on the arclength by the
-library and refined by Newton on their minimally extended systems
-(``continuation.CycleFold``, ``PeriodDoubling``, ``NeimarkSacker``: the critical
-multiplier at +1, -1 or on the unit circle); branch points (a multiplier through +1
-where the branch does not turn: the symmetric cycle of the symmetric channel gives way
-to a pair of asymmetric ones), by Newton on the cycles that keep the channel's mirror,
-``u(t + T/2) = R u(t)`` (``continuation.locate_symmetry_breaking``; in an asymmetric
-channel they keep the arclength location). :mod:`fsicas.cycles.branch_switching`
+Special cycles (``detect``): folds, period doublings and Neimark-Sacker points, located
+on the arclength and refined by Newton on their minimally extended systems
+(``continuation.CycleFold``, ``PeriodDoubling``, ``NeimarkSacker``); branch points (a
+multiplier through +1 where the branch does not turn: symmetric cycles giving way to
+asymmetric ones), by Newton on the cycles that keep the channel's mirror
+(``continuation.locate_symmetry_breaking``). :mod:`fsicas.cycles.branch_switching`
 switches at them onto the period-doubled and the asymmetric cycles.
-
-Extrema are those of the collocation polynomial, exact in t
-(:class:`fsicas.cycles.gauge.PolynomialExtrema`); the contact intervals are counted on
-``samples`` points per mesh interval (dense at the impacts).
 """
 from __future__ import annotations
 
 import time
+import warnings
 from dataclasses import dataclass, field, replace
 from typing import Literal
 
@@ -50,6 +41,7 @@ import continuation as C
 
 from ..linear.adapter import LOG_M, PI, PI_SCALE, TIME_SCALE, flutter_field, pi_of
 from ..linear.steady import steady_state
+from ..model.accuracy import IMPACT_QUADRATURE_TOL, adequate_model
 from ..model.assembly import Model, build_model
 from ..scene import Scene
 from .gauge import PolynomialGauge
@@ -93,7 +85,8 @@ class CollocationImpactSettings:
     integrated period of the located cycle, and located again, then ``refine_passes``
     times re-meshed on their own error and located again, the one of smallest
     ``flow_defect`` kept: critical multipliers of a smaller discretization error (0: on
-    the branch's mesh)."""
+    the branch's mesh); ``quadrature_tol``: the bound of the quadrature estimate (module
+    docstring; None: no control)."""
 
     ntst: int = 200
     ncol: int = 4
@@ -111,10 +104,12 @@ class CollocationImpactSettings:
     refine_ntst: int = 0
     refine_ncol: int = 6
     refine_passes: int = 3
+    quadrature_tol: float | None = IMPACT_QUADRATURE_TOL
 
     def __post_init__(self):
         check_settings(self, integers=("ntst", "ncol", "max_points", "samples", "guess_samples"),
-                       positives=("tol", "ds", "ds_max", "guess_tol"),
+                       positives=("tol", "ds", "ds_max", "guess_tol") + (
+                           () if self.quadrature_tol is None else ("quadrature_tol",)),
                        nonnegative_integers=("adapt_every", "mesh_passes", "refine_ntst",
                                              "refine_ncol", "refine_passes"))
         if not (2 <= self.ncol <= 7 and self.refine_ncol in (0, *range(2, 8))):
@@ -231,8 +226,7 @@ def impacting_collocation_branch(scene: Scene, state, period: float, pressure_dr
     except RuntimeError as err:                  # CVODES failure, e.g. a gap closing
         return failed_branch(scene, model, "the start cycle could not be integrated over "
                              f"one period: {err}", start)
-    return continued_branch(scene, model, problem, (ustar_min, ustar_max), direction,
-                            settings, start)
+    return continued_branch(scene, model, problem, (ustar_min, ustar_max), direction, settings, start)
 
 
 def check_smooth(scene: Scene) -> None:
@@ -244,13 +238,27 @@ def check_smooth(scene: Scene) -> None:
 
 def failed_branch(scene, model, message, start) -> CollocatedImpactBranch:
     """The empty branch of status "failed" with ``message``, timed from ``start``."""
-    return CollocatedImpactBranch(scene, model.scene.contact_gap, [], "failed", message,
-                                  time.perf_counter() - start)
+    return CollocatedImpactBranch(scene, model.scene.contact_gap, [], "failed", message, time.perf_counter() - start)
 
 
 def continued_branch(scene, model, problem, ustar_range, direction, settings, start
                      ) -> CollocatedImpactBranch:
-    """The branch of ``problem`` in U* within ``ustar_range``, its special cycles refined."""
+    """The branch of ``problem`` in U* within ``ustar_range``, its special cycles refined
+    (once more on the adequate model of its worst cycle: module docstring)."""
+    result, gauge = _continued(scene, model, problem, ustar_range, direction, settings, start)
+    tol = settings.quadrature_tol
+    if tol is not None and gauge.worst[0] > tol:
+        model = adequate_model(model, *gauge.worst[1:], tol)[0]
+        problem = problem.on_field(flutter_field(model), problem.X0)[0]
+        result, gauge = _continued(scene.replace(quad_nodes=model.scene.n_quad), model,
+                                   problem, ustar_range, direction, settings, start)
+    if tol is not None and gauge.worst[0] > tol:
+        warnings.warn(f"quadrature error {gauge.worst[0]:.2g} exceeds quadrature_tol {tol:g}")
+    return result
+
+
+def _continued(scene, model, problem, ustar_range, direction, settings, start) -> tuple:
+    """:func:`continued_branch` on ``model``, and its gauge."""
     gauge = PolynomialGauge(model, steady_state(scene, model).x, settings.samples)
     once = (lambda problem, X: "reached max_points = 1") if settings.max_points == 1 else None
     branch = C.continuation(problem, record=gauge.record, stop=once, settings=_steps(
@@ -262,7 +270,7 @@ def continued_branch(scene, model, problem, ustar_range, direction, settings, st
     special = [_refined(problem, sp, gauge, settings, finer) for sp in branch.special_points
                if sp.kind in _CRITICAL]
     return _result(scene, model.scene.contact_gap, branch, special, settings,
-                   time.perf_counter() - start)
+                   time.perf_counter() - start), gauge
 
 
 def _refined(problem, sp, gauge, settings, finer) -> "CollocatedImpactPoint":

@@ -10,7 +10,8 @@ Impact load of wall c on the beam (paper Eq. 16, signs ``s_1 = -1, s_2 = +1``)::
 
 with ``ramp = max(0, .)`` (the exact law) or its softplus of width ``smoothing * eps``.
 One home for these formulas: the CasADi model, the energy balance, the outcome
-measures and the cycle gauges all call them, symbolically or on NumPy arrays.
+measures and the cycle gauges all call them, symbolically or on NumPy arrays; the
+patch where the load acts is located and integrated in :mod:`fsicas.model.patch`.
 """
 from __future__ import annotations
 
@@ -18,10 +19,11 @@ import casadi as ca
 import numpy as np
 
 __all__ = ["GAP_POINTS", "WALL_SIGNS", "ramp", "stiffness", "gap", "wall_gaps", "gaps",
-           "wall_load", "modal_load", "contact_load", "reference_force"]
+           "wall_load", "modal_load", "reference_force"]
 
 GAP_POINTS = np.linspace(0.0, 1.0, 101)
-"""Points x/L where gaps are sampled by the outcome checks, the gauges and the plots."""
+"""Points x/L where gaps are sampled by the gauges and the plots (the impact load and
+the deepest penetration are located between them: :mod:`fsicas.model.patch`)."""
 
 WALL_SIGNS = (-1.0, 1.0)
 """``s_c``: wall 1 (above, y > 0 closes it) and wall 2 (below)."""
@@ -59,15 +61,16 @@ def wall_gaps(walls, y) -> tuple:
     return tuple(gap(H, y, s) for H, s in zip(walls, WALL_SIGNS))
 
 
-def modal_load(model, x, phi, weights) -> np.ndarray:
-    """``c_n = Σ_j w_j f(x_j) phi_n(x_j)``, f the scene's law summed over both walls."""
-    s, n = model.scene, model.n_modes
-    y = phi.T @ x[n:2 * n]
-    H = [w(model.basis.x) for w in s.walls]
+def modal_load(model, x) -> np.ndarray:
+    """``c_n = Σ_j w_j f(x_j) phi_n(x_j)`` on the model's contact rule, f the scene's law
+    summed over both walls (the impact term of the equations, in NumPy)."""
+    s, n, basis = model.scene, model.n_modes, model.contact_basis
+    y = basis.phi.T @ x[n:2 * n]
+    H = [w(basis.x) for w in s.walls]
     k = stiffness(s.contact_stiffness, model.omega_1)
     load = sum(wall_load(h, sign, k, s.contact_gap, s.contact_smoothing)
                for h, sign in zip(wall_gaps(H, y), WALL_SIGNS))
-    return phi @ (weights * load)
+    return basis.phi @ (model.contact_weights * load)
 
 
 def gaps(model, X, xs=GAP_POINTS) -> np.ndarray:
@@ -80,18 +83,6 @@ def gaps(model, X, xs=GAP_POINTS) -> np.ndarray:
 def wall_load(h, sign: float, k, eps, smoothing: float):
     """``f_c = s_c k ramp(eps - h_c)``: the load density of one wall on the beam."""
     return sign * k * ramp(eps - h, smoothing * eps if smoothing else 0.0)
-
-
-def contact_load(model, X, xs=GAP_POINTS) -> tuple[np.ndarray, np.ndarray]:
-    """Impact load density ``|f| = k max(0, eps - h_c)`` summed over the walls.
-
-    Returns (samples × points density, total ∫|f| dx by the trapezoid rule on ``xs``).
-    The exact (non-smoothed) law, also when the scene smooths it.
-    """
-    s = model.scene
-    k = stiffness(s.contact_stiffness, model.omega_1)
-    density = k * ramp(s.contact_gap - gaps(model, X, xs), 0.0).sum(axis=1)
-    return density, np.trapezoid(density, xs, axis=1)
 
 
 def reference_force(model) -> float:

@@ -19,11 +19,14 @@ and give, per channel c and mode n,
                    + ∫ f_contact phi_n
     kinematics: dq_n/dt = r_n
 
-All integrals are Gauss–Legendre sums over the scene's nodes. u|u| is C^1, so F is
+All integrals are Gauss–Legendre sums over the scene's nodes, but the impact load's
+``∫ f_contact phi_n``: its patch is 1e-3 of L long, so it has its own rule, graded
+towards the tip (:func:`fsicas.model.quadrature.tip_graded_gauss_legendre`). u|u| is C^1, so F is
 smooth except for the contact kink ``max(0, eps - h_c)``.
 
 The state enters the nonlinear terms only through the nodal values
-``z = L x = (y, dy/dt, ∫_0^x dy/dt at the K nodes, Q_1, Q_2, y(1), ∫_0^1 dy/dt)``, and the
+``z = L x = (y, dy/dt, ∫_0^x dy/dt at the K nodes, Q_1, Q_2, y(1), ∫_0^1 dy/dt, y at the
+contact nodes)``, and the
 nonlinear terms come back through constant projections (``a = Σ Phi_m v_r,m`` at the
 nodes, ``w = (a, v_Q) = L_w v``)::
 
@@ -55,22 +58,25 @@ class LiftedEquations:
     ``basis`` (K nodes, ``weights``) and tip modes ``tip``; ``sym`` is ``ca.SX`` or
     ``ca.MX``, ``names`` the model's parameter names."""
 
-    def __init__(self, scene, basis, tip, weights, sym, names):
+    def __init__(self, scene, basis, tip, weights, sym, names, contact_rule=None):
         self.scene, self.basis, self.tip, self.w = scene, basis, tip, weights
         self.n, self.K, self.sym, self.names = scene.modes, len(weights), sym, names
-        phi, Phi, n, K = basis.phi, basis.Phi, self.n, self.K
+        self.contact_basis, self.contact_w = contact_rule if contact_rule else (None, np.zeros(0))
+        phi, Phi, n, K, Kc = basis.phi, basis.Phi, self.n, self.K, len(self.contact_w)
         zero = lambda rows, cols=None: np.zeros((rows, cols if cols is not None else n))
         state = lambda r, q, Q: np.hstack([r, q, Q])
+        phi_c = self.contact_basis.phi if Kc else zero(n, 0)
         self.L = sp.csc_matrix(np.vstack([
             state(zero(K), phi.T, zero(K, 2)), state(phi.T, zero(K), zero(K, 2)),
             state(Phi.T, zero(K), zero(K, 2)), state(zero(2), zero(2), np.eye(2)),
             state(zero(1), tip.phi[:, 1:].T, zero(1, 2)),
-            state(tip.Phi[:, 1:].T, zero(1), zero(1, 2))]))
+            state(tip.Phi[:, 1:].T, zero(1), zero(1, 2)), state(zero(Kc), phi_c.T, zero(Kc, 2))]))
         self.L_w = sp.csc_matrix(np.vstack([state(Phi.T, zero(K), zero(K, 2)),
                                             state(zero(2), zero(2), np.eye(2))]))
-        beam = np.hstack([basis.Psi, phi, zero(n, 2 * K), tip.Phi[:, 1:], zero(n, 2)])
-        flow = np.hstack([zero(2, 2 * K), np.kron(np.eye(2), -weights), zero(2, 1), np.eye(2)])
-        self.P = sp.csc_matrix(np.vstack([beam, zero(n, 4 * K + 3), flow]))
+        beam = np.hstack([basis.Psi, phi, zero(n, 2 * K), tip.Phi[:, 1:], zero(n, 2), phi_c])
+        flow = np.hstack([zero(2, 2 * K), np.kron(np.eye(2), -weights), zero(2, 1), np.eye(2),
+                          zero(2, Kc)])
+        self.P = sp.csc_matrix(np.vstack([beam, zero(n, 4 * K + 3 + Kc), flow]))
         self.P_m = sp.csc_matrix(np.vstack([np.hstack([basis.Psi, zero(n, 2 * K)]),
                                             zero(n, 3 * K),
                                             np.hstack([zero(2, K), np.kron(np.eye(2), weights)])]))
@@ -106,26 +112,36 @@ class LiftedEquations:
         return ca.vertcat(*[self.par[f"zeta{k + 1}"] for k in range(self.n)])
 
     def _nodal_force(self, z):
-        """``g = (a, b, gt_1, gt_2, c, s_1, s_2)``: the nodal loads ``a`` (on Psi) and ``b``
-        (on phi), the nodal ``gt_c`` (on the flow rows, ``-∫ gt_c``), the inlet load ``c``
-        (on Phi(1)) and the flow rows' scalar terms ``s_c`` (paper Eqs. 11–16)."""
+        """``g = (a, b, gt_1, gt_2, c, s_1, s_2, f)``: the nodal loads ``a`` (on Psi) and
+        ``b`` (on phi), the nodal ``gt_c`` (on the flow rows, ``-∫ gt_c``), the inlet load
+        ``c`` (on Phi(1)), the flow rows' scalar terms ``s_c`` (paper Eqs. 11–16) and the
+        impact load ``f`` at the contact rule's nodes (on phi there)."""
         K, par, w = self.K, self.par, self.w
         mstar = par["mstar"]
         kin = dict(y=z[:K], ydot=z[K:2 * K], run=z[2 * K:3 * K], y_tip=z[3 * K + 2],
                    run_tip=z[3 * K + 3])
-        a, b, c, gts, rows = 0, 0, 0, [], []
+        a, b, c, gts, rows, impact = 0, 0, 0, [], [], ca.DM.zeros(0)
         for ch, s in enumerate(contact.WALL_SIGNS):
-            h, u, gt, u_in, u_out = _channel(self.scene, self.basis, z[3 * K + ch], ch, s,
-                                             par["friction"], kin)
+            u, gt, u_in, u_out = _channel(self.scene, self.basis, z[3 * K + ch], ch, s,
+                                          par["friction"], kin)
             a -= mstar * s * w * gt
             b -= mstar * s * w * u**2 / 2
             c -= mstar * s * par["k0"] / 2 * u_in * ca.fabs(u_in)
             gts.append(gt)
             rows.append(par["pressure_drop"] / mstar
                         - (par["k0"] * u_in * ca.fabs(u_in) + par["kl"] * u_out * ca.fabs(u_out)) / 2)
-            if self.scene.contact:
-                b += w * _contact_density(self.scene, self.basis, h, s, par)
-        return ca.vertcat(a, b, *gts, c, *rows)
+        if len(self.contact_w):
+            impact = self.contact_w * self._impact_density(z[3 * K + 4:])
+        return ca.vertcat(a, b, *gts, c, *rows, impact)
+
+    def _impact_density(self, y):
+        """``Σ_c f_c`` at the contact rule's nodes from the deflection ``y`` there."""
+        k = contact.stiffness(self.par["contact_stiffness"], self.basis.omega[0])
+        eps = self.par["contact_eps"] * self.scene.hstar / 2
+        smoothing = self.scene.contact_smoothing
+        return sum(contact.wall_load(contact.gap(wall(self.contact_basis.x), y, s), s, k, eps,
+                                     smoothing)
+                   for wall, s in zip(self.scene.walls, contact.WALL_SIGNS))
 
     # -- M ------------------------------------------------------------------------------
     def _nodal_mass(self):
@@ -173,21 +189,13 @@ def _dm(a) -> ca.DM:
 
 
 def _channel(scene, basis, Q_c, c, s, f, kin):
-    """Flow of channel c at the nodes: ``h_c = H_c + s_c y``,
-    ``u_c = (Q_c − s_c ∫_0^x dy/dt)/h_c``, ``gt_c = u_c (f|u_c| − s_c dy/dt)/h_c`` and the
-    inlet and outlet velocities u_c0, u_c1."""
+    """Flow of channel c at the nodes: ``u_c = (Q_c − s_c ∫_0^x dy/dt)/h_c`` with
+    ``h_c = H_c + s_c y``, ``gt_c = u_c (f|u_c| − s_c dy/dt)/h_c`` and the inlet and
+    outlet velocities u_c0, u_c1."""
     wall = scene.walls[c]
-    h = contact.gap(wall(basis.x), kin["y"], s)
-    inv_h = 1.0 / h
+    inv_h = 1.0 / contact.gap(wall(basis.x), kin["y"], s)
     u = (Q_c - s * kin["run"]) * inv_h
     gt = u * (f * ca.fabs(u) - s * kin["ydot"]) * inv_h
     u_in = Q_c / float(wall(0.0))
     u_out = (Q_c - s * kin["run_tip"]) / (float(wall(1.0)) + s * kin["y_tip"])
-    return h, u, gt, u_in, u_out
-
-
-def _contact_density(scene, basis, h, s, par):
-    """The impact load density ``f_c`` of wall c at the nodes (:mod:`.contact`)."""
-    k = contact.stiffness(par["contact_stiffness"], basis.omega[0])
-    eps = par["contact_eps"] * scene.hstar / 2
-    return contact.wall_load(h, s, k, eps, scene.contact_smoothing)
+    return u, gt, u_in, u_out

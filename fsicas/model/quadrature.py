@@ -9,7 +9,7 @@ from __future__ import annotations
 import numpy as np
 from numpy.polynomial.legendre import leggauss
 
-__all__ = ["gauss_legendre", "composite_gauss_legendre"]
+__all__ = ["gauss_legendre", "composite_gauss_legendre", "tip_graded_gauss_legendre"]
 
 
 def gauss_legendre(n_nodes: int) -> tuple[np.ndarray, np.ndarray]:
@@ -18,8 +18,6 @@ def gauss_legendre(n_nodes: int) -> tuple[np.ndarray, np.ndarray]:
         raise ValueError(f"quad_nodes must be a positive integer, got {n_nodes!r}")
     xi, w = leggauss(int(n_nodes))
     return 0.5 * (xi + 1.0), 0.5 * w
-
-
 
 
 def composite_gauss_legendre(n_intervals: int, points: int) -> tuple[np.ndarray, np.ndarray]:
@@ -31,3 +29,27 @@ def composite_gauss_legendre(n_intervals: int, points: int) -> tuple[np.ndarray,
     x, w = gauss_legendre(points)
     left = np.arange(n_intervals)[:, None] / n_intervals
     return (left + x / n_intervals).ravel(), np.tile(w / n_intervals, n_intervals)
+
+
+def tip_graded_gauss_legendre(n: int, points: int = 2) -> tuple[np.ndarray, np.ndarray]:
+    """``points``-point Gauss–Legendre on cells graded towards the tip x = 1.
+
+    A cell at distance d from the tip is ``max(0.01/n², min(4 d/n, 2/n))`` wide: cells
+    of 4/n of their distance near the tip, where a cantilever's gap is narrowest, so a
+    contact patch of any length l reaching the tip has its edge (the kink of the law)
+    in a cell of about 4 l/n, and ``2/n`` away from it. For the kinked load
+    ``max(0, eps - h) phi_n`` the error falls like n^-2: at n = 40 (230 nodes) 3e-4 of
+    the peak modal load over an impacting cycle, at 80 (478) 7e-5, at 160 1.5e-5
+    (docs/simulate.md).
+    """
+    if int(n) != n or n < 1:
+        raise ValueError(f"n must be a positive integer, got {n!r}")
+    smallest, growth, widest = 0.01 / n**2, 4.0 / n, 2.0 / n
+    ends, x = [1.0], 1.0
+    while x > 0.0:
+        x = max(0.0, x - min(widest, max(smallest, growth * (1.0 - x))))
+        ends.append(x)
+    ends = np.array(ends[::-1])
+    xi, w = gauss_legendre(points)
+    left, width = ends[:-1, None], np.diff(ends)[:, None]
+    return (left + width * xi).ravel(), (width * w).ravel()

@@ -23,7 +23,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..model.assembly import modal_basis
-from ..model.contact import contact_load, reference_force
+from ..model.contact import reference_force
+from ..model.patch import penetration
 from ..timedomain.returns import poincare_returns
 from .backend import NONDIM, PALETTE, finish, outcome_words, pyplot, styled, subplots
 
@@ -139,7 +140,7 @@ def cycle_view(run, snapshots: int = 24) -> CycleView:
     picks = np.linspace(0, len(X) - 1, snapshots).astype(int)
     q = X[:, n:2 * n]
     freq, spectrum = tip_spectrum(tr.t, tr.tip_velocity, T)
-    _, force = contact_load(model, X)
+    force = penetration(model, X).load
     upper, lower = scene.walls
     return CycleView(
         ustar=float(scene.ustar), mstar=float(scene.mstar), modes=int(n),

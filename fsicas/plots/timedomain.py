@@ -9,7 +9,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..model.contact import contact_load, reference_force
+from ..model.contact import reference_force
+from ..model.patch import penetration
 from .backend import NONDIM, PALETTE, finish, outcome_words, styled, subplots
 from .impacting import cycle_view, cycle_window, plot_cycle, plot_cycles, return_period
 from .cycles import draw_curves, mark_cases
@@ -44,7 +45,7 @@ def plot_run(run, path=None):
     ax[1].plot(tr.t, tr.x[:, -1], lw=0.7, label="$Q_2$ (below)")
     ax[1].set_ylabel("flow rate $Q_c$ (units of $L^2/T$)")
     ax[1].legend(loc="best")
-    _, total = contact_load(model, tr.x)
+    total = penetration(model, tr.x).load
     ax[2].plot(tr.t, total / reference_force(model), lw=0.7, color=PALETTE[1])
     ax[2].set_ylabel(f"impact force $F/F_0$ {NONDIM}")
     ax[2].set_xlabel("time $t$ (units of $T$)")

@@ -55,7 +55,7 @@ class EnergyBalance:
         return abs(self.residual) / scale
 
 
-def _powers(traj: Trajectory, k: int, xs, phi_xs, phi_nodes, weights):
+def _powers(traj: Trajectory, k: int, xs, phi_xs):
     """(P_fluid, P_contact, D, E) at sample k."""
     model = traj.model
     scene, n = model.scene, model.n_modes
@@ -70,7 +70,7 @@ def _powers(traj: Trajectory, k: int, xs, phi_xs, phi_nodes, weights):
     zeta, w = scene.zeta_modes, model.basis.omega
     impact = 0.0
     if scene.contact:
-        impact = float(r @ contact.modal_load(model, x, phi_nodes, weights))
+        impact = float(r @ contact.modal_load(model, x))
     return fluid, impact, float(np.sum(2 * zeta * w * r**2)), float(np.sum(r**2 + (w * x[n:2 * n])**2) / 2)
 
 
@@ -84,7 +84,7 @@ def energy_balance(traj: Trajectory, t_a: float, t_b: float, points: int = 2001)
     model = traj.model
     xs = np.linspace(0.0, 1.0, points)
     phi_xs = modal_basis(model.scene, xs).phi
-    terms = np.array([_powers(traj, k, xs, phi_xs, model.basis.phi, model.weights)
+    terms = np.array([_powers(traj, k, xs, phi_xs)
                       for k in range(a, b)])
     t = traj.t[a:b]
     work = [simpson(terms[:, j], x=t) for j in range(3)]

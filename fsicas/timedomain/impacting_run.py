@@ -22,11 +22,15 @@ IMPACTING_SETTINGS = Settings(method="idas", rtol=1e-7, atol=1e-9, dt_out=2e-5, 
 
 
 def impacting_run(ustar: float, modes: int = 10, contact: dict = HOLDING_CONTACT,
-                  t_end: float = 4.0, tol: float = 2e-2):
+                  t_end: float = 4.0, tol: float = 2e-2, *, quad_nodes: int | None = None,
+                  quadrature_tol: float | str | None = "auto"):
     """One run of the paper's impacting points at ``ustar`` with ``modes`` modes and the
     contact law ``contact`` (``contact_stiffness``, ``contact_eps``), to ``t_end`` without
     an early stop; its outcome's ``convergence`` says how closely the last 4 cycles agree
-    (settled below ``tol``)."""
-    scene = MAP_SCENE.replace(ustar=ustar, modes=modes, contact=True, **contact)
+    (settled below ``tol``). ``quad_nodes`` (None: 2N + 20) and ``quadrature_tol``: the
+    quadrature and its control (:func:`fsicas.timedomain.run.run_case`)."""
+    scene = MAP_SCENE.replace(ustar=ustar, modes=modes, contact=True, quad_nodes=quad_nodes,
+                              **contact)
     return run_case(scene, t_end, settings=IMPACTING_SETTINGS, perturbation=0.3,
-                    stop_early=False, criteria=Criteria(cycles=4, tol_impacting=tol))
+                    stop_early=False, criteria=Criteria(cycles=4, tol_impacting=tol),
+                    quadrature_tol=quadrature_tol)

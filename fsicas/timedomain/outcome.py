@@ -5,8 +5,8 @@
 **Criteria** (:class:`Criteria`, defaults in brackets):
 
 - *contact*: a gap falls to the contact distance ``eps = (eps/H) H*/2`` (the onset of the
-  regularized impact force) at one of the 101 check points, at an output sample; the time
-  is then located between the samples. With contact off the run stops there (paper,
+  regularized impact force) anywhere along the beam (:func:`fsicas.model.patch.penetration`),
+  at an output sample; the time is then located between the samples. With contact off the run stops there (paper,
   Fig. 4); with contact on it goes on.
 - *limit cycle*: over the last ``cycles`` [4] cycles, the **remaining change** of the
   period, of the amplitude and of the Poincaré point (relative to the cycle's size) is
@@ -42,7 +42,8 @@ import scipy.interpolate
 import scipy.optimize
 
 from ..model.assembly import Model
-from ..model.contact import GAP_POINTS, contact_load, gaps, reference_force
+from ..model.contact import reference_force
+from ..model.patch import penetration
 from .integrators import Trajectory
 from .returns import Cycles, cycles, xdot_rows
 
@@ -183,18 +184,21 @@ def _first_contact(t, X, model, start: int = 0):
     the root of ``min_x h(x, t) − eps`` on the cubic through the samples ``k−3 .. k``
     (Lagrange interpolation of the state, error O(dt_out⁴)), by Brent's method.
     """
-    eps = model.scene.contact_gap
-    touch = gaps(model, X[start:]).min(axis=(1, 2)) <= eps
+    touch = penetration(model, X[start:]).depth >= 0
     if not touch.any():
         return None
     k = start + int(np.argmax(touch))
     if k == 0:
-        return 0, float(t[0]), float(GAP_POINTS[np.argmin(gaps(model, X[:1])[0].min(axis=0))])
+        return 0, float(t[0]), _deepest_at(model, X[0])
     state = scipy.interpolate.BarycentricInterpolator(t[max(0, k - 3):k + 1], X[max(0, k - 3):k + 1])
-    smallest = lambda s: gaps(model, state(s))[0].min(axis=0)
-    tc = scipy.optimize.brentq(lambda s: smallest(s).min() - eps, t[k - 1], t[k],
+    tc = scipy.optimize.brentq(lambda s: penetration(model, state(s)).depth[0], t[k - 1], t[k],
                                xtol=1e-14 * max(1.0, abs(t[k])))
-    return k, float(tc), float(GAP_POINTS[np.argmin(smallest(tc))])
+    return k, float(tc), _deepest_at(model, state(tc))
+
+
+def _deepest_at(model, x) -> float:
+    """Where the gap of the state ``x`` is narrowest (:func:`fsicas.model.patch.penetration`)."""
+    return float(penetration(model, x).position[0])
 
 
 class Monitor:
@@ -229,8 +233,7 @@ class Monitor:
         contact = self._contact_in(t, X)
         if contact is None and closed:
             # the gap went from > eps to 0 between the last sample and the solver failure
-            h = gaps(model, X[-1:])[0]
-            contact = len(t) - 1, float(t[-1]), float(GAP_POINTS[np.argmin(h.min(axis=0))])
+            contact = len(t) - 1, float(t[-1]), _deepest_at(model, X[-1])
         stop_on_contact = (not model.scene.contact) if crit.stop_on_contact is None \
             else crit.stop_on_contact
         info = {}
@@ -301,14 +304,15 @@ class Monitor:
 
 
 def _impacts(X, model, m):
-    """Impact force, contact positions and chattering count over the measured cycles."""
-    density, total = contact_load(model, X)
-    on = total > 0
+    """Impact force, contact positions (where each contact interval penetrates deepest)
+    and chattering count over the measured cycles (:func:`fsicas.model.patch.penetration`)."""
+    patch = penetration(model, X)
+    on = patch.load > 0
     starts = np.flatnonzero(on & ~np.r_[False, on[:-1]])
     ends = np.flatnonzero(on & ~np.r_[on[1:], False])
-    positions = sorted({round(float(GAP_POINTS[np.argmax(density[a:b + 1].max(axis=0))]), 3)
+    positions = sorted({round(float(patch.position[a + np.argmax(patch.depth[a:b + 1])]), 3)
                         for a, b in zip(starts, ends)})
-    return dict(max_impact_force=float(total.max() / reference_force(model)),
+    return dict(max_impact_force=float(patch.load.max() / reference_force(model)),
                 impacts_per_cycle=starts.size / m, contact_positions=positions)
 
 

@@ -13,6 +13,7 @@ import functools
 import json
 import math
 import time
+import warnings
 from dataclasses import dataclass, replace
 
 import numpy as np
@@ -41,6 +42,8 @@ class Run:
     trajectory: Trajectory
     outcome: Outcome
     wall_time: float
+    #: the bound its quadrature error was controlled to (:func:`run_case`), None if not
+    quadrature_tol: float | None = None
 
     @functools.cached_property
     def quadrature_error(self) -> float:
@@ -49,17 +52,34 @@ class Run:
         on the settled cycle) among them, at the steady state's parameters."""
         return quadrature_error(self.model, _spread(self.trajectory.x), self.steady.p)
 
+    @property
+    def warnings(self) -> list[str]:
+        """What the run's own estimates say against its tolerances."""
+        tol = self.quadrature_tol
+        if tol is None or not self.quadrature_error > tol:
+            return []
+        return [f"quadrature error {self.quadrature_error:.2g} on {self.model.scene.n_quad} "
+                f"nodes exceeds its tolerance {tol:.2g}: raise quad_nodes"]
+
+    @property
+    def status(self) -> str:
+        """The trajectory's status, or "unconverged" for a successful trajectory whose
+        error estimate exceeds its tolerance (:attr:`warnings`)."""
+        status = self.trajectory.status
+        return "unconverged" if status == "success" and self.warnings else status
+
     def to_json(self) -> dict:
         """The ``fsicas simulate --json`` object (keys in docs/simulate.md)."""
         o, tr = self.outcome, self.trajectory
         out = {k: o.to_json()[k] for k in ("outcome", "period", "frequency", "tip_amplitude", "contact",
                                             "first_contact_time", "contact_positions",
                                             "max_impact_force", "mean_flow_reduction")}
-        out.update(steps=tr.steps, wall_time=self.wall_time, status=tr.status, message=tr.message,
+        out.update(steps=tr.steps, wall_time=self.wall_time, status=self.status, message=tr.message,
                    t_end_reached=float(tr.t[-1]), convergence=o.convergence,
                    settled=o.settled, impacts_per_cycle=o.impacts_per_cycle,
                    first_contact_position=o.first_contact_position,
-                   quadrature_error=self.quadrature_error, quadrature_nodes=self.model.scene.n_quad)
+                   quadrature_error=self.quadrature_error, quadrature_nodes=self.model.scene.n_quad,
+                   quadrature_tol=self.quadrature_tol, warnings=self.warnings)
         return out
 
 
@@ -116,15 +136,27 @@ def run_case(scene: Scene, t_end: float, *, settings: Settings = Settings(),
     once = functools.partial(_run_once, t_end=t_end, settings=settings, criteria=criteria,
                              schedule=schedule, perturbation=perturbation, stop_early=stop_early,
                              progress=progress)
-    run = once(scene, model)
-    for _ in range(MAX_REPEATS if quadrature_tol is not None else 0):
+    run = _controlled(once(scene, model), once, quadrature_tol)
+    run = replace(run, wall_time=time.perf_counter() - start)
+    for message in run.warnings:
+        warnings.warn(message, RuntimeWarning, stacklevel=2)
+    return run
+
+
+def _controlled(run: Run, once, tol: float | None) -> Run:
+    """``run``, repeated by ``once(scene, model)`` on the adequate model while its
+    :func:`sensitive_states` need more nodes for ``tol`` (at most :data:`MAX_REPEATS`
+    times), with ``quadrature_tol = tol`` if it was checked."""
+    for _ in range(MAX_REPEATS if tol is not None else 0):
         states = sensitive_states(run)
-        finer = run.model if states is None else adequate_model(run.model, states, run.steady.p,
-                                                                 quadrature_tol)[0]
-        if finer is run.model:
+        if states is None:
             break
-        run = once(scene.replace(quad_nodes=finer.scene.n_quad), finer)
-    return replace(run, wall_time=time.perf_counter() - start)
+        finer = adequate_model(run.model, states, run.steady.p, tol)[0]
+        if finer is run.model:
+            return replace(run, quadrature_tol=tol)
+        run = replace(once(run.scene.replace(quad_nodes=finer.scene.n_quad), finer),
+                      quadrature_tol=tol)
+    return run
 
 
 #: Repeats of a run on finer quadrature at most (:func:`run_case`).
@@ -143,14 +175,18 @@ def _quadrature_tol(value, criteria: Criteria, rtol: float) -> float | None:
 
 
 def sensitive_states(run: Run) -> np.ndarray | None:
-    """The samples (at most :data:`QUADRATURE_SAMPLES`) on which the outcome of a
-    contact-free run depends on the flow quadrature, or None: a limit cycle or an
-    unsettled run, whose amplitude near a wall moves with the rule (1.5e-6 at 40 eps on
-    the default nodes, M* = 3). A decay stays far from the walls; a contact is not
-    repeated, since the error estimate grows without bound as the gap closes to eps (a
-    graze needed 1280 nodes for 1e-8, 15x the run's cost), so it is reported; runs with
-    the contact law on penetrate the contact distance by design (reported too)."""
-    if run.scene.contact or run.outcome.outcome not in ("lco", "unsettled"):
+    """The samples (at most :data:`QUADRATURE_SAMPLES`) on which the outcome of a run
+    depends on the quadrature, or None. A contact-free limit cycle or unsettled run,
+    whose amplitude near a wall moves with the rule (1.5e-6 at 40 eps on the default
+    nodes, M* = 3); and every run with the contact law on that did not decay: at 40
+    nodes an impacting run's equations were 1.9e-2 off, its period 1.5e-5 and its peak
+    force 2.7e-4 (80 nodes: 6.8e-5, 3.9e-8, 1.9e-5; docs/simulate.md). A contact-free run stopped by contact is
+    not repeated: the estimate grows without bound as the gap closes to eps (a graze
+    needed 1280 nodes for 1e-8, 15x the run's cost), so it is reported; nor is a failed
+    run."""
+    kind = run.outcome.outcome
+    if kind == "decay" or (not run.scene.contact and kind not in ("lco", "unsettled")) \
+            or run.trajectory.status != "success":
         return None
     return _spread(run.trajectory.x)
 

@@ -12,7 +12,7 @@ the last cycle is the last ``k`` returns, ``k`` the tip swings of the continued 
   cycle of that period (a stable cycle), growing where it leaves it (an unstable one);
 * ``tip_amplitude``: half the tip's range over that period (samples), ``min_gap``,
   ``peak_force``: the largest total impact load over it / F0
-  (:func:`fsicas.model.contact.contact_load`, the exact law, as the branches measure).
+  (:func:`fsicas.model.patch.penetration`, the exact law, as the branches measure).
 
 ``status``: "settled" (drift below ``tol``), "unsettled" (above) or "failed" (the
 integration failed or the run has fewer than ``k + 1`` returns; ``message`` says why).
@@ -27,7 +27,8 @@ import numpy as np
 from ..checks import finite_number, require
 from ..linear.steady import steady_state
 from ..model.assembly import Model
-from ..model.contact import contact_load, gaps, reference_force
+from ..model.contact import gaps, reference_force
+from ..model.patch import penetration
 from ..scene import Scene
 from .integrators import Settings, simulate
 from .returns import cycles, xdot_rows
@@ -77,7 +78,7 @@ def settled_cycle(model: Model, scene: Scene, state, period: float, *, periods: 
     last = slice(cyc.index[-1 - k], cyc.index[-1] + 1)
     drift = float(np.max(np.abs(cyc.points[-1] - cyc.points[-1 - k])) / cyc.size)
     y = model.tip_deflection(X[last])
-    _, load = contact_load(model, X[last])
+    load = penetration(model, X[last]).load
     return SettledCycle("settled" if drift < tol else "unsettled",
                         float(cyc.times[-1] - cyc.times[-1 - k]), k, drift,
                         float(np.ptp(y) / 2), float(gaps(model, X[last]).min()),
