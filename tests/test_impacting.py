@@ -171,7 +171,7 @@ def test_peak_force_and_flow_reduction_against_a_time_integration(through_contac
     traj = simulate(model, st, last.period, x0=last.state,
                     settings=Settings(rtol=1e-10, atol=1e-12, dt_out=last.period / 20000,
                                       chunk=last.period))
-    _, total = contact_load(model, traj.x)
+    _, total = contact_load(model, traj.x, traj.p)
     assert total.max() / reference_force(model) == pytest.approx(last.peak_force, rel=1e-2)
     flow = traj.x[:, -2:].sum(axis=1)
     mean = np.trapezoid(flow, traj.t) / (traj.t[-1] - traj.t[0])

@@ -241,3 +241,26 @@ def test_shipped_example_studies_load():
     assert len(onset.points) == 200 and onset.physical == "soft_palate"
     assert len(fig4.points) == 105 and fig4.analysis == "outcome"
     assert 0.1 * 0.999 < min(p["mstar"] for p in fig4.points) < 0.1 * 1.001
+
+
+def test_a_sweep_over_the_contact_law_equals_separate_runs(tmp_path):
+    """Points that differ in k* share one model (the contact law is a parameter of it),
+    yet each reports its own force: every row equals a run of its scene alone, on its own
+    model (before: the second point's force was computed with the first point's k*)."""
+    text = ('analysis = "outcome"\n[scene]\nmstar = 1.0\nustar = 7.0\nmodes = 4\n'
+            'zeta = 0.01\ncontact = true\ncontact_eps = 0.1\n'
+            '[grid]\ncontact_stiffness = [3e4, 1e5]\n')
+    study = load_study(_write(tmp_path, text))
+    rows = [study_point(study, i) for i in range(2)]
+    from fsicas.timedomain.integrators import Settings
+    from fsicas.timedomain.run import sweep_model
+    scenes = [fsicas.Scene(**study.scene, **point) for point in study.points]
+    assert sweep_model(scenes[0]) is sweep_model(scenes[1])
+    s = study.settings
+    settings = Settings(rtol=s["rtol"], atol=s["atol"], dt_out=s["dt_out"], chunk=1.0)
+    for row, scene in zip(rows, scenes):
+        alone = fsicas.run_case(scene, s["t_end"], settings=settings).to_json()
+        assert row["outcome"] == alone["outcome"] == "impacting_lco" and row["error"] == ""
+        for key in ("max_impact_force", "period", "tip_amplitude", "first_contact_time"):
+            assert row[key] == pytest.approx(alone[key], rel=1e-9), key
+    assert rows[1]["max_impact_force"] > 1.2 * rows[0]["max_impact_force"]

@@ -202,7 +202,7 @@ def continue_cycles(scene: Scene, model: Model | None = None, *, ustar_max: floa
                                         adapt_every=settings.adapt_every)
     problem = C.cycle_from_hopf(flutter_problem(scene, model, min(0.2, hopf.ustar / 2)),
                                 hopf.point, dp=settings.dp, settings=collocation)
-    gauge = ProfileGauge(model, hopf.x, settings.quadrature_tol)
+    gauge = ProfileGauge(model, hopf.x, scene.contact_gap, settings.quadrature_tol)
     if settings.quadrature_tol is not None:
         problem.refine = gauge.refine
     problems = {}
@@ -268,8 +268,8 @@ class ProfileGauge(Gauge):
     """Measures of X = (nodes, 100 T, Π) on the collocation polynomial, the extrema exact
     (:class:`fsicas.cycles.gauge.PolynomialExtrema`)."""
 
-    def __init__(self, model: Model, x_eq, quadrature_tol: float | None):
-        super().__init__(model, x_eq)
+    def __init__(self, model: Model, x_eq, eps: float, quadrature_tol: float | None):
+        super().__init__(model, x_eq, eps)
         self._extrema = PolynomialExtrema(model)
         self.quadrature_tol = quadrature_tol
 

@@ -241,14 +241,15 @@ def check_smooth(scene: Scene) -> None:
 
 def failed_branch(scene, model, message, start) -> CollocatedImpactBranch:
     """The empty branch of status "failed" with ``message``, timed from ``start``."""
-    return CollocatedImpactBranch(scene, model.scene.contact_gap, [], "failed", message,
+    return CollocatedImpactBranch(scene, scene.contact_gap, [], "failed", message,
                                   time.perf_counter() - start)
 
 
 def continued_branch(scene, model, problem, ustar_range, direction, settings, start
                      ) -> CollocatedImpactBranch:
     """The branch of ``problem`` in U* within ``ustar_range``, its special cycles refined."""
-    gauge = PolynomialGauge(model, steady_state(scene, model).x, settings.samples)
+    gauge = PolynomialGauge(model, steady_state(scene, model).x, scene.contact_gap,
+                            settings.samples)
     once = (lambda problem, X: "reached max_points = 1") if settings.max_points == 1 else None
     branch = C.continuation(problem, record=gauge.record, stop=once, settings=_steps(
         scene, model, *ustar_range, direction, settings))
@@ -258,7 +259,7 @@ def continued_branch(scene, model, problem, ustar_range, direction, settings, st
                          ncol=settings.refine_ncol or settings.ncol))
     special = [_refined(problem, sp, gauge, settings, finer) for sp in branch.special_points
                if sp.kind in _CRITICAL]
-    return _result(scene, model.scene.contact_gap, branch, special, settings,
+    return _result(scene, scene.contact_gap, branch, special, settings,
                    time.perf_counter() - start)
 
 

@@ -139,7 +139,7 @@ def cycle_view(run, snapshots: int = 24) -> CycleView:
     picks = np.linspace(0, len(X) - 1, snapshots).astype(int)
     q = X[:, n:2 * n]
     freq, spectrum = tip_spectrum(tr.t, tr.tip_velocity, T)
-    _, force = contact_load(model, X)
+    _, force = contact_load(model, X, tr.p)
     upper, lower = scene.walls
     return CycleView(
         ustar=float(scene.ustar), mstar=float(scene.mstar), modes=int(n),

@@ -44,7 +44,7 @@ def plot_run(run, path=None):
     ax[1].plot(tr.t, tr.x[:, -1], lw=0.7, label="$Q_2$ (below)")
     ax[1].set_ylabel("flow rate $Q_c$ (units of $L^2/T$)")
     ax[1].legend(loc="best")
-    _, total = contact_load(model, tr.x)
+    _, total = contact_load(model, tr.x, tr.p)
     ax[2].plot(tr.t, total / reference_force(model), lw=0.7, color=PALETTE[1])
     ax[2].set_ylabel(f"impact force $F/F_0$ {NONDIM}")
     ax[2].set_xlabel("time $t$ (units of $T$)")

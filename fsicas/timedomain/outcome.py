@@ -175,15 +175,14 @@ def _decayed(cyc: Cycles | None, crit: Criteria, X, x_ref, gap, first_amplitude)
     return bool(np.all(np.diff(last) < 0) and last[-1] < crit.decay_ratio * first_amplitude)
 
 
-def _first_contact(t, X, model, start: int = 0):
-    """(sample index, time, position) of the first contact at or after sample ``start``,
-    or None.
+def _first_contact(t, X, model, eps: float, start: int = 0):
+    """(sample index, time, position) of the first contact (a gap at ``eps``) at or after
+    sample ``start``, or None.
 
     The samples give the interval; the time is then located inside it (event location):
     the root of ``min_x h(x, t) − eps`` on the cubic through the samples ``k−3 .. k``
     (Lagrange interpolation of the state, error O(dt_out⁴)), by Brent's method.
     """
-    eps = model.scene.contact_gap
     touch = gaps(model, X[start:]).min(axis=(1, 2)) <= eps
     if not touch.any():
         return None
@@ -231,7 +230,7 @@ class Monitor:
             # the gap went from > eps to 0 between the last sample and the solver failure
             h = gaps(model, X[-1:])[0]
             contact = len(t) - 1, float(t[-1]), float(GAP_POINTS[np.argmin(h.min(axis=0))])
-        stop_on_contact = (not model.scene.contact) if crit.stop_on_contact is None \
+        stop_on_contact = (not self.steady.scene.contact) if crit.stop_on_contact is None \
             else crit.stop_on_contact
         info = {}
         if contact is not None:
@@ -261,7 +260,8 @@ class Monitor:
     def _contact_in(self, t, X):
         """The first contact (:func:`_first_contact`), scanning only samples not seen."""
         if self._contact is None and len(t) > self._scanned:
-            self._contact = _first_contact(t, X, self.model, self._scanned)
+            self._contact = _first_contact(t, X, self.model, self.steady.scene.contact_gap,
+                                           self._scanned)
             self._scanned = len(t)
         return self._contact
 
@@ -296,13 +296,14 @@ class Monitor:
                    convergence=change, cycles=int(cyc.periods.size), mean_flow_reduction=reduction,
                    t_settled=float(cyc.times[-1]), settled=settled)
         if info.get("contact"):
-            out.update(_impacts(X[a:b], self.model, m))
+            out.update(_impacts(X[a:b], self.model, self.steady.p, m))
         return Outcome(kind, **{**info, **out})
 
 
-def _impacts(X, model, m):
-    """Impact force, contact positions and chattering count over the measured cycles."""
-    density, total = contact_load(model, X)
+def _impacts(X, model, p, m):
+    """Impact force, contact positions and chattering count over the measured cycles, at
+    the parameters ``p``."""
+    density, total = contact_load(model, X, p)
     on = total > 0
     starts = np.flatnonzero(on & ~np.r_[False, on[:-1]])
     ends = np.flatnonzero(on & ~np.r_[on[1:], False])
