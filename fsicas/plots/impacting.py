@@ -127,7 +127,7 @@ def cycle_view(run, snapshots: int = 24) -> CycleView:
     """The last settled cycle of ``run`` (or, unsettled, its last tip return) for the
     figures."""
     scene, model, tr = run.scene, run.model, run.trajectory
-    settled, T = run.outcome.period is not None, run.outcome.period
+    settled, T = run.outcome.periodic, run.outcome.period
     if not settled:
         T = return_period(run)
         if T is None:

@@ -21,7 +21,8 @@ __all__ = ["plot_run", "plot_map", "plot_cycle", "plot_cycles", "cycle_view", "c
 #: Colour and marker of each outcome on the map (Okabe–Ito; the paper's limit cycles
 #: orange, contact blue).
 _MARKERS = {"decay": (PALETTE[2], "o"), "lco": (PALETTE[4], "o"), "contact": (PALETTE[0], "s"),
-            "impacting_lco": (PALETTE[3], "D"), "unsettled": ("0.55", "^"), "error": ("k", "x")}
+            "impacting_lco": (PALETTE[3], "D"), "impacting_nonperiodic": (PALETTE[5], "D"),
+            "unsettled": ("0.55", "^"), "error": ("k", "x")}
 #: Neighbouring boundary samples whose frequencies differ by more than this factor lie on
 #: two branches: their line is broken there.
 _FREQUENCY_JUMP = 1.25

@@ -18,18 +18,25 @@
   rtol 1e-8), within [1e-8, 1e-2]: what the samples can resolve, not a fixed 1e-3 that
   declared growing cycles settled with amplitudes low by up to 2 %. Impacting cycles:
   the largest plain change below ``tol_impacting`` [2e-2] (chattering cycles are only
-  nearly periodic). The remaining change is reported as ``convergence``.
+  nearly periodic), between returns of the tip; at the end of a run that did not settle
+  so, between every k-th return, k up to ``MAX_SWINGS`` [3] (a cycle of k tip swings:
+  its period spans them; not earlier, since a slowly fading alternation of a cycle of
+  one swing passes for two swings at first). The remaining change is reported as
+  ``convergence``.
 - *decay*: the last ``cycles`` cycle amplitudes decrease monotonically and the last one
   is below ``decay_ratio`` [0.1] times the first cycle's amplitude; or the deviation from
   the steady state is below ``floor`` [1e-9 of the gap] over the last eighth of the samples.
 - at the end of a run: a contact-free cycle whose remaining change is below ``tol_end``
   [1e-2] is a limit cycle with ``settled = False`` (its ``convergence`` says how far it
-  has still to go); otherwise *unsettled* (or *contact* if contact happened but no
-  impacting cycle settled).
+  has still to go); an impacting oscillation whose cycles still differ by more than
+  ``tol_impacting`` is *impacting_nonperiodic*: not periodic (quasi-periodic, chaotic or
+  a long transient), measured over its last cycles like a cycle, its ``convergence``
+  the largest change between them (of single tip returns); otherwise *unsettled* (or
+  *contact* if contact happened but too few cycles followed to measure).
 
 **Incremental monitoring.** :class:`Monitor` keeps what it has found (the contact scan
 up to the last sample, the first cycle's amplitude, the latest period) and looks at the
-last ``1.5 (cycles + 4)`` periods only, so a run costs O(samples), not O(samples²).
+last ``1.5 (cycles + 4)`` periods only (after a contact ``1.5 (MAX_SWINGS cycles + 4)``), so a run costs O(samples), not O(samples²).
 """
 from __future__ import annotations
 
@@ -51,14 +58,18 @@ __all__ = ["Criteria", "Outcome", "OutcomeKind", "classify", "Monitor", "SETTLIN
 #: What a run did (module docstring): "decay" back to the steady state; "lco" a limit
 #: cycle without contact; "impacting_lco" a settled cycle with wall contact; "contact" a
 #: gap reached the contact distance but no impacting cycle settled (or the contact-free
-#: run stopped there); "unsettled" none of these by the end of the run.
-OutcomeKind = Literal["decay", "lco", "impacting_lco", "contact", "unsettled"]
+#: run stopped there); "impacting_nonperiodic" an impacting oscillation that is not
+#: periodic by the end of the run; "unsettled" none of these by the end of the run.
+OutcomeKind = Literal["decay", "lco", "impacting_lco", "impacting_nonperiodic", "contact",
+                      "unsettled"]
 
 #: The default settling tolerance per unit of the integrator's rtol (module docstring).
 SETTLING_PER_RTOL = 1e3
 _TOL_RANGE = (1e-8, 1e-2)
 #: Relative differences between cycles below ``NOISE × tol`` are noise, not a trend.
 NOISE = 1e-3
+#: Tip swings an impacting cycle may span at most (module docstring).
+MAX_SWINGS = 3
 
 
 @dataclass(frozen=True)
@@ -118,6 +129,12 @@ class Outcome:
     t_settled: float | None = None
     settled: bool = False
 
+    @property
+    def periodic(self) -> bool:
+        """A cycle that repeats (settled or still approaching): ``period`` is its period,
+        not the mean return time of an impacting_nonperiodic run."""
+        return self.period is not None and self.outcome != "impacting_nonperiodic"
+
     def to_json(self) -> dict:
         return {k: (float(v) if isinstance(v, np.floating) else v) for k, v in self.__dict__.items()}
 
@@ -164,6 +181,24 @@ def _distance_to_go(dx: np.ndarray, noise: float) -> float:
     if dx[-1] < noise:
         return noise
     return _geometric_tail(dx) if np.all(dx[1:] < dx[:-1]) else float(dx.max())
+
+
+def _swings(cyc: Cycles, m: int, tol: float) -> tuple[Cycles, float] | None:
+    """``(cycles, change)`` of the fewest tip swings k <= :data:`MAX_SWINGS` per cycle
+    whose cycles (every k-th return, the last among them) change by less than ``tol``,
+    or None."""
+    for k in range(2, MAX_SWINGS + 1):
+        every = np.arange(cyc.times.size - 1, -1, -k)[::-1]
+        if every.size < m + 2:
+            return None
+        times = cyc.times[every]
+        amplitudes = [cyc.amplitudes[a:b].max() for a, b in zip(every[:-1], every[1:])]
+        grouped = Cycles(cyc.index[every], times, cyc.points[every], np.diff(times),
+                         np.array(amplitudes), cyc.size)
+        change = _convergence(grouped, m, None)
+        if change < tol:
+            return grouped, change
+    return None
 
 
 def _decayed(cyc: Cycles | None, crit: Criteria, X, x_ref, gap, first_amplitude) -> bool:
@@ -221,9 +256,12 @@ class Monitor:
         self.outcome = self.classify(t, X, final=False)
         return None if self.outcome is None else self.outcome.outcome
 
-    def classify(self, t, X, final: bool, closed: bool = False) -> Outcome | None:
+    def classify(self, t, X, final: bool, closed: bool = False,
+                 failed: bool = False) -> Outcome | None:
         """The outcome of the samples so far (None while undecided and not ``final``);
-        ``closed``: the run ended on a closed gap after its last sample."""
+        ``closed``: the run ended on a closed gap after its last sample; ``failed``: the
+        run failed (then an impacting run that did not settle is "contact", not
+        "impacting_nonperiodic")."""
         model, crit = self.model, self.criteria
         contact = self._contact_in(t, X)
         if contact is None and closed:
@@ -253,8 +291,22 @@ class Monitor:
             return self._measure(kind, t[start:], X[start:], cyc, change, info, settled=True)
         if not final:
             return None
-        if change is not None and not impacting and change < crit.tol_end:
-            return self._measure(kind, t[start:], X[start:], cyc, change, info, settled=False)
+        return self._at_end(t[start:], X[start:], cyc, change, info, failed)
+
+    def _at_end(self, t, X, cyc, change, info, failed: bool) -> Outcome:
+        """The outcome at the end of a run that did not settle (module docstring): an
+        impacting cycle of several swings, an impacting_nonperiodic run, a contact-free
+        cycle still approaching, or contact / unsettled."""
+        impacting, crit = bool(info), self.criteria
+        if impacting and change is not None:
+            swings = _swings(cyc, crit.cycles, crit.tol_impacting)
+            if swings is not None:
+                return self._measure("impacting_lco", t, X, *swings, info, settled=True)
+            if not failed:
+                return self._measure("impacting_nonperiodic", t, X, cyc, change, info,
+                                     settled=False)
+        if not impacting and change is not None and change < crit.tol_end:
+            return self._measure("lco", t, X, cyc, change, info, settled=False)
         return Outcome("contact", **info) if impacting else Outcome("unsettled", convergence=change)
 
     def _contact_in(self, t, X):
@@ -266,10 +318,13 @@ class Monitor:
         return self._contact
 
     def _window(self, t) -> int:
-        """First sample of the last ``1.5 (cycles + 4)`` periods (0 before a period is known)."""
+        """First sample of the last ``1.5 (cycles + 4)`` periods, after a contact
+        ``1.5 (MAX_SWINGS cycles + 4)`` (0 before a period is known)."""
         if self._period is None:
             return 0
-        return int(np.searchsorted(t, t[-1] - 1.5 * (self.criteria.cycles + 4) * self._period))
+        swings = 1 if self._contact is None else MAX_SWINGS
+        span = 1.5 * (swings * self.criteria.cycles + 4) * self._period
+        return int(np.searchsorted(t, t[-1] - span))
 
     def _cycles(self, t, X, start, y_ref=None) -> Cycles | None:
         cyc = cycles(t[start:], X[start:], self.model,
@@ -317,4 +372,5 @@ def classify(traj: Trajectory, steady, criteria: Criteria = Criteria()) -> Outco
     """Classify a whole trajectory and measure its cycle (module docstring)."""
     monitor = Monitor(traj.model, steady, criteria, rtol=traj.settings.rtol,
                       pressure=lambda s: np.interp(s, traj.t, traj.pressure_drop))
-    return monitor.classify(traj.t, traj.x, final=True, closed=traj.gap_closed)
+    return monitor.classify(traj.t, traj.x, final=True, closed=traj.gap_closed,
+                            failed=traj.failed)
