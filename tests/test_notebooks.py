@@ -238,7 +238,7 @@ def check_physical_units(out):
     assert all(a < b for a, b in zip(out["flows"], out["flows"][1:]))
     low, high = out["breaths"]["5 L/min"], out["breaths"]["8 L/min"]
     assert low["t_c"] is None and low["status"] == "success"
-    assert high["outcome"] == "contact" and high["status"] == "success"
+    assert high["outcome"] == "impacting_nonperiodic" and high["status"] == "success"
     assert onset["onset_flow_l_min"] < high["flow_c"] < 8.0
 
 
