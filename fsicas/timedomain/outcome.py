@@ -36,7 +36,8 @@
 
 **Incremental monitoring.** :class:`Monitor` keeps what it has found (the contact scan
 up to the last sample, the first cycle's amplitude, the latest period) and looks at the
-last ``1.5 (cycles + 4)`` periods only (after a contact ``1.5 (MAX_SWINGS cycles + 4)``), so a run costs O(samples), not O(samples²).
+last ``1.5 (cycles + 4)`` periods only (after a contact ``1.5 (MAX_SWINGS cycles + 4)``),
+so a run costs O(samples), not O(samples²).
 """
 from __future__ import annotations
 
