@@ -15,7 +15,8 @@ from .checks import finite_number, read_toml, require
 from .profile import Profile
 from .units import MAX_BEAM_RATIO, THIN_BEAM_RATIO, Scales, thick_beam_message
 
-__all__ = ["Scene", "load_scene"]
+__all__ = ["Scene", "load_scene", "PARAMETER_FIELDS", "MODEL_PARAMETERS", "CONTACT_PARAMETERS",
+           "STRUCTURE_FIELDS"]
 
 
 def default_quad_nodes(n_modes: int) -> int:
@@ -35,6 +36,17 @@ MAX_SLENDERNESS = MAX_BEAM_RATIO
 #: Beam-theory fields that only the Timoshenko beam uses, with their defaults.
 _TIMOSHENKO_FIELDS = ("beam", "slenderness", "poisson", "shear_coefficient")
 _DEFAULTS = dict(beam=EULER_BERNOULLI, slenderness=None, poisson=0.3, shear_coefficient=None)
+
+
+#: The Scene fields that are parameters: numeric inputs of a model, which serves every value
+#: of them (U* through the pressure drop it sets). ``MODEL_PARAMETERS`` are the model's
+#: symbolic inputs by name, in the order of its parameter vector (zeta one entry per
+#: mode); ``CONTACT_PARAMETERS`` those of the contact law, inputs of a model with contact
+#: only. Every other field but ``scales`` is structure (:data:`STRUCTURE_FIELDS`): a model
+#: is built for its values (:func:`fsicas.model.assembly.build_model`).
+CONTACT_PARAMETERS = ("contact_stiffness", "contact_eps")
+MODEL_PARAMETERS = ("mstar", "friction", "k0", "kl") + CONTACT_PARAMETERS + ("zeta",)
+PARAMETER_FIELDS = ("ustar",) + MODEL_PARAMETERS
 
 
 def min_quad_nodes(n_modes: int) -> int:
@@ -186,6 +198,11 @@ class Scene:
         return cls(mstar=rho_f * L / (rho_s * e), ustar=U0 * scales.time / L,
                    hstar=(H1 + H2) / L, channel1=Profile.constant(H1 / L),
                    channel2=Profile.constant(H2 / L), scales=scales, **nondimensional)
+
+
+#: The Scene fields that shape a model (module constants above): all but the parameters.
+STRUCTURE_FIELDS = tuple(f.name for f in dataclasses.fields(Scene)
+                         if f.name not in PARAMETER_FIELDS and f.name != "scales")
 
 
 def _physical_beam(beam, nu, e, L) -> dict:

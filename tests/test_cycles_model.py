@@ -227,3 +227,42 @@ def test_the_position_rows_leave_the_interval_lus():
     for mu_a, mu_c in zip(a.eigenvalues, c.eigenvalues):   # conjugates in either order
         distance = np.abs(mu_a[:, None] - mu_c[None, :])
         assert max(distance.min(axis=0).max(), distance.min(axis=1).max()) < 1e-9
+
+
+@pytest.mark.parametrize("mstar", [0.7, 0.75])
+def test_branch_starts_where_l1_is_near_zero(mstar):
+    """N = 10, zeta = 0.01: l1 = 0.023 at M* = 0.7, where the normal form's start guess
+    (dp = 1e-3) was a quarter of the gap and its Newton diverged; the start is retried
+    closer to the Hopf point. The first cycle is a cycle: an IDAS integration over one
+    period from its state returns to it (independent of the collocation)."""
+    scene = fsicas.Scene(mstar=mstar, zeta=0.01)
+    model = build_model(scene)
+    branch = cycle_branch(scene, model, settings=CycleSettings(max_points=3))
+    assert branch.status == "max_points" and abs(branch.hopf["l1"]) < 0.05
+    first = branch.points[0]
+    assert abs(first.ustar - branch.hopf["ustar_crit"]) < 1e-2 and first.tip_amplitude < 0.01
+    at = scene.replace(ustar=first.ustar)
+    st = fsicas.steady_state(at, model)
+    traj = fsicas.simulate(model, st, first.period, x0=first.state,
+                           settings=Settings(method="idas", rtol=1e-11, atol=1e-13,
+                                             dt_out=first.period / 200, chunk=first.period))
+    deviation = np.abs(first.state - st.x).max()
+    assert np.abs(traj.x[-1] - first.state).max() < 1e-4 * deviation
+
+
+@pytest.mark.slow
+def test_stable_cycles_past_the_fold_near_l1_zero_are_those_of_a_time_integration():
+    """M* = 0.7, N = 10, zeta = 0.01 (l1 = 0.023, subcritical): past the fold the branch's
+    stable cycles are where a run from the perturbed steady state settles (IDAS, rtol
+    1e-9), period and amplitude to the run's convergence."""
+    scene = fsicas.Scene(mstar=0.7, zeta=0.01)
+    model = build_model(scene)
+    branch = cycle_branch(scene, model)
+    assert branch.status == "contact" and len(branch.folds) == 1
+    p = next(q for q in branch.points if q.stable and q.ustar > branch.hopf["ustar_crit"] + 0.1)
+    run = run_case(scene.replace(ustar=p.ustar), 80.0,
+                   settings=Settings(method="idas", rtol=1e-9, atol=1e-11, dt_out=1e-3))
+    o = run.outcome
+    assert o.outcome == "lco" and o.settled
+    assert o.period == pytest.approx(p.period, rel=max(o.convergence, 1e-6))
+    assert o.tip_amplitude == pytest.approx(p.tip_amplitude, rel=2 * max(o.convergence, 1e-6))

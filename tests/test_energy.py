@@ -51,7 +51,7 @@ def test_energy_balance_with_impacts():
     eb = energy_balance(tr, t_a, t_b)
     assert eb.relative_residual < 1e-3                              # measured 2e-4
     w = np.flatnonzero((tr.t >= t_a) & (tr.t <= t_b))
-    force = penetration(run.model, tr.x[w]).load
+    force = penetration(run.model, tr.x[w], tr.p).load
     on = np.flatnonzero(force > 0)
     assert on.size > 0
     k_max = on[0] + int(np.argmax(force[on[0]:on[0] + 200]))

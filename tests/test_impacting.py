@@ -173,7 +173,7 @@ def test_peak_force_and_flow_reduction_against_a_time_integration(through_contac
     traj = simulate(model, st, last.period, x0=last.state,
                     settings=Settings(rtol=1e-10, atol=1e-12, dt_out=last.period / 20000,
                                       chunk=last.period))
-    total = penetration(model, traj.x).load
+    total = penetration(model, traj.x, traj.p).load
     assert total.max() / reference_force(model) == pytest.approx(last.peak_force, rel=1e-2)
     flow = traj.x[:, -2:].sum(axis=1)
     mean = np.trapezoid(flow, traj.t) / (traj.t[-1] - traj.t[0])
@@ -185,18 +185,21 @@ def test_cli_lco_through_contact(capsys):
     impacting branch on the contact model from 3 eps before it: by collocation (default)
     with its special cycles, at N = 4 the Neimark-Sacker point past the first contact
     (located once more on NTST = 200, ``--special-ntst``), and a warning when the mesh is too coarse (NTST = 10); by shooting (plumbing: one
-    point)."""
+    point). Without ``--impact-points`` the branch runs on to ``--ustar-max``; a stop
+    names the option that made it."""
     import json
     from fsicas.cli import main
     keys = {"ustar", "period", "tip_amplitude", "min_gap", "gap_ratio", "impacts",
             "peak_force", "flow_reduction", "stable", "quadrature_error", "quadrature_nodes"}
     code = main(["lco", "--mstar", "1", "--zeta", "0.01", "--modes", "4", "--ustar-max", "6.7",
-                 "--through-contact", "--impact-points", "16", "--impact-ntst", "100",
-                 "--special-ntst", "200", "--json"])
+                 "--through-contact", "--impact-ntst", "100", "--special-ntst", "200",
+                 "--json"])
     out = json.loads(capsys.readouterr().out)
     imp = out["impacting"]
     assert code == 0 and out["status"] == "contact" and imp["route"] == "collocation"
     assert imp["status"] == "bound" and set(imp["points"][0]) == keys
+    assert imp["stopped_by"] == "--ustar-max 6.7" and out["stopped_by"] is None
+    assert len(imp["points"]) > 10 and 6.65 < imp["points"][-1]["ustar"] <= 6.7
     assert 0 < imp["max_error_estimate"] < 0.1          # no coarse-mesh warning here
     (ns,) = imp["special"]
     assert ns["kind"] == "ns" and ns["located"] and ns["ntst"] == 200
@@ -209,6 +212,7 @@ def test_cli_lco_through_contact(capsys):
                  "--json"])
     imp = json.loads(capsys.readouterr().out)["impacting"]
     assert code == 0 and imp["status"] == "max_points" and imp["route"] == "shooting"
+    assert imp["stopped_by"] == "--impact-points 1" and "raise --impact-points" in imp["message"]
     point = imp["points"][0]
     assert set(point) == keys and imp["special"] == []
     assert point["gap_ratio"] == pytest.approx(3.0, abs=1.0) and imp["eps"] > 0

@@ -1,4 +1,6 @@
 """The nonlinear model against closed forms, the PDEs it came from, FD and symmetry."""
+import dataclasses
+
 import casadi as ca
 import numpy as np
 import pytest
@@ -378,3 +380,22 @@ def test_quadrature_error_of_many_states_is_that_of_their_plain_evaluations():
     assert expected > 1e-8                                  # the near-wall rows dominate
     assert quadrature_error(model, x, st.p) == pytest.approx(expected, rel=1e-12)
     assert quadrature_error(model, x[::-1], st.p) == pytest.approx(expected, rel=1e-12)
+
+
+def test_one_model_serves_every_value_of_the_parameter_fields():
+    """A model built for one scene, given the parameter vector of a scene that differs in
+    every parameter field (fsicas.scene.PARAMETER_FIELDS), gives the right-hand side of
+    that scene's own model; scene_at recovers the scene's parameters from the vector."""
+    from fsicas.scene import PARAMETER_FIELDS, STRUCTURE_FIELDS
+    first = Scene(modes=3, contact=True, contact_stiffness=1e4, contact_eps=0.2)
+    other = first.replace(ustar=6.0, mstar=2.0, friction=0.2, k0=0.3, kl=0.5,
+                          zeta=(0.01, 0.02, 0.03), contact_stiffness=3e4, contact_eps=0.3)
+    names = {f.name for f in dataclasses.fields(Scene)} - {"scales"}
+    assert set(PARAMETER_FIELDS) | set(STRUCTURE_FIELDS) == names
+    assert all(getattr(first, f) != getattr(other, f) for f in PARAMETER_FIELDS)
+    shared, own = build_model(first), build_model(other)
+    x = np.r_[0.1, -0.2, 0.05, 0.01, -0.02, 0.03, 0.4, 0.35]   # tip deflection near eps
+    x[3:6] *= (first.hstar / 2 - 0.5 * other.contact_gap) / shared.tip_deflection(x)
+    p = shared.parameters(other, pressure_drop=3.0)
+    assert np.array_equal(np.asarray(shared.rhs(x, p)), np.asarray(own.rhs(x, p)))
+    assert shared.scene_at(p) == other.replace(ustar=first.ustar)

@@ -47,7 +47,7 @@ def test_load_depth_and_position_of_tip_patches(model):
     three modes: load to 1e-6, depth to 1e-12 of eps, position at the tip."""
     eps = SCENE.contact_gap
     X = bent(model, eps * np.array([0.02, 0.1, 0.5, 1.0]), np.array([1.0, 0.1, -0.03] + [0] * 7))
-    patch = penetration(model, X)
+    patch = penetration(model, X, model.parameters())
     reference = trapezoid(np.abs(fine_density(model, X)))
     assert patch.load == pytest.approx(reference, rel=1e-6)
     assert patch.depth == pytest.approx(eps * np.array([0.02, 0.1, 0.5, 1.0]), abs=1e-12 * eps)
@@ -67,7 +67,7 @@ def test_interior_patch_between_the_grid_points(model):
     # (amplitudes for depths of about 2e-7, 5e-7 and 1e-6 at x = 0.4913)
     density = fine_density(m, X)
     assert np.all(fine_density(m, X, xs) == 0)         # the 101-point grid misses it
-    patch = penetration(m, X)
+    patch = penetration(m, X, m.parameters())
     reference = trapezoid(np.abs(density))
     assert np.all(reference > 0)
     assert patch.load == pytest.approx(reference, rel=1e-5)
@@ -78,7 +78,7 @@ def test_interior_patch_between_the_grid_points(model):
 
 def test_no_contact_gives_no_load(model):
     X = bent(model, [-0.5 * SCENE.contact_gap, -1e-3 * SCENE.contact_gap], np.eye(10)[0])
-    patch = penetration(model, X)
+    patch = penetration(model, X, model.parameters())
     assert np.all(patch.load == 0) and np.all(patch.depth < 0)
 
 

@@ -38,6 +38,9 @@ COARSE_MESH = 0.1
 #: The contact law of ``--through-contact`` where none is given: that of Figs. 6-9
 #: (docs/simulate.md), smoothed (docs/cycles.md).
 THROUGH_STIFFNESS, THROUGH_EPS, THROUGH_SMOOTHING = 1e8, 1e-2, 0.1
+#: The impacting branch's points without ``--impact-points``: no limit that a branch
+#: bounded by ``--ustar-max`` reaches.
+UNLIMITED_POINTS = 10 ** 6
 
 
 def add_cycle_commands(sub) -> None:
@@ -62,8 +65,9 @@ def add_cycle_commands(sub) -> None:
                    f"--contact-eps, default {THROUGH_EPS:g}; smoothed): per point impacts, "
                    "peak force, flow reduction, Floquet stability; with the collocation "
                    "route also its folds, period doublings and Neimark-Sacker points")
-    p.add_argument("--impact-points", type=int, default=10,
-                   help="points of the impacting branch at most (with --through-contact)")
+    p.add_argument("--impact-points", type=int, default=None,
+                   help="stop the impacting branch after this many points (with "
+                        "--through-contact; default: no limit, on to --ustar-max)")
     p.add_argument("--impact-route", choices=("collocation", "shooting"), default="collocation",
                    help="the impacting branch by adaptive collocation (NTST = --impact-ntst; "
                         "special cycles located) or by multiple shooting (12 segments)")
@@ -82,7 +86,7 @@ def _cmd_cycles(args) -> dict:
         raise ValueError("cycles are continued on the contact-free model: drop --contact "
                          "(--through-contact turns the contact law on past the first contact)")
     for name in ("impact_points", "impact_ntst"):
-        if getattr(args, name) < 1:
+        if getattr(args, name) is not None and getattr(args, name) < 1:
             raise ValueError(f"--{name.replace('_', '-')} must be >= 1, got {getattr(args, name)}")
     if args.special_ntst < 0:
         raise ValueError(f"--special-ntst must be >= 0 (0: off), got {args.special_ntst}")
@@ -106,7 +110,8 @@ def _cmd_cycles(args) -> dict:
         write_json(args.out, branch.to_json(), args)    # CycleBranch.load reads it
     if args.plot:
         plot_branch(branch, args.plot)
-    out = {"hopf": branch.hopf, "status": branch.status, "message": branch.message,
+    out = {"hopf": branch.hopf, "status": branch.status,
+           **_stop(branch.status, branch.message, "--max-points", args.max_points, args),
            "eps": branch.eps, "folds": [_point_summary(p) for p in branch.folds],
            "contact": None if branch.contact is None else _point_summary(branch.contact),
            "points": [_point_summary(p) for p in branch.points], "wall_time": branch.wall_time}
@@ -124,21 +129,7 @@ def _through_contact(scene, branch, args, say) -> dict:
     start = pre_contact_start(branch)
     scene = scene.replace(ustar=start.ustar, contact=True)
     model = build_model(scene)
-    law = f"k* = {scene.contact_stiffness:g}, eps/H = {scene.contact_eps:g}"
-    if args.impact_route == "shooting":
-        settings = ImpactSettings(max_points=args.impact_points)
-        say.stage(f"through contact from U* = {start.ustar:.5g} by multiple shooting "
-                  f"({settings.segments} segments, {law})")
-        imp = impacting_branch(scene, start.state, start.period, start.pressure_drop,
-                               model=model, ustar_max=args.ustar_max, settings=settings)
-    else:
-        settings = CollocationImpactSettings(ntst=args.impact_ntst, max_points=args.impact_points,
-                                             refine_ntst=args.special_ntst)
-        say.stage(f"through contact from U* = {start.ustar:.5g} by adaptive collocation "
-                  f"(NTST = {settings.ntst}, {law})")
-        imp = impacting_collocation_branch(scene, start.state, start.period,
-                                           start.pressure_drop, model=model,
-                                           ustar_max=args.ustar_max, settings=settings)
+    imp = _impacting_branch(scene, model, start, args, say)
     special = getattr(imp, "special", [])
     say.stats(f"{len(imp.points)} impacting cycles, {len(special)} special, status {imp.status}")
     worst = max((getattr(p, "error_estimate", 0.0) for p in imp.points), default=0.0)
@@ -146,12 +137,51 @@ def _through_contact(scene, branch, args, say) -> dict:
         say.stage(f"warning: the collocation error indicator reached {worst:.2g} (> "
                   f"{COARSE_MESH:g}): the mesh is too coarse for these cycles; raise "
                   "--impact-ntst", always=True)
-    return {"status": imp.status, "message": imp.message, "eps": imp.eps,
+    stop = _stop(imp.status, imp.message, "--impact-points", args.impact_points, args)
+    if imp.status == "max_points":
+        say.stage(f"warning: {stop['message']}", always=True)
+    return {"status": imp.status, **stop, "eps": imp.eps,
             "max_error_estimate": worst,
             "reference_force": reference_force(model), "route": args.impact_route,
             "start_ustar": start.ustar, "wall_time": imp.wall_time,
             "points": [{k: getattr(p, k) for k in _IMPACT_KEYS} for p in imp.points],
             "special": [_special_summary(p) for p in special]}
+
+
+def _impacting_branch(scene, model, start, args, say):
+    """The impacting branch from ``start`` by ``--impact-route``, on to ``--ustar-max``
+    or ``--impact-points`` points."""
+    law = f"k* = {scene.contact_stiffness:g}, eps/H = {scene.contact_eps:g}"
+    points = args.impact_points or UNLIMITED_POINTS
+    if args.impact_route == "shooting":
+        settings = ImpactSettings(max_points=points)
+        say.stage(f"through contact from U* = {start.ustar:.5g} by multiple shooting "
+                  f"({settings.segments} segments, {law})")
+        return impacting_branch(scene, start.state, start.period, start.pressure_drop,
+                                model=model, ustar_max=args.ustar_max, settings=settings)
+    settings = CollocationImpactSettings(ntst=args.impact_ntst, max_points=points,
+                                         refine_ntst=args.special_ntst)
+    say.stage(f"through contact from U* = {start.ustar:.5g} by adaptive collocation "
+              f"(NTST = {settings.ntst}, {law})")
+    return impacting_collocation_branch(scene, start.state, start.period, start.pressure_drop,
+                                        model=model, ustar_max=args.ustar_max,
+                                        settings=settings)
+
+
+def _stop(status: str, message: str, option: str, value, args) -> dict:
+    """``stopped_by`` (the option that ended a branch: ``option`` = ``value`` on its
+    points, ``--ustar-max`` at the U* bound; None for the wall or a failure) and the
+    ``message`` saying so."""
+    if status == "max_points":
+        by = f"{option} {value}"
+        message = (f"stopped after {value} points by {by}, below --ustar-max "
+                   f"{args.ustar_max:g}: raise {option} to go on ({message})")
+    elif status == "bound":
+        by = f"--ustar-max {args.ustar_max:g}"
+        message = f"reached {by} ({message})"
+    else:
+        by = None
+    return {"stopped_by": by, "message": message}
 
 
 def _special_summary(point) -> dict:

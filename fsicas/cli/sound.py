@@ -112,7 +112,7 @@ def _sound(run, scene, args):
     """The cycle looped, or the last ``--duration`` of a run that did not settle (with a
     warning); ValueError if the run failed before that."""
     traj, sc = run.trajectory, scene.scales
-    if run.outcome.period is not None:
+    if run.outcome.periodic:
         return cycle_sound(traj, sc, args.distance, args.duration, AUDIO_RATE)
     if traj.failed or run.outcome.outcome == "decay" or (
             run.outcome.outcome == "contact" and not scene.contact):
@@ -134,9 +134,10 @@ def _sound(run, scene, args):
 
 
 def _print_sound(result: dict) -> None:
-    f0 = result["fundamental_hz"]
+    f0, top = result["fundamental_hz"], result["dominant_hz"]
     print(f"sound at {result['distance_m']:g} m: {result['spl_db']:.1f} dB SPL, fundamental "
-          + ("none" if f0 is None else f"{f0:.4g} Hz") + f" ({result['source']}, outcome "
+          + ("none" if f0 is None else f"{f0:.4g} Hz") + ", strongest line "
+          + ("none" if top is None else f"{top:.4g} Hz") + f" ({result['source']}, outcome "
           f"{result['outcome']})")
     print("  harmonics (mPa): " + ", ".join(f"{a * 1e3:.3g}" for a in result["harmonics_pa"]))
     if result.get("onset_s") is not None:

@@ -84,7 +84,7 @@ def _cmd_simulate(args) -> dict:
               f"{run.status}, {run.wall_time:.2f} s")
     if args.plot:
         plot_run(run, args.plot)
-        if run.outcome.period is not None:
+        if run.outcome.periodic:
             stem, dot, ext = args.plot.rpartition(".")
             plot_cycle(run, f"{stem}_cycle.{ext}" if dot else args.plot + "_cycle")
     return add_physical(run.to_json(), scene, "simulate")

@@ -200,11 +200,30 @@ def continue_cycles(scene: Scene, model: Model | None = None, *, ustar_max: floa
     hopf = hopf or first_hopf(scene, model, ustar_max=ustar_max)
     if hopf is None:
         raise CriticalVelocityError(f"no Hopf point below U* = {ustar_max:g} at M* = {scene.mstar:g}")
+    for attempt in range(START_RETRIES + 1):
+        run = _continued(scene, model, hopf, settings.dp / 10 ** attempt, settings, ustar_max)
+        if run.branch.s.size or "start point" not in run.branch.message:
+            break
+    return run
+
+
+#: Retries of the start from the Hopf point, each with a tenth of the offset ``dp`` of
+#: the one before: the normal form's amplitude sqrt(|alpha dp / (l1 omega)|) grows without
+#: bound as l1 -> 0, and where l1 is small its cubic term no longer sets the amplitude
+#: (zeta = 0.01, N = 10: at M* = 0.7, l1 = 0.023, Newton diverged from a guess of tip
+#: amplitude 0.012 at dp = 1e-3 and converged from 0.0037 at 1e-4; at M* = 0.75,
+#: l1 = 2.6e-4, it converged from dp = 1e-7, tip amplitude 0.0011).
+START_RETRIES = 5
+
+
+def _continued(scene: Scene, model: Model, hopf: HopfPoint, dp: float,
+               settings: CycleSettings, ustar_max: float) -> CycleRun:
+    """The branch from the Hopf point, started at the offset ``dp`` of Π from it."""
     collocation = C.CollocationSettings(ntst=settings.ntst, ncol=settings.ncol, floquet="product",
                                         adapt_every=settings.adapt_every)
     problem = C.cycle_from_hopf(flutter_problem(scene, model, min(0.2, hopf.ustar / 2)),
-                                hopf.point, dp=settings.dp, settings=collocation)
-    gauge = ProfileGauge(model, hopf.x, settings.quadrature_tol)
+                                hopf.point, dp=dp, settings=collocation)
+    gauge = ProfileGauge(model, hopf.x, scene.contact_gap, settings.quadrature_tol)
     if settings.quadrature_tol is not None:
         problem.refine = gauge.refine
     problems = {}
@@ -270,8 +289,8 @@ class ProfileGauge(Gauge):
     """Measures of X = (nodes, 100 T, Π) on the collocation polynomial, the extrema exact
     (:class:`fsicas.cycles.gauge.PolynomialExtrema`)."""
 
-    def __init__(self, model: Model, x_eq, quadrature_tol: float | None):
-        super().__init__(model, x_eq)
+    def __init__(self, model: Model, x_eq, eps: float, quadrature_tol: float | None):
+        super().__init__(model, x_eq, eps)
         self._extrema = PolynomialExtrema(model)
         self.quadrature_tol = quadrature_tol
 

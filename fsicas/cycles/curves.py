@@ -240,7 +240,7 @@ def _seed_curves(job) -> tuple[dict, list]:
         run = continue_cycles(scene, ustar_max=ustar_max, settings=cycles)
     except CriticalVelocityError as err:
         return {"grazing": [], "fold": []}, [f"M* = {scene.mstar:.4g}: {err}"]
-    pi_max = _pi_max(run, ustar_max)
+    pi_max = _pi_max(scene, run, ustar_max)
     grazing = [_trace(run, run.problem_at(sp), sp.unknowns, "grazing", settings, pi_max)
                for sp in run.branch.special("contact") if sp.status == "converged"]
     folds, failures = _fold_curves(run, settings, pi_max)
@@ -288,7 +288,7 @@ def grazing_curve(scene: Scene, model: Model | None = None, *,
                          f"contact below U* = {ustar_max:g} ({run.branch.message})")
     sp = contacts[0]
     return _trace(run, run.problem_at(sp), sp.unknowns, "grazing", settings,
-                  _pi_max(run, ustar_max))
+                  _pi_max(scene, run, ustar_max))
 
 
 def fold_curves(scene: Scene, model: Model | None = None, *,
@@ -300,14 +300,16 @@ def fold_curves(scene: Scene, model: Model | None = None, *,
     refined by Newton on its minimally extended system first (a fold that is not refined
     starts no curve)."""
     run = run or continue_cycles(scene, model, ustar_max=ustar_max, settings=cycles)
-    return _fold_curves(run, settings, _pi_max(run, ustar_max))[0]
+    return _fold_curves(run, settings, _pi_max(scene, run, ustar_max))[0]
 
 
-def _pi_max(run: CycleRun, ustar_max: float) -> float:
-    """Π of U* = ``ustar_max`` at the run's M* (Π ≈ 3.3 U*² / 100 at any M*: the bound of
-    the curves in U*)."""
+def _pi_max(scene: Scene, run: CycleRun, ustar_max: float) -> float:
+    """Π of U* = ``ustar_max`` for ``scene`` at the run's M* (Π ≈ 3.3 U*² / 100 at any M*:
+    the bound of the curves in U*), on the run's last model (its quadrature possibly
+    refined)."""
     model = run.gauge.model
-    return pi_of(model.scene.replace(mstar=run.hopf.mstar), model, ustar_max)
+    return pi_of(scene.replace(mstar=run.hopf.mstar, quad_nodes=model.scene.n_quad), model,
+                 ustar_max)
 
 
 def _trace(run: CycleRun, problem, X, kind: CurveKind, settings: CurveSettings,
@@ -315,7 +317,7 @@ def _trace(run: CycleRun, problem, X, kind: CurveKind, settings: CurveSettings,
     """Continue the curve of ``kind`` through the cycle ``X`` of ``problem`` both ways,
     inside the M* window and below Π = ``pi_max``."""
     start = time.perf_counter()
-    gauge = ProfileGauge(run.gauge.model, run.hopf.x, settings.quadrature_tol)
+    gauge = ProfileGauge(run.gauge.model, run.hopf.x, run.gauge.eps, settings.quadrature_tol)
     condition = gauge.grazing_condition() if kind == "grazing" else C.CycleFold()
     halves = []
     for direction in (-1, 1):

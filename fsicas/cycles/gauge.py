@@ -37,11 +37,12 @@ PERIOD_COLUMN = "cycle_period"
 
 
 class Gauge:
-    """Common measures of cycle unknowns X; the routes add amplitude and gap."""
+    """Common measures of cycle unknowns X; the routes add amplitude and gap. ``eps``:
+    the contact distance of the analysed scene (``scene.contact_gap``)."""
 
-    def __init__(self, model, x_eq):
+    def __init__(self, model, x_eq, eps: float):
         self.model = model
-        self.eps = model.scene.contact_gap
+        self.eps = eps
         self.x_eq = np.asarray(x_eq, dtype=float)
         #: the largest quadrature error measured, with its states and parameters
         self.worst = (0.0, None, None)
@@ -94,13 +95,14 @@ class Gauge:
         """Tip deflection y(1) of states x (rows)."""
         return self.model.tip_deflection(x)
 
-    def impact_measures(self, x, weights) -> dict:
-        """``peak_force``: the largest total impact load over the samples ``x`` in units
+    def impact_measures(self, x, weights, p) -> dict:
+        """``peak_force``: the largest total impact load (at the model's parameters ``p``)
+        over the samples ``x`` in units
         of the reference force of Fig. 9 (:func:`fsicas.model.contact.reference_force`);
         ``flow_reduction``: 1 - the time mean of Q1 + Q2 (quadrature ``weights`` of the
         samples) over the steady flow at the same pressure drop (call after
         :meth:`common`, which finds that steady state)."""
-        total = penetration(self.model, x).load
+        total = penetration(self.model, x, p).load
         flow = np.asarray(x)[:, -2:].sum(axis=1)
         mean = float(np.dot(weights, flow) / np.sum(weights))
         return {"peak_force": float(total.max() / contact.reference_force(self.model)),
@@ -152,8 +154,8 @@ class PolynomialGauge(Gauge):
     extrema exact (:class:`fsicas.cycles.gauge.PolynomialExtrema`), the contact
     intervals counted on ``samples`` points per mesh interval (dense at the impacts)."""
 
-    def __init__(self, model, x_eq, samples: int):
-        super().__init__(model, x_eq)
+    def __init__(self, model, x_eq, eps: float, samples: int):
+        super().__init__(model, x_eq, eps)
         self.samples, self.t_last = samples, time.perf_counter()
         self._extrema = PolynomialExtrema(model)
 
@@ -173,4 +175,5 @@ class PolynomialGauge(Gauge):
         weights = np.repeat(np.diff(mesh), self.samples)          # the samples' time steps
         return {**common, "tip_amplitude": (y_max - y_min) / 2,
                 "min_gap": lowest, "gap_ratio": lowest / self.eps, "impacts": impacts,
-                "ntst": problem.ntst, "ncol": problem.ncol, "wall_time": wall, **self.impact_measures(x, weights)}
+                "ntst": problem.ntst, "ncol": problem.ncol, "wall_time": wall,
+                **self.impact_measures(x, weights, model_parameters(self.model, problem, X))}

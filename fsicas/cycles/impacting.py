@@ -49,7 +49,7 @@ from ..linear.adapter import LOG_M, PI, PI_SCALE, TIME_SCALE, flutter_field, pi_
 from ..model.assembly import Model, build_model
 from ..scene import Scene
 from ..linear.steady import steady_state
-from .gauge import Gauge
+from .gauge import Gauge, model_parameters
 from .records import BranchRecord, CycleMeasures, check_settings
 
 __all__ = ["ImpactSettings", "ImpactPoint", "ImpactBranch", "impacting_branch",
@@ -156,11 +156,11 @@ def impacting_branch(scene: Scene, state, period: float, pressure_drop: float, *
         orbit = shooting_points(vf, np.asarray(state, float), period * TIME_SCALE, params,
                                 settings.segments, shoot)
     except RuntimeError as err:                  # CVODES failure, e.g. a gap closing
-        return ImpactBranch(scene, model.scene.contact_gap, [], "failed",
+        return ImpactBranch(scene, scene.contact_gap, [], "failed",
                             f"the start cycle could not be integrated over one period: {err}",
                             time.perf_counter() - start)
     problem = C.ShootingProblem(vf, orbit, period * TIME_SCALE, params, PI, settings=shoot)
-    gauge = _ImpactGauge(model, st.x, settings.samples)
+    gauge = _ImpactGauge(model, st.x, scene.contact_gap, settings.samples)
     branch = C.continuation(problem, record=gauge.record, settings=_steps(
         scene, model, ustar_min, ustar_max, direction, settings))
     return _result(scene, model, branch, settings, time.perf_counter() - start)
@@ -197,7 +197,7 @@ def _result(scene, model, branch, settings, wall_time) -> ImpactBranch:
     points = points[:settings.max_points]
     status = "max_points" if len(points) == settings.max_points else \
         {"bound": "bound", "max_steps": "max_points"}.get(branch.status, "failed")
-    return ImpactBranch(scene, model.scene.contact_gap, points, status, branch.message,
+    return ImpactBranch(scene, scene.contact_gap, points, status, branch.message,
                         wall_time)
 
 
@@ -254,8 +254,8 @@ class _ImpactGauge(Gauge):
     """Measures of shooting unknowns X = (x_0..x_{m-1}, 100 T, Π) on ``samples`` outputs
     per segment (not refined), as branch columns (the fields of :class:`ImpactPoint`)."""
 
-    def __init__(self, model: Model, x_eq, samples: int):
-        super().__init__(model, x_eq)
+    def __init__(self, model: Model, x_eq, eps: float, samples: int):
+        super().__init__(model, x_eq, eps)
         self.samples, self.t_last = samples, time.perf_counter()
 
     def record(self, problem, X) -> dict:
@@ -270,4 +270,5 @@ class _ImpactGauge(Gauge):
         return {**common, "tip_amplitude": float(y.max() - y.min()) / 2,
                 "min_gap": float(gap.min()), "gap_ratio": float(gap.min() / self.eps),
                 "impacts": impacts, "wall_time": wall,
-                **self.impact_measures(x, np.ones(len(x)))}   # samples equally spaced in t
+                **self.impact_measures(x, np.ones(len(x)),   # samples equally spaced in t
+                                       model_parameters(self.model, problem, X))}

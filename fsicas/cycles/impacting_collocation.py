@@ -4,14 +4,12 @@ The cycle is continued in Π by orthogonal collocation (``continuation.CycleProb
 block-assembled sparse Jacobian) of the model *with* the smoothed contact law
 (``Scene.contact_smoothing`` > 0: the softplus of width σ eps is C-infinity, so the
 collocation polynomial converges at its order once the mesh resolves the contact layer).
-The mesh is re-equidistributed at every accepted point (``adapt_every``), so that its
-intervals concentrate at the impacts, where the solution's higher derivatives are
-large; NTST is fixed during a run (a few hundred intervals).
+The mesh is re-equidistributed at every accepted point (``adapt_every``): its intervals
+concentrate at the impacts; NTST is fixed during a run (a few hundred intervals).
 
 Start: a cycle's state at phase 0, its period and pressure drop, as for
 :func:`fsicas.cycles.impacting.impacting_branch`; one period is integrated from it
-(CVODES) and the start mesh equidistributed on that guess (``mesh_passes`` passes), so
-a start with impacts is resolved before the first Newton step.
+(CVODES) and the start mesh equidistributed on that guess (``mesh_passes`` passes).
 
 Per point the measures of the shooting route (:class:`ImpactPoint`) plus NTST and the
 library's a-posteriori error indicator; extrema of the collocation polynomial, exact in
@@ -118,9 +116,6 @@ class CollocationImpactSettings:
         if not isinstance(self.detect, bool):
             raise ValueError("CollocationImpactSettings.detect must be a bool, got "
                              f"{self.detect!r}")
-        if max(self.ntst, self.refine_ntst) > C.MAX_NTST:
-            raise ValueError(f"ntst and refine_ntst must be at most {C.MAX_NTST}, got "
-                             f"{self.ntst} and {self.refine_ntst}")
         if not (isinstance(self.max_turn, (int, float)) and 0 <= self.max_turn <= np.pi):
             raise ValueError("CollocationImpactSettings.max_turn must be an angle in [0, pi] "
                              f"(0: off), got {self.max_turn!r}")
@@ -238,7 +233,8 @@ def check_smooth(scene: Scene) -> None:
 
 def failed_branch(scene, model, message, start) -> CollocatedImpactBranch:
     """The empty branch of status "failed" with ``message``, timed from ``start``."""
-    return CollocatedImpactBranch(scene, model.scene.contact_gap, [], "failed", message, time.perf_counter() - start)
+    return CollocatedImpactBranch(scene, scene.contact_gap, [], "failed", message,
+                                  time.perf_counter() - start)
 
 
 def continued_branch(scene, model, problem, ustar_range, direction, settings, start
@@ -259,7 +255,8 @@ def continued_branch(scene, model, problem, ustar_range, direction, settings, st
 
 def _continued(scene, model, problem, ustar_range, direction, settings, start) -> tuple:
     """:func:`continued_branch` on ``model``, and its gauge."""
-    gauge = PolynomialGauge(model, steady_state(scene, model).x, settings.samples)
+    gauge = PolynomialGauge(model, steady_state(scene, model).x, scene.contact_gap,
+                            settings.samples)
     once = (lambda problem, X: "reached max_points = 1") if settings.max_points == 1 else None
     branch = C.continuation(problem, record=gauge.record, stop=once, settings=_steps(
         scene, model, *ustar_range, direction, settings))
@@ -269,7 +266,7 @@ def _continued(scene, model, problem, ustar_range, direction, settings, start) -
                          ncol=settings.refine_ncol or settings.ncol))
     special = [_refined(problem, sp, gauge, settings, finer) for sp in branch.special_points
                if sp.kind in _CRITICAL]
-    return _result(scene, model.scene.contact_gap, branch, special, settings,
+    return _result(scene, scene.contact_gap, branch, special, settings,
                    time.perf_counter() - start), gauge
 
 

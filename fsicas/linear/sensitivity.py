@@ -31,14 +31,14 @@ import continuation as C
 
 from ..model.assembly import Model, build_model
 from ..profile import Profile
-from ..scene import TIMOSHENKO, Scene
+from ..scene import CONTACT_PARAMETERS, MODEL_PARAMETERS, TIMOSHENKO, Scene
 from .adapter import LOG_M, PI, TIME_SCALE
 from .hopf import HopfPoint, flutter_problem
 
 __all__ = ["OnsetSensitivity", "onset_sensitivity", "EXACT", "BY_DIFFERENCES", "FD_STEP"]
 
 #: Parameters differentiated exactly (implicit-function theorem) and by differences.
-EXACT = ("mstar", "friction", "k0", "kl", "zeta")
+EXACT = tuple(n for n in MODEL_PARAMETERS if n not in CONTACT_PARAMETERS)
 BY_DIFFERENCES = ("h1", "h2", "slenderness", "poisson")
 #: Relative step of the central differences.
 FD_STEP = 1e-4

@@ -21,27 +21,22 @@ from .beam_timoshenko_fe import timoshenko_fe_elements, timoshenko_fe_modes
 from .equations import LiftedEquations
 from .beam_fe import default_n_elements, nonuniform_beam_modes
 from .quadrature import composite_gauss_legendre, gauss_legendre, tip_graded_gauss_legendre
-from ..scene import Scene
+from ..scene import CONTACT_PARAMETERS, MODEL_PARAMETERS, STRUCTURE_FIELDS, Scene
 
 __all__ = ["Model", "build_model", "modal_basis", "parameter_names", "per_model", "contact_rule"]
 
-_FLOW_PARAMS = ("pressure_drop", "mstar", "friction", "k0", "kl")
-_CONTACT_PARAMS = ("contact_stiffness", "contact_eps")
-
-
-#: Scene fields that are not symbolic parameters of the model (nor U* or contact).
-_STRUCTURE_FIELDS = ("hstar", "modes", "quad_nodes", "channel1", "channel2", "thickness",
-                     "contact_smoothing", "beam", "slenderness", "poisson", "shear_coefficient")
-
-
-def _structure(scene: Scene) -> tuple:
-    return tuple(getattr(scene, f) for f in _STRUCTURE_FIELDS)
+#: Structure fields compared by :meth:`Model.require_structure` (``contact`` apart: a
+#: model with contact also serves a contact-free scene).
+_COMPARED = tuple(f for f in STRUCTURE_FIELDS if f != "contact")
 
 
 def parameter_names(scene: Scene) -> tuple[str, ...]:
-    """Names of the symbolic parameters of the model of ``scene``, in order."""
-    contact = _CONTACT_PARAMS if scene.contact else ()
-    return _FLOW_PARAMS + contact + tuple(f"zeta{n + 1}" for n in range(scene.modes))
+    """Names of the symbolic parameters of the model of ``scene``, in order: the pressure
+    drop, then :data:`fsicas.scene.MODEL_PARAMETERS` (those of the contact law only with
+    contact; zeta as ``zeta1 .. zetaN``)."""
+    names = [name for name in MODEL_PARAMETERS if scene.contact or name not in CONTACT_PARAMETERS]
+    return ("pressure_drop",) + tuple(name for name in names if name != "zeta") \
+        + tuple(f"zeta{n + 1}" for n in range(scene.modes))
 
 
 def modal_basis(scene: Scene, x) -> ModalBasis:
@@ -151,8 +146,8 @@ class Model:
         if scene.contact and not self.scene.contact:
             raise ValueError("the scene has contact = true but the model was built without "
                              "contact: build the model from this scene (build_model(scene))")
-        if _structure(scene) != _structure(self.scene):
-            differ = [f for f in _STRUCTURE_FIELDS if getattr(scene, f) != getattr(self.scene, f)]
+        differ = [f for f in _COMPARED if getattr(scene, f) != getattr(self.scene, f)]
+        if differ:
             raise ValueError(f"the model was built for another scene structure (fields "
                              f"{', '.join(differ)} differ): build the model from this scene "
                              "(build_model(scene))")
@@ -160,13 +155,22 @@ class Model:
     def parameters(self, scene: Scene | None = None, pressure_drop: float = 0.0, **override) -> np.ndarray:
         """Numeric parameter vector from a scene (same structure) plus overrides by name."""
         s = scene or self.scene
-        values = dict(pressure_drop=pressure_drop, mstar=s.mstar, friction=s.friction, k0=s.k0,
-                      kl=s.kl, contact_stiffness=s.contact_stiffness, contact_eps=s.contact_eps)
+        values = {name: getattr(s, name) for name in MODEL_PARAMETERS if name != "zeta"}
+        values["pressure_drop"] = pressure_drop
         values.update({f"zeta{n + 1}": z for n, z in enumerate(s.zeta_modes)})
         for name, value in override.items():
             self.index(name)
             values[name] = value
         return np.array([values[name] for name in self.parameter_names], dtype=float)
+
+    def scene_at(self, p) -> Scene:
+        """The model's scene with the parameters of the vector ``p`` (all but U*: p holds
+        the pressure drop instead): the analysed scene of a run or a cycle, for what needs
+        its fields; ``self.scene`` holds those of the first scene of this structure only."""
+        value = dict(zip(self.parameter_names, np.asarray(p, dtype=float).ravel()))
+        changes = {name: value[name] for name in MODEL_PARAMETERS if name in value}
+        changes["zeta"] = tuple(value[f"zeta{n + 1}"] for n in range(self.n_modes))
+        return self.scene.replace(**changes)
 
     @property
     def mirror(self) -> np.ndarray:

@@ -18,7 +18,7 @@ from __future__ import annotations
 import casadi as ca
 import numpy as np
 
-__all__ = ["GAP_POINTS", "WALL_SIGNS", "ramp", "stiffness", "gap", "wall_gaps", "gaps",
+__all__ = ["GAP_POINTS", "WALL_SIGNS", "ramp", "stiffness", "law", "gap", "wall_gaps", "gaps",
            "wall_load", "modal_load", "reference_force"]
 
 GAP_POINTS = np.linspace(0.0, 1.0, 101)
@@ -51,6 +51,17 @@ def stiffness(contact_stiffness, omega_1: float):
     return contact_stiffness * omega_1 ** 2
 
 
+def law(model, p) -> tuple[float, float]:
+    """``(k, eps)`` of the parameter vector ``p`` of ``model`` (never of ``model.scene``,
+    whose k*, eps/H are those of the first scene the model was built for); (0, 0) for
+    a model without contact, whose equations carry no contact load."""
+    p = np.asarray(p, dtype=float).ravel()
+    if "contact_stiffness" not in model.parameter_names:
+        return 0.0, 0.0
+    eps = p[model.index("contact_eps")] * model.scene.hstar / 2
+    return stiffness(p[model.index("contact_stiffness")], model.omega_1), eps
+
+
 def gap(H, y, sign: float):
     """``h_c = H_c + s_c y``: the gap to wall c of profile ``H_c`` at deflection y."""
     return H + sign * y
@@ -61,14 +72,14 @@ def wall_gaps(walls, y) -> tuple:
     return tuple(gap(H, y, s) for H, s in zip(walls, WALL_SIGNS))
 
 
-def modal_load(model, x) -> np.ndarray:
-    """``c_n = Σ_j w_j f(x_j) phi_n(x_j)`` on the model's contact rule, f the scene's law
-    summed over both walls (the impact term of the equations, in NumPy)."""
+def modal_load(model, x, p) -> np.ndarray:
+    """``c_n = Σ_j w_j f(x_j) phi_n(x_j)`` on the model's contact rule, f the law of ``p``
+    (:func:`law`) summed over both walls (the impact term of the equations, in NumPy)."""
     s, n, basis = model.scene, model.n_modes, model.contact_basis
     y = basis.phi.T @ x[n:2 * n]
     H = [w(basis.x) for w in s.walls]
-    k = stiffness(s.contact_stiffness, model.omega_1)
-    load = sum(wall_load(h, sign, k, s.contact_gap, s.contact_smoothing)
+    k, eps = law(model, p)
+    load = sum(wall_load(h, sign, k, eps, s.contact_smoothing)
                for h, sign in zip(wall_gaps(H, y), WALL_SIGNS))
     return basis.phi @ (model.contact_weights * load)
 

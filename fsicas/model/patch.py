@@ -92,20 +92,21 @@ def patch_cells(model: Model) -> _Cells:
                   np.maximum(chord - walls, 0.0).max(axis=2))
 
 
-def penetration(model: Model, X) -> Penetration:
+def penetration(model: Model, X, p) -> Penetration:
     """The load, deepest penetration and its position of the states ``X`` (rows), both
-    walls (module docstring)."""
+    walls, under the contact law of the parameter vector ``p``
+    (:func:`fsicas.model.contact.law`; module docstring)."""
     X = np.atleast_2d(np.asarray(X, dtype=float))
-    parts = [_block(model, X[i:i + _ROWS]) for i in range(0, len(X), _ROWS)]
+    k, eps = contact.law(model, p)
+    parts = [_block(model, X[i:i + _ROWS], k, eps) for i in range(0, len(X), _ROWS)]
     if not parts:
         return Penetration(np.zeros(0), np.zeros(0), np.zeros(0))
     return Penetration(*(np.concatenate([p[k] for p in parts]) for k in range(3)))
 
 
-def _block(model: Model, X: np.ndarray) -> tuple:
-    """:func:`penetration` of at most ``_ROWS`` states."""
-    cells, scene, n = patch_cells(model), model.scene, model.n_modes
-    eps = scene.contact_gap
+def _block(model: Model, X: np.ndarray, k: float, eps: float) -> tuple:
+    """:func:`penetration` of at most ``_ROWS`` states, law ``(k, eps)``."""
+    cells, n = patch_cells(model), model.n_modes
     q = X[:, n:2 * n]
     g_ends = _excess(eps, cells.walls_ends, q @ cells.phi_ends)            # (rows, 2, cells+1)
     chord_max = np.maximum(g_ends[..., :-1], g_ends[..., 1:])
@@ -121,7 +122,6 @@ def _block(model: Model, X: np.ndarray) -> tuple:
         coef = g @ cells.to_coefficients.T                                   # (candidates, DEGREE+1)
         top, peak = _maximum(coef)
         integral = _positive_integral(coef, top, peak) * cells.width / 2
-        k = contact.stiffness(scene.contact_stiffness, model.omega_1)
         np.add.at(load, rows, k * integral)
         x_top = cells.x[index] + (top + 1.0) * cells.width / 2
         _deepest(depth, position, rows, peak, x_top)

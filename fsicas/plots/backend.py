@@ -32,6 +32,7 @@ PALETTE = ("#0072B2", "#D55E00", "#009E73", "#CC79A7", "#E69F00", "#56B4E9", "#0
 #: What each time-integration outcome means, in words for titles and legends.
 OUTCOME_WORDS = {"decay": "decays to the steady state", "lco": "limit cycle, no contact",
                  "contact": "reaches the wall", "impacting_lco": "impacting limit cycle",
+                 "impacting_nonperiodic": "impacting, not periodic",
                  "unsettled": "not settled", "error": "solver failure"}
 
 #: The unit suffix of a nondimensional quantity's axis label.

@@ -128,7 +128,7 @@ def cycle_view(run, snapshots: int = 24) -> CycleView:
     """The last settled cycle of ``run`` (or, unsettled, its last tip return) for the
     figures."""
     scene, model, tr = run.scene, run.model, run.trajectory
-    settled, T = run.outcome.period is not None, run.outcome.period
+    settled, T = run.outcome.periodic, run.outcome.period
     if not settled:
         T = return_period(run)
         if T is None:
@@ -140,7 +140,7 @@ def cycle_view(run, snapshots: int = 24) -> CycleView:
     picks = np.linspace(0, len(X) - 1, snapshots).astype(int)
     q = X[:, n:2 * n]
     freq, spectrum = tip_spectrum(tr.t, tr.tip_velocity, T)
-    force = penetration(model, X).load
+    force = penetration(model, X, tr.p).load
     upper, lower = scene.walls
     return CycleView(
         ustar=float(scene.ustar), mstar=float(scene.mstar), modes=int(n),

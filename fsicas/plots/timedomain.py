@@ -22,7 +22,8 @@ __all__ = ["plot_run", "plot_map", "plot_cycle", "plot_cycles", "cycle_view", "c
 #: Colour and marker of each outcome on the map (Okabe–Ito; the paper's limit cycles
 #: orange, contact blue).
 _MARKERS = {"decay": (PALETTE[2], "o"), "lco": (PALETTE[4], "o"), "contact": (PALETTE[0], "s"),
-            "impacting_lco": (PALETTE[3], "D"), "unsettled": ("0.55", "^"), "error": ("k", "x")}
+            "impacting_lco": (PALETTE[3], "D"), "impacting_nonperiodic": (PALETTE[5], "D"),
+            "unsettled": ("0.55", "^"), "error": ("k", "x")}
 #: Neighbouring boundary samples whose frequencies differ by more than this factor lie on
 #: two branches: their line is broken there.
 _FREQUENCY_JUMP = 1.25
@@ -45,7 +46,7 @@ def plot_run(run, path=None):
     ax[1].plot(tr.t, tr.x[:, -1], lw=0.7, label="$Q_2$ (below)")
     ax[1].set_ylabel("flow rate $Q_c$ (units of $L^2/T$)")
     ax[1].legend(loc="best")
-    total = penetration(model, tr.x).load
+    total = penetration(model, tr.x, tr.p).load
     ax[2].plot(tr.t, total / reference_force(model), lw=0.7, color=PALETTE[1])
     ax[2].set_ylabel(f"impact force $F/F_0$ {NONDIM}")
     ax[2].set_xlabel("time $t$ (units of $T$)")

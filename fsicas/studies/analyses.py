@@ -107,9 +107,10 @@ def _sound(study: Study, point: dict) -> dict:
     row = _outcome_row(scene, physical, run)
     traj, o, r = run.trajectory, run.outcome, study.settings["distance"]
     row.update(spl_db=None, fundamental_hz=None, dominant_hz=None)
-    if o.period is not None:
+    if o.periodic:
         sound = cycle_sound(traj, scene.scales, r, duration=1.0)
-    elif o.outcome == "unsettled" or (o.outcome == "contact" and scene.contact):
+    elif o.outcome in ("unsettled", "impacting_nonperiodic") or (o.outcome == "contact" and
+                                                                 scene.contact):
         sound = trajectory_sound(traj, scene.scales, r, t_start=traj.t[-1] * 2 / 3)
     else:
         return row

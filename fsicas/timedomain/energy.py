@@ -58,7 +58,7 @@ class EnergyBalance:
 def _powers(traj: Trajectory, k: int, xs, phi_xs):
     """(P_fluid, P_contact, D, E) at sample k."""
     model = traj.model
-    scene, n = model.scene, model.n_modes
+    scene, n = model.scene_at(traj.p), model.n_modes
     x = traj.x[k]
     p = traj.p.copy()
     p[model.index("pressure_drop")] = traj.pressure_drop[k]
@@ -70,7 +70,7 @@ def _powers(traj: Trajectory, k: int, xs, phi_xs):
     zeta, w = scene.zeta_modes, model.basis.omega
     impact = 0.0
     if scene.contact:
-        impact = float(r @ contact.modal_load(model, x))
+        impact = float(r @ contact.modal_load(model, x, p))
     return fluid, impact, float(np.sum(2 * zeta * w * r**2)), float(np.sum(r**2 + (w * x[n:2 * n])**2) / 2)
 
 

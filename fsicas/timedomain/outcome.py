@@ -18,18 +18,26 @@
   rtol 1e-8), within [1e-8, 1e-2]: what the samples can resolve, not a fixed 1e-3 that
   declared growing cycles settled with amplitudes low by up to 2 %. Impacting cycles:
   the largest plain change below ``tol_impacting`` [2e-2] (chattering cycles are only
-  nearly periodic). The remaining change is reported as ``convergence``.
+  nearly periodic), between returns of the tip; at the end of a run that did not settle
+  so, between every k-th return, k up to ``MAX_SWINGS`` [3] (a cycle of k tip swings:
+  its period spans them; not earlier, since a slowly fading alternation of a cycle of
+  one swing passes for two swings at first). The remaining change is reported as
+  ``convergence``.
 - *decay*: the last ``cycles`` cycle amplitudes decrease monotonically and the last one
   is below ``decay_ratio`` [0.1] times the first cycle's amplitude; or the deviation from
   the steady state is below ``floor`` [1e-9 of the gap] over the last eighth of the samples.
 - at the end of a run: a contact-free cycle whose remaining change is below ``tol_end``
   [1e-2] is a limit cycle with ``settled = False`` (its ``convergence`` says how far it
-  has still to go); otherwise *unsettled* (or *contact* if contact happened but no
-  impacting cycle settled).
+  has still to go); an impacting oscillation whose cycles still differ by more than
+  ``tol_impacting`` is *impacting_nonperiodic*: not periodic (quasi-periodic, chaotic or
+  a long transient), measured over its last cycles like a cycle, its ``convergence``
+  the largest change between them (of single tip returns); otherwise *unsettled* (or
+  *contact* if contact happened but too few cycles followed to measure).
 
 **Incremental monitoring.** :class:`Monitor` keeps what it has found (the contact scan
 up to the last sample, the first cycle's amplitude, the latest period) and looks at the
-last ``1.5 (cycles + 4)`` periods only, so a run costs O(samples), not O(samples²).
+last ``1.5 (cycles + 4)`` periods only (after a contact ``1.5 (MAX_SWINGS cycles + 4)``),
+so a run costs O(samples), not O(samples²).
 """
 from __future__ import annotations
 
@@ -52,14 +60,18 @@ __all__ = ["Criteria", "Outcome", "OutcomeKind", "classify", "Monitor", "SETTLIN
 #: What a run did (module docstring): "decay" back to the steady state; "lco" a limit
 #: cycle without contact; "impacting_lco" a settled cycle with wall contact; "contact" a
 #: gap reached the contact distance but no impacting cycle settled (or the contact-free
-#: run stopped there); "unsettled" none of these by the end of the run.
-OutcomeKind = Literal["decay", "lco", "impacting_lco", "contact", "unsettled"]
+#: run stopped there); "impacting_nonperiodic" an impacting oscillation that is not
+#: periodic by the end of the run; "unsettled" none of these by the end of the run.
+OutcomeKind = Literal["decay", "lco", "impacting_lco", "impacting_nonperiodic", "contact",
+                      "unsettled"]
 
 #: The default settling tolerance per unit of the integrator's rtol (module docstring).
 SETTLING_PER_RTOL = 1e3
 _TOL_RANGE = (1e-8, 1e-2)
 #: Relative differences between cycles below ``NOISE × tol`` are noise, not a trend.
 NOISE = 1e-3
+#: Tip swings an impacting cycle may span at most (module docstring).
+MAX_SWINGS = 3
 
 
 @dataclass(frozen=True)
@@ -119,6 +131,12 @@ class Outcome:
     t_settled: float | None = None
     settled: bool = False
 
+    @property
+    def periodic(self) -> bool:
+        """A cycle that repeats (settled or still approaching): ``period`` is its period,
+        not the mean return time of an impacting_nonperiodic run."""
+        return self.period is not None and self.outcome != "impacting_nonperiodic"
+
     def to_json(self) -> dict:
         return {k: (float(v) if isinstance(v, np.floating) else v) for k, v in self.__dict__.items()}
 
@@ -167,6 +185,24 @@ def _distance_to_go(dx: np.ndarray, noise: float) -> float:
     return _geometric_tail(dx) if np.all(dx[1:] < dx[:-1]) else float(dx.max())
 
 
+def _swings(cyc: Cycles, m: int, tol: float) -> tuple[Cycles, float] | None:
+    """``(cycles, change)`` of the fewest tip swings k <= :data:`MAX_SWINGS` per cycle
+    whose cycles (every k-th return, the last among them) change by less than ``tol``,
+    or None."""
+    for k in range(2, MAX_SWINGS + 1):
+        every = np.arange(cyc.times.size - 1, -1, -k)[::-1]
+        if every.size < m + 2:
+            return None
+        times = cyc.times[every]
+        amplitudes = [cyc.amplitudes[a:b].max() for a, b in zip(every[:-1], every[1:])]
+        grouped = Cycles(cyc.index[every], times, cyc.points[every], np.diff(times),
+                         np.array(amplitudes), cyc.size)
+        change = _convergence(grouped, m, None)
+        if change < tol:
+            return grouped, change
+    return None
+
+
 def _decayed(cyc: Cycles | None, crit: Criteria, X, x_ref, gap, first_amplitude) -> bool:
     if np.max(np.abs(X[-max(len(X) // 8, 1):] - x_ref)) < crit.floor * gap:
         return True
@@ -176,29 +212,29 @@ def _decayed(cyc: Cycles | None, crit: Criteria, X, x_ref, gap, first_amplitude)
     return bool(np.all(np.diff(last) < 0) and last[-1] < crit.decay_ratio * first_amplitude)
 
 
-def _first_contact(t, X, model, start: int = 0):
-    """(sample index, time, position) of the first contact at or after sample ``start``,
-    or None.
+def _first_contact(t, X, model, p, start: int = 0):
+    """(sample index, time, position) of the first contact (a gap at the ``eps`` of the
+    parameters ``p``) at or after sample ``start``, or None.
 
     The samples give the interval; the time is then located inside it (event location):
     the root of ``min_x h(x, t) − eps`` on the cubic through the samples ``k−3 .. k``
     (Lagrange interpolation of the state, error O(dt_out⁴)), by Brent's method.
     """
-    touch = penetration(model, X[start:]).depth >= 0
+    touch = penetration(model, X[start:], p).depth >= 0
     if not touch.any():
         return None
     k = start + int(np.argmax(touch))
     if k == 0:
-        return 0, float(t[0]), _deepest_at(model, X[0])
+        return 0, float(t[0]), _deepest_at(model, X[0], p)
     state = scipy.interpolate.BarycentricInterpolator(t[max(0, k - 3):k + 1], X[max(0, k - 3):k + 1])
-    tc = scipy.optimize.brentq(lambda s: penetration(model, state(s)).depth[0], t[k - 1], t[k],
+    tc = scipy.optimize.brentq(lambda s: penetration(model, state(s), p).depth[0], t[k - 1], t[k],
                                xtol=1e-14 * max(1.0, abs(t[k])))
-    return k, float(tc), _deepest_at(model, state(tc))
+    return k, float(tc), _deepest_at(model, state(tc), p)
 
 
-def _deepest_at(model, x) -> float:
+def _deepest_at(model, x, p) -> float:
     """Where the gap of the state ``x`` is narrowest (:func:`fsicas.model.patch.penetration`)."""
-    return float(penetration(model, x).position[0])
+    return float(penetration(model, x, p).position[0])
 
 
 class Monitor:
@@ -226,15 +262,18 @@ class Monitor:
         self.outcome = self.classify(t, X, final=False)
         return None if self.outcome is None else self.outcome.outcome
 
-    def classify(self, t, X, final: bool, closed: bool = False) -> Outcome | None:
+    def classify(self, t, X, final: bool, closed: bool = False,
+                 failed: bool = False) -> Outcome | None:
         """The outcome of the samples so far (None while undecided and not ``final``);
-        ``closed``: the run ended on a closed gap after its last sample."""
+        ``closed``: the run ended on a closed gap after its last sample; ``failed``: the
+        run failed (then an impacting run that did not settle is "contact", not
+        "impacting_nonperiodic")."""
         model, crit = self.model, self.criteria
         contact = self._contact_in(t, X)
         if contact is None and closed:
             # the gap went from > eps to 0 between the last sample and the solver failure
-            contact = len(t) - 1, float(t[-1]), _deepest_at(model, X[-1])
-        stop_on_contact = (not model.scene.contact) if crit.stop_on_contact is None \
+            contact = len(t) - 1, float(t[-1]), _deepest_at(model, X[-1], self.steady.p)
+        stop_on_contact = (not self.steady.scene.contact) if crit.stop_on_contact is None \
             else crit.stop_on_contact
         info = {}
         if contact is not None:
@@ -257,22 +296,39 @@ class Monitor:
             return self._measure(kind, t[start:], X[start:], cyc, change, info, settled=True)
         if not final:
             return None
-        if change is not None and not impacting and change < crit.tol_end:
-            return self._measure(kind, t[start:], X[start:], cyc, change, info, settled=False)
+        return self._at_end(t[start:], X[start:], cyc, change, info, failed)
+
+    def _at_end(self, t, X, cyc, change, info, failed: bool) -> Outcome:
+        """The outcome at the end of a run that did not settle (module docstring): an
+        impacting cycle of several swings, an impacting_nonperiodic run, a contact-free
+        cycle still approaching, or contact / unsettled."""
+        impacting, crit = bool(info), self.criteria
+        if impacting and change is not None:
+            swings = _swings(cyc, crit.cycles, crit.tol_impacting)
+            if swings is not None:
+                return self._measure("impacting_lco", t, X, *swings, info, settled=True)
+            if not failed:
+                return self._measure("impacting_nonperiodic", t, X, cyc, change, info,
+                                     settled=False)
+        if not impacting and change is not None and change < crit.tol_end:
+            return self._measure("lco", t, X, cyc, change, info, settled=False)
         return Outcome("contact", **info) if impacting else Outcome("unsettled", convergence=change)
 
     def _contact_in(self, t, X):
         """The first contact (:func:`_first_contact`), scanning only samples not seen."""
         if self._contact is None and len(t) > self._scanned:
-            self._contact = _first_contact(t, X, self.model, self._scanned)
+            self._contact = _first_contact(t, X, self.model, self.steady.p, self._scanned)
             self._scanned = len(t)
         return self._contact
 
     def _window(self, t) -> int:
-        """First sample of the last ``1.5 (cycles + 4)`` periods (0 before a period is known)."""
+        """First sample of the last ``1.5 (cycles + 4)`` periods, after a contact
+        ``1.5 (MAX_SWINGS cycles + 4)`` (0 before a period is known)."""
         if self._period is None:
             return 0
-        return int(np.searchsorted(t, t[-1] - 1.5 * (self.criteria.cycles + 4) * self._period))
+        swings = 1 if self._contact is None else MAX_SWINGS
+        span = 1.5 * (swings * self.criteria.cycles + 4) * self._period
+        return int(np.searchsorted(t, t[-1] - span))
 
     def _cycles(self, t, X, start, y_ref=None) -> Cycles | None:
         cyc = cycles(t[start:], X[start:], self.model,
@@ -299,14 +355,15 @@ class Monitor:
                    convergence=change, cycles=int(cyc.periods.size), mean_flow_reduction=reduction,
                    t_settled=float(cyc.times[-1]), settled=settled)
         if info.get("contact"):
-            out.update(_impacts(X[a:b], self.model, m))
+            out.update(_impacts(X[a:b], self.model, self.steady.p, m))
         return Outcome(kind, **{**info, **out})
 
 
-def _impacts(X, model, m):
+def _impacts(X, model, p, m):
     """Impact force, contact positions (where each contact interval penetrates deepest)
-    and chattering count over the measured cycles (:func:`fsicas.model.patch.penetration`)."""
-    patch = penetration(model, X)
+    and chattering count over the measured cycles, under the contact law of ``p``
+    (:func:`fsicas.model.patch.penetration`)."""
+    patch = penetration(model, X, p)
     on = patch.load > 0
     starts = np.flatnonzero(on & ~np.r_[False, on[:-1]])
     ends = np.flatnonzero(on & ~np.r_[on[1:], False])
@@ -320,4 +377,5 @@ def classify(traj: Trajectory, steady, criteria: Criteria = Criteria()) -> Outco
     """Classify a whole trajectory and measure its cycle (module docstring)."""
     monitor = Monitor(traj.model, steady, criteria, rtol=traj.settings.rtol,
                       pressure=lambda s: np.interp(s, traj.t, traj.pressure_drop))
-    return monitor.classify(traj.t, traj.x, final=True, closed=traj.gap_closed)
+    return monitor.classify(traj.t, traj.x, final=True, closed=traj.gap_closed,
+                            failed=traj.failed)

@@ -22,7 +22,7 @@ from .breathing import PressureSchedule
 from ..model.accuracy import adequate_model, quadrature_error
 from ..model.assembly import Model, build_model
 from .outcome import Criteria, Monitor, Outcome, classify
-from ..scene import Scene
+from ..scene import STRUCTURE_FIELDS, Scene
 from .integrators import Settings, Trajectory, pressure_coefficient, simulate
 from ..linear.stability import eigenvalues
 from ..linear.steady import SteadyState, steady_state
@@ -90,19 +90,16 @@ def guarded_model(scene: Scene) -> tuple[Model, bool]:
     return build_model(scene.replace(contact=True)), True
 
 
-#: The models of this process by structure (:func:`sweep_model`), and the Scene fields
-#: that are parameters of a model rather than its structure.
+#: The models of this process by structure (:func:`sweep_model`).
 _SWEEP_MODELS: dict = {}
-_PARAMETER_FIELDS = ("ustar", "mstar", "friction", "k0", "kl", "zeta", "contact_stiffness",
-                     "contact_eps")
 
 
 def sweep_model(scene: Scene, guarded: bool = True) -> Model:
     """The model of ``scene``'s structure (``guarded``: :func:`guarded_model`'s), built
     once per process: the points of a sweep on a worker differ in parameters only, as a
     rule, and reuse it."""
-    fields = {k: v for k, v in scene.to_dict().items() if k not in _PARAMETER_FIELDS}
-    key = (json.dumps(fields, sort_keys=True, default=str), guarded, scene.contact)
+    fields = {k: v for k, v in scene.to_dict().items() if k in STRUCTURE_FIELDS}
+    key = (json.dumps(fields, sort_keys=True, default=str), guarded)
     if key not in _SWEEP_MODELS:
         _SWEEP_MODELS[key] = guarded_model(scene)[0] if guarded else build_model(scene)
     return _SWEEP_MODELS[key]

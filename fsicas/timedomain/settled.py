@@ -78,7 +78,7 @@ def settled_cycle(model: Model, scene: Scene, state, period: float, *, periods: 
     last = slice(cyc.index[-1 - k], cyc.index[-1] + 1)
     drift = float(np.max(np.abs(cyc.points[-1] - cyc.points[-1 - k])) / cyc.size)
     y = model.tip_deflection(X[last])
-    load = penetration(model, X[last]).load
+    load = penetration(model, X[last], traj.p).load
     return SettledCycle("settled" if drift < tol else "unsettled",
                         float(cyc.times[-1] - cyc.times[-1 - k]), k, drift,
                         float(np.ptp(y) / 2), float(gaps(model, X[last]).min()),

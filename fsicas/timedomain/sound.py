@@ -35,9 +35,10 @@ from .integrators import Settings, initial_state, simulate
 from .returns import cycles, poincare_returns, xdot_rows
 from .run import guarded_model
 
-__all__ = ["Sound", "AUDIO_RATE", "P_REF", "SOUND_SPEED", "HARMONICS", "flow_derivative",
-           "monopole_pressure", "spl_db", "harmonic_amplitudes", "looped_sound", "cycle_sound",
-           "trajectory_sound", "breath_trajectory", "write_wav"]
+__all__ = ["Sound", "AUDIO_RATE", "P_REF", "SOUND_SPEED", "HARMONICS", "HARMONIC_FLOOR",
+           "flow_derivative", "monopole_pressure", "spl_db", "harmonic_amplitudes", "pitch",
+           "strongest_line", "looped_sound", "cycle_sound", "trajectory_sound",
+           "breath_trajectory", "write_wav"]
 
 #: Audio sample rate (Hz), reference pressure of dB SPL (Pa), speed of sound in air (m/s).
 AUDIO_RATE, P_REF, SOUND_SPEED = 44100, 20e-6, 343.0
@@ -45,13 +46,18 @@ AUDIO_RATE, P_REF, SOUND_SPEED = 44100, 20e-6, 343.0
 HARMONICS = 10
 #: Uniform points per period on which the harmonics are taken.
 _PERIOD_POINTS = 4096
+#: Harmonics weaker than this fraction of the strongest (-40 dB) are absent from the
+#: spectrum: the fundamental is the largest common divisor of the present ones.
+HARMONIC_FLOOR = 1e-2
 
 
 @dataclass(frozen=True)
 class Sound:
     """A radiated pressure signal ``pressure`` (Pa) at ``distance_m``, sampled at
-    ``rate`` Hz; ``fundamental_hz`` (1 / the cycle's period; None without a cycle),
-    ``spl_db`` (RMS level, dB re 20 µPa), ``harmonics_pa`` (amplitudes of the first
+    ``rate`` Hz; ``fundamental_hz`` (the lowest frequency of which the cycle's present
+    harmonics are multiples, :func:`pitch`: 2/T for the symmetric cycle of a symmetric
+    channel; None without a cycle), ``dominant_hz`` (the strongest line of the spectrum
+    of ``pressure`` itself, :func:`strongest_line`; None for silence), ``spl_db``  (RMS level, dB re 20 µPa), ``harmonics_pa`` (amplitudes of the first
     :data:`HARMONICS` harmonics of the cycle, Pa), ``source`` ("cycle" or "trajectory"),
     ``period_s`` and, for a trajectory, ``onset_s`` and ``offset_s`` (first and last time
     the level over :data:`HEARD_WINDOW` exceeds :data:`HEARD_FRACTION` of its largest);
@@ -61,6 +67,7 @@ class Sound:
     rate: int
     pressure: np.ndarray
     fundamental_hz: float | None
+    dominant_hz: float | None
     spl_db: float
     harmonics_pa: tuple
     distance_m: float
@@ -68,14 +75,6 @@ class Sound:
     period_s: float | None
     onset_s: float | None = None
     offset_s: float | None = None
-
-    @property
-    def dominant_hz(self) -> float | None:
-        """The frequency of the strongest of the reported harmonics (the pitch heard; for
-        symmetric channels the total flow repeats each half cycle: twice the fundamental)."""
-        if self.fundamental_hz is None:
-            return None
-        return (1 + int(np.argmax(self.harmonics_pa))) * self.fundamental_hz
 
     @property
     def duration_s(self) -> float:
@@ -129,6 +128,32 @@ def harmonic_amplitudes(one_period, count: int = HARMONICS) -> tuple:
     return tuple(float(a) for a in np.pad(amp, (0, count - amp.size)))
 
 
+def pitch(one_period, period_s: float) -> tuple[float, float]:
+    """``(fundamental, strongest line)`` in Hz of the periodic signal sampled uniformly
+    over one period of ``period_s`` seconds (endpoint excluded): of its harmonics n/T,
+    the strongest, and as the fundamental ``g/T``, g the largest common divisor of the
+    harmonics at least :data:`HARMONIC_FLOOR` of the strongest (g = 2 when the signal
+    repeats each half period, as the total flow of a symmetric cycle does)."""
+    lines = np.abs(np.fft.rfft(np.asarray(one_period, dtype=float))[1:])
+    present = np.flatnonzero(lines >= HARMONIC_FLOOR * lines.max()) + 1
+    return int(np.gcd.reduce(present)) / period_s, (int(np.argmax(lines)) + 1) / period_s
+
+
+def strongest_line(pressure, rate: int) -> float | None:
+    """The frequency (Hz) of the strongest line of the spectrum of ``pressure`` sampled
+    at ``rate``: the largest bin of its Hann-windowed FFT (the mean left out), refined
+    by the parabola through the log magnitudes of it and its neighbours (to a fraction
+    of the bin width 1/duration); None for silence."""
+    p = np.asarray(pressure, dtype=float)
+    spectrum = np.abs(np.fft.rfft((p - p.mean()) * np.hanning(p.size)))
+    j = int(np.argmax(spectrum[1:-1])) + 1 if spectrum.size > 2 else 0
+    if j == 0 or spectrum[j] == 0:
+        return None
+    a, b, c = np.log(np.maximum(spectrum[j - 1:j + 2], 1e-300))
+    shift = 0.5 * (a - c) / (a - 2 * b + c) if a - 2 * b + c < 0 else 0.0
+    return float((j + shift) * rate / p.size)
+
+
 def _check(distance, duration, rate) -> None:
     if not (np.isfinite(distance) and distance > 0):
         raise ValueError(f"distance must be > 0 (m), got {distance}")
@@ -178,8 +203,8 @@ def looped_sound(t, dqdt, t_a: float, t_b: float, scales: Scales, distance: floa
     p = scale * spline(np.mod(t_audio / scales.time, period))
     one = scale * spline(np.arange(_PERIOD_POINTS) * period / _PERIOD_POINTS)
     period_s = period * scales.time
-    return Sound(rate, p, 1.0 / period_s, spl_db(one), harmonic_amplitudes(one), distance,
-                 "cycle", period_s)
+    return Sound(rate, p, *pitch(one, period_s), spl_db(one), harmonic_amplitudes(one),
+                 distance, "cycle", period_s)
 
 
 def cycle_sound(traj, scales: Scales, distance: float = 0.3, duration: float = 2.0,
@@ -208,19 +233,21 @@ def trajectory_sound(traj, scales: Scales, distance: float = 0.3, rate: int = AU
     t_audio = t_start * scales.time + np.arange(int(duration * rate)) / rate - distance / SOUND_SPEED
     p = np.where(t_audio >= 0, scale * spline(np.maximum(t_audio, 0.0) / scales.time), 0.0)
     onset, offset = _heard(p, rate, t_audio[0])
+    dominant = strongest_line(p, rate)
     if onset is None:
-        return Sound(rate, p, None, spl_db(p), (0.0,) * HARMONICS, distance, "trajectory", None)
+        return Sound(rate, p, None, dominant, spl_db(p), (0.0,) * HARMONICS, distance,
+                     "trajectory", None)
     sel = (traj.t >= onset / scales.time) & (traj.t <= offset / scales.time)
     returns, _ = poincare_returns(traj.t[sel], traj.tip[sel])
     if returns.size < 3:
-        return Sound(rate, p, None, spl_db(p), (0.0,) * HARMONICS, distance, "trajectory",
-                     None, onset, offset)
+        return Sound(rate, p, None, dominant, spl_db(p), (0.0,) * HARMONICS, distance,
+                     "trajectory", None, onset, offset)
     periods = np.diff(returns)
     j = int(np.argmin(np.abs(periods - np.median(periods))))
     one = scale * spline(returns[j] + np.arange(_PERIOD_POINTS) * periods[j] / _PERIOD_POINTS)
     period_s = float(np.median(periods)) * scales.time
-    return Sound(rate, p, 1.0 / period_s, spl_db(p), harmonic_amplitudes(one), distance,
-                 "trajectory", period_s, onset, offset)
+    return Sound(rate, p, pitch(one, period_s)[0], dominant, spl_db(p), harmonic_amplitudes(one),
+                 distance, "trajectory", period_s, onset, offset)
 
 
 #: Window (s) of the level that tells when a snore is heard, and the fraction of the
