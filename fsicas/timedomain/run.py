@@ -19,7 +19,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from .breathing import PressureSchedule
-from ..model.accuracy import adequate_model, quadrature_error
+from ..model.accuracy import IMPACT_QUADRATURE_TOL, adequate_model, quadrature_error
 from ..model.assembly import Model, build_model
 from .outcome import Criteria, Monitor, Outcome, classify
 from ..scene import STRUCTURE_FIELDS, Scene
@@ -119,11 +119,12 @@ def run_case(scene: Scene, t_end: float, *, settings: Settings = Settings(),
     :data:`MAX_REPEATS` times; "auto": :data:`QUADRATURE_PER_SETTLING` times the
     settling tolerance of ``criteria`` at ``settings.rtol`` (1e-5 at rtol 1e-8: a cycle's
     amplitude moved by 0.04 to 0.23 times the equations' relative error, so the
-    quadrature stays 4x below what the cycle is settled to); None: never. ``progress``: a bar of the integrated time.
+    quadrature stays 4x below what the cycle is settled to), and for a scene with the
+    contact law :data:`fsicas.model.accuracy.IMPACT_QUADRATURE_TOL`; None: never. ``progress``: a bar of the integrated time.
     """
     if not (isinstance(t_end, (int, float)) and np.isfinite(t_end) and t_end > 0):
         raise ValueError(f"t_end must be a finite number > 0, got {t_end!r}")
-    quadrature_tol = _quadrature_tol(quadrature_tol, criteria, settings.rtol)
+    quadrature_tol = _quadrature_tol(quadrature_tol, criteria, settings.rtol, scene.contact)
     start = time.perf_counter()
     stop_on_contact = not scene.contact
     if model is None:
@@ -162,10 +163,10 @@ MAX_REPEATS = 3
 QUADRATURE_PER_SETTLING = 1.0
 
 
-def _quadrature_tol(value, criteria: Criteria, rtol: float) -> float | None:
+def _quadrature_tol(value, criteria: Criteria, rtol: float, contact: bool) -> float | None:
     """``run_case``'s ``quadrature_tol`` as a number or None (ValueError if invalid)."""
     if value == "auto":
-        return QUADRATURE_PER_SETTLING * criteria.settling_tol(rtol)
+        return IMPACT_QUADRATURE_TOL if contact else QUADRATURE_PER_SETTLING * criteria.settling_tol(rtol)
     if value is not None and not (isinstance(value, (int, float)) and 0 < value < 1):
         raise ValueError(f"quadrature_tol must lie in (0, 1), or be 'auto' or None, got {value!r}")
     return value
