@@ -23,7 +23,7 @@ def test_public_names():
         "Branch", "ContinuationIterator", "ContinuationSettings", "EigenSettings",
         "EquilibriumProblem", "FoldCurveProblem", "HopfCurveProblem", "NewtonSettings",
         "PALC", "Problem", "SpecialPoint", "Step", "VectorField", "continuation", "observing",
-        "first_lyapunov", "hopf_point", "CollocationSettings", "CycleProblem",
+        "first_lyapunov", "hopf_point", "CollocationSettings", "MAX_NTST", "CycleProblem",
         "cycle_from_hopf", "ShootingProblem", "ShootingSettings",
         "cycle_from_pd", "cycle_from_bp", "equilibrium_from_bp", "correct", "Event", "Lifted", "Status", "Condition",
         "CycleCurveProblem", "CycleFold", "Extremum", "NeimarkSacker", "PeriodDoubling",
