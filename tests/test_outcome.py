@@ -252,11 +252,11 @@ IMPACTING = dict(mstar=1.0, zeta=0.01, modes=4, contact=True, contact_eps=0.1,
                  contact_stiffness=1e5)
 
 
-@pytest.mark.parametrize("ustar, kind, swings", [(8.0, "impacting_nonperiodic", None),
-                                                  (8.5, "impacting_lco", 2)])
+@pytest.mark.parametrize("ustar, kind, swings", [(7.75, "impacting_nonperiodic", None),
+                                                  (8.25, "impacting_lco", 2)])
 def test_impacting_runs_are_called_periodic_only_when_they_repeat(ustar, kind, swings):
-    """N = 4, k* = 1e5, eps/H = 0.1, to t = 5: at U* = 8.5 the cycle spans two tip swings
-    (returns two apart agree to tol_impacting, neighbours do not), at U* = 8 no return
+    """N = 4, k* = 1e5, eps/H = 0.1, to t = 5: at U* = 8.25 the cycle spans two tip swings
+    (returns two apart agree to tol_impacting, neighbours do not), at U* = 7.75 no return
     repeats within 6 swings: the run is not called periodic, its convergence is
     measured. Checked on returns interpolated linearly between the samples, relative to
     the largest range of a state component over the last swing."""
@@ -270,21 +270,20 @@ def test_impacting_runs_are_called_periodic_only_when_they_repeat(ustar, kind, s
     apart = {k: np.abs(points[-8:] - points[-8 - k:-k]).max() / size for k in range(1, 7)}
     if swings is None:
         assert not o.settled and o.convergence > tol and t[-1] == 5.0
-        assert min(apart.values()) > 2 * tol                  # measured 0.051 (lag 2)
+        assert min(apart.values()) > tol                      # measured 0.028 (lag 2)
         assert o.period == pytest.approx(np.diff(times[-5:]).mean(), rel=1e-2)
     else:
-        assert o.settled and apart[swings] < tol < apart[1]  # measured 0.004, 0.025
+        assert o.settled and apart[swings] < tol < apart[1]  # measured 0.007, 0.035
         assert o.period == pytest.approx(times[-1] - times[-1 - swings], rel=1e-3)
 
 
 @pytest.mark.slow
-def test_the_papers_case_1c_is_not_periodic():
-    """The main job's (1c), U* = 10, N = 10, k* = 1e8, eps/H = 1e-2 (measured 90 s): not
-    an impacting limit cycle; its convergence (0.105) is what separates its cycles, and
-    no return repeats within 6 swings on linearly interpolated returns."""
+def test_the_papers_case_1c_closes_its_gap_and_says_so():
+    """The main job's (1c), U* = 10, N = 10, k* = 1e8, eps/H = 1e-2: with the impact load
+    integrated on its patch the law does not hold the beam (the gap closes near t = 2, on
+    40 and on 80 nodes alike): reported as a failed contact with the reason, never as a
+    cycle."""
     from fsicas.timedomain.impacting_run import impacting_run
     run = impacting_run(10.0)
-    o, tol = run.outcome, Criteria().tol_impacting
-    assert o.outcome == "impacting_nonperiodic" and not o.settled and o.convergence > tol
-    times, points, size = _linear_returns(run.trajectory.t, run.trajectory.x, run.model)
-    assert min(np.abs(points[-8:] - points[-8 - k:-k]).max() / size for k in range(1, 7)) > tol
+    assert run.outcome.outcome == "contact" and run.trajectory.status == "failed"
+    assert "a gap closed" in run.trajectory.message and run.outcome.period is None
