@@ -40,6 +40,7 @@ def test_energy_balance_of_a_limit_cycle_without_contact():
         assert abs(diff) < 1e-3 * inflow[c]
 
 
+@pytest.mark.slow
 def test_energy_balance_with_impacts():
     """Impacting cycle (k* = 1e7, eps/H = 1e-2): the balance holds over the cycle and over
     one impact, where the contact work is large (elastic energy stored in the wall)."""
