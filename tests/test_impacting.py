@@ -19,6 +19,8 @@ from fsicas.linear.steady import steady_state
 #: the start cycle on the scene's nodes, those of the impacting branch
 SCENE_NODES = CycleSettings(quadrature_tol=None)
 IMPACT = dict(contact=True, contact_stiffness=1e8, contact_eps=1e-2, contact_smoothing=0.1)
+#: four shooting points from 3 eps before the wall to the first impacting cycle (N = 4)
+THROUGH = ImpactSettings(max_points=4, ds=0.08, ds_max=0.5)
 
 
 def test_block_jacobian_equals_library_jacobian():
@@ -76,8 +78,9 @@ def test_shooting_passes_first_contact_onto_unstable_impacting_cycles():
     """M* = 1, N = 4: shooting from a collocation cycle before contact (gap/eps = 3.8)
     reproduces it (independent route: collocation of the contact-free model), passes the
     first contact, and the period-1 impacting cycles beyond are unstable (complex
-    multipliers |mu| > 1): time integration from such a cycle's state stays on it for the
-    first period and then leaves it."""
+    multipliers |mu| > 1; the smoothed law already acts within about 1.1 eps, where the
+    cycles lose stability before the gap reaches eps): time integration from such a
+    cycle's state stays on it for the first period and then leaves it."""
     from fsicas.cycles import cycle_branch
     base = Scene(mstar=1.0, zeta=0.01, modes=4, contact_eps=1e-2)
     start = pre_contact_start(cycle_branch(base, ustar_max=10.0, settings=SCENE_NODES))
@@ -85,13 +88,14 @@ def test_shooting_passes_first_contact_onto_unstable_impacting_cycles():
     scene = base.replace(ustar=start.ustar, **IMPACT)
     model = build_model(scene)
     br = impacting_branch(scene, start.state, start.period, start.pressure_drop, model=model,
-                          settings=ImpactSettings(max_points=6, ds=0.02, ds_max=0.2))
-    assert br.status == "max_points" and len(br.points) == 6
+                          settings=ImpactSettings(max_points=10, ds=0.02, ds_max=0.2,
+                                                  quadrature_tol=None))
+    assert br.status == "max_points" and len(br.points) == 10
     first = br.points[0]
     assert abs(first.period / start.period - 1) < 1e-6
     assert abs(first.tip_amplitude / start.tip_amplitude - 1) < 1e-5
     assert abs(first.ustar - start.ustar) < 1e-8
-    free = [p for p in br.points if p.gap_ratio > 1]
+    free = [p for p in br.points if p.gap_ratio > 1.5]
     hit = [p for p in br.points if p.gap_ratio < 1]
     assert free and hit and all(p.stable for p in free) and all(p.impacts == 0 for p in free)
     assert all(not p.stable and p.impacts >= 1 for p in hit)
@@ -119,7 +123,8 @@ def test_period3_impacting_cycle_matches_time_integration(period3_impacting_run)
     period = r.period
     assert r.swings == 3
     br = impacting_branch(r.scene, r.state, period, r.run.steady.pressure_drop, model=r.model,
-                          settings=ImpactSettings(max_points=2, ds=0.05, ds_max=0.5))
+                          settings=ImpactSettings(max_points=2, ds=0.05, ds_max=0.5,
+                                                  quadrature_tol=None))
     assert len(br.points) == 2
     p = br.points[0]
     assert abs(p.ustar - 7.0) < 1e-8
@@ -153,7 +158,8 @@ def through_contact():
     start = pre_contact_start(cycle_branch(base, ustar_max=8.0, settings=SCENE_NODES))
     scene = base.replace(ustar=start.ustar, contact=True)
     return scene, impacting_branch(scene, start.state, start.period, start.pressure_drop,
-                                   settings=ImpactSettings(max_points=8))
+                                   settings=replace(THROUGH, quadrature_tol=None))
+
 
 
 def test_peak_force_and_flow_reduction_against_a_time_integration(through_contact):
@@ -166,8 +172,8 @@ def test_peak_force_and_flow_reduction_against_a_time_integration(through_contac
     before, last = branch.points[0], branch.points[-1]
     assert before.impacts == 0 and before.peak_force == 0.0
     assert last.impacts >= 1 and last.gap_ratio < 1 and last.peak_force > 0
-    model = build_model(scene)
-    at = scene.replace(ustar=last.ustar)
+    model = build_model(branch.scene)          # the nodes the branch was computed on
+    at = branch.scene.replace(ustar=last.ustar)
     st = steady_state(at, model)
     assert st.pressure_drop == pytest.approx(last.pressure_drop, rel=1e-8)
     traj = simulate(model, st, last.period, x0=last.state,
@@ -225,3 +231,32 @@ def test_cli_lco_through_contact(capsys):
     assert "mesh is too coarse" in coarse.err and "--impact-ntst" in coarse.err
     for bad in (["--impact-points", "0"], ["--impact-ntst", "0"], ["--special-ntst", "-1"]):
         assert main(["lco", "--modes", "4", "--through-contact", *bad, "--json"]) == 2
+
+
+@pytest.mark.slow
+def test_quadrature_control_of_shooting_cycles(through_contact):
+    """N = 4, the branch of the fixture (28 nodes, no control) computed again with the
+    default control: on the adequate nodes every point's estimate is within
+    IMPACT_QUADRATURE_TOL (the plain branch's is not); one period integrated by Radau
+    (rtol 1e-11) from the last, impacting, cycle on twice those nodes returns to it far
+    closer than from the plain branch's last cycle."""
+    from fsicas.model.accuracy import IMPACT_QUADRATURE_TOL
+    scene, plain = through_contact
+    start = plain.points[0]
+    controlled = impacting_branch(scene, start.state, start.period, start.pressure_drop,
+                                  settings=THROUGH)
+    nodes = controlled.scene.n_quad
+    assert nodes > scene.n_quad and {p.quadrature_nodes for p in controlled.points} == {nodes}
+    assert max(p.quadrature_error for p in controlled.points) <= IMPACT_QUADRATURE_TOL
+    assert max(p.quadrature_error for p in plain.points) > IMPACT_QUADRATURE_TOL
+    assert controlled.points[-1].impacts >= 1
+    fine = build_model(scene.replace(quad_nodes=2 * nodes))
+
+    def miss(point):
+        steady = steady_state(scene.replace(ustar=point.ustar, quad_nodes=2 * nodes), fine)
+        traj = simulate(fine, steady, point.period, x0=point.state,
+                        settings=Settings(method="radau", rtol=1e-11, atol=1e-13,
+                                          dt_out=point.period / 2000))
+        assert traj.status == "success"
+        return np.max(np.abs(traj.x[-1] - point.state)) / np.max(np.abs(point.state))
+    assert miss(controlled.points[-1]) < 1e-2 * miss(plain.points[-1])

@@ -20,6 +20,7 @@ A cycle problem of :mod:`continuation` on ``flutter_field`` has unknowns
 from __future__ import annotations
 
 import time
+import warnings
 
 import numpy as np
 
@@ -27,10 +28,11 @@ import continuation as C
 
 from ..linear.adapter import LOG_M, PI, PI_SCALE, TIME_SCALE, steady_ustar
 from ..model import contact
-from ..model.accuracy import quadrature_error
+from ..model.accuracy import adequate_model, quadrature_error
 from ..model.patch import penetration
 
-__all__ = ["Gauge", "PolynomialExtrema", "PolynomialGauge", "PERIOD_COLUMN", "model_parameters"]
+__all__ = ["Gauge", "PolynomialExtrema", "PolynomialGauge", "PERIOD_COLUMN", "model_parameters",
+           "quadrature_controlled"]
 
 PERIOD_COLUMN = "cycle_period"
 """Branch column of the period in units of T (the library's ``period`` is in T/100)."""
@@ -111,6 +113,20 @@ class Gauge:
     def min_gap(self, x) -> np.ndarray:
         """``min_{x, c} h_c(x)`` of each state (row): :func:`fsicas.model.contact.gaps`."""
         return contact.gaps(self.model, x).min(axis=(1, 2))
+
+
+def quadrature_controlled(compute, model, tol: float | None):
+    """``compute(model) -> (branch, gauge)`` once, and once more on the adequate model
+    (:func:`fsicas.model.accuracy.adequate_model`) of the worst cycle its gauge measured
+    when that cycle's quadrature error exceeds ``tol`` (None: never); a warning if the
+    error still exceeds it. Returns the branch."""
+    branch, gauge = compute(model)
+    if tol is not None and gauge.worst[0] > tol:
+        branch, gauge = compute(adequate_model(model, *gauge.worst[1:], tol)[0])
+    if tol is not None and gauge.worst[0] > tol:
+        warnings.warn(f"quadrature error {gauge.worst[0]:.2g} on {gauge.model.scene.n_quad} "
+                      f"nodes exceeds quadrature_tol {tol:g}", RuntimeWarning, stacklevel=3)
+    return branch
 
 
 def model_parameters(model, problem, X) -> np.ndarray:

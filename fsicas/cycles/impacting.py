@@ -37,7 +37,7 @@ from __future__ import annotations
 
 import math
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Literal
 
 import casadi as ca
@@ -46,10 +46,11 @@ import numpy as np
 import continuation as C
 
 from ..linear.adapter import LOG_M, PI, PI_SCALE, TIME_SCALE, flutter_field, pi_of
+from ..model.accuracy import IMPACT_QUADRATURE_TOL
 from ..model.assembly import Model, build_model
 from ..scene import Scene
 from ..linear.steady import steady_state
-from .gauge import Gauge, model_parameters
+from .gauge import Gauge, model_parameters, quadrature_controlled
 from .records import BranchRecord, CycleMeasures, check_settings
 
 __all__ = ["ImpactSettings", "ImpactPoint", "ImpactBranch", "impacting_branch",
@@ -69,7 +70,10 @@ class ImpactSettings:
     points, 100 T and Π); ``max_points``: branch points; ``samples``: output points per
     segment for the measurements (min gap, amplitude, impacts); ``sensitivities``:
     ``"fast"`` or ``"exact"`` (``continuation.ShootingSettings``, module docstring);
-    ``threads``: segments integrated in parallel (the same numbers on any count)."""
+    ``threads``: segments integrated in parallel (the same numbers on any count);
+    ``quadrature_tol``: the bound of the flow quadrature's error over the cycles (a branch
+    above it is computed once more on the adequate model of its worst cycle; None: no
+    control)."""
 
     segments: int = 12
     tol: float = 1e-10
@@ -80,10 +84,12 @@ class ImpactSettings:
     samples: int = 2000
     sensitivities: str = "fast"
     threads: int = 2
+    quadrature_tol: float | None = IMPACT_QUADRATURE_TOL
 
     def __post_init__(self):
         check_settings(self, integers=("segments", "max_points", "samples", "threads"),
-                       positives=("tol", "newton_tol", "ds", "ds_max"))
+                       positives=("tol", "newton_tol", "ds", "ds_max") + (
+                           () if self.quadrature_tol is None else ("quadrature_tol",)))
         if self.sensitivities not in ("exact", "fast"):
             raise ValueError("ImpactSettings.sensitivities must be 'exact' or 'fast', got "
                              f"{self.sensitivities!r}")
@@ -149,21 +155,34 @@ def impacting_branch(scene: Scene, state, period: float, pressure_drop: float, *
     if not scene.contact:
         raise ValueError("impacting_branch needs scene.contact = True (the impact law)")
     model = model or build_model(scene)
-    vf, st = flutter_field(model), steady_state(scene, model)
-    params = _field_parameters(vf, model, st, scene, pressure_drop)
-    shoot = shooting_settings(settings)
+    state = np.asarray(state, float)
+
+    def compute(on):
+        analysed = scene if on is model else scene.replace(quad_nodes=on.scene.n_quad)
+        return _shot(analysed, on, state, period, pressure_drop, (ustar_min, ustar_max),
+                     direction, settings)
     try:
-        orbit = shooting_points(vf, np.asarray(state, float), period * TIME_SCALE, params,
-                                settings.segments, shoot)
+        branch = quadrature_controlled(compute, model, settings.quadrature_tol)
     except RuntimeError as err:                  # CVODES failure, e.g. a gap closing
         return ImpactBranch(scene, scene.contact_gap, [], "failed",
                             f"the start cycle could not be integrated over one period: {err}",
                             time.perf_counter() - start)
+    return replace(branch, wall_time=time.perf_counter() - start)
+
+
+def _shot(scene, model, state, period, pressure_drop, ustar_range, direction, settings):
+    """:func:`impacting_branch` on ``model``, and its gauge (RuntimeError if the start
+    cycle cannot be integrated)."""
+    start = time.perf_counter()
+    vf, st = flutter_field(model), steady_state(scene, model)
+    params = _field_parameters(vf, model, st, scene, pressure_drop)
+    shoot = shooting_settings(settings)
+    orbit = shooting_points(vf, state, period * TIME_SCALE, params, settings.segments, shoot)
     problem = C.ShootingProblem(vf, orbit, period * TIME_SCALE, params, PI, settings=shoot)
     gauge = _ImpactGauge(model, st.x, scene.contact_gap, settings.samples)
     branch = C.continuation(problem, record=gauge.record, settings=_steps(
-        scene, model, ustar_min, ustar_max, direction, settings))
-    return _result(scene, model, branch, settings, time.perf_counter() - start)
+        scene, model, *ustar_range, direction, settings))
+    return _result(scene, model, branch, settings, time.perf_counter() - start), gauge
 
 
 def shooting_settings(settings: ImpactSettings) -> C.ShootingSettings:
@@ -250,6 +269,11 @@ def shooting_points(vf, x0, period, params, m, shoot) -> np.ndarray:
     return np.vstack([x0, xs])                   # the orbit at t = 0, 1/m, ..., (m - 1)/m
 
 
+#: Samples nearest the wall (and as many spread) on which a shooting cycle's quadrature
+#: error is measured (:meth:`_ImpactGauge.states`).
+QUADRATURE_STATES = 200
+
+
 class _ImpactGauge(Gauge):
     """Measures of shooting unknowns X = (x_0..x_{m-1}, 100 T, Π) on ``samples`` outputs
     per segment (not refined), as branch columns (the fields of :class:`ImpactPoint`)."""
@@ -258,9 +282,22 @@ class _ImpactGauge(Gauge):
         super().__init__(model, x_eq, eps)
         self.samples, self.t_last = samples, time.perf_counter()
 
+    def sampled(self, problem, X) -> np.ndarray:
+        """The cycle's ``samples`` outputs per segment (kept for the last X)."""
+        return self.kept("samples", problem, X, lambda: problem.sample(X, self.samples)[1])
+
+    def states(self, problem, X) -> np.ndarray:
+        """The samples the quadrature error is measured on: the
+        :data:`QUADRATURE_STATES` nearest the wall (the flow integrals are sharpest
+        where the gap is narrowest) and as many spread over the cycle."""
+        x = self.sampled(problem, X)
+        nearest = np.argsort(self.min_gap(x))[:QUADRATURE_STATES]
+        spread = np.linspace(0, len(x) - 1, min(len(x), QUADRATURE_STATES)).astype(int)
+        return x[np.union1d(nearest, spread)]
+
     def record(self, problem, X) -> dict:
         """The columns of one branch point (multipliers from the kept Jacobian)."""
-        x = problem.sample(X, self.samples)[1]
+        x = self.sampled(problem, X)
         y, gap = self.tip(x), self.min_gap(x)
         inside = gap < self.eps
         impacts = int(np.sum(inside & ~np.roll(inside, 1))) if not inside.all() else 1

@@ -28,7 +28,6 @@ switches at them onto the period-doubled and the asymmetric cycles.
 from __future__ import annotations
 
 import time
-import warnings
 from dataclasses import dataclass, field, replace
 from typing import Literal
 
@@ -39,10 +38,10 @@ import continuation as C
 
 from ..linear.adapter import LOG_M, PI, PI_SCALE, TIME_SCALE, flutter_field, pi_of
 from ..linear.steady import steady_state
-from ..model.accuracy import IMPACT_QUADRATURE_TOL, adequate_model
+from ..model.accuracy import IMPACT_QUADRATURE_TOL
 from ..model.assembly import Model, build_model
 from ..scene import Scene
-from .gauge import PolynomialGauge
+from .gauge import PolynomialGauge, quadrature_controlled
 from .impacting import ImpactBranch, ImpactPoint, shooting_points
 from .records import check_settings
 
@@ -241,16 +240,13 @@ def continued_branch(scene, model, problem, ustar_range, direction, settings, st
                      ) -> CollocatedImpactBranch:
     """The branch of ``problem`` in U* within ``ustar_range``, its special cycles refined
     (once more on the adequate model of its worst cycle: module docstring)."""
-    result, gauge = _continued(scene, model, problem, ustar_range, direction, settings, start)
-    tol = settings.quadrature_tol
-    if tol is not None and gauge.worst[0] > tol:
-        model = adequate_model(model, *gauge.worst[1:], tol)[0]
-        problem = problem.on_field(flutter_field(model), problem.X0)[0]
-        result, gauge = _continued(scene.replace(quad_nodes=model.scene.n_quad), model,
-                                   problem, ustar_range, direction, settings, start)
-    if tol is not None and gauge.worst[0] > tol:
-        warnings.warn(f"quadrature error {gauge.worst[0]:.2g} exceeds quadrature_tol {tol:g}")
-    return result
+    def compute(on):
+        if on is model:
+            return _continued(scene, model, problem, ustar_range, direction, settings, start)
+        finer = problem.on_field(flutter_field(on), problem.X0)[0]
+        return _continued(scene.replace(quad_nodes=on.scene.n_quad), on, finer, ustar_range,
+                          direction, settings, start)
+    return quadrature_controlled(compute, model, settings.quadrature_tol)
 
 
 def _continued(scene, model, problem, ustar_range, direction, settings, start) -> tuple:
