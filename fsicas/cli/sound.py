@@ -12,9 +12,8 @@ import warnings
 
 from ..plots.sound import plot_sound
 from ..timedomain.integrators import Settings
-from ..timedomain.outcome import classify
 from ..timedomain.run import run_case
-from ..timedomain.sound import (AUDIO_RATE, breath_trajectory, cycle_sound, trajectory_sound,
+from ..timedomain.sound import (AUDIO_RATE, breath_run, cycle_sound, trajectory_sound,
                                 write_wav)
 from .meta import cli_meta, record
 from .progress import reporter
@@ -88,18 +87,17 @@ def _cmd_sound(args) -> dict:
     say.stage(f"time integration to t = {t_end:g} T ({scene.scales.seconds(t_end):.3g} s), "
               f"N = {scene.modes}")
     if args.breath:
-        traj, steady = breath_trajectory(scene, t_end, settings, progress=say.bars)
-        outcome = classify(traj, steady).outcome
-        sound = trajectory_sound(traj, scene.scales, args.distance, AUDIO_RATE)
+        run = breath_run(scene, t_end, settings, progress=say.bars)
+        sound = trajectory_sound(run.trajectory, scene.scales, args.distance, AUDIO_RATE)
     else:
         run = run_case(scene, t_end, settings=settings, progress=say.bars)
-        traj, outcome, sound = run.trajectory, run.outcome.outcome, _sound(run, scene, args)
-    out = {**sound.to_json(), "outcome": outcome, "status": traj.status,
+        sound = _sound(run, scene, args)
+    traj = run.trajectory      # the run's quadrature, controlled (docs/simulate.md)
+    out = {**sound.to_json(), "outcome": run.outcome.outcome, "status": run.status,
            "message": traj.message, "t_end_reached": float(traj.t[-1]),
+           "quadrature_error": run.quadrature_error, "quadrature_nodes": run.model.scene.n_quad,
+           "quadrature_tol": run.quadrature_tol,
            "contact": scene.contact, "out": args.out, "plot": args.plot}
-    if not args.breath:     # the run's quadrature, controlled (docs/simulate.md)
-        out.update(status=run.status, quadrature_error=run.quadrature_error,
-                   quadrature_nodes=run.model.scene.n_quad, quadrature_tol=run.quadrature_tol)
     if args.out:
         out["wav_pa_per_count"] = write_wav(sound, args.out)
     if args.plot:

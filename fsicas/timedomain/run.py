@@ -27,7 +27,8 @@ from .integrators import Settings, Trajectory, pressure_coefficient, simulate
 from ..linear.stability import eigenvalues
 from ..linear.steady import SteadyState, steady_state
 
-__all__ = ["Run", "run_case", "guarded_model", "sweep_model", "sensitive_states"]
+__all__ = ["Run", "run_case", "guarded_model", "sweep_model", "sensitive_states",
+           "controlled_run", "quadrature_tolerance"]
 
 
 #: Samples of a trajectory at which its quadrature error is estimated, at most.
@@ -124,7 +125,7 @@ def run_case(scene: Scene, t_end: float, *, settings: Settings = Settings(),
     """
     if not (isinstance(t_end, (int, float)) and np.isfinite(t_end) and t_end > 0):
         raise ValueError(f"t_end must be a finite number > 0, got {t_end!r}")
-    quadrature_tol = _quadrature_tol(quadrature_tol, criteria, settings.rtol, scene.contact)
+    quadrature_tol = quadrature_tolerance(quadrature_tol, criteria, settings.rtol, scene.contact)
     start = time.perf_counter()
     stop_on_contact = not scene.contact
     if model is None:
@@ -134,14 +135,14 @@ def run_case(scene: Scene, t_end: float, *, settings: Settings = Settings(),
     once = functools.partial(_run_once, t_end=t_end, settings=settings, criteria=criteria,
                              schedule=schedule, perturbation=perturbation, stop_early=stop_early,
                              progress=progress)
-    run = _controlled(once(scene, model), once, quadrature_tol)
+    run = controlled_run(once(scene, model), once, quadrature_tol)
     run = replace(run, wall_time=time.perf_counter() - start)
     for message in run.warnings:
         warnings.warn(message, RuntimeWarning, stacklevel=2)
     return run
 
 
-def _controlled(run: Run, once, tol: float | None) -> Run:
+def controlled_run(run: Run, once, tol: float | None) -> Run:
     """``run``, repeated by ``once(scene, model)`` on the adequate model while its
     :func:`sensitive_states` need more nodes for ``tol`` (at most :data:`MAX_REPEATS`
     times), with ``quadrature_tol = tol`` if it was checked."""
@@ -163,7 +164,7 @@ MAX_REPEATS = 3
 QUADRATURE_PER_SETTLING = 1.0
 
 
-def _quadrature_tol(value, criteria: Criteria, rtol: float, contact: bool) -> float | None:
+def quadrature_tolerance(value, criteria: Criteria, rtol: float, contact: bool) -> float | None:
     """``run_case``'s ``quadrature_tol`` as a number or None (ValueError if invalid)."""
     if value == "auto":
         return IMPACT_QUADRATURE_TOL if contact else QUADRATURE_PER_SETTLING * criteria.settling_tol(rtol)

@@ -23,7 +23,10 @@ docs/sound.md states the model, its assumptions and limits.
 """
 from __future__ import annotations
 
-from dataclasses import dataclass
+import functools
+import time
+import warnings
+from dataclasses import dataclass, replace
 
 import numpy as np
 from scipy.interpolate import CubicSpline
@@ -33,12 +36,13 @@ from ..units import Scales
 from .breathing import PressureSchedule
 from .integrators import Settings, initial_state, simulate
 from .returns import cycles, poincare_returns, xdot_rows
-from .run import guarded_model
+from .outcome import Criteria, classify
+from .run import Run, controlled_run, guarded_model, quadrature_tolerance
 
 __all__ = ["Sound", "AUDIO_RATE", "P_REF", "SOUND_SPEED", "HARMONICS", "HARMONIC_FLOOR",
            "flow_derivative", "monopole_pressure", "spl_db", "harmonic_amplitudes", "pitch",
            "strongest_line", "looped_sound", "cycle_sound", "trajectory_sound",
-           "breath_trajectory", "write_wav"]
+           "breath_run", "write_wav"]
 
 #: Audio sample rate (Hz), reference pressure of dB SPL (Pa), speed of sound in air (m/s).
 AUDIO_RATE, P_REF, SOUND_SPEED = 44100, 20e-6, 343.0
@@ -269,18 +273,39 @@ def _heard(p, rate: int, t0: float) -> tuple[float | None, float | None]:
     return t0 + loud[0] * n / rate, t0 + (loud[-1] + 1) * n / rate
 
 
-def breath_trajectory(scene, t_end: float, settings: Settings = Settings(),
-                      perturbation=1e-2, progress: bool = False):
+def breath_run(scene, t_end: float, settings: Settings = Settings(), perturbation=1e-2,
+               progress: bool = False, quadrature_tol: float | str | None = "auto",
+               repeat: bool = False) -> Run:
     """One breath of ``t_end`` (nondimensional): ``U*(t) = scene.ustar |sin(π t / t_end)|``
     (:class:`~fsicas.timedomain.breathing.PressureSchedule`), started from rest (no flow,
     no pressure drop: a consistent start) with the beam perturbed as by
-    :func:`~fsicas.timedomain.integrators.initial_state`, run to the end."""
-    model, _ = guarded_model(scene)
+    :func:`~fsicas.timedomain.integrators.initial_state`, run to the end and classified.
+    ``quadrature_tol`` ("auto" as in :func:`~fsicas.timedomain.run.run_case`): the bound
+    of the flow quadrature's error over the breath, measured at the peak's parameters
+    on its states (the integrals sharpen as the gap closes); above it the run's status is
+    "unconverged" with a warning. ``repeat``: run again on the adequate nodes instead
+    (up to three times; each repeat of an irregularly impacting breath can cost many
+    times the first run)."""
+    start = time.perf_counter()
+    tol = quadrature_tolerance(quadrature_tol, Criteria(), settings.rtol, scene.contact)
+    once = functools.partial(_breath_once, t_end=t_end, settings=settings,
+                             perturbation=perturbation, progress=progress)
+    run = once(scene, guarded_model(scene)[0])
+    run = controlled_run(run, once, tol) if repeat else replace(run, quadrature_tol=tol)
+    for message in run.warnings:
+        warnings.warn(message, RuntimeWarning, stacklevel=2)
+    return replace(run, wall_time=time.perf_counter() - start)
+
+
+def _breath_once(scene, model, *, t_end, settings, perturbation, progress) -> Run:
+    """:func:`breath_run` once on ``model``."""
+    start = time.perf_counter()
     steady = steady_state(scene, model)
     x0 = initial_state(model, steady, perturbation) - np.asarray(steady.x, dtype=float)
     x0[-2:] = 0.0
-    return simulate(model, steady, t_end, settings=settings, x0=x0, progress=progress,
-                    schedule=PressureSchedule.breath(scene.ustar, t_end)), steady
+    traj = simulate(model, steady, t_end, settings=settings, x0=x0, progress=progress,
+                    schedule=PressureSchedule.breath(scene.ustar, t_end))
+    return Run(scene, model, steady, traj, classify(traj, steady), time.perf_counter() - start)
 
 
 def write_wav(sound: Sound, path) -> float:
