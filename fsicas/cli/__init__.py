@@ -4,12 +4,14 @@ With ``--json`` stdout holds one JSON object and nothing else (a stable contract
 Warnings of the analyses (e.g. a modal truncation too short to resolve the onset) are
 returned in its ``"warnings"`` list (printed as a line of the summary without ``--json``).
 Exit status: 0 when the command succeeded; 1 when it ran to the end but its result
-reports a failure (``"status": "failed"``: a time integration whose gap closed or whose
+reports a failure (``"status": "failed"``, also of a sub-result such as the impacting
+branch of ``lco --through-contact``: a time integration whose gap closed or whose
 solver failed, a continuation whose corrector failed), the result still printed; 2 for
 bad input or an analysis that could not start (the error on stderr, or as
 ``{"error": ...}`` with ``--json``); 130 after Ctrl-C (one line on stderr); 141 when the
 reader of stdout went away (``| head``), silently.
-Every JSON printed carries a ``"meta"`` object (versions, UTC time, the command line,
+No NaN or Infinity is printed: such a value is written as null and a warning names
+where it was (:mod:`fsicas.strict_json`). Every JSON printed carries a ``"meta"`` object (versions, UTC time, the command line,
 the scene, the settings and the units of each field; :mod:`fsicas.cli.meta`).
 ``--quiet`` and ``--verbose`` (before or after the command) set what is told on stderr
 while it runs (:mod:`fsicas.cli.progress`). docs/cli.md lists every command and option
@@ -20,7 +22,6 @@ line (not the library) selects before a command that writes figures runs.
 from __future__ import annotations
 
 import argparse
-import json
 import os
 import re
 import sys
@@ -30,7 +31,7 @@ import warnings
 import casadi
 import numpy as np
 
-from .. import __version__
+from .. import __version__, strict_json
 from ..linear.hopf import CriticalVelocityError
 from ..linear.steady import SteadyStateError
 from ..plots.backend import select_file_backend
@@ -171,20 +172,31 @@ def _main(argv) -> int:
             result = args.run(args)
     except (ValueError, SteadyStateError, CriticalVelocityError) as err:
         if getattr(args, "json", False):
-            print(json.dumps({"error": str(err), "meta": cli_meta(args)}))
+            print(strict_json.dumps({"error": str(err), "meta": cli_meta(args)}))
         else:
             print(f"fsicas {args.command}: error: {err}", file=sys.stderr)
         return EXIT_ERROR
-    notes = _notes(caught)
+    if args.json:
+        result = {**result, "meta": result.get("meta") or cli_meta(args)}
+    result, places = strict_json.finite(result)
+    notes = _notes(caught) + ([strict_json.nonfinite_note(places)] if places else [])
     if notes:
         own = result.get("warnings") or []
         result = {**result, "warnings": own + [n for n in notes if n not in own]}
     if args.json:
-        print(json.dumps({**result, "meta": result.get("meta") or cli_meta(args)}))
+        print(strict_json.dumps(result))
     else:
         (getattr(args, "human", None) or _print_human)(result)
         print(f"{'wall time':>16}: {time.perf_counter() - start:.3f} s")
-    return EXIT_FAILED_RESULT if result.get("status") == "failed" else EXIT_OK
+    return EXIT_FAILED_RESULT if failed(result) else EXIT_OK
+
+
+def failed(result: dict) -> bool:
+    """Whether ``result`` or a sub-result in it (a dict value at any depth, e.g. the
+    impacting branch of ``lco --through-contact``) has ``"status": "failed"``; the
+    records of a list (the points of a sweep) are each point's own."""
+    return result.get("status") == "failed" or any(
+        failed(v) for k, v in result.items() if isinstance(v, dict) and k != "meta")
 
 
 if __name__ == "__main__":  # pragma: no cover
