@@ -11,7 +11,8 @@ import time
 from concurrent.futures import ProcessPoolExecutor
 from contextlib import contextmanager
 
-__all__ = ["die_with_parent", "local_pool", "dask_executor", "DASK_CONNECT_TIMEOUT"]
+__all__ = ["die_with_parent", "local_pool", "dask_executor", "DASK_CONNECT_TIMEOUT", "check_workers",
+           "OVERSUBSCRIBE_HELP"]
 
 
 def die_with_parent(parent: int) -> None:
@@ -30,6 +31,25 @@ def die_with_parent(parent: int) -> None:
             time.sleep(1.0)
         os._exit(1)
     threading.Thread(target=watch, daemon=True).start()
+
+
+#: The help of ``--oversubscribe`` (the commands with ``--workers``).
+OVERSUBSCRIBE_HELP = "allow --workers beyond the cores of this machine"
+
+
+def check_workers(workers: int | None, oversubscribe: bool = False) -> None:
+    """ValueError unless ``workers`` is None (the cores) or from 1 to the cores of this
+    machine; more only with ``oversubscribe`` (``--oversubscribe``: processes beyond the
+    cores share them and each point takes longer)."""
+    cores = os.cpu_count() or 1
+    if workers is None:
+        return
+    if workers < 1:
+        raise ValueError(f"--workers must be >= 1, got {workers}")
+    if workers > cores and not oversubscribe:
+        raise ValueError(f"--workers {workers} is more than the {cores} cores of this "
+                         f"machine: give --workers {cores} or fewer, or add --oversubscribe "
+                         "to run more processes than cores")
 
 
 def local_pool(workers: int | None = None) -> ProcessPoolExecutor:

@@ -68,6 +68,12 @@ COMMAND_CASES = [
     (["lco", "--max-points", "0"], "max_points"), (["lco", "--ntst", "0"], "ntst"),
     (["lco", "--ncol", "0"], "ncol"), (["lco", "--ustar-max", "-1"], "ustar_max"),
     (["lco", "--contact"], "contact"),
+    # beyond the cores only when asked; repeated grid values; a ramp start beyond any U*
+    (["map", "--workers", "100000"], "--oversubscribe"),
+    (["grazing", "--workers", "100000"], "--oversubscribe"),
+    (["map", "--ustar", "4,5,4"], "--ustar repeats 4"), (["map", "--mstar", "1:1:3"], "--mstar repeats 1"),
+    (["boundary", "--mstar", "0.5,0.5"], "--mstar repeats 0.5"),
+    (["simulate", "--t-end", "1", "--schedule", "ramp", "--ustar-start", "1e308"], "--ustar-start"),
 ]
 
 
@@ -299,3 +305,16 @@ def test_an_unreachable_dask_scheduler_fails_fast_and_clearly(capsys, tripwire, 
     check_refused(capsys, ["map", "--ustar", "6", "--mstar", "1", "--dask", "tcp://127.0.0.1:1",
                            "--out", "m.jsonl"], "no Dask scheduler answered")
     assert time.perf_counter() - start < 30
+
+
+def test_workers_beyond_the_cores_run_when_asked(monkeypatch):
+    """``--oversubscribe`` lets ``--workers`` exceed the cores (the check alone: no work)."""
+    from fsicas.workers import check_workers
+    monkeypatch.setattr("os.cpu_count", lambda: 2)
+    check_workers(None)
+    check_workers(2)
+    check_workers(8, oversubscribe=True)
+    with pytest.raises(ValueError, match="more than the 2 cores.*--workers 2 or fewer"):
+        check_workers(3)
+    with pytest.raises(ValueError, match=">= 1"):
+        check_workers(0, oversubscribe=True)

@@ -12,6 +12,7 @@ from ..linear.boundary import stability_boundary
 from ..model.assembly import build_model
 from ..physical_report import add_physical
 from ..plots.cycles import plot_curves
+from ..workers import OVERSUBSCRIBE_HELP, check_workers
 from .meta import record, write_json
 from .progress import reporter
 from .ranges import parse_range
@@ -36,6 +37,7 @@ def add_curve_command(sub) -> None:
     p.add_argument("--max-points", type=int, default=150,
                    help="points of each curve per direction at most")
     p.add_argument("--workers", type=int, default=1, help="seeds computed in parallel processes")
+    p.add_argument("--oversubscribe", action="store_true", help=OVERSUBSCRIBE_HELP)
     p.add_argument("--out", metavar="FILE.json", help="save the curves whole, with their meta")
     p.add_argument("--plot", metavar="FILE", help="the (U*, M*) plane with the three curves")
     p.set_defaults(run=_cmd_grazing)
@@ -45,8 +47,7 @@ def _cmd_grazing(args) -> dict:
     scene = scene_from_args(args)
     if scene.contact:
         raise ValueError("the curves are of contact-free cycles: drop --contact")
-    if args.workers < 1:
-        raise ValueError(f"--workers must be >= 1, got {args.workers}")
+    check_workers(args.workers, args.oversubscribe)
     if args.ntst < 2:
         raise ValueError(f"--ntst must be >= 2, got {args.ntst}")
     if not args.ustar_max > 0:

@@ -29,6 +29,10 @@ def parse_range(text: str, name: str, log: bool = False) -> np.ndarray:
                          f"({'log-spaced' if log else 'evenly spaced'}, 1 <= COUNT <= "
                          f"{MAX_COUNT}) of finite "
                          f"values{' > 0' if log else ''}; got {text!r}")
+    unique, counts = np.unique(values, return_counts=True)
+    if np.any(counts > 1):
+        raise ValueError(f"--{name} repeats {', '.join(f'{v:g}' for v in unique[counts > 1])} "
+                         f"(in {text!r}): give each value once")
     return values
 
 

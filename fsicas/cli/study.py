@@ -8,7 +8,7 @@ from __future__ import annotations
 from pathlib import Path
 
 from ..studies import check_table_path, load_study, run_study, summarize
-from ..workers import dask_executor
+from ..workers import OVERSUBSCRIBE_HELP, check_workers, dask_executor
 from .meta import cli_meta, record
 from .progress import reporter
 
@@ -24,6 +24,7 @@ def add_study_command(sub) -> None:
                    "beside the study file, NAME.csv); its results file NAME.jsonl beside it")
     p.add_argument("--workers", type=int, default=None,
                    help="local processes (default: the cores)")
+    p.add_argument("--oversubscribe", action="store_true", help=OVERSUBSCRIBE_HELP)
     p.add_argument("--dask", metavar="ADDRESS", help="run the points on a Dask scheduler "
                    "(tcp://host:8786; needs the 'parallel' extra)")
     p.add_argument("--json", action="store_true", help="print one JSON object on stdout")
@@ -31,8 +32,7 @@ def add_study_command(sub) -> None:
 
 
 def _cmd_study(args) -> dict:
-    if args.workers is not None and args.workers < 1:
-        raise ValueError(f"--workers must be >= 1, got {args.workers}")
+    check_workers(args.workers, args.oversubscribe)
     study = load_study(args.study)
     table = check_table_path(args.out or Path(args.study).with_suffix(".csv"))
     record(args, None, analysis=study.analysis, points=len(study.points),

@@ -11,7 +11,8 @@ from ..timedomain.breathing import PressureSchedule
 from ..timedomain.impact_map import MAP_SCENE, impact_map
 from ..timedomain.integrators import Settings
 from ..timedomain.run import run_case
-from ..workers import dask_executor
+from ..scene import MAX_ABS_USTAR
+from ..workers import OVERSUBSCRIBE_HELP, check_workers, dask_executor
 from .meta import record
 from .progress import reporter
 from .ranges import parse_range
@@ -50,6 +51,7 @@ def _add_map_command(sub) -> None:
     p.add_argument("--modes", type=int, default=10, help="number of beam modes N")
     p.add_argument("--t-end", type=float, default=30.0, help="final time of each run (units of T)")
     p.add_argument("--workers", type=int, default=None, help="local processes (default: the cores)")
+    p.add_argument("--oversubscribe", action="store_true", help=OVERSUBSCRIBE_HELP)
     p.add_argument("--dask", metavar="ADDRESS", help="run the points on a Dask scheduler "
                    "(e.g. tcp://host:8786) instead of local processes; needs the parallel extra")
     p.add_argument("--out", default="impact_map.jsonl", help="results file (resumable)")
@@ -64,6 +66,9 @@ def _schedule(args, scene):
         if args.schedule in option and not value > 0:
             raise ValueError(f"--{option} must be > 0, got {value}")
     if args.schedule == "ramp":
+        if not abs(args.ustar_start) <= MAX_ABS_USTAR:
+            raise ValueError(f"--ustar-start must lie in [-{MAX_ABS_USTAR:g}, "
+                             f"{MAX_ABS_USTAR:g}] (as --ustar), got {args.ustar_start}")
         return PressureSchedule.ramp(args.ustar_start, scene.ustar, args.ramp_time)
     if args.schedule == "breath":
         return PressureSchedule.breath(scene.ustar, args.breath_period)
@@ -91,6 +96,7 @@ def _cmd_simulate(args) -> dict:
 
 
 def _cmd_map(args) -> dict:
+    check_workers(args.workers, args.oversubscribe)
     ustars = parse_range(args.ustar, "ustar", log=False)
     mstars = parse_range(args.mstar, "mstar", log=True)
     scene = MAP_SCENE.replace(modes=args.modes, **beam_fields(args))

@@ -33,6 +33,8 @@ from typing import Literal, get_args
 import casadi as ca
 import numpy as np
 
+from ..scene import MAX_ABS_USTAR
+
 __all__ = ["PressureSchedule", "ScheduleKind", "schedule_expression", "N_SCHEDULE_PARAMS"]
 
 N_SCHEDULE_PARAMS = 6
@@ -59,6 +61,10 @@ class PressureSchedule:
             value = getattr(self, name)
             if not isinstance(value, (int, float)) or not math.isfinite(value):
                 raise ValueError(f"schedule {name} must be a finite number, got {value!r}")
+        for name in ("ustar", "ustar_start"):
+            if abs(getattr(self, name)) > MAX_ABS_USTAR:
+                raise ValueError(f"schedule {name} must lie in [-{MAX_ABS_USTAR:g}, "
+                                 f"{MAX_ABS_USTAR:g}] (as Scene.ustar), got {getattr(self, name)}")
         if self.duration <= 0 or self.period <= 0:
             raise ValueError(f"schedule duration and period must be > 0, got "
                              f"{self.duration}, {self.period}")
