@@ -205,6 +205,8 @@ def test_cli_study_json_and_resume(tmp_path, capsys):
      "distribution must be one of uniform"),
     ('analysis = "onset"\n[sample]\nsize = 3\nmstar = {distribution = "uniform", low = 2.0, '
      'high = 1.0}\n', "need 0 < low < high"),
+    ('analysis = "onset"\n[grid]\nmstar = [1.0, 2.0, 1.0]\n', "grid.mstar repeats 1"),
+    ('analysis = "onset"\n[grid]\nmstar = {start = 1.0, stop = 1.0, num = 2}\n', "grid.mstar repeats 1"),
 ])
 def test_bad_study_files_are_refused_before_any_work(tmp_path, capsys, text, message):
     assert main(["study", str(_write(tmp_path, text)), "--json"]) == 2

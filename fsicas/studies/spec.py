@@ -192,6 +192,10 @@ def _grid(grid: dict, convert, label: str) -> list[dict]:
             axes[name] = [convert(name, v, where) for v in spec]
         else:
             raise ValueError(f"{where} must be a non-empty list or a {{start, stop, num}} table")
+        repeated = sorted({v for v in axes[name] if axes[name].count(v) > 1})
+        if repeated:
+            raise ValueError(f"{where} repeats {', '.join(f'{v:g}' for v in repeated)}: "
+                             "give each value once (each point would be computed again)")
     return [dict(zip(axes, combo)) for combo in itertools.product(*axes.values())]
 
 
