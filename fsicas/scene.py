@@ -28,6 +28,9 @@ def default_quad_nodes(n_modes: int) -> int:
 #: (the paper works at N = 40 and M* in [0.01, 100]): beyond them a run would take hours
 #: or run out of memory, or fail later with a misleading message.
 MAX_MODES, MAX_QUAD_NODES, MAX_MSTAR, MAX_ABS_USTAR = 200, 2000, 1e6, 1e4
+#: The largest modal damping ratio (100 times critical damping; beyond it the damping
+#: force overflows rather than describing a structure).
+MAX_ZETA = 100.0
 
 #: Beam theories of :class:`Scene`; e/L beyond MAX_SLENDERNESS is outside 1D beam theory.
 EULER_BERNOULLI, TIMOSHENKO = "euler-bernoulli", "timoshenko"
@@ -242,7 +245,8 @@ def _validate_zeta(s: Scene) -> None:
     zeta = np.atleast_1d(np.asarray(s.zeta, dtype=float))
     require(zeta.size in (1, s.modes), f"zeta must be a scalar or have one value per mode "
              f"({s.modes}), got {zeta.size} values")
-    require(bool(np.all(zeta >= 0)), "zeta must be >= 0")
+    require(bool(np.all((zeta >= 0) & (zeta <= MAX_ZETA))),
+            f"zeta must lie in [0, {MAX_ZETA:g}] (1 is critical damping), got {s.zeta}")
 
 
 def _validate_beam(s: Scene) -> None:

@@ -21,7 +21,7 @@ SCENE_CASES = {
     "--friction": ["-0.1", "nan", "inf", "abc"],
     "--k0": ["-1", "nan", "abc"],
     "--kl": ["-1", "nan", "abc"],
-    "--zeta": ["-0.01", "nan", "inf", "abc"],
+    "--zeta": ["-0.01", "nan", "inf", "abc", "1e308"],
     "--modes": ["0", "-3", "2.5", "1000", "99999999999999999999", "abc"],
     "--quad-nodes": ["5", "100000", "2.5", "-1", "abc"],
     "--contact-stiffness": ["0", "-1e6", "nan", "abc"],
