@@ -127,6 +127,24 @@ def test_closing_gap_is_a_reported_failure_not_nan(damped_scene_u7, capfd):
     assert np.all(np.isfinite(traj.x)) and traj.t[-1] < 3.0
     printed = capfd.readouterr()
     assert printed.out == "" and printed.err == ""
+    # the last state was inside the layer: the law did not stop the beam there
+    assert gaps(model, traj.x[-1:]).min() < scene.contact_gap
+    assert "did not stop the beam within the contact layer" in traj.message
+
+
+def test_a_step_across_the_whole_contact_layer_is_told_apart(damped_scene_u7):
+    """A gap that closes from outside the contact layer (one step crossed it) is not
+    blamed on the stiffness."""
+    from fsicas.timedomain.failures import closing
+    scene = damped_scene_u7.replace(contact=True, contact_stiffness=1e8, contact_eps=1e-3)
+    model = build_model(scene)
+    x = steady_state(scene, model).x.copy()
+    n, eps = model.n_modes, scene.contact_gap
+    for gap, words in ((3 * eps, "crossed the whole layer"), (0.5 * eps, "did not stop the beam")):
+        bent = x.copy()
+        bent[n] += (scene.hstar / 2 - gap) / model.tip.phi[0, 1]
+        assert gaps(model, bent[None]).min() == pytest.approx(gap, rel=1e-6)
+        assert words in closing(model, bent)
 
 
 def test_explicit_jacobian_through_the_mass_action_equals_ad_through_m(damped_scene_u7):

@@ -41,6 +41,7 @@ from tqdm import tqdm
 from ..checks import finite_number, require
 from .limits import check_size
 from .breathing import PressureSchedule
+from .failures import first_bad, solver_message
 from .rhs import compiled_route
 from ..model.assembly import Model
 from ..model.contact import GAP_POINTS, gaps
@@ -295,12 +296,13 @@ def _loop(model, steady, schedule, integrator, x0, n_chunks, monitor, bar) -> Tr
         try:
             X, nsteps = integrator.run(x, pe)
         except RuntimeError as err:
-            status, message = "failed", _solver_message(err, k * span)
             t_good, x_good = _recover(model, integrator, x, pe, k * span)
+            last = x_good[-1] if len(x_good) else x
+            status, message = "failed", solver_message(err, k * span, model, last)
             ts.append(t_good), xs.append(x_good)
             break
         steps += nsteps
-        bad = _first_bad(model, X.T)
+        bad = first_bad(model, X.T)
         if bad is not None:
             status, message = "failed", bad[1]
             ts.append(k * span + np.linspace(0.0, span, n_out + 1)[1:bad[0] + 1])
@@ -365,7 +367,7 @@ def _runs(model, integrator, x, pe, t0, count):
             X, _ = integrator.run(x, np.concatenate([pe[:-1], [start]]))
         except RuntimeError:
             break
-        if _first_bad(model, X.T) is not None:
+        if first_bad(model, X.T) is not None:
             break
         x = X[:, -1]
         ts.append(start + grid), xs.append(X.T)
@@ -374,27 +376,3 @@ def _runs(model, integrator, x, pe, t0, count):
 
 def _u_abs_u(u):
     return u * np.abs(u)
-
-
-def _solver_message(err: Exception, t0: float) -> str:
-    text = str(err).strip().splitlines()
-    if any("RHSFUNC_FAIL" in line or "RES_FAIL" in line for line in text):
-        return (f"a gap closed (h_c <= 0) in the chunk starting at t = {t0:.6g}: the flow model is "
-                "singular there; with contact on the impact load did not stop the beam "
-                "(raise contact_stiffness or contact_eps)")
-    key = [line for line in text if "CV_" in line or "IDA_" in line or "solve_ivp" in line]
-    return f"integrator failed in the chunk starting at t = {t0:.6g}: " + (key[-1] if key else text[-1] if text else repr(err))
-
-
-def _first_bad(model, X) -> tuple[int, str] | None:
-    """(index of the first bad sample, message) if a sample is not finite or a gap closed."""
-    finite = np.all(np.isfinite(X), axis=1)
-    if not finite.all():
-        k = int(np.argmin(finite))
-        return k, f"non-finite state at output sample {k} of the chunk"
-    h = gaps(model, X)
-    if h.min() <= 0:
-        k = int(np.argmax(h.min(axis=(1, 2)) <= 0))
-        return k, (f"a gap closed (h_c = {h.min():.3g} <= 0) at output sample {k} of the chunk: the "
-                "flow model is singular there; with contact on, raise contact_stiffness or eps")
-    return None

@@ -1,0 +1,55 @@
+"""Why a time integration failed, in words: a solver error or a bad sample (not finite,
+or a gap that closed), and for a gap that closed with the contact law on, how: one step
+across the whole contact layer (no stiffness acts in time) or a law too soft to stop
+the beam inside it."""
+from __future__ import annotations
+
+import numpy as np
+
+from ..model.contact import gaps
+
+__all__ = ["solver_message", "first_bad", "closing"]
+
+
+def solver_message(err: Exception, t0: float, model, x_last) -> str:
+    """Why the solver failed, in words; a failed right-hand side is a gap that closed,
+    and :func:`closing` says how (``x_last``: the last good state)."""
+    text = str(err).strip().splitlines()
+    if any("RHSFUNC_FAIL" in line or "RES_FAIL" in line for line in text):
+        return (f"a gap closed (h_c <= 0) in the chunk starting at t = {t0:.6g}: the flow model is "
+                f"singular there; {closing(model, x_last)}")
+    key = [line for line in text if "CV_" in line or "IDA_" in line or "solve_ivp" in line]
+    return f"integrator failed in the chunk starting at t = {t0:.6g}: " + (key[-1] if key else text[-1] if text else repr(err))
+
+
+def first_bad(model, X) -> tuple[int, str] | None:
+    """(index of the first bad sample, message) if a sample is not finite or a gap closed."""
+    finite = np.all(np.isfinite(X), axis=1)
+    if not finite.all():
+        k = int(np.argmin(finite))
+        return k, f"non-finite state at output sample {k} of the chunk"
+    h = gaps(model, X)
+    if h.min() <= 0:
+        k = int(np.argmax(h.min(axis=(1, 2)) <= 0))
+        last = X[k - 1] if k > 0 else None
+        return k, (f"a gap closed (h_c = {h.min():.3g} <= 0) at output sample {k} of the chunk: the "
+                   f"flow model is singular there; {closing(model, last)}")
+    return None
+
+
+def closing(model, x_last) -> str:
+    """How the gap closed, from the last good state: with the contact law on, either one
+    step crossed the whole contact layer (the last gap was wider than eps, so no
+    stiffness acts in time: the layer must be thicker or the steps shorter) or the law
+    did not stop the beam inside it (a stiffer law or a thicker layer)."""
+    if model.contact_weights is None:
+        return "the beam reached the wall (turn the contact law on to hold it)"
+    eps = model.scene.contact_gap
+    if x_last is not None and gaps(model, np.atleast_2d(x_last)).min() > eps:
+        gap = gaps(model, np.atleast_2d(x_last)).min()
+        return (f"the last state before it was {gap / eps:.3g} eps from the wall, outside the "
+                f"contact layer (eps = {eps:.3g}): one step crossed the whole layer, where no "
+                "contact stiffness can act; make the layer thicker (contact_eps; a tighter "
+                "rtol also shortens the steps)")
+    return ("the impact load did not stop the beam within the contact layer (raise "
+            "contact_stiffness or contact_eps)")
