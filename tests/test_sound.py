@@ -148,3 +148,23 @@ def test_bad_inputs_are_refused(capsys, argv, option):
     assert main([*argv, "--json"]) == 2
     error = json.loads(capsys.readouterr().out)["error"]
     assert option in error
+
+
+def test_the_default_run_is_long_enough_for_the_sound_asked(capsys, monkeypatch):
+    """Without --t-end the run settles for 20 T, or covers --duration after 10 T of start-up
+    when the sound is longer (the harvester's T is 0.047 s: 2 s are 42 T)."""
+    import fsicas.cli.sound as sound_cli
+    asked = {}
+
+    def stop(scene, t_end, **kwargs):
+        asked["T"], asked["t_end"] = scene.scales.time, t_end
+        raise ValueError("stopped by the test")
+    monkeypatch.setattr(sound_cli, "run_case", stop)
+    for preset, extra in (("harvester", []), ("soft_palate", []), ("harvester", ["--t-end", "30"])):
+        assert main(["sound", "--physical", preset, *extra, "--json"]) == 2
+        capsys.readouterr()
+        heard = 2.0 / asked["T"]
+        expected = 30.0 if extra else max(20.0, heard + 10.0)
+        assert asked["t_end"] == pytest.approx(expected, rel=1e-12)
+        if preset == "harvester" and not extra:
+            assert heard > 20 and asked["t_end"] > heard

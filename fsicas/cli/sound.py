@@ -23,6 +23,9 @@ __all__ = ["add_sound_command"]
 
 #: The contact law of ``sound`` when none is given: the wall holds the palate's impacts.
 SOUND_STIFFNESS, SOUND_EPS = 1e8, 0.1
+#: The default integration time to settle a cycle, and the start-up kept before the
+#: sound of an unsettled run (units of T; :func:`_t_end`).
+SETTLE_T_END, LEAD_T = 20.0, 10.0
 
 #: Units of the fields of the JSON (its meta.units).
 SOUND_UNITS = {"fundamental_hz": "Hz", "dominant_hz": "Hz", "spl_db": "dB SPL re 20 uPa (RMS)",
@@ -45,8 +48,9 @@ def add_sound_command(sub) -> None:
     p.add_argument("--breath", action="store_true", help="one breath from rest: the flow "
                    "rises from 0 to --flow and back (|sin|) over --duration; onset and offset "
                    "heard")
-    p.add_argument("--t-end", type=float, default=20.0, help="integration time to settle a "
-                   "cycle (units of T; not with --breath)")
+    p.add_argument("--t-end", type=float, default=None, help="integration time (units of T; "
+                   f"not with --breath; default: {SETTLE_T_END:g}, or --duration plus "
+                   f"{LEAD_T:g} T when the sound is longer)")
     p.add_argument("--dt-out", type=float, default=2e-4, help="output step (units of T)")
     p.add_argument("--rtol", type=float, default=1e-7, help="relative tolerance")
     p.set_defaults(run=_cmd_sound, human=_print_sound)
@@ -58,6 +62,8 @@ def _check(args) -> None:
                          "distance in m (e.g. --physical soft_palate)")
     for option in ("distance", "duration", "t_end", "dt_out"):
         value = getattr(args, option)
+        if value is None:
+            continue
         if not (math.isfinite(value) and value > 0):
             raise ValueError(f"--{option.replace('_', '-')} must be > 0, got {value}")
     if args.duration > 600:
@@ -77,10 +83,20 @@ def _scene(args):
     return scene
 
 
+def _t_end(args, scene) -> float:
+    """The integration time (units of T): the breath's length, ``--t-end``, or by
+    default :data:`SETTLE_T_END` to settle, longer when ``--duration`` is: an unsettled
+    run's sound is its last ``--duration``, after at least :data:`LEAD_T` of start-up."""
+    heard = args.duration / scene.scales.time
+    if args.breath:
+        return heard
+    return args.t_end if args.t_end is not None else max(SETTLE_T_END, heard + LEAD_T)
+
+
 def _cmd_sound(args) -> dict:
     _check(args)
     scene = _scene(args)
-    t_end = args.duration / scene.scales.time if args.breath else args.t_end
+    t_end = _t_end(args, scene)
     settings = Settings(rtol=args.rtol, atol=1e-10, dt_out=args.dt_out)
     record(args, scene, integrator=settings, t_end=t_end)
     say = reporter(args)
