@@ -5,8 +5,9 @@ Every finished point is appended at once to a results file (JSON lines,
 header that must match, with a digest of all the points), keyed by its index; a rerun
 computes only the points that are not there, so a study killed at any moment (SIGKILL
 included) resumes without losing, repeating or mixing rows. The table (``.csv`` or ``.parquet``) is written from
-the results file at the end, one row per point in the study's order, its first line (CSV:
-a ``#`` comment; Parquet: the schema metadata) the study's header.
+the results file at the end, one row per point in the study's order: a plain CSV that
+any reader loads (the study's header is the results file's first line), or Parquet with
+the header in its schema metadata too.
 """
 from __future__ import annotations
 
@@ -56,8 +57,8 @@ def _is_table(path: Path) -> bool:
     if not path.is_file():
         return False
     with open(path, "rb") as fh:
-        head = fh.read(4)
-    return head in (b"", b"PAR1") or head.startswith(b"# {")
+        head = fh.read(6)
+    return head in (b"", b"PAR1") or head.startswith((b"index", b"# {"))   # (older tables: "# {")
 
 
 def run_study(study: Study, table, *, workers: int | None = None,
@@ -93,7 +94,8 @@ def _quiet(progress: bool | None):
 
 def write_table(rows: list[dict], table: Path, header: dict) -> None:
     """``rows`` as one tidy table (columns: the union of the rows' keys, in first-seen
-    order), CSV with a ``#`` header line, or Parquet with the header in its metadata."""
+    order, ``index`` first): a plain CSV (the header is the first record of the results
+    file beside it), or Parquet with the header in its metadata too."""
     columns = list(dict.fromkeys(k for row in rows for k in row))
     text = json.dumps(header, sort_keys=True)
     if table.suffix == ".parquet":
@@ -102,7 +104,6 @@ def write_table(rows: list[dict], table: Path, header: dict) -> None:
         pq.write_table(pa.table(data).replace_schema_metadata({"fsicas_study": text}), table)
         return
     with open(table, "w", newline="") as fh:
-        fh.write(f"# {text}\n")
         writer = csv.DictWriter(fh, fieldnames=columns, restval="", extrasaction="ignore")
         writer.writeheader()
         for row in rows:
