@@ -121,8 +121,11 @@ def test_seeds_one_per_piece_of_the_boundary():
 def test_cli_grazing(capsys, tmp_path):
     from fsicas.cli import main
     code = main(["grazing", "--mstar", "0.95:1.05:3", "--seeds", "1", "--max-points", "3",
-                 "--json", "-q", "--plot", str(tmp_path / "curves.png")])
-    out = json.loads(capsys.readouterr().out)
+                 "--json", "--plot", str(tmp_path / "curves.png")])
+    printed = capsys.readouterr()
+    out = json.loads(printed.out)
+    # a log (stderr not a terminal) is told of each finished seed by default
+    assert "fsicas grazing [" in printed.err and "seed 1/1, the cycle branch at M* = 1:" in printed.err
     assert code == 0 and set(out) >= {"grazing", "fold", "hopf", "seeds", "meta"}
     assert any(p["mstar"] == pytest.approx(1.0) for p in out["grazing"])
     assert all(p["gap_ratio"] == pytest.approx(1.0, abs=1e-8) for p in out["grazing"])

@@ -68,9 +68,11 @@ def _cmd_grazing(args) -> dict:
     boundary = stability_boundary(scene, mstars, model)
     seeds = curve_seeds([s.mstar for s in boundary.switches], settings.mstar_min,
                         settings.mstar_max) if seeds is None else list(seeds)
-    say.stage(f"grazing and fold curves from {len(seeds)} cycle branches (N = {scene.modes})")
+    say.stage(f"grazing and fold curves from {len(seeds)} cycle branches (N = {scene.modes})",
+              always=True)
     curves = cycle_curves(scene, seeds, settings=settings, cycles=cycles,
-                          ustar_max=args.ustar_max, workers=args.workers, progress=say.stage)
+                          ustar_max=args.ustar_max, workers=args.workers,
+                          progress=lambda text: say.stage(text, always=True))
     say.stats(f"{len(curves.grazing)} grazing and {len(curves.fold)} fold curves "
               f"in {curves.wall_time:.1f} s")
     out = {**curves.to_json(), "hopf": _hopf_points(boundary),

@@ -214,17 +214,20 @@ def cycle_curves(scene: Scene, seeds, *, settings: CurveSettings = CurveSettings
                  workers: int = 1, progress=None) -> CurveMap:
     """The grazing and fold curves through the cycle branches at the M* ``seeds``, the
     seeds in ``workers`` processes; a curve whose seed lies on a curve of an earlier seed
-    is the same curve and kept once. ``progress(text)`` is told of each finished seed."""
+    is the same curve and kept once. ``progress(text)`` is told of each finished seed (its
+    count, and an estimate of the time left)."""
     start = time.perf_counter()
     jobs = [(scene.replace(mstar=float(m)), settings, cycles, ustar_max) for m in seeds]
     found = {"grazing": [], "fold": []}
     failures = []
     with (local_pool(workers) if workers > 1 else nullcontext()) as pool:
         results = pool.map(_seed_curves, jobs) if pool else map(_seed_curves, jobs)
-        for mstar, (curves, failed) in zip(seeds, results):
+        for done, (mstar, (curves, failed)) in enumerate(zip(seeds, results), 1):
             if progress:
-                progress(f"cycle branch at M* = {mstar:.4g}: {len(curves['grazing'])} "
-                         f"grazing, {len(curves['fold'])} fold curves")
+                left = (time.perf_counter() - start) * (len(jobs) - done) / done
+                progress(f"seed {done}/{len(jobs)}, the cycle branch at M* = {mstar:.4g}: "
+                         f"{len(curves['grazing'])} grazing, {len(curves['fold'])} fold "
+                         f"curves" + (f"; about {left:.0f} s left" if done < len(jobs) else ""))
             failures += failed
             for kind, new in curves.items():
                 found[kind] += [c for c in new if not _traced(found[kind], c.seed)]
