@@ -335,3 +335,15 @@ def test_curves_give_each_map_point_its_expected_outcome():
     assert report["consistent"] == 5
     assert report["exceptions"] == [{"ustar": 5.0, "mstar": 1.0, "outcome": "contact",
                                      "expected": "lco"}]
+
+
+def test_the_cycle_branch_figure_says_how_the_branch_ended(tmp_path):
+    """The title tells the branch's end in words, not its status code."""
+    from fsicas.cycles import CycleSettings, cycle_branch
+    from fsicas.plots.cycles import plot_branch
+    branch = cycle_branch(Scene(mstar=1.0, zeta=0.01, modes=4), ustar_max=30.0,
+                          settings=CycleSettings(max_points=4))
+    assert branch.status == "max_points"
+    fig = plot_branch(branch, tmp_path / "branch.png")
+    assert "stopped at its point budget" in fig.get_suptitle()
+    assert "max_points" not in fig.get_suptitle()

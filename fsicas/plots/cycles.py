@@ -29,11 +29,16 @@ def plot_branch(branch, path=None):
     s = branch.scene
     zeta = f"{s.zeta:g}" if np.isscalar(s.zeta) else "per mode"
     fig.suptitle(fr"limit cycles at $M^*$ = {s.mstar:g}, $N$ = {s.modes}, $\zeta$ = {zeta}: "
-                 f"branch {branch.status}")
+                 + _ENDS[branch.status])
     handles, labels = axes[0][0].get_legend_handles_labels()
     if handles:
         fig.legend(handles, labels, loc="outside right upper")
     return finish(fig, path)
+
+
+#: How a cycle branch ended, in words (:data:`fsicas.cycles.collocation.CycleStatus`).
+_ENDS = {"contact": "up to the first wall contact", "bound": "up to the U* bound",
+         "max_points": "stopped at its point budget", "failed": "stopped by a solver failure"}
 
 
 def _branch_panel(ax, branch, name: str) -> None:
