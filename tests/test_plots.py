@@ -131,6 +131,10 @@ def test_fig2_draws_each_branch_up_to_its_located_switch(boundary6):
         assert np.all(np.maximum(w[1:], w[:-1]) / np.minimum(w[1:], w[:-1]) < 1.2)
     assert "$M^*$" in left.get_xlabel() and "$U^*_c$" in left.get_ylabel()
     assert r"$\omega/\omega_1$" in mid.get_ylabel() and r"$\ell_1$" in crit.get_ylabel()
+    # l1 is not joined across a switch: one line per stretch of one branch
+    branches = [p["branch"] for p in boundary.points if p.get("l1") is not None]
+    stretches = 1 + sum(a != b for a, b in zip(branches[:-1], branches[1:]))
+    assert len(crit.lines) - 1 == stretches >= len(switches) + 1      # less the zero line
     assert all("nondim" in ax.get_ylabel() for ax in (left, mid, crit))
     legend = [t.get_text() for t in fig.legends[0].get_texts()]
     assert {"mode 2", "mode 3", "mode 4", "mode 5"} <= set(legend)

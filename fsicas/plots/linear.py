@@ -12,6 +12,8 @@ shapes Fig. 3 shows.
 """
 from __future__ import annotations
 
+import itertools
+
 import math
 from collections import Counter
 from dataclasses import dataclass, field
@@ -258,11 +260,14 @@ def _onset_panels(left, mid, boundary: StabilityBoundary, lines: list[BranchLine
 
 
 def _criticality_panel(ax, pts: list) -> None:
-    """The first Lyapunov coefficient l1 along the boundary (symlog)."""
+    """The first Lyapunov coefficient l1 along the boundary (symlog), one line per
+    stretch of one branch (l1 jumps where the boundary switches branch: not joined)."""
     with_l1 = [p for p in pts if p.get("l1") is not None]
-    if with_l1:
-        ax.plot([p["mstar"] for p in with_l1], [p["l1"] for p in with_l1], ".-", color="k",
+    for _, stretch in itertools.groupby(with_l1, key=lambda p: p.get("branch")):
+        stretch = list(stretch)
+        ax.plot([p["mstar"] for p in stretch], [p["l1"] for p in stretch], ".-", color="k",
                 lw=0.8, ms=3)
+    if with_l1:
         ax.set_yscale("symlog", linthresh=1e-3)
         ax.axhline(0.0, color="0.5", lw=0.6)
     ax.set(xscale="log", xlabel=MSTAR, ylabel=fr"first Lyapunov coeff. $\ell_1$ {NONDIM}",
