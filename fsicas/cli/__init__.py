@@ -29,7 +29,6 @@ import time
 import warnings
 
 import casadi
-import numpy as np
 
 from .. import __version__, strict_json
 from ..linear.hopf import CriticalVelocityError
@@ -38,6 +37,7 @@ from ..plots.backend import select_file_backend
 from .curves import add_curve_command
 from .cycles import add_cycle_commands
 from .design import add_design_command
+from .human import print_report
 from .linear import add_linear_commands
 from .meta import cli_meta
 from .onset import add_onset_command
@@ -87,16 +87,6 @@ def _add_global_options(parser: argparse.ArgumentParser, default=False) -> None:
                        help="no progress bars and no stage lines on stderr")
     group.add_argument("--verbose", "-v", action="store_true", default=default,
                        help="stage lines of every command and solver statistics on stderr")
-
-
-def _print_human(result: dict, prefix: str = "") -> None:
-    for key, value in result.items():
-        if isinstance(value, dict) and (prefix or key == "physical"):
-            _print_human(value, f"{prefix}{key}.")   # physical units: one line a field
-            continue
-        if isinstance(value, list) and value and isinstance(value[0], float):
-            value = np.array2string(np.array(value), precision=6, max_line_width=100)
-        print(f"{prefix + key:>16}: {value}")
 
 
 def _writes_figures(args: argparse.Namespace) -> bool:
@@ -186,7 +176,7 @@ def _main(argv) -> int:
     if args.json:
         print(strict_json.dumps(result))
     else:
-        (getattr(args, "human", None) or _print_human)(result)
+        (getattr(args, "human", None) or print_report)(result)
         print(f"{'wall time':>16}: {time.perf_counter() - start:.3f} s")
     return EXIT_FAILED_RESULT if failed(result) else EXIT_OK
 
