@@ -4,13 +4,14 @@ Each row is one :func:`fsicas.timedomain.impacting_run.impacting_run` with the m
 settings (M* = 1, ζ = 0.01, H* = 1/10, k* = 1e8, eps/H = 1e-2, t_end = 4 without an early
 stop, settled to 2e-2, the quadrature controlled to its default) at U* and N modes.
 Printed per run: outcome and status, period (the mean return time when not periodic),
-peak impact force / F0, impacts per cycle, the least gap over the measured cycles / eps
+tip amplitude (units of L), peak impact force / F0, impacts per cycle, the least gap over the measured cycles / eps
 (the impact load's exact rule, :func:`fsicas.model.patch.penetration`), mean flow-rate
 reduction, convergence (how closely the last 4 cycles agree), the run's quadrature error
 estimate and nodes, and wall time. Then, per U*, the relative differences of period and
 peak force between successive N.
 
     python3 benchmarks/bench_impacting_truncation.py [--ustar 7 8.5 10] [--modes 10 20 40] [--jsonl rows.jsonl]
+    python3 benchmarks/bench_impacting_truncation.py --table rows.jsonl   # the saved rows
 
 One run per (U*, N), in this process, one after another (N = 40 takes minutes).
 """
@@ -43,7 +44,7 @@ def measure(ustar: float, modes: int) -> dict:
     seconds = time.perf_counter() - start
     j = run.to_json()
     return {"ustar": ustar, "modes": modes, "outcome": j["outcome"], "status": run.status,
-            "period": j["period"], "peak_force": j["max_impact_force"],
+            "period": j["period"], "amplitude": j["tip_amplitude"], "peak_force": j["max_impact_force"],
             "impacts": j["impacts_per_cycle"], "min_gap": min_gap_ratio(run),
             "flow": j["mean_flow_reduction"], "convergence": j["convergence"],
             "quadrature_error": j["quadrature_error"], "nodes": j["quadrature_nodes"],
@@ -57,22 +58,30 @@ def _g(value, fmt: str) -> str:
 
 def print_row(r: dict) -> None:
     print(f"| {r['ustar']:g} | {r['modes']} | {r['outcome']} | {r['status']} | "
-          f"{_g(r['period'], '.6f')} | {_g(r['peak_force'], ',.0f')} | {_g(r['impacts'], 'g')} | "
+          f"{_g(r['period'], '.6f')} | {_g(r.get('amplitude'), '.5f')} | {_g(r['peak_force'], ',.0f')} | {_g(r['impacts'], 'g')} | "
           f"{_g(r['min_gap'], '.3f')} | {_g(r['flow'], '.4f')} | {_g(r['convergence'], '.2g')} | "
           f"{r['quadrature_error']:.1e} ({r['nodes']}) | {r['t_reached']:.3f} | "
           f"{r['seconds']:.0f} |", flush=True)
 
 
 def print_differences(rows: list[dict]) -> None:
-    """Per U*, |X_a - X_b| / |X_b| of period and peak force for successive N (a < b)."""
-    print("\n| U* | N vs N' | period | peak force |")
-    print("| --- | --- | --- | --- |")
+    """Per U*, |X_a - X_b| / |X_b| of period, peak force and flow reduction for
+    successive N (a < b)."""
+    print("\n| U* | N vs N' | period | peak force | flow reduction |")
+    print("| --- | --- | --- | --- | --- |")
     for ustar in dict.fromkeys(r["ustar"] for r in rows):
         same = sorted((r for r in rows if r["ustar"] == ustar), key=lambda r: r["modes"])
         for a, b in zip(same, same[1:]):
-            cells = [_g(abs(a[k] / b[k] - 1), ".1e") if a[k] and b[k] else "-"
-                     for k in ("period", "peak_force")]
-            print(f"| {ustar:g} | {a['modes']} vs {b['modes']} | {cells[0]} | {cells[1]} |")
+            cells = [_g(abs(a[k] - b[k]) / abs(b[k]), ".1e") if a[k] and b[k] else "-"
+                     for k in ("period", "peak_force", "flow")]
+            print(f"| {ustar:g} | {a['modes']} vs {b['modes']} | {' | '.join(cells)} |")
+
+
+def print_header() -> None:
+    print("| U* | N | outcome | status | period | tip amplitude | peak force / F0 | impacts "
+          "per cycle | min gap / eps | flow reduction | convergence | quadrature error "
+          "(nodes) | t reached | time [s] |")
+    print("|" + " --- |" * 14)
 
 
 def main(argv=None) -> None:
@@ -80,11 +89,16 @@ def main(argv=None) -> None:
     parser.add_argument("--ustar", type=float, nargs="+", default=[7.0, 8.5, 10.0])
     parser.add_argument("--modes", type=int, nargs="+", default=[10, 20, 40])
     parser.add_argument("--jsonl", default=None, help="also append each row to this file")
+    parser.add_argument("--table", default=None, metavar="JSONL",
+                        help="print the table of the rows saved in this file, run nothing")
     args = parser.parse_args(argv)
-    print("| U* | N | outcome | status | period | peak force / F0 | impacts per cycle | "
-          "min gap / eps | flow reduction | convergence | quadrature error (nodes) | "
-          "t reached | time [s] |")
-    print("| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |")
+    print_header()
+    if args.table:
+        with open(args.table) as f:
+            rows = sorted((json.loads(line) for line in f), key=lambda r: (r["ustar"], r["modes"]))
+        for r in rows:
+            print_row(r)
+        return print_differences(rows)
     rows = []
     for ustar in args.ustar:
         for modes in args.modes:
