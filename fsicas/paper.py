@@ -163,7 +163,8 @@ def _cycle_job(args):
 
 def _cycle_jobs(out: Path, quick: bool) -> tuple[list, list]:
     """The runs of Figs. 6-9, ``(ustar, modes, contact, t_end, plot)``: those reported
-    and, for the first of them, the same with half the modes (their truncation)."""
+    and, for each with the law that holds, the same with half the modes (its truncation
+    estimate; the paper's law, whose gap closes, has none)."""
     if quick:
         shown = [(8.5, 6, HOLDING_CONTACT, 0.6, out / "fig6_9_U8.5.png")]
     else:
