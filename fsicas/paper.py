@@ -7,7 +7,8 @@ criticality, the impact map's counts and the impacting cycles), ``fig2_boundary.
 ``fig3_modes.png``, ``fig4_impact_map.png`` (with its resumable ``fig4_map.jsonl``; unless
 ``quick``, over the grazing and fold-of-cycles curves, ``fig4_curves.json``, and the
 report counts the map points the curves explain),
-``fig6_9_U7.png``, ``fig6_9_U8.5.png``, ``fig6_9_U10.png`` (impacting cycles at N = 10,
+``fig6_9_U7.png``, ``fig6_9_U8.5.png``, ``fig6_9_U10.png`` (impacting cycles at
+N = :data:`CYCLE_MODES`, each with its truncation estimate against N/2 modes,
 zeta = 0.01, with the contact law that holds, k* = 1e8, eps/H = 1e-2; the paper's
 k* = 1e6, eps/H = 1e-3 is run too and reported: its gap closes, docs/simulate.md),
 ``fig6_9_cycles.png`` (the three cycles side by side, as the paper shows them) and,
@@ -35,9 +36,11 @@ from .plots.linear import (boundary_function, plot_boundary, plot_boundary_varia
 from .plots.timedomain import cycle_view, plot_cycle, plot_cycles, plot_map, return_period
 from .scene import Scene
 from .timedomain.impact_map import MAP_SCENE, impact_map
-from .timedomain.impacting_run import HOLDING_CONTACT, PAPER_CONTACT, impacting_run
+from .timedomain.impacting_run import (HOLDING_CONTACT, PAPER_CONTACT, impacting_run,
+                                       with_truncation)
 
-__all__ = ["PAPER_SCENE", "VARIANTS", "CYCLE_USTARS", "REPORT_FIELDS", "impacting_cycle",
+__all__ = ["PAPER_SCENE", "VARIANTS", "CYCLE_USTARS", "CYCLE_MODES", "REPORT_FIELDS",
+           "impacting_cycle",
            "run_paper", "summary", "consistency"]
 
 PAPER_SCENE = Scene(mstar=1.0, ustar=5.0, hstar=0.1, friction=0.14, k0=0.0, kl=1.0,
@@ -45,6 +48,10 @@ PAPER_SCENE = Scene(mstar=1.0, ustar=5.0, hstar=0.1, friction=0.14, k0=0.0, kl=1
 VARIANTS = {"zeta = 0.01": dict(zeta=0.01), "H* = 1/20": dict(hstar=0.05),
             "H* = 1/5": dict(hstar=0.2)}
 CYCLE_USTARS = (7.0, 8.5, 10.0)
+#: The modes of Figs. 6-9; each cycle's truncation is estimated against half as many
+#: (docs/simulate.md: at U* = 7 the period moves 3.4e-3 from N = 10 to 20, 3.4e-4 from
+#: 20 to 40).
+CYCLE_MODES = 20
 
 
 #: What the report's quantities are, and their units (nondimensional, docs/model.md).
@@ -65,7 +72,10 @@ REPORT_FIELDS = {
                         "to its convergence; impacting_nonperiodic: one that does not, measured "
                         "over its last cycles), period (units of T; the mean return time when "
                         "not periodic), tip amplitude (units of L), impacts per cycle, peak "
-                        "impact force, mean flow-rate reduction",
+                        "impact force, mean flow-rate reduction; truncation_error: per measure "
+                        "|X_N - X_N'| / |X_N| against the same run with truncation_modes "
+                        "N' = N/2 modes (a bound where X converges in N; the peak force and "
+                        "impacts per cycle do not), warned above truncation_tol",
     "wall_time": "seconds",
 }
 
@@ -121,13 +131,19 @@ def _variants(scene, mstars, reference, path):
              for label, b in curves.items()}, curves["zeta = 0.01"])
 
 
-def impacting_cycle(ustar: float, modes: int = 10, contact: dict = HOLDING_CONTACT,
-                    t_end: float = 4.0, plot=None, tol: float = 2e-2) -> dict:
+def impacting_cycle(ustar: float, modes: int = CYCLE_MODES, contact: dict = HOLDING_CONTACT,
+                    t_end: float = 4.0, plot=None, tol: float = 2e-2,
+                    truncation: bool = True) -> dict:
     """One of the paper's impacting points (1a-c), run by
     :func:`fsicas.timedomain.impacting_run.impacting_run`; returns the run's JSON (plus U*,
     N, the contact law). ``plot``: the Figs. 6-9 panels of the last settled cycle, or of
-    the last tip return of a run that hit the wall without settling."""
-    return _impacting_cycle(ustar, modes, contact, t_end, plot, tol)[0]
+    the last tip return of a run that hit the wall without settling. ``truncation``: with
+    its modal truncation estimate against the same run with ``modes // 2`` modes
+    (:func:`fsicas.timedomain.impacting_run.with_truncation`)."""
+    cycle = _impacting_cycle(ustar, modes, contact, t_end, plot, tol)[0]
+    if not truncation:
+        return cycle
+    return with_truncation(cycle, _impacting_cycle(ustar, modes // 2, contact, t_end, None, tol)[0])
 
 
 def _impacting_cycle(ustar, modes, contact, t_end, plot=None, tol=2e-2):
@@ -145,28 +161,46 @@ def _cycle_job(args):
     return _impacting_cycle(*args)
 
 
+def _cycle_jobs(out: Path, quick: bool) -> tuple[list, list]:
+    """The runs of Figs. 6-9, ``(ustar, modes, contact, t_end, plot)``: those reported
+    and, for each with the law that holds, the same with half the modes (its truncation
+    estimate; the paper's law, whose gap closes, has none)."""
+    if quick:
+        shown = [(8.5, 6, HOLDING_CONTACT, 0.6, out / "fig6_9_U8.5.png")]
+    else:
+        shown = [(u, CYCLE_MODES, HOLDING_CONTACT, 4.0, out / f"fig6_9_U{u:g}.png")
+                 for u in CYCLE_USTARS]
+    coarser = [(u, n // 2, law, t, None) for u, n, law, t, _ in shown]
+    if not quick:
+        shown.append((8.5, CYCLE_MODES, PAPER_CONTACT, 1.0, None))
+    return shown, coarser
+
+
 def _time_domain(out: Path, quick: bool, say, linear=None) -> dict:
     """Fig. 4 (the impact map, N = 10, over ``linear``, a dense boundary of its scene if
-    given) and Figs. 6-9 (impacting cycles, N = 10, each and side by side)."""
+    given) and Figs. 6-9 (impacting cycles, N = :data:`CYCLE_MODES` with their
+    truncation against N/2, each and side by side)."""
     if quick:
         ustars, mstars, t_map = np.array([4.0, 9.0]), np.array([1.0]), 5.0
-        jobs = [(8.5, 6, HOLDING_CONTACT, 0.6, out / "fig6_9_U8.5.png")]
     else:
         ustars, mstars, t_map = np.linspace(2, 16, 15), np.geomspace(0.1, 10, 7), 30.0
-        jobs = [(u, 10, HOLDING_CONTACT, 4.0, out / f"fig6_9_U{u:g}.png") for u in CYCLE_USTARS]
-        jobs.append((8.5, 10, PAPER_CONTACT, 1.0, None))
     say(f"Fig. 4: the impact map, {ustars.size * mstars.size} time integrations")
     result = impact_map(ustars, mstars, out / "fig4_map.jsonl", t_end=t_map, workers=2)
     curves = None if quick or linear is None else _fig4_curves(linear, mstars, ustars, say)
     plot_map(result, out / "fig4_impact_map.png", linear=linear, curves=curves,
              cases=[] if quick else [(f"1{c}", u, 1.0) for c, u in zip("abc", CYCLE_USTARS)])
-    say(f"Figs. 6-9: {len(jobs)} impacting cycles (N = 10)")
+    jobs, coarser = _cycle_jobs(out, quick)
+    say(f"Figs. 6-9: {len(jobs)} impacting cycles (N = {jobs[0][1]}) and {len(coarser)} "
+        f"with N = {coarser[0][1]} (their truncation)")
     with ProcessPoolExecutor(max_workers=2) as pool:
-        done = list(pool.map(_cycle_job, jobs))
+        done = list(pool.map(_cycle_job, jobs + coarser))
     views = [view for (_, view), job in zip(done, jobs) if job[4] is not None and view is not None]
     if views:
         plot_cycles(views, out / "fig6_9_cycles.png")
-    report = {"impact_map": result.to_json(), "impacting_cycles": [c for c, _ in done]}
+    cycles = [c for c, _ in done[:len(jobs)]]
+    for i, (rough, _) in enumerate(done[len(jobs):]):
+        cycles[i] = with_truncation(cycles[i], rough)
+    report = {"impact_map": result.to_json(), "impacting_cycles": cycles}
     if curves is not None:
         (out / "fig4_curves.json").write_text(json.dumps(curves.to_json(), indent=1))
         report["fig4_curves"] = consistency(result, curves, boundary_function(linear))
@@ -215,7 +249,8 @@ def summary(report: dict) -> dict:
         out["map against the curves"] = (f"{c['consistent']} consistent, "
                                          f"{len(c['exceptions'])} exceptions")
     for c in report.get("impacting_cycles", []):
-        key = f"U* = {c['ustar']:g}, k* = {c['contact_stiffness']:g}, eps/H = {c['contact_eps']:g}"
+        key = (f"U* = {c['ustar']:g}, N = {c['modes']}, k* = {c['contact_stiffness']:g}, "
+               f"eps/H = {c['contact_eps']:g}")
         out[key] = _cycle_summary(c)
     return out
 
@@ -225,5 +260,11 @@ def _cycle_summary(c: dict) -> str:
     if c["period"] is None:
         return f"{c['outcome']} ({c['status']}) {c['message'][:60]}"
     period = "mean return time" if c["outcome"] == "impacting_nonperiodic" else "period"
-    return (f"{c['outcome']} (convergence {c['convergence']:.3g}): {period} {c['period']:.5f}, "
-            f"{c['impacts_per_cycle']:g} impacts/cycle, flow -{100 * c['mean_flow_reduction']:.1f} %")
+    text = (f"{c['outcome']} ({c['status']}, convergence {c['convergence']:.3g}): {period} "
+            f"{c['period']:.5f}, {c['impacts_per_cycle']:g} impacts/cycle, peak force "
+            f"{c['max_impact_force']:.4g} F0, flow -{100 * c['mean_flow_reduction']:.1f} %")
+    if "truncation_error" in c:
+        errors = ", ".join(f"{k} {'-' if e is None else f'{e:.1g}'}"
+                           for k, e in c["truncation_error"].items())
+        text += f"; against N = {c['truncation_modes']}: {errors}"
+    return text

@@ -76,6 +76,10 @@ def test_paper_quick_writes_report(tmp_path, capsys):
     assert outcomes == {4.0: "decay", 9.0: "contact"}
     assert (tmp_path / "fig4_impact_map.png").exists()
     assert [c["contact"] for c in out["impacting_cycles"]] == [True]
+    (cycle,) = out["impacting_cycles"]       # with its truncation against half the modes
+    from fsicas.timedomain.impacting_run import TRUNCATION_MEASURES
+    assert cycle["truncation_modes"] == 3 and set(cycle["truncation_error"]) == \
+        set(TRUNCATION_MEASURES)
     # the terminal summary repeats the report's numbers
     from fsicas.paper import summary
     short = summary(out)

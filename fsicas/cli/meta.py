@@ -73,8 +73,8 @@ UNITS = {
     "paper": {"omega_invacuo": _RATE, "steady": f"pressure_drop, closed_form {_PRESSURE}; "
               f"Q {_FLOW}", "boundary": "as fsicas boundary: omega " + _RATE,
               "variants": "ustar_crit, freq_ratio " + _RATIO, "impact_map": "counts",
-              "impacting_cycles": f"period {_TIME}; tip_amplitude {_LENGTH}; else as "
-              "fsicas simulate"},
+              "impacting_cycles": f"period {_TIME}; tip_amplitude {_LENGTH}; truncation_error "
+              f"{_RATIO} (relative change with half the modes); else as fsicas simulate"},
 }
 _COMMON = {"physical": _PHYSICAL, "warnings": _WARNINGS, "wall_time": _WALL}
 _ALIASES = {"cycles": "lco"}
