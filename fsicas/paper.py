@@ -17,14 +17,13 @@ unless ``quick``, ``boundary_variants.png`` (zeta = 0.01 and H* in {1/20, 1/5}).
 """
 from __future__ import annotations
 
-import json
 import time
 from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 
 import numpy as np
 
-from . import __version__
+from . import __version__, strict_json
 from .cycles.collocation import CycleSettings
 from .cycles.curves import CurveMap, CurveSettings, curve_seeds, cycle_curves, expected_outcomes
 from .linear.boundary import stability_boundary
@@ -114,7 +113,7 @@ def run_paper(out="results", quick: bool = False, progress=None, meta: dict | No
                                                out / "boundary_variants.png")
     report.update(_time_domain(out, quick, say, damped))
     report["wall_time"] = time.perf_counter() - start
-    (out / "report.json").write_text(json.dumps(report, indent=2))
+    (out / "report.json").write_text(strict_json.dumps(report, indent=2))
     return report
 
 
@@ -202,7 +201,7 @@ def _time_domain(out: Path, quick: bool, say, linear=None) -> dict:
         cycles[i] = with_truncation(cycles[i], rough)
     report = {"impact_map": result.to_json(), "impacting_cycles": cycles}
     if curves is not None:
-        (out / "fig4_curves.json").write_text(json.dumps(curves.to_json(), indent=1))
+        (out / "fig4_curves.json").write_text(strict_json.dumps(curves.to_json(), indent=1))
         report["fig4_curves"] = consistency(result, curves, boundary_function(linear))
     return report
 
@@ -216,7 +215,7 @@ def _fig4_curves(linear, mstars, ustars, say) -> CurveMap:
     say(f"Fig. 4: grazing and fold-of-cycles curves from {len(seeds)} cycle branches")
     return cycle_curves(MAP_SCENE, seeds, settings=settings,
                         cycles=CycleSettings(quadrature_tol=settings.quadrature_tol),
-                        ustar_max=float(ustars.max()), workers=2)
+                        ustar_max=float(ustars.max()), workers=2, progress=say)
 
 
 def consistency(result, curves: CurveMap, hopf) -> dict:
