@@ -2,7 +2,7 @@
 
 The blocks of one page run in order in one namespace (a page reads as one session), in a
 scratch folder. docs/continuation.md has its own test (tests/continuation). The pages
-in ``LONG`` take minutes (docs/cycles.md: branches through contact, 16 minutes at
+in ``LONG`` take minutes (docs/cycles.md: branches through contact, 9 minutes at
 N = 4) and run in the slow set.
 """
 from __future__ import annotations
