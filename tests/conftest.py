@@ -3,10 +3,24 @@ with ``--import-mode=importlib``, so test modules import nothing local).
 
 Each name says what the object is; derive variants with ``scene.replace(...)``.
 """
+import subprocess
+import sys
+
 import pytest
 
 from fsicas import Profile, Scene
 from fsicas.timedomain.integrators import Settings
+
+
+@pytest.fixture(scope="session")
+def run_cli():
+    """``run_cli(argv, cwd)``: the command line ``fsicas argv`` run as a subprocess
+    (``python -m fsicas.cli``, this interpreter) in the folder ``cwd``, its
+    ``CompletedProcess`` (stdout and stderr as text; 30 minutes at most)."""
+    def run(argv, cwd):
+        return subprocess.run([sys.executable, "-m", "fsicas.cli", *argv], cwd=cwd,
+                              capture_output=True, text=True, timeout=1800)
+    return run
 
 
 @pytest.fixture(scope="session")

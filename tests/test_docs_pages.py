@@ -1,10 +1,9 @@
 """Every ```python block of the user docs runs, and the numbers it asserts hold.
 
 The blocks of one page run in order in one namespace (a page reads as one session), in a
-scratch folder. docs/continuation.md has its own test (tests/continuation). The examples
-of docs/cycles.md are still fragments of one long session (names defined in later
-blocks, branches that take many minutes): they are skipped, visibly, until the page is
-rewritten as runnable steps.
+scratch folder. docs/continuation.md has its own test (tests/continuation). The pages
+in ``LONG`` take minutes (docs/cycles.md: branches through contact, 9 minutes at
+N = 4) and run in the slow set.
 """
 from __future__ import annotations
 
@@ -15,7 +14,7 @@ import pytest
 
 DOCS = pathlib.Path(__file__).parents[1] / "docs"
 OWN_TEST = ("continuation.md",)
-FRAGMENTS = ("cycles.md",)
+LONG = ("cycles.md",)
 
 
 def python_blocks(page: pathlib.Path) -> list[str]:
@@ -30,8 +29,7 @@ def test_the_docs_have_examples():
 
 
 @pytest.mark.parametrize("page", [
-    pytest.param(p, id=p.name, marks=[pytest.mark.skip(reason="examples are fragments")]
-                 if p.name in FRAGMENTS else [])
+    pytest.param(p, id=p.name, marks=[pytest.mark.slow] if p.name in LONG else [])
     for p in PAGES])
 def test_docs_page_examples_run(page, tmp_path, monkeypatch):
     monkeypatch.chdir(tmp_path)

@@ -14,8 +14,6 @@ import math
 import pathlib
 import re
 import shlex
-import subprocess
-import sys
 
 import pytest
 
@@ -93,9 +91,8 @@ def test_the_readme_quotes_numbers_of_its_commands():
 @pytest.mark.parametrize("command, comment", [
     pytest.param(c, m, id=c, marks=[pytest.mark.slow] if c.split()[1] in LONG_COMMANDS else [])
     for c, m in COMMANDS])
-def test_readme_command_prints_the_quoted_numbers(command, comment, tmp_path):
-    done = subprocess.run([sys.executable, "-m", "fsicas.cli", *_argv(command)], cwd=tmp_path,
-                          capture_output=True, text=True, timeout=1800)
+def test_readme_command_prints_the_quoted_numbers(command, comment, tmp_path, run_cli):
+    done = run_cli(_argv(command), tmp_path)
     assert done.returncode == 0, done.stderr[-2000:]
     printed = json_numbers(json.loads(done.stdout))
     missing = [q for q, half in quoted_numbers(comment) if not _matches(q, half, printed)]

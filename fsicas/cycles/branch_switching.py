@@ -56,7 +56,8 @@ def symmetry_broken_branch(scene: Scene, point: "CollocatedImpactPoint", *,
 
 def _switched(scene, point, kind, model, amplitude, ustar_range, settings
               ) -> CollocatedImpactBranch:
-    """The branch born at the special cycle ``point`` of ``kind`` ("pd", "bp")."""
+    """The branch born at the special cycle ``point`` of ``kind`` ("pd", "bp"), on
+    ``model`` or else on the quadrature nodes the point was computed on."""
     start = time.perf_counter()
     check_smooth(scene)
     if getattr(point, "kind", None) != kind:
@@ -64,7 +65,9 @@ def _switched(scene, point, kind, model, amplitude, ustar_range, settings
                          f"collocation branch, got kind {getattr(point, 'kind', None)!r}")
     if not (np.isfinite(amplitude) and amplitude > 0):
         raise ValueError(f"amplitude must be a positive finite number, got {amplitude!r}")
-    model = model or build_model(scene)
+    scene = scene.replace(quad_nodes=model.scene.n_quad if model else
+                          point.quadrature_nodes or scene.quad_nodes)
+    model = model or build_model(scene)     # the nodes the point was computed on
     try:
         problem = impacting_collocation_problem(scene, point.state, point.period,
                                                 point.pressure_drop, model=model,
