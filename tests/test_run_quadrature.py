@@ -91,3 +91,15 @@ def test_estimate_above_its_tolerance_is_not_success(impacting_runs):
     strict = replace(plain, quadrature_tol=plain.quadrature_error / 2)
     assert strict.status == "unconverged" and strict.to_json()["status"] == "unconverged"
     assert "exceeds its tolerance" in strict.warnings[0] and strict.to_json()["warnings"]
+
+
+def test_a_run_not_repeated_says_its_estimate(impacting_runs):
+    """``repeat=False``: the run on the scene's nodes, judged against the tolerance (the
+    same trajectory as the plain run, now "unconverged" with its warning)."""
+    _, plain, _ = impacting_runs
+    judged = run_case(IMPACTING, 0.7, settings=IMPACT_SETTINGS, perturbation=0.3,
+                      stop_early=False, repeat=False)
+    assert judged.model.scene.n_quad == plain.model.scene.n_quad == 28
+    assert np.array_equal(judged.trajectory.x, plain.trajectory.x)
+    assert judged.quadrature_tol == pytest.approx(IMPACT_QUADRATURE_TOL)
+    assert judged.status == "unconverged" and "raise quad_nodes" in judged.warnings[0]

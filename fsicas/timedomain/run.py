@@ -109,7 +109,8 @@ def sweep_model(scene: Scene, guarded: bool = True) -> Model:
 def run_case(scene: Scene, t_end: float, *, settings: Settings = Settings(),
              criteria: Criteria = Criteria(), schedule: PressureSchedule | None = None,
              perturbation=1e-2, model: Model | None = None, stop_early: bool = True,
-             quadrature_tol: float | str | None = "auto", progress: bool = False) -> Run:
+             quadrature_tol: float | str | None = "auto", repeat: bool = True,
+             progress: bool = False) -> Run:
     """Integrate ``scene`` from its perturbed steady state and classify the run.
 
     ``model``: a prebuilt model (e.g. from :func:`guarded_model`) reused across a sweep.
@@ -121,7 +122,10 @@ def run_case(scene: Scene, t_end: float, *, settings: Settings = Settings(),
     settling tolerance of ``criteria`` at ``settings.rtol`` (1e-5 at rtol 1e-8: a cycle's
     amplitude moved by 0.04 to 0.23 times the equations' relative error, so the
     quadrature stays 4x below what the cycle is settled to), and for a scene with the
-    contact law :data:`fsicas.model.accuracy.IMPACT_QUADRATURE_TOL`; None: never. ``progress``: a bar of the integrated time.
+    contact law :data:`fsicas.model.accuracy.IMPACT_QUADRATURE_TOL`; None: never.
+    ``repeat=False``: measure the error and judge it (status "unconverged" and a warning
+    above the tolerance) without repeating the run. ``progress``: a bar of the integrated
+    time.
     """
     if not (isinstance(t_end, (int, float)) and np.isfinite(t_end) and t_end > 0):
         raise ValueError(f"t_end must be a finite number > 0, got {t_end!r}")
@@ -135,7 +139,9 @@ def run_case(scene: Scene, t_end: float, *, settings: Settings = Settings(),
     once = functools.partial(_run_once, t_end=t_end, settings=settings, criteria=criteria,
                              schedule=schedule, perturbation=perturbation, stop_early=stop_early,
                              progress=progress)
-    run = controlled_run(once(scene, model), once, quadrature_tol)
+    run = once(scene, model)
+    run = controlled_run(run, once, quadrature_tol) if repeat else \
+        replace(run, quadrature_tol=quadrature_tol)
     run = replace(run, wall_time=time.perf_counter() - start)
     for message in run.warnings:
         warnings.warn(message, RuntimeWarning, stacklevel=2)
