@@ -238,6 +238,7 @@ def test_cycle_figure_labels_every_panel_and_shows_every_mode(lco_view, tmp_path
     assert len(velocities.lines) == lco_view.modes
     title = fig.get_suptitle()
     assert "limit cycle" in title and "_" not in title.replace("$T_0$", "")
+    assert "$N$ = 4" in title and "no contact law" in title
     spectrum = next(ax for ax in panels if "spectrum" in ax.get_title())
     f, a = spectrum.lines[0].get_data()
     top = np.argsort([a[k] if a[k] >= max(a[k - 1], a[k + 1]) else 0 for k in range(1, len(a) - 1)])

@@ -54,6 +54,8 @@ class CycleView:
     ustar: float
     mstar: float
     modes: int
+    #: the contact law in words (stiffness, layer), or "no contact law"
+    law: str
     outcome: str
     settled: bool
     period: float
@@ -78,7 +80,8 @@ class CycleView:
         what = (f"{outcome_words(self.outcome)}, $T_0$ = {self.period:.4g}" if self.settled
                 else f"{outcome_words(self.outcome)}, not settled: last tip return "
                      f"$T$ = {self.period:.4g}")
-        return f"$U^*$ = {self.ustar:g}, $M^*$ = {self.mstar:g}, $N$ = {self.modes}: {what}"
+        return (f"$U^*$ = {self.ustar:g}, $M^*$ = {self.mstar:g}, $N$ = {self.modes}, "
+                f"{self.law}: {what}")
 
 
 def cycle_window(run, cycles: int = 1, period: float | None = None) -> slice:
@@ -143,7 +146,7 @@ def cycle_view(run, snapshots: int = 24) -> CycleView:
     force = penetration(model, X, tr.p).load
     upper, lower = scene.walls
     return CycleView(
-        ustar=float(scene.ustar), mstar=float(scene.mstar), modes=int(n),
+        ustar=float(scene.ustar), mstar=float(scene.mstar), modes=int(n), law=_law(scene),
         outcome=str(run.outcome.outcome), settled=settled, period=float(T),
         tau=(t - t[0]) / T, x=xs, shapes=X[picks, n:2 * n] @ phi,
         wall_upper=np.asarray(upper(xs)), wall_lower=-np.asarray(lower(xs)),
@@ -151,6 +154,14 @@ def cycle_view(run, snapshots: int = 24) -> CycleView:
         tip=tr.tip[w].copy(), tip_velocity=tr.tip_velocity[w].copy(), freq=freq,
         spectrum=spectrum, rms=np.sqrt(np.mean((q - q.mean(axis=0)) ** 2, axis=0)),
         force=total_force(model, force))
+
+
+def _law(scene) -> str:
+    """The scene's contact law in words (:attr:`CycleView.law`)."""
+    if not scene.contact:
+        return "no contact law"
+    smooth = f", smoothed {scene.contact_smoothing:g}" if scene.contact_smoothing else ""
+    return f"contact $k^*$ = {scene.contact_stiffness:.3g}, eps/H = {scene.contact_eps:g}{smooth}"
 
 
 def total_force(model, total) -> np.ndarray:
@@ -193,8 +204,9 @@ def plot_cycles(runs, path=None, labels=None, snapshots: int = 24):
             row.set_ylabel("")
     first = views[0] if views else None
     if first is not None:
-        fig.suptitle(f"impacting cycles at $M^*$ = {first.mstar:g}, $N$ = {first.modes}: "
-                     "Figs. 6 (snapshots), 7 ($r_n$, $Q_c$), 8 (tip, spectrum, RMS), 9 (force)")
+        fig.suptitle(f"impacting cycles at $M^*$ = {first.mstar:g}, $N$ = {first.modes}, "
+                     f"{first.law}: Figs. 6 (snapshots), 7 ($r_n$, $Q_c$), 8 (tip, spectrum, "
+                     "RMS), 9 (force)")
     return finish(fig, path)
 
 
