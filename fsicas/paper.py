@@ -18,7 +18,7 @@ unless ``quick``, ``boundary_variants.png`` (zeta = 0.01 and H* in {1/20, 1/5}).
 from __future__ import annotations
 
 import time
-from concurrent.futures import ProcessPoolExecutor
+from concurrent.futures import ProcessPoolExecutor, as_completed
 from pathlib import Path
 
 import numpy as np
@@ -191,8 +191,7 @@ def _time_domain(out: Path, quick: bool, say, linear=None) -> dict:
     jobs, coarser = _cycle_jobs(out, quick)
     say(f"Figs. 6-9: {len(jobs)} impacting cycles (N = {jobs[0][1]}) and {len(coarser)} "
         f"with N = {coarser[0][1]} (their truncation)")
-    with ProcessPoolExecutor(max_workers=2) as pool:
-        done = list(pool.map(_cycle_job, jobs + coarser))
+    done = _run_cycles(jobs + coarser, say)
     views = [view for (_, view), job in zip(done, jobs) if job[4] is not None and view is not None]
     if views:
         plot_cycles(views, out / "fig6_9_cycles.png")
@@ -204,6 +203,19 @@ def _time_domain(out: Path, quick: bool, say, linear=None) -> dict:
         (out / "fig4_curves.json").write_text(strict_json.dumps(curves.to_json(), indent=1))
         report["fig4_curves"] = consistency(result, curves, boundary_function(linear))
     return report
+
+
+def _run_cycles(jobs: list, say) -> list:
+    """:func:`_cycle_job` of each job on two processes, in the jobs' order; each finished
+    run told (a log sees the long stage advance)."""
+    start = time.perf_counter()
+    with ProcessPoolExecutor(max_workers=2) as pool:
+        futures = [pool.submit(_cycle_job, job) for job in jobs]
+        for k, future in enumerate(as_completed(futures), 1):
+            c = future.result()[0]
+            say(f"impacting cycle {k}/{len(jobs)}: U* = {c['ustar']:g}, N = {c['modes']}, "
+                f"{c['outcome']} ({time.perf_counter() - start:.0f} s)")
+    return [future.result() for future in futures]
 
 
 def _fig4_curves(linear, mstars, ustars, say) -> CurveMap:

@@ -60,7 +60,8 @@ def test_paper_quick_writes_report(tmp_path, capsys):
     assert code == 0
     stages = [line for line in captured.err.splitlines() if line.startswith("fsicas paper [")]
     assert [s.split("] ", 1)[1].split(":")[0] for s in stages] == \
-        ["Fig. 2 and 3", "Fig. 4", "Figs. 6-9"]          # each stage announced on stderr
+        ["Fig. 2 and 3", "Fig. 4", "Figs. 6-9",          # each stage announced on stderr,
+         "impacting cycle 1/2", "impacting cycle 2/2"]    # and each impacting run when done
     assert out["steady"]["pressure_drop"] == pytest.approx(out["steady"]["closed_form"], rel=1e-14)
     for name in ("report.json", "fig2_boundary.png", "fig3_modes.png"):
         assert (tmp_path / name).exists()
