@@ -17,6 +17,7 @@ unless ``quick``, ``boundary_variants.png`` (zeta = 0.01 and H* in {1/20, 1/5}).
 """
 from __future__ import annotations
 
+import textwrap
 import time
 from concurrent.futures import ProcessPoolExecutor, as_completed
 from pathlib import Path
@@ -269,7 +270,7 @@ def summary(report: dict) -> dict:
 def _cycle_summary(c: dict) -> str:
     """One impacting run in words: its outcome, convergence and measures."""
     if c["period"] is None:
-        return f"{c['outcome']} ({c['status']}) {c['message'][:60]}"
+        return f"{c['outcome']} ({c['status']}): " + textwrap.shorten(c["message"], 200, placeholder=" ...")
     period = "mean return time" if c["outcome"] == "impacting_nonperiodic" else "period"
     text = (f"{c['outcome']} ({c['status']}, convergence {c['convergence']:.3g}): {period} "
             f"{c['period']:.5f}, {c['impacts_per_cycle']:g} impacts/cycle, peak force "
