@@ -3,7 +3,7 @@
 Python's ``json`` writes ``NaN`` and ``Infinity`` by default, which strict readers
 (JavaScript, ``jq``, most JSON libraries) refuse. :func:`finite` replaces each
 non-finite number by ``null`` and says where it was, so the writer can say so in words;
-:func:`dumps` and :func:`dump` write with ``allow_nan=False`` after it.
+:func:`dumps` writes with ``allow_nan=False`` after it.
 """
 from __future__ import annotations
 
@@ -12,7 +12,7 @@ import math
 
 import numpy as np
 
-__all__ = ["finite", "dumps", "dump", "nonfinite_note"]
+__all__ = ["finite", "dumps", "nonfinite_note"]
 
 #: The places named in a note at most.
 NOTE_PLACES = 5
@@ -43,8 +43,3 @@ def nonfinite_note(places: list[str]) -> str | None:
 def dumps(value, **kwargs) -> str:
     """``json.dumps`` of :func:`finite` (``value``), refusing any NaN left."""
     return json.dumps(finite(value)[0], allow_nan=False, **kwargs)
-
-
-def dump(value, f, **kwargs) -> None:
-    """``json.dump`` of :func:`finite` (``value``) to the open file ``f``."""
-    json.dump(finite(value)[0], f, allow_nan=False, **kwargs)

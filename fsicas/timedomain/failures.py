@@ -45,8 +45,8 @@ def closing(model, x_last) -> str:
     if model.contact_weights is None:
         return "the beam reached the wall (turn the contact law on to hold it)"
     eps = model.scene.contact_gap
-    if x_last is not None and gaps(model, np.atleast_2d(x_last)).min() > eps:
-        gap = gaps(model, np.atleast_2d(x_last)).min()
+    gap = -np.inf if x_last is None else gaps(model, np.atleast_2d(x_last)).min()
+    if gap > eps:
         return (f"the last state before it was {gap / eps:.3g} eps from the wall, outside the "
                 f"contact layer (eps = {eps:.3g}): one step crossed the whole layer, where no "
                 "contact stiffness can act; make the layer thicker (contact_eps; a tighter "

@@ -140,18 +140,23 @@ def run_case(scene: Scene, t_end: float, *, settings: Settings = Settings(),
                              schedule=schedule, perturbation=perturbation, stop_early=stop_early,
                              progress=progress)
     run = once(scene, model)
-    run = controlled_run(run, once, quadrature_tol) if repeat else \
-        replace(run, quadrature_tol=quadrature_tol)
-    run = replace(run, wall_time=time.perf_counter() - start)
+    run = controlled_run(run, once, quadrature_tol, repeat)
+    return replace(run, wall_time=time.perf_counter() - start)
+
+
+def controlled_run(run: Run, once, tol: float | None, repeat: bool = True) -> Run:
+    """``run``, repeated by ``once(scene, model)`` on the adequate model while its
+    :func:`sensitive_states` need more nodes for ``tol`` (at most :data:`MAX_REPEATS`
+    times; not with ``repeat=False``), with ``quadrature_tol = tol``; its
+    :attr:`Run.warnings` issued."""
+    run = _repeated(run, once, tol) if repeat else replace(run, quadrature_tol=tol)
     for message in run.warnings:
-        warnings.warn(message, RuntimeWarning, stacklevel=2)
+        warnings.warn(message, RuntimeWarning, stacklevel=3)
     return run
 
 
-def controlled_run(run: Run, once, tol: float | None) -> Run:
-    """``run``, repeated by ``once(scene, model)`` on the adequate model while its
-    :func:`sensitive_states` need more nodes for ``tol`` (at most :data:`MAX_REPEATS`
-    times), with ``quadrature_tol = tol`` if it was checked."""
+def _repeated(run: Run, once, tol: float | None) -> Run:
+    """:func:`controlled_run`'s repeats."""
     for _ in range(MAX_REPEATS if tol is not None else 0):
         states = sensitive_states(run)
         if states is None:

@@ -25,7 +25,6 @@ from __future__ import annotations
 
 import functools
 import time
-import warnings
 from dataclasses import dataclass, replace
 
 import numpy as np
@@ -291,9 +290,7 @@ def breath_run(scene, t_end: float, settings: Settings = Settings(), perturbatio
     once = functools.partial(_breath_once, t_end=t_end, settings=settings,
                              perturbation=perturbation, progress=progress)
     run = once(scene, guarded_model(scene)[0])
-    run = controlled_run(run, once, tol) if repeat else replace(run, quadrature_tol=tol)
-    for message in run.warnings:
-        warnings.warn(message, RuntimeWarning, stacklevel=2)
+    run = controlled_run(run, once, tol, repeat)
     return replace(run, wall_time=time.perf_counter() - start)
 
 
