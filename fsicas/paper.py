@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import textwrap
 import time
+from dataclasses import asdict
 from concurrent.futures import ProcessPoolExecutor, as_completed
 from pathlib import Path
 
@@ -31,6 +32,7 @@ from .linear.boundary import stability_boundary
 from .linear.steady import steady_state, straight_pressure_drop
 from .model.assembly import build_model
 from .model.beam import clamped_free_betas
+from .provenance import with_meta
 from .plots.linear import (boundary_function, plot_boundary, plot_boundary_variants,
                            plot_mode_shapes)
 from .plots.timedomain import cycle_view, plot_cycle, plot_cycles, plot_map, return_period
@@ -45,6 +47,7 @@ __all__ = ["PAPER_SCENE", "VARIANTS", "CYCLE_USTARS", "CYCLE_MODES", "REPORT_FIE
 
 PAPER_SCENE = Scene(mstar=1.0, ustar=5.0, hstar=0.1, friction=0.14, k0=0.0, kl=1.0,
                     zeta=0.0, modes=10)
+PAPER_LABEL = "paper (zeta = 0, H* = 1/10)"
 VARIANTS = {"zeta = 0.01": dict(zeta=0.01), "H* = 1/20": dict(hstar=0.05),
             "H* = 1/5": dict(hstar=0.2)}
 CYCLE_USTARS = (7.0, 8.5, 10.0)
@@ -52,22 +55,32 @@ CYCLE_USTARS = (7.0, 8.5, 10.0)
 #: (docs/simulate.md: at U* = 7 the period moves 3.4e-3 from N = 10 to 20, 3.4e-4 from
 #: 20 to 40).
 CYCLE_MODES = 20
+#: The boundary is searched for onsets up to this U*.
+BOUNDARY_USTAR_MAX = 40.0
 
 
 #: What the report's quantities are, and their units (nondimensional, docs/model.md).
 REPORT_FIELDS = {
     "units": "nondimensional: lengths by the beam length L, time by T = L^2 sqrt(rho_s e / D), "
              "pressure by D / L^3 (D the bending stiffness per unit width)",
+    "scene": "each section's own scene (as scene files, docs/model.md; meta.scene is null): "
+             "whole where one scene made it, else the fields held fixed while M* and U* vary "
+             "over its grid",
     "omega_invacuo": "in-vacuo clamped-free frequencies w_n = beta_n^2 (rad per unit T)",
     "steady": "steady state at U*: pressure drop P0 - PL and its closed form, flow rates Q1, Q2",
-    "boundary": "flutter boundary U*_c(M*): per M* the onset U*, frequency omega (rad per unit "
+    "boundary": "flutter boundary U*_c(M*) at mstar_values (onsets searched up to ustar_max): "
+                "per M* the onset U*, frequency omega (rad per unit "
                 "T), omega / w_1, branch, first Lyapunov coefficient l1 and criticality; the mode "
                 "switches (crossings and folds of Hopf curves, located)",
-    "variants": "the boundary for zeta = 0.01 and H* = 1/20, 1/5",
-    "impact_map": "Fig. 4: outcome counts of the (U*, M*) map (decay, lco, contact, unsettled)",
+    "variants": "the boundary for zeta = 0.01 and H* = 1/20, 1/5, each with its scene",
+    "impact_map": "Fig. 4: outcome counts of the (U*, M*) map (decay, lco, contact, unsettled) "
+                  "over its grid, each point a run to t_end (units of T) with the integrator "
+                  "settings and settling criteria given; its linear boundary (first Hopf point "
+                  "per M*)",
     "fig4_curves": "Fig. 4's map against its curves (fig4_curves.json: grazing and fold-of-"
                    "cycles curves, mstar and ustar per point): points whose outcome agrees "
-                   "with the region the curves put them in, and the exceptions",
+                   "with the region the curves put them in, and the exceptions; the curves' "
+                   "settings (CurveSettings)",
     "impacting_cycles": "Figs. 6-9: per U* the outcome (impacting_lco: a cycle that repeats "
                         "to its convergence; impacting_nonperiodic: one that does not, measured "
                         "over its last cycles), period (units of T; the mean return time when "
@@ -75,7 +88,9 @@ REPORT_FIELDS = {
                         "impact force, mean flow-rate reduction; truncation_error: per measure "
                         "|X_N - X_N'| / |X_N| against the same run with truncation_modes "
                         "N' = N/2 modes (a bound where X converges in N; the peak force and "
-                        "impacts per cycle do not), warned above truncation_tol",
+                        "impacts per cycle do not), warned above truncation_tol; its scene, "
+                        "t_end (units of T) and settle_tol (relative change per cycle)",
+    "warnings": "every section's warnings, each prefixed with the section",
     "wall_time": "seconds",
 }
 
@@ -95,17 +110,19 @@ def run_paper(out="results", quick: bool = False, progress=None, meta: dict | No
     steady = steady_state(scene, model)
     mstars = np.logspace(-1, 1, 7) if quick else np.logspace(-2, 2, 33)
     say(f"Fig. 2 and 3: the flutter boundary at {len(mstars)} M* (N = {scene.modes})")
-    boundary = stability_boundary(scene, mstars, model)
+    boundary = stability_boundary(scene, mstars, model, ustar_max=BOUNDARY_USTAR_MAX)
     plot_boundary(boundary, out / "fig2_boundary.png")
     plot_mode_shapes(boundary, model, out / "fig3_modes.png")
     report = {
         "version": __version__,
-        "meta": {**(meta or {}), "fields": REPORT_FIELDS},
-        "scene": scene.to_dict(),
+        "meta": {**(meta or {}), "scene": None, "fields": REPORT_FIELDS},
         "omega_invacuo": (clamped_free_betas(scene.modes) ** 2).tolist(),
-        "steady": {"ustar": scene.ustar, "pressure_drop": steady.pressure_drop,
+        "steady": {"scene": scene.to_dict(), "ustar": scene.ustar,
+                   "pressure_drop": steady.pressure_drop,
                    "closed_form": straight_pressure_drop(scene), "Q": steady.Q.tolist()},
-        "boundary": {k: v for k, v in boundary.to_json().items() if k != "curves"},
+        "boundary": {"scene": held(scene), "mstar_values": mstars.tolist(),
+                     "ustar_max": BOUNDARY_USTAR_MAX,
+                     **{k: v for k, v in boundary.to_json().items() if k != "curves"}},
     }
     damped = None        # the zeta = 0.01 boundary: Fig. 4's linear boundary, drawn dense
     if not quick:
@@ -113,21 +130,41 @@ def run_paper(out="results", quick: bool = False, progress=None, meta: dict | No
         report["variants"], damped = _variants(scene, mstars[::2], boundary,
                                                out / "boundary_variants.png")
     report.update(_time_domain(out, quick, say, damped))
+    report["warnings"] = collected_warnings(report)
     report["wall_time"] = time.perf_counter() - start
+    report = with_meta(report, report["meta"])
     (out / "report.json").write_text(strict_json.dumps(report, indent=2))
     return report
+
+
+def held(scene: Scene) -> dict:
+    """The fields of ``scene`` a result over a grid in (U*, M*) holds fixed."""
+    return {k: v for k, v in scene.to_dict().items() if k not in ("mstar", "ustar")}
+
+
+def collected_warnings(report: dict) -> list[str]:
+    """Every warning of the report's sections, each prefixed with where it is."""
+    found = [f"boundary: {w}" for w in report["boundary"].get("warnings", [])]
+    for c in report.get("impacting_cycles", []):
+        law = f"k* = {c['contact_stiffness']:g}, eps/H = {c['contact_eps']:g}"
+        found += [f"impacting cycle U* = {c['ustar']:g} ({law}): {w}"
+                  for w in c.get("warnings", [])]
+    return found
 
 
 def _variants(scene, mstars, reference, path):
     """Boundaries with structural damping and other confinements, drawn together; returns
     their report and the zeta = 0.01 boundary."""
-    curves = {"paper (zeta = 0, H* = 1/10)": reference}
-    for label, change in VARIANTS.items():
-        variant = scene.replace(**change)
-        curves[label] = stability_boundary(variant, mstars, build_model(variant), refine=False)
+    scenes = {PAPER_LABEL: scene,
+              **{label: scene.replace(**change) for label, change in VARIANTS.items()}}
+    curves = {label: reference if label == PAPER_LABEL else
+              stability_boundary(variant, mstars, build_model(variant), refine=False)
+              for label, variant in scenes.items()}
     plot_boundary_variants(curves, path)
-    return ({label: [{"mstar": p["mstar"], "ustar_crit": p["ustar_crit"], "freq_ratio": p["freq_ratio"]}
-                     for p in b.points if p["ustar_crit"] is not None]
+    return ({label: {"scene": held(scenes[label]),
+                     "points": [{"mstar": p["mstar"], "ustar_crit": p["ustar_crit"],
+                                 "freq_ratio": p["freq_ratio"]}
+                                for p in b.points if p["ustar_crit"] is not None]}
              for label, b in curves.items()}, curves["zeta = 0.01"])
 
 
@@ -154,7 +191,8 @@ def _impacting_cycle(ustar, modes, contact, t_end, plot=None, tol=2e-2):
     view = cycle_view(run) if shown and not run.trajectory.failed else None
     if plot is not None and view is not None:
         plot_cycle(view, plot)     # a perturbed periodic run: its last tip return
-    return {**run.to_json(), "ustar": ustar, "modes": modes, **contact}, view
+    return {**run.to_json(), "ustar": ustar, "modes": modes, **contact,
+            "scene": run.scene.to_dict(), "t_end": t_end, "settle_tol": tol}, view
 
 
 def _cycle_job(args):
@@ -201,8 +239,10 @@ def _time_domain(out: Path, quick: bool, say, linear=None) -> dict:
         cycles[i] = with_truncation(cycles[i], rough)
     report = {"impact_map": result.to_json(), "impacting_cycles": cycles}
     if curves is not None:
+        curve_settings = fig4_curve_settings(mstars)
         (out / "fig4_curves.json").write_text(strict_json.dumps(curves.to_json(), indent=1))
-        report["fig4_curves"] = consistency(result, curves, boundary_function(linear))
+        report["fig4_curves"] = {"scene": held(MAP_SCENE), "settings": asdict(curve_settings),
+                                 **consistency(result, curves, boundary_function(linear))}
     return report
 
 
@@ -219,10 +259,15 @@ def _run_cycles(jobs: list, say) -> list:
     return [future.result() for future in futures]
 
 
+def fig4_curve_settings(mstars) -> CurveSettings:
+    """The curves' settings over the map's M* window."""
+    return CurveSettings(mstar_min=float(mstars.min()), mstar_max=float(mstars.max()))
+
+
 def _fig4_curves(linear, mstars, ustars, say) -> CurveMap:
     """The grazing and fold-of-cycles curves over the map's window, seeded one per piece
     of its flutter boundary (two processes)."""
-    settings = CurveSettings(mstar_min=float(mstars.min()), mstar_max=float(mstars.max()))
+    settings = fig4_curve_settings(mstars)
     seeds = curve_seeds([s.mstar for s in linear.switches], settings.mstar_min,
                         settings.mstar_max)
     say(f"Fig. 4: grazing and fold-of-cycles curves from {len(seeds)} cycle branches")
@@ -255,7 +300,8 @@ def summary(report: dict) -> dict:
            [round(w["mstar"], 3) for w in b["switches"]],
            "U*_c at M* = 1": next((p["ustar_crit"] for p in b["points"] if abs(p["mstar"] - 1) < 1e-9), None)}
     if "impact_map" in report:
-        out["impact map (Fig. 4)"] = report["impact_map"]["counts"]
+        out["impact map (Fig. 4)"] = ", ".join(f"{n} {outcome}" for outcome, n in
+                                               report["impact_map"]["counts"].items())
     if "fig4_curves" in report:
         c = report["fig4_curves"]
         out["map against the curves"] = (f"{c['consistent']} consistent, "
@@ -270,7 +316,9 @@ def summary(report: dict) -> dict:
 def _cycle_summary(c: dict) -> str:
     """One impacting run in words: its outcome, convergence and measures."""
     if c["period"] is None:
-        return f"{c['outcome']} ({c['status']}): " + textwrap.shorten(c["message"], 200, placeholder=" ...")
+        why = c["message"] or (f"first contact at t = {c['first_contact_time']:.4g}"
+                               if c.get("first_contact_time") is not None else "no cycle")
+        return f"{c['outcome']} ({c['status']}): " + textwrap.shorten(why, 200, placeholder=" ...")
     period = "mean return time" if c["outcome"] == "impacting_nonperiodic" else "period"
     text = (f"{c['outcome']} ({c['status']}, convergence {c['convergence']:.3g}): {period} "
             f"{c['period']:.5f}, {c['impacts_per_cycle']:g} impacts/cycle, peak force "

@@ -79,8 +79,9 @@ def _boundary(out: dict, scene: Scene, sc: Scales) -> dict:
 
 def _cycle(sc: Scales, p: dict) -> dict:
     """A limit cycle (time integration or branch point): period, frequency, amplitude."""
-    return {"period_s": _opt(sc.seconds, p.get("period")),
-            "frequency_hz": _opt(sc.hz, p.get("frequency")),
+    period = p.get("period")
+    return {"period_s": _opt(sc.seconds, period),
+            "frequency_hz": _opt(sc.hz, 2 * math.pi / period if period else None),
             "tip_amplitude_mm": _opt(sc.mm, p.get("tip_amplitude"))}
 
 
@@ -98,8 +99,7 @@ def _impact_point(sc: Scales, p: dict, reference_force: float) -> dict:
     """An impacting cycle: as a limit cycle, plus the least gap and the peak impact force
     in N (``reference_force``: F0, nondimensional; impacts per cycle and the flow
     reduction stay dimensionless)."""
-    frequency = 2 * math.pi / p["period"] if p.get("period") else None
-    return {**flow_json(sc, p["ustar"]), **_cycle(sc, {**p, "frequency": frequency}),
+    return {**flow_json(sc, p["ustar"]), **_cycle(sc, p),
             "min_gap_mm": _opt(sc.mm, p.get("min_gap")),
             "peak_force_n": _opt(sc.newtons, p["peak_force"] * reference_force)}
 
@@ -122,10 +122,9 @@ def _lco(out: dict, scene: Scene, sc: Scales) -> dict:
 def _curve_point(sc: Scales, p: dict) -> dict:
     """A point of a curve in (M*, U*): at its own M*, i.e. the same beam in a fluid of
     density M* rho_s e / L (as the boundary's points)."""
-    frequency = 2 * math.pi / p["period"]
     return {"mstar": p["mstar"], **flow_json(sc, p["ustar"]),
             "fluid_density_kg_m3": p["mstar"] * sc.beam_mass_per_area / sc.length,
-            **_cycle(sc, {**p, "frequency": frequency})}
+            **_cycle(sc, p)}
 
 
 def _grazing(out: dict, scene: Scene, sc: Scales) -> dict:

@@ -1,12 +1,12 @@
 """What made a result and when: the versions of fsicas and its numerical libraries and a
-UTC time stamp, written with every result file and JSON."""
+UTC time stamp, written with every result file and JSON, in its ``meta``."""
 from __future__ import annotations
 
 import platform
 from datetime import datetime, timezone
 from importlib.metadata import PackageNotFoundError, version
 
-__all__ = ["__version__", "versions", "created", "provenance"]
+__all__ = ["__version__", "versions", "created", "provenance", "with_meta"]
 
 try:   # the one version source: pyproject.toml, through the installed package's metadata
     __version__ = version("fsicas")
@@ -31,3 +31,10 @@ def created() -> str:
 def provenance() -> dict:
     """:func:`versions` and ``created``."""
     return {**versions(), "created": created()}
+
+
+def with_meta(data: dict, meta: dict) -> dict:
+    """``data`` with ``meta``, whose ``units`` (field -> unit) keep only the fields
+    ``data`` has: a unit is never given for a field that was not written."""
+    units = {k: v for k, v in (meta.get("units") or {}).items() if k in data}
+    return {**data, "meta": {**meta, "units": units}}

@@ -24,6 +24,8 @@ import json
 import os
 from pathlib import Path
 
+from . import strict_json
+
 try:
     import fcntl
 except ImportError:  # pragma: no cover - not POSIX
@@ -121,8 +123,9 @@ class ResultsFile:
             self._fd = None
 
     def append(self, record: dict) -> None:
-        """Append ``record`` as one line, in one write."""
-        os.write(self._fd, (json.dumps(record) + "\n").encode())
+        """Append ``record`` as one line, in one write (NaN and infinities as null:
+        :mod:`fsicas.strict_json`)."""
+        os.write(self._fd, (strict_json.dumps(record) + "\n").encode())
 
     def _lock(self) -> None:
         if fcntl is None:

@@ -6,6 +6,7 @@ import sys
 import numpy as np
 import pytest
 
+import fsicas
 from fsicas.cli import main
 from fsicas.cli.ranges import parse_range
 
@@ -67,7 +68,17 @@ def test_paper_quick_writes_report(tmp_path, capsys):
         assert (tmp_path / name).exists()
     meta = out["meta"]
     assert {"created", "fsicas", "casadi", "command", "fields"} <= set(meta)
-    assert set(out) - {"version", "meta", "scene"} <= set(meta["fields"])   # every field explained
+    assert set(out) - {"version", "meta"} <= set(meta["fields"])   # every field explained
+    assert set(meta["units"]) <= set(out)           # and no unit of a field not written
+    # each result holds its own scene (none is the report's): Fig. 4 at zeta = 0.01 (the
+    # paper's), the cycle with the modes and contact law it was run with
+    assert meta["scene"] is None and "scene" not in out
+    assert out["steady"]["scene"]["ustar"] == out["steady"]["ustar"]
+    assert out["boundary"]["scene"]["zeta"] == 0 and "mstar" not in out["boundary"]["scene"]
+    assert out["boundary"]["mstar_values"] == pytest.approx(np.logspace(-1, 1, 7))
+    fig4 = out["impact_map"]
+    assert fig4["scene"]["zeta"] == 0.01 and fig4["t_end"] == 5.0
+    assert fig4["grid"] == {"ustar": [4.0, 9.0], "mstar": [1.0]}
     points = out["boundary"]["points"]
     assert len(points) == 7 and all(p["refined"] and p["omega"] > 0 for p in points)
     assert out["boundary"]["switches"]
@@ -81,10 +92,16 @@ def test_paper_quick_writes_report(tmp_path, capsys):
     from fsicas.timedomain.impacting_run import TRUNCATION_MEASURES
     assert cycle["truncation_modes"] == 3 and set(cycle["truncation_error"]) == \
         set(TRUNCATION_MEASURES)
+    ran = fsicas.Scene.from_dict(cycle["scene"])
+    assert (ran.modes, ran.ustar, ran.contact, ran.contact_stiffness, ran.contact_eps, ran.zeta) \
+        == (6, 8.5, True, cycle["contact_stiffness"], cycle["contact_eps"], 0.01)
+    assert [w for w in out["warnings"] if w.startswith("impacting cycle U* = 8.5")] == \
+        [w for w in out["warnings"] if any(w.endswith(c) for c in cycle["warnings"])]
+    assert len(out["warnings"]) == len(out["boundary"]["warnings"]) + len(cycle["warnings"])
     # the terminal summary repeats the report's numbers
     from fsicas.paper import summary
     short = summary(out)
-    assert short["boundary points"] == 7 and short["impact map (Fig. 4)"] == {"decay": 1, "contact": 1}
+    assert short["boundary points"] == 7 and short["impact map (Fig. 4)"] == "1 decay, 1 contact"
     assert short["U*_c at M* = 1"] == next(p["ustar_crit"] for p in points if p["mstar"] == 1.0)
 
 

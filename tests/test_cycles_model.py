@@ -152,6 +152,28 @@ def test_save_load_roundtrip(supercritical, tmp_path):
     assert back.contact.state.shape == branch.contact.state.shape
 
 
+def test_saved_branch_is_strict_json_and_reads_unmeasured_values_back(supercritical, tmp_path):
+    """A point whose quadrature error was not measured (NaN) and a multiplier that is not
+    finite are written as null (strict JSON, which ``json`` refuses to read as NaN when
+    told to) and read back as NaN."""
+    import dataclasses
+    import json
+    _, branch = supercritical
+    point = branch.points[0]
+    odd = dataclasses.replace(point, quadrature_error=float("nan"),
+                              multipliers=np.r_[point.multipliers[:-1], complex(np.inf, 0)])
+    dataclasses.replace(branch, points=[odd]).save(tmp_path / "b.json")
+    text = (tmp_path / "b.json").read_text()
+
+    def refuse(token):
+        raise AssertionError(f"non-standard JSON token {token}")
+    data = json.loads(text, parse_constant=refuse)
+    assert data["points"][0]["quadrature_error"] is None
+    back = CycleBranch.load(tmp_path / "b.json").points[0]
+    assert np.isnan(back.quadrature_error) and np.isnan(back.multipliers[-1].real)
+    assert np.array_equal(back.multipliers[:-1], point.multipliers[:-1])
+
+
 def test_no_hopf_point_below_ustar_max_raises():
     with pytest.raises(fsicas.linear.hopf.CriticalVelocityError):
         cycle_branch(SUPER, ustar_max=3.0, settings=CycleSettings(max_points=5))

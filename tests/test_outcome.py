@@ -38,7 +38,7 @@ def test_limit_cycle_near_onset_has_the_hopf_frequency(damped_scene_u6_5, outcom
     o = run.outcome
     omega = abs(eigenvalues(run.model, run.steady)[0].imag)
     assert o.outcome == "lco" and not o.contact and o.convergence < 1e-3
-    assert o.frequency == pytest.approx(omega, rel=5e-2)     # weakly nonlinear shift only
+    assert o.omega == pytest.approx(omega, rel=5e-2)     # weakly nonlinear shift only
     assert 0 < o.tip_amplitude < damped_scene_u6_5.hstar / 2
     assert 0 < o.mean_flow_reduction < 0.2                   # fluttering beam reduces the mean flow
 
@@ -76,7 +76,7 @@ def test_cli_simulate_json_contract(capsys):
                  "--json"])
     out = json.loads(capsys.readouterr().out)
     assert code == 0
-    assert {"outcome", "period", "frequency", "tip_amplitude", "contact", "first_contact_time",
+    assert {"outcome", "period", "omega", "tip_amplitude", "contact", "first_contact_time",
             "contact_positions", "max_impact_force", "mean_flow_reduction", "steps",
             "wall_time", "quadrature_error"} <= set(out)
     assert out["outcome"] == "decay" and out["steps"] > 0

@@ -39,7 +39,7 @@ from .cycles import add_cycle_commands
 from .design import add_design_command
 from .human import print_report
 from .linear import add_linear_commands
-from .meta import cli_meta
+from .meta import cli_meta, with_meta
 from .onset import add_onset_command
 from .outputs import check_outputs
 from .paper import add_paper_command
@@ -162,7 +162,7 @@ def _main(argv) -> int:
             result = args.run(args)
     except (ValueError, SteadyStateError, CriticalVelocityError) as err:
         if getattr(args, "json", False):
-            print(strict_json.dumps({"error": str(err), "meta": cli_meta(args)}))
+            print(strict_json.dumps(with_meta({"error": str(err)}, cli_meta(args))))
         else:
             print(f"fsicas {args.command}: error: {err}", file=sys.stderr)
         return EXIT_ERROR
@@ -174,7 +174,7 @@ def _main(argv) -> int:
         own = result.get("warnings") or []
         result = {**result, "warnings": own + [n for n in notes if n not in own]}
     if args.json:
-        print(strict_json.dumps(result))
+        print(strict_json.dumps(with_meta(result, result["meta"])))
     else:
         (getattr(args, "human", None) or print_report)(result)
         print(f"{'wall time':>16}: {time.perf_counter() - start:.3f} s")

@@ -26,7 +26,7 @@ from .scene_options import add_scene_options, scene_from_args
 
 __all__ = ["add_cycle_commands"]
 
-_POINT_KEYS = ("kind", "ustar", "period", "frequency", "tip_amplitude", "gap_ratio", "stable",
+_POINT_KEYS = ("kind", "ustar", "period", "omega", "tip_amplitude", "gap_ratio", "stable",
                "quadrature_error", "quadrature_nodes")
 _IMPACT_KEYS = ("ustar", "period", "tip_amplitude", "min_gap", "gap_ratio", "impacts",
                 "peak_force", "flow_reduction", "stable", "quadrature_error", "quadrature_nodes")

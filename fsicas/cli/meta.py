@@ -6,21 +6,22 @@ result, when, from what and in which units.
 (:meth:`fsicas.Scene.to_dict` of the scene the command used; None for ``modes``;
 ``paper``'s main scene, its variants named in the report), ``settings`` (every other option of the command, as
 parsed, plus the resolved settings objects where the command builds them) and ``units``
-(field of the result -> its unit). This module is the one home of that description;
+(field of the result -> its unit, for the fields the result has: :func:`with_meta`). This module is the one home of that description;
 ``fsicas paper`` passes it to :func:`fsicas.paper.run_paper`, which writes it into
 ``report.json`` with the report's own ``fields``.
 """
 from __future__ import annotations
 
 import argparse
-import json
 import shlex
 from dataclasses import asdict, is_dataclass
 
-from ..provenance import provenance, versions
+from .. import strict_json
+from ..provenance import provenance, versions, with_meta
 from .scene_options import SCENE_OPTIONS, scene_from_args
 
-__all__ = ["NONDIM", "UNITS", "versions", "run_meta", "cli_meta", "record", "write_json"]
+__all__ = ["NONDIM", "UNITS", "versions", "run_meta", "cli_meta", "record", "with_meta",
+           "write_json"]
 
 #: The unit of a nondimensional length or time (docs/model.md).
 NONDIM = "nondimensional (units of L, T = L^2 sqrt(rho_s e / D))"
@@ -34,7 +35,7 @@ _PHYSICAL = "SI-derived, as each key says (Hz, Pa, mm, m/s, L/min)"
 _WARNINGS = "text"
 _WALL = "seconds"
 _BRANCH = {"ustar": _RATIO + " (U* = U0 T / L, docs/model.md)",
-           "period": _TIME, "frequency": _RATE, "tip_amplitude": _LENGTH,
+           "period": _TIME, "omega": _RATE, "tip_amplitude": _LENGTH,
            "gap_ratio": _RATIO + " (min gap / eps)", "eps": _LENGTH + " (contact layer)",
            "hopf": "U* and M* dimensionless, omega " + _RATE + ", pressure_drop " + _PRESSURE}
 
@@ -48,7 +49,7 @@ UNITS = {
     "boundary": {"points": "mstar, ustar_crit, freq_ratio " + _RATIO + "; omega " + _RATE +
                  "; l1 nondimensional; truncation relative", "switches": "mstar, ustar " +
                  _RATIO},
-    "simulate": {"period": _TIME, "frequency": _RATE, "tip_amplitude": _LENGTH,
+    "simulate": {"period": _TIME, "omega": _RATE, "tip_amplitude": _LENGTH,
                  "first_contact_time": _TIME, "contact_positions": _LENGTH,
                  "first_contact_position": _LENGTH, "t_end_reached": _TIME,
                  "max_impact_force": "dimensionless (max of the integrated impact force / "
@@ -57,9 +58,10 @@ UNITS = {
                  "convergence": _RATIO + " (relative remaining change)",
                  "quadrature_error": _RATIO + " (relative)",
                  "quadrature_tol": _RATIO + " (relative; null: not controlled)"},
-    "map": {"boundary": "U*, M* " + _RATIO},
+    "map": {"boundary": "U*, M* " + _RATIO + "; omega " + _RATE, "grid": "U*, M* " + _RATIO,
+            "t_end": _TIME, "scene": "as scene files (docs/model.md)"},
     "lco": {"hopf": _BRANCH["hopf"], "eps": _BRANCH["eps"],
-            "points": ", ".join(f"{k} {_BRANCH[k]}" for k in ("ustar", "period", "frequency",
+            "points": ", ".join(f"{k} {_BRANCH[k]}" for k in ("ustar", "period", "omega",
                                                               "tip_amplitude", "gap_ratio")),
             "folds": "as points", "contact": "as points"},
     "grazing": {"grazing": f"mstar, ustar, gap_ratio {_RATIO}; period {_TIME}; tip_amplitude "
@@ -70,11 +72,14 @@ UNITS = {
               "omega": _RATE, "freq_ratio": _RATIO + " (omega / omega_1)",
               "ustar_reference": _BRANCH["ustar"], "ustar_max": _BRANCH["ustar"],
               "truncation": _RATIO + " (relative change of ustar_crit with twice the modes)"},
-    "paper": {"omega_invacuo": _RATE, "steady": f"pressure_drop, closed_form {_PRESSURE}; "
-              f"Q {_FLOW}", "boundary": "as fsicas boundary: omega " + _RATE,
-              "variants": "ustar_crit, freq_ratio " + _RATIO, "impact_map": "counts",
+    "paper": {"omega_invacuo": _RATE, "boundary": "as fsicas boundary: omega " + _RATE,
+              "variants": "ustar_crit, freq_ratio " + _RATIO,
+              "impact_map": f"counts; grid U*, M* {_RATIO}; t_end {_TIME}; boundary as fsicas "
+              "map",
               "impacting_cycles": f"period {_TIME}; tip_amplitude {_LENGTH}; truncation_error "
-              f"{_RATIO} (relative change with half the modes); else as fsicas simulate"},
+              f"{_RATIO} (relative change with half the modes); t_end {_TIME}; else as "
+              "fsicas simulate", "fig4_curves": "counts of map points",
+              "steady": f"ustar {_RATIO}; pressure_drop, closed_form {_PRESSURE}; Q {_FLOW}"},
 }
 _COMMON = {"physical": _PHYSICAL, "warnings": _WARNINGS, "wall_time": _WALL}
 _ALIASES = {"cycles": "lco"}
@@ -114,9 +119,15 @@ def cli_meta(args: argparse.Namespace) -> dict:
 
 
 def write_json(path, data: dict, args: argparse.Namespace, indent: int = 1) -> None:
-    """Write ``data`` with its ``meta`` to ``path`` (a file the command line writes)."""
+    """Write ``data`` with its ``meta`` to ``path`` (a file the command line writes), as
+    strict JSON: a NaN or infinite number is written as null, and a warning in the file
+    names where (:mod:`fsicas.strict_json`)."""
+    data, places = strict_json.finite(data)
+    if places:
+        data["warnings"] = (data.get("warnings") or []) + [strict_json.nonfinite_note(places)]
+    data = with_meta(data, strict_json.finite(cli_meta(args))[0])
     with open(path, "w") as f:
-        json.dump({**data, "meta": cli_meta(args)}, f, indent=indent)
+        f.write(strict_json.dumps(data, indent=indent))
 
 
 def _scene(args: argparse.Namespace):

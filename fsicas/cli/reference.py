@@ -22,10 +22,13 @@ documents of its analysis.
 With `--json`, stdout holds one JSON object and nothing else. Every such object (and the
 branch file of `lco --out`, and `report.json` of `paper`) carries a `meta` object:
 `fsicas`, `casadi`, `numpy`, `scipy`, `python` (versions), `created` (UTC, ISO 8601),
-`command` (the command line), `scene` (the scene used, as `Scene.to_dict()`), `settings`
-(the other options as parsed, and the settings the command resolved from them) and
-`units` (field of the result: its unit; lengths by L, time by T = L^2 sqrt(rho_s e / D),
-pressure by D / L^3).
+`command` (the command line), `scene` (the scene used, as `Scene.to_dict()`; null for
+`paper`, whose sections each hold their own `scene`), `settings` (the other options as
+parsed, and the settings the command resolved from them) and `units` (field of the
+result: its unit, for the fields the result has; lengths by L, time by
+T = L^2 sqrt(rho_s e / D), pressure by D / L^3). No file or output holds NaN or
+Infinity: a number that is not finite is written as null and a `warnings` entry says
+where.
 
 On stderr: by default, progress bars when stderr is a terminal (continuation runs of
 `boundary`, `lco`, `onset`, `paper`; the points of `map`) and the stage lines of `paper`;

@@ -9,7 +9,7 @@ guess), which is continued by pseudo-arclength collocation in the adapter's para
 - U*: the inlet velocity (Q1 + Q2)/H* of the *steady state at the same pressure drop*
   (time integration holds Δp fixed at the steady value of the requested U*, so a cycle
   "at U*" is the cycle at that Δp);
-- period T and frequency 2π/T; tip half-amplitude (max − min of y(1, t) over the cycle)/2;
+- period T and angular frequency omega = 2π/T; tip half-amplitude (max − min of y(1, t) over the cycle)/2;
 - the Floquet multipliers (condensed monodromy product) and stability (all non-trivial
   multipliers inside the unit circle);
 - the minimal gap min_{x,t} h_c(x, t) over the cycle and its ratio to the contact
@@ -113,10 +113,11 @@ class CyclePoint(CycleMeasures):
     #: (None where not recorded)
     quadrature_nodes: int | None = None
 
-    _derived = ("frequency",)
+    _derived = ("omega",)
 
     @property
-    def frequency(self) -> float:
+    def omega(self) -> float:
+        """The angular frequency 2π/T (rad per unit T)."""
         return 2 * math.pi / self.period
 
 

@@ -6,10 +6,12 @@
 from __future__ import annotations
 
 import json
+import math
 from dataclasses import asdict, dataclass, fields
 
 import numpy as np
 
+from .. import strict_json
 from ..checks import finite_number, require
 
 __all__ = ["CycleRecord", "CycleMeasures", "BranchRecord", "plain_value", "check_settings"]
@@ -50,10 +52,14 @@ class CycleRecord:
 
     @classmethod
     def from_json(cls, d: dict):
-        d = {k: v for k, v in d.items() if k not in cls._derived}
-        d.update({k: np.array([complex(a, b) for a, b in d[k]], dtype=complex)
+        """The record of ``to_json``'s dict, also read back from strict JSON: a null
+        where a number was (NaN or infinite when written) reads as NaN."""
+        unmeasured = {f.name for f in fields(cls) if _is_nan(f.default)}
+        d = {k: math.nan if v is None and k in unmeasured else v
+             for k, v in d.items() if k not in cls._derived}
+        d.update({k: np.array([complex(_nan(a), _nan(b)) for a, b in d[k]], dtype=complex)
                   for k in cls._complex if k in d})
-        d["state"] = np.array(d["state"], dtype=float)
+        d["state"] = np.array([_nan(v) for v in d["state"]], dtype=float)
         return cls(**d)
 
 
@@ -69,6 +75,15 @@ class CycleMeasures(CycleRecord):
     tip_amplitude: float
     min_gap: float
     gap_ratio: float
+
+
+def _is_nan(value) -> bool:
+    return isinstance(value, float) and math.isnan(value)
+
+
+def _nan(value) -> float:
+    """A number of a strict JSON file: null as NaN."""
+    return math.nan if value is None else value
 
 
 def plain_value(value):
@@ -87,8 +102,9 @@ class BranchRecord:
         return np.array([getattr(p, name) for p in self.points])
 
     def save(self, path) -> None:
+        """Write the branch as strict JSON (NaN and infinities as null)."""
         with open(path, "w") as f:
-            json.dump(self.to_json(), f, indent=1)
+            f.write(strict_json.dumps(self.to_json(), indent=1))
 
     @classmethod
     def load(cls, path):

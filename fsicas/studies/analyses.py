@@ -84,12 +84,12 @@ def _run(study: Study, point: dict):
 
 def _outcome_row(scene: Scene, physical, run) -> dict:
     out = run.to_json()
-    keep = ("outcome", "period", "frequency", "tip_amplitude", "contact", "first_contact_time",
+    keep = ("outcome", "period", "omega", "tip_amplitude", "contact", "first_contact_time",
             "max_impact_force", "mean_flow_reduction", "settled", "convergence", "status")
     row = {k: out[k] for k in keep}
     row.update(ustar=scene.ustar, mstar=scene.mstar)
-    if physical is not None and row["frequency"] is not None:
-        row["frequency_hz"] = scene.scales.hz(row["frequency"])      # angular: 2 pi / T
+    if physical is not None and row["omega"] is not None:
+        row["frequency_hz"] = scene.scales.hz(row["omega"])
     return row
 
 

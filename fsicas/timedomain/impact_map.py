@@ -48,7 +48,9 @@ MapOutcome = Union[OutcomeKind, Literal["error"]]
 @dataclass(frozen=True)
 class MapResult:
     """Points (dicts with ustar, mstar, outcome: :data:`MapOutcome`, ...) and the linear
-    boundary."""
+    boundary; ``header``: what every point depends on but its (U*, M*) (the results
+    file's, :func:`map_header`: scene fields, t_end, integrator settings, criteria);
+    ``grid``: the U* and M* values."""
 
     points: list
     boundary: dict
@@ -56,6 +58,8 @@ class MapResult:
     computed: int
     #: the map's scene (its U* and M* are those of the grid)
     scene: Scene | None = None
+    header: dict | None = None
+    grid: dict | None = None
 
     def counts(self) -> dict[MapOutcome, int]:
         out = {}
@@ -64,7 +68,9 @@ class MapResult:
         return out
 
     def to_json(self) -> dict:
-        return {"points": len(self.points), "computed": self.computed, "counts": self.counts(),
+        described = {k: v for k, v in (self.header or {}).items() if k != "format"}
+        return {**described, "grid": self.grid, "points": len(self.points),
+                "computed": self.computed, "counts": self.counts(),
                 "boundary": self.boundary, "wall_time": self.wall_time}
 
 
@@ -131,7 +137,8 @@ def impact_map(ustars, mstars, path, *, scene: Scene = MAP_SCENE, t_end: float =
     start = time.perf_counter()
     criteria = Criteria(stop_on_contact=True)
     base = scene.replace(contact=False)
-    with ResultsFile(path, map_header(base, t_end, settings, criteria), provenance()) as out, \
+    header = map_header(base, t_end, settings, criteria)
+    with ResultsFile(path, header, provenance()) as out, \
             contextlib.ExitStack() as stack:
         done = {_key(row["ustar"], row["mstar"]): row for row in out.records}
         todo = [(u, m) for m in mstars for u in ustars if _key(u, m) not in done]
@@ -148,7 +155,8 @@ def impact_map(ustars, mstars, path, *, scene: Scene = MAP_SCENE, t_end: float =
                 progress(k, len(todo))
     points = [done[_key(u, m)] for m in mstars for u in ustars]
     boundary = stability_boundary(scene, mstars, ustars)
-    return MapResult(points, boundary, time.perf_counter() - start, len(todo), base)
+    return MapResult(points, boundary, time.perf_counter() - start, len(todo), base, header,
+                     {"ustar": ustars.tolist(), "mstar": mstars.tolist()})
 
 
 def stability_boundary(scene: Scene, mstars, ustars) -> dict:

@@ -117,7 +117,7 @@ class Outcome:
 
     outcome: OutcomeKind
     period: float | None = None
-    frequency: float | None = None
+    omega: float | None = None
     tip_amplitude: float | None = None
     convergence: float | None = None
     cycles: int = 0
@@ -351,7 +351,7 @@ class Monitor:
         Qs = self.steady.x[-2:].sum()
         flow = X[a:b, -2:].sum(axis=1)
         reduction = 1.0 - float(np.trapezoid(flow, t[a:b]) / (t[b - 1] - t[a]) / Qs)
-        out = dict(period=T, frequency=2 * np.pi / T, tip_amplitude=float(cyc.amplitudes[-1]),
+        out = dict(period=T, omega=2 * np.pi / T, tip_amplitude=float(cyc.amplitudes[-1]),
                    convergence=change, cycles=int(cyc.periods.size), mean_flow_reduction=reduction,
                    t_settled=float(cyc.times[-1]), settled=settled)
         if info.get("contact"):

@@ -72,7 +72,7 @@ class Run:
     def to_json(self) -> dict:
         """The ``fsicas simulate --json`` object (keys in docs/simulate.md)."""
         o, tr = self.outcome, self.trajectory
-        out = {k: o.to_json()[k] for k in ("outcome", "period", "frequency", "tip_amplitude", "contact",
+        out = {k: o.to_json()[k] for k in ("outcome", "period", "omega", "tip_amplitude", "contact",
                                             "first_contact_time", "contact_positions",
                                             "max_impact_force", "mean_flow_reduction")}
         out.update(steps=tr.steps, wall_time=self.wall_time, status=self.status, message=tr.message,
