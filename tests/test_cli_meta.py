@@ -201,3 +201,26 @@ def test_reference_writer_takes_a_file_and_answers_help(tmp_path, monkeypatch, c
         main(["--help"])
     assert exit_.value.code == 0 and "usage:" in capsys.readouterr().out
     assert sorted(p.name for p in tmp_path.iterdir()) == ["out.md"]
+
+
+def _strict(text: str):
+    """``json.loads`` that refuses NaN and Infinity (as strict readers do)."""
+    def refuse(token):
+        raise AssertionError(f"non-standard JSON token {token}")
+    return json.loads(text, parse_constant=refuse)
+
+
+def test_written_files_hold_no_nan_and_say_where_it_was(tmp_path):
+    """A command's --out JSON and a results file write a non-finite number as null; the
+    JSON file's warnings name the place."""
+    from fsicas.cli.meta import write_json
+    from fsicas.results_file import ResultsFile
+    args = build_parser().parse_args(["modes", "--modes", "2"])
+    write_json(tmp_path / "out.json", {"a": {"b": [1.0, float("nan")]}, "c": float("inf")}, args)
+    data = _strict((tmp_path / "out.json").read_text())
+    assert data["a"]["b"] == [1.0, None] and data["c"] is None
+    assert any("a.b[1]: nan" in w and "c: inf" in w for w in data["warnings"])
+    with ResultsFile(tmp_path / "r.jsonl", {"kind": "test"}) as f:
+        f.append({"x": float("nan"), "y": 2.0})
+    lines = (tmp_path / "r.jsonl").read_text().splitlines()
+    assert _strict(lines[-1]) == {"x": None, "y": 2.0}
