@@ -205,6 +205,7 @@ def test_cli_lco_through_contact(capsys):
     assert code == 0 and out["status"] == "contact" and imp["route"] == "collocation"
     assert imp["status"] == "bound" and set(imp["points"][0]) == keys
     assert imp["stopped_by"] == "--ustar-max 6.7" and out["stopped_by"] is None
+    assert imp["message"] == "reached --ustar-max 6.7"       # no internal parameter names
     assert len(imp["points"]) > 10 and 6.65 < imp["points"][-1]["ustar"] <= 6.7
     assert 0 < imp["max_error_estimate"] < 0.1          # no coarse-mesh warning here
     (ns,) = imp["special"]

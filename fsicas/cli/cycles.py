@@ -178,7 +178,7 @@ def _stop(status: str, message: str, option: str, value, args) -> dict:
                    f"{args.ustar_max:g}: raise {option} to go on ({message})")
     elif status == "bound":
         by = f"--ustar-max {args.ustar_max:g}"
-        message = f"reached {by} ({message})"
+        message = f"reached {by}"        # the library's words name its internal parameter
     else:
         by = None
     return {"stopped_by": by, "message": message}
