@@ -4,10 +4,19 @@ no cell fails, every figure is shown, and the key numbers are right.
 Each notebook in ``notebooks/`` is executed once (parametrized over the files, so
 ``pytest -n 2`` spreads them); a notebook with an entry in :data:`REPORTS` gets that cell
 appended, which prints its key numbers as one JSON line for :data:`CHECKS`. The stored
-notebooks carry cell ids and no outputs.
+notebooks carry cell ids and the outputs of one run top to bottom (:data:`REGENERATE`),
+checked fast against their sources (every cell that prints or draws shows it, no error
+or warning, figures of a modest size) and, where the notebook is executed, against the
+fresh run's outputs: the same lines, numbers aside. Executing never writes the stored file.
 """
+import ast
+import base64
+import importlib.metadata
 import json
 import re
+import struct
+import sys
+import tomllib
 from pathlib import Path
 
 import nbclient
@@ -17,6 +26,18 @@ import pytest
 
 NOTEBOOKS = Path(__file__).resolve().parent.parent / "notebooks"
 PATHS = sorted(NOTEBOOKS.glob("*.ipynb"))
+PYPROJECT = NOTEBOOKS.parent / "pyproject.toml"
+
+#: The command of README.md that executes the stored notebooks in place.
+REGENERATE = ("jupyter nbconvert --to notebook --execute --inplace "
+              "--ExecutePreprocessor.record_timing=False notebooks/*.ipynb")
+
+#: A number as printed (sign, digits, decimals, exponent): masked where runs may differ.
+NUMBER = re.compile(r"[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?")
+
+#: Limits of a stored notebook: a figure's width in pixels (inline at dpi 100), the
+#: file's size, and the text one cell prints.
+MAX_FIGURE_WIDTH, MAX_FILE_BYTES, MAX_CELL_TEXT = 1200, 600_000, 4000
 
 #: A code cell draws when it calls pyplot or a plotting function (fsicas.plots.plot_*).
 DRAWS = re.compile(r"\bplt\.|\bplot_\w+\(")
@@ -82,6 +103,51 @@ print("REPORT " + _json.dumps({
 }
 
 
+def code_cells(nb) -> list:
+    return [c for c in nb.cells if c.cell_type == "code"]
+
+
+def stream_text(cell, name: str = "stdout") -> str:
+    """What ``cell`` printed to ``name`` (stdout or stderr), its chunks joined."""
+    return "".join(o.text for o in cell.outputs if o.output_type == "stream" and o.name == name)
+
+
+def figures(cell) -> list:
+    """The base64 PNGs ``cell`` shows."""
+    return [o.data["image/png"] for o in cell.outputs
+            if o.output_type == "display_data" and "image/png" in o.data]
+
+
+def png_width(data: str) -> int:
+    """Width in pixels of a base64 PNG: the first field of its IHDR chunk (bytes 16-20)."""
+    return struct.unpack(">I", base64.b64decode(data[:32])[16:20])[0]
+
+
+def shape(cell) -> tuple:
+    """What a run of ``cell`` shows, numbers aside: its printed text with every number
+    masked and the spaces dropped (array padding follows the numbers), and its figures."""
+    return re.sub(r"\s+", "", NUMBER.sub("#", stream_text(cell))), len(figures(cell))
+
+
+def imported_modules(nb) -> set:
+    """Top-level names of the modules the code cells of ``nb`` import (magics skipped)."""
+    names = set()
+    for cell in code_cells(nb):
+        source = "\n".join(line for line in cell.source.splitlines()
+                           if not line.lstrip().startswith(("%", "!")))
+        for node in ast.walk(ast.parse(source)):
+            if isinstance(node, ast.Import):
+                names |= {alias.name.split(".")[0] for alias in node.names}
+            elif isinstance(node, ast.ImportFrom) and node.level == 0:
+                names.add(node.module.split(".")[0])
+    return names
+
+
+def distribution(requirement: str) -> str:
+    """The normalized distribution name of a requirement (``"dask[distributed]>=1"``: dask)."""
+    return re.sub(r"[-_.]+", "-", re.match(r"[A-Za-z0-9_.-]+", requirement).group()).lower()
+
+
 def execute(path: Path):
     """The executed notebook (with its report cell appended, if any) and its report."""
     nb = nbformat.read(path, as_version=4)
@@ -104,22 +170,65 @@ def test_there_are_notebooks():
 
 
 @pytest.mark.parametrize("path", PATHS, ids=lambda p: p.stem)
-def test_stored_without_outputs(path):
-    """Outputs are stripped in the repository, every cell has a unique id."""
+def test_stored_with_outputs(path):
+    """Stored as one run top to bottom leaves it: unique cell ids, execution counts 1, 2,
+    ... in order, the text of every cell that prints and the figure of every cell that
+    draws, no error, traceback, warning or object address, and a modest size."""
+    assert path.stat().st_size <= MAX_FILE_BYTES, f"{path.name}: {path.stat().st_size} bytes"
     nb = nbformat.read(path, as_version=4)
     nbformat.validate(nb)
     ids = [c.get("id") for c in nb.cells]
     assert all(ids) and len(set(ids)) == len(ids)
-    for cell in nb.cells:
-        if cell.cell_type == "code":
-            assert cell.outputs == [] and cell.execution_count is None, cell.id
     assert nb.metadata.kernelspec.name == "python3"
+    code = code_cells(nb)
+    assert [c.execution_count for c in code] == list(range(1, len(code) + 1)), \
+        f"{path.name} is not stored as one run top to bottom: {REGENERATE}"
+    for cell in code:
+        where, text = f"{path.name} cell {cell.id}", stream_text(cell)
+        assert all(o.output_type in ("stream", "display_data", "execute_result")
+                   for o in cell.outputs), f"{where} stores an error"
+        assert not stream_text(cell, "stderr"), f"{where}: {stream_text(cell, 'stderr')[:400]}"
+        assert not re.search(r"Traceback|\w+Warning: | at 0x[0-9a-f]+", text + str(cell.outputs)), where
+        assert len(text) <= MAX_CELL_TEXT, f"{where} prints {len(text)} characters"
+        if re.search(r"\bprint\(", cell.source):
+            assert text, f"{where} prints but stores no text: {REGENERATE}"
+        if DRAWS.search(cell.source):
+            assert figures(cell), f"{where} draws but stores no figure: {REGENERATE}"
+        assert all(png_width(f) <= MAX_FIGURE_WIDTH for f in figures(cell)), where
+
+
+def test_the_notebooks_extra_installs_what_they_import():
+    """``pip install -e ".[notebooks]"`` brings JupyterLab and every package a notebook
+    imports (outside the standard library and fsicas): each is a core dependency or in
+    the ``notebooks`` extra."""
+    project = tomllib.loads(PYPROJECT.read_text())["project"]
+    declared = {distribution(r) for r in
+                project["dependencies"] + project["optional-dependencies"]["notebooks"]}
+    assert {"jupyterlab", "ipykernel", "nbconvert"} <= declared
+    providers = importlib.metadata.packages_distributions()
+    for path in PATHS:
+        modules = imported_modules(nbformat.read(path, as_version=4))
+        for module in modules - set(sys.stdlib_module_names) - {"fsicas"}:
+            found = {distribution(d) for d in providers.get(module, [])}
+            assert found & declared, f"{path.name} imports {module} ({found or 'not installed'}), " \
+                                     "which the notebooks extra does not install"
+
+
+def test_the_readme_says_how_to_open_and_regenerate_them():
+    readme = (NOTEBOOKS.parent / "README.md").read_text()
+    assert 'python3 -m pip install -e ".[notebooks]" && jupyter lab notebooks/' in readme
+    assert REGENERATE in readme
 
 
 @pytest.mark.parametrize("path", PATHS, ids=lambda p: p.stem)
 def test_notebook(path):
+    stored = path.read_bytes()
     nb, out = execute(path)
-    code = [c for c in nb.cells if c.cell_type == "code"]
+    assert path.read_bytes() == stored                  # executing never writes the file
+    code = code_cells(nb)
+    for old, new in zip(code_cells(nbformat.reads(stored.decode(), as_version=4)), code):
+        assert shape(old) == shape(new), \
+            f"{path.name} cell {old.id}: the stored outputs are not its source's: {REGENERATE}"
     errors = [(c.id, o.ename, o.evalue) for c in code for o in c.outputs if o.output_type == "error"]
     assert not errors
     figures = [o for c in code for o in c.outputs
