@@ -309,7 +309,8 @@ def _flow_panel(ax, view: CycleView) -> None:
         ax.axhline(view.Q_steady[c], color=PALETTE[c], ls=":", lw=0.8)
     ax.set(xlabel=TAU, ylabel="flow rate $Q_c$ (units of $L^2/T$)", xlim=(0, 1))
     handles = [*ax.get_legend_handles_labels()[0], Line2D([], [], color="0.3", ls=":", lw=0.8)]
-    ax.legend(handles, ["$Q_1$ (above)", "$Q_2$ (below)", "steady state"], fontsize=7)
+    ax.legend(handles, ["$Q_1$ (above)", "$Q_2$ (below)", "steady state"], loc="upper right",
+              fontsize=7)
 
 
 def _tip_panels(ax_phase, ax_tip, view: CycleView) -> None:

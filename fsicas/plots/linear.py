@@ -337,7 +337,7 @@ def plot_eigenvalues(result, scene, path=None):
     ax.set(xlabel=r"growth rate $\mathrm{Re}\,\lambda$ (units of $1/T$)",
            ylabel=r"frequency $\mathrm{Im}\,\lambda$ (rad per unit $T$)",
            title=f"$M^*$ = {scene.mstar:g}, $U^*$ = {scene.ustar:g}, $N$ = {scene.modes}")
-    ax.legend(loc="best")
+    ax.legend(loc="upper right")       # moved off the data if it covers any
     return finish(fig, path)
 
 
