@@ -230,7 +230,7 @@ def test_cycle_figure_labels_every_panel_and_shows_every_mode(lco_view, tmp_path
     fig = plot_cycle(lco_view, tmp_path / "cycle.pdf")
     assert (tmp_path / "cycle.pdf").read_bytes()[:5] == b"%PDF-"
     panels = _panels(fig)
-    assert len(panels) == 8
+    assert len(panels) == 9                       # Figs. 6-9 and the first contact zoomed
     for ax in panels:
         assert ax.get_xlabel() and ax.get_ylabel(), ax.get_title()
         assert "(units of" in ax.get_ylabel() or "nondim" in ax.get_ylabel(), ax.get_ylabel()
@@ -254,7 +254,7 @@ def test_cycles_side_by_side_one_column_per_case(lco_view):
     other = replace(lco_view, ustar=7.0, outcome="impacting_lco")
     fig = plot_cycles([lco_view, other])
     panels = _panels(fig)
-    assert len(panels) == 16
+    assert len(panels) == 18
     cols = {ax.get_subplotspec().colspan.start for ax in panels}
     assert cols == {0, 1}
     tops = [ax for ax in panels if ax.get_subplotspec().rowspan.start == 0]
@@ -315,6 +315,47 @@ def test_fig4_draws_the_curves_the_band_and_the_cases(boundary6):
     assert any(t.get_text() == "1a" for t in ax.texts)
     grazing = [line for line in ax.lines if line.get_label() == "grazing (first contact)"]
     assert np.allclose(grazing[0].get_xdata(), 7 + np.log10(grazing[0].get_ydata()))
+
+
+#: Two curves whose ends stopped for four reasons, with the messages ``_trace`` writes
+#: (the continuation's own wording of each status).
+_ENDED = (("grazing", ("bound", "max_steps"),
+           "lower M*: bound (parameter log10_mstar = -1.00521 left [-1, 1]); higher M*: "
+           "max_steps (reached max_steps = 149)"),
+          ("fold", ("stopped", "bound"),
+           "lower M*: stopped (the cycles reached the wall (min gap below eps)); higher M*: "
+           "bound (parameter kinematic_pressure_drop = 8.69577 left [0, 8.448])"))
+
+
+def test_fig4_legend_names_the_switch_jumps_and_why_each_curve_ends(boundary6):
+    from dataclasses import replace
+
+    from fsicas.cycles.curves import CurveMap
+    from fsicas.plots import plot_map
+    boundary, _ = boundary6
+    synthetic = _synthetic_curves()
+    grazing, fold = (replace(c, status=status, message=message) for c, (_, status, message)
+                     in zip((synthetic.grazing[0], synthetic.fold[0]), _ENDED))
+    assert [r for _, r in grazing.ends()] == ["mstar_window", "budget"]
+    assert [r for _, r in fold.ends()] == ["wall", "ustar_bound"]
+    points = [{"ustar": 4.0, "mstar": 1.0, "outcome": "lco"}]
+    fig = plot_map(_map_result(points, {"mstar": [1.0], "ustar_crit": [5.5], "omega": [45.0]}),
+                   linear=boundary, curves=CurveMap([grazing], [fold], [1.0], [], 0.0))
+    labels = [t.get_text() for t in fig.legends[0].get_texts()]
+    assert "jump of $U^*_c$ at a branch switch" in labels
+    assert {"end: edge of the $M^*$ window", "end: point budget used up (unfinished)",
+            "end: its cycles reach the wall", "end: the $U^*$ limit of the map"} <= set(labels)
+    ax = _panels(fig)[0]
+    jumps = [line for line in ax.lines if line.get_gid() == "mode switch"]
+    assert len(jumps) == len(boundary.switches)
+    for s, line in zip(boundary.switches, jumps):           # across in U*, at the switch's M*
+        assert sorted(line.get_xdata()) == sorted([s.ustar_below, s.ustar_above])
+    marks = {line.get_gid(): line.get_xydata().tolist() for line in ax.lines
+             if (line.get_gid() or "").startswith("curve end")}
+    last = grazing.points[-1]
+    assert marks["curve end: budget"] == [[last.ustar, last.mstar]]
+    first = fold.points[0]
+    assert marks["curve end: wall"] == [[first.ustar, first.mstar]]
 
 
 def test_curves_give_each_map_point_its_expected_outcome():

@@ -39,12 +39,20 @@ from ..workers import local_pool
 from .collocation import CycleRun, CycleSettings, ProfileGauge, continue_cycles
 from .records import check_settings, plain_value
 
-__all__ = ["CurveKind", "CurveSettings", "CurvePoint", "CycleCurve", "CurveMap", "grazing_curve",
+__all__ = ["CurveKind", "CurveEnd", "CurveSettings", "CurvePoint", "CycleCurve", "CurveMap",
+           "grazing_curve",
            "fold_curves", "cycle_curves", "curve_seeds", "crossings", "lowest_ustar",
            "expected_outcomes"]
 
 CurveKind = Literal["grazing", "fold"]
 """A curve of grazing cycles (min gap = eps) or of cycle folds (LPC)."""
+
+CurveEnd = Literal["mstar_window", "ustar_bound", "bound", "budget", "wall", "hopf", "failed",
+                   "stopped"]
+"""Why a curve's end stopped (:meth:`CycleCurve.ends`): it left the M* window, passed the
+U* bound (``ustar_max``), another bound, used up its points (``max_points``), its cycles
+reached the wall or shrank onto the Hopf curve (a fold curve's stop rule), a corrector
+failure, another stop."""
 
 
 @dataclass(frozen=True)
@@ -121,6 +129,14 @@ class CycleCurve:
     def column(self, name: str) -> np.ndarray:
         return np.array([getattr(p, name) for p in self.points])
 
+    def ends(self) -> list[tuple[CurvePoint, CurveEnd]]:
+        """The curve's first and last point, each with why it stopped there
+        (:data:`CurveEnd`, read off ``status`` and the side's part of ``message``)."""
+        sides = self.message.split("; higher M*: ")
+        sides += [""] * (2 - len(sides))
+        return [(point, _end(status, text)) for point, status, text
+                in zip((self.points[0], self.points[-1]), self.status, sides)]
+
     def to_json(self) -> dict:
         return {"kind": self.kind, "seed": self.seed.to_json(),
                 "points": [p.to_json() for p in self.points], "status": list(self.status),
@@ -131,6 +147,15 @@ class CycleCurve:
         return cls(d["kind"], CurvePoint.from_json(d["seed"]),
                    [CurvePoint.from_json(p) for p in d["points"]],
                    tuple(d["status"]), d["message"], d["wall_time"])
+
+
+def _end(status: str, text: str) -> CurveEnd:
+    """:data:`CurveEnd` of one side of a curve from its branch status and message."""
+    if status == "bound":
+        return ("mstar_window" if LOG_M in text else "ustar_bound" if PI in text else "bound")
+    if status == "stopped":
+        return "wall" if "reached the wall" in text else "hopf" if "shrank" in text else "stopped"
+    return {"max_steps": "budget", "failed": "failed"}.get(status, "stopped")
 
 
 @dataclass(frozen=True)

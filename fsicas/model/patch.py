@@ -31,7 +31,7 @@ from numpy.polynomial import chebyshev as cheb
 from . import contact
 from .assembly import Model, per_model
 
-__all__ = ["DEGREE", "Penetration", "penetration", "patch_cells"]
+__all__ = ["DEGREE", "Penetration", "penetration", "patch_cells", "contact_intervals"]
 
 DEGREE = 11
 """Degree of the Chebyshev interpolant of the gap on one cell."""
@@ -102,6 +102,16 @@ def penetration(model: Model, X, p) -> Penetration:
     if not parts:
         return Penetration(np.zeros(0), np.zeros(0), np.zeros(0))
     return Penetration(*(np.concatenate([p[k] for p in parts]) for k in range(3)))
+
+
+def contact_intervals(load) -> np.ndarray:
+    """The separate contact intervals of a sampled impact load (the samples where it is
+    positive): rows (first, last) sample index, one per impact; several in quick
+    succession are chattering."""
+    on = np.asarray(load) > 0
+    starts = np.flatnonzero(on & ~np.r_[False, on[:-1]])
+    ends = np.flatnonzero(on & ~np.r_[on[1:], False])
+    return np.c_[starts, ends]
 
 
 def _block(model: Model, X: np.ndarray, k: float, eps: float) -> tuple:

@@ -106,9 +106,12 @@ def subplots(nrows: int = 1, ncols: int = 1, **kwargs):
 
 
 def finish(fig, path=None):
-    """Write ``fig`` to ``path`` (format from the file name; PNG if it has none) and
-    release it from pyplot; without a path leave it open. Returns the figure, which stays
-    usable (inspect it, save it again)."""
+    """Keep every legend of ``fig`` off its panel's data
+    (:func:`fsicas.plots.legends.settle_legends`), write ``fig`` to ``path`` (format from
+    the file name; PNG if it has none) and release it from pyplot; without a path leave
+    it open. Returns the figure, which stays usable (inspect it, save it again)."""
+    from .legends import settle_legends
+    settle_legends(fig)
     if path is not None:
         fig.savefig(Path(path))
         pyplot().close(fig)

@@ -13,6 +13,16 @@ __all__ = ["plot_branch", "plot_curves", "draw_curves", "mark_cases"]
 _CURVE_STYLE = {"grazing": dict(color=PALETTE[5], ls="--", label="grazing (first contact)"),
                 "fold": dict(color=PALETTE[1], ls="-.", label="fold of cycles")}
 
+#: Marker and words of each reason a curve's end stopped (:meth:`CycleCurve.ends`).
+_END_MARKS = {"mstar_window": ("h", "end: edge of the $M^*$ window"),
+              "ustar_bound": (">", "end: the $U^*$ limit of the map"),
+              "bound": ("h", "end: a bound of the continuation"),
+              "budget": ("X", "end: point budget used up (unfinished)"),
+              "wall": ("o", "end: its cycles reach the wall"),
+              "hopf": ("v", "end: its cycles shrink onto the Hopf curve"),
+              "failed": ("x", "end: solver failure"),
+              "stopped": ("D", "end: stopped")}
+
 _PANELS = (("tip_amplitude", f"tip half-amplitude $A/L$ {NONDIM}"),
            ("period", "period (units of $T$)"))
 
@@ -66,6 +76,7 @@ def draw_curves(ax, curves, hopf=None) -> None:
             label = style.pop("label")
             ax.plot(curve.column("ustar"), curve.column("mstar"), lw=1.4,
                     label=label if k == 0 else None, zorder=2, **style)
+    _curve_ends(ax, curves)
     grazing = [p.mstar for c in curves.grazing for p in c.points]
     if hopf is None or not grazing:
         return
@@ -74,6 +85,20 @@ def draw_curves(ax, curves, hopf=None) -> None:
     ceiling = lowest_ustar(curves.grazing, m, floor=critical)
     ax.fill_betweenx(m, critical, ceiling, where=np.isfinite(ceiling), color="0.85", zorder=0,
                      lw=0, label="contact-free cycles")
+
+
+def _curve_ends(ax, curves) -> None:
+    """A marker at each end of each curve, its shape saying why the curve stopped there
+    (:data:`_END_MARKS`), each reason once in the legend."""
+    ends = {}
+    for curve in [*curves.grazing, *curves.fold]:
+        for point, reason in curve.ends():
+            ends.setdefault(reason, []).append((point.ustar, point.mstar))
+    for reason, points in ends.items():
+        marker, words = _END_MARKS[reason]
+        u, m = np.array(points).T
+        ax.plot(u, m, marker, ls="none", ms=5, mfc="white", mec="k", mew=0.9, zorder=2.5,
+                label=words, gid=f"curve end: {reason}")      # under the map's points
 
 
 def mark_cases(ax, cases) -> None:

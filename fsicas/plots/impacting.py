@@ -9,9 +9,12 @@ by side (one column each, one row per quantity), as the paper shows its cases (1
 - modal velocities r_n(t) of all N modes and flow rates Q_c(t) (Fig. 7),
 - tip displacement, tip phase portrait, spectrum of the tip velocity and RMS of the
   modal displacements q_n (Fig. 8),
-- total impact force / F0 (Fig. 9),
+- total impact force / F0 (Fig. 9) and its first contact episode zoomed
+  (:func:`first_contact`): at the cycle's time scale the several impacts of a chattering
+  contact merge into one spike,
 
-against t / T0 (T0 the cycle's period). The spectrum (:func:`tip_spectrum`) averages
+against t / T0 (T0 the cycle's period). Legends are kept off the data
+(:mod:`fsicas.plots.legends`). The spectrum (:func:`tip_spectrum`) averages
 Hann-windowed segments of a whole number of periods, so a periodic motion's harmonics
 sit on exact bins at integer multiples of f0 = 1/T0 and the floor between them is what
 is not periodic.
@@ -24,18 +27,18 @@ import numpy as np
 
 from ..model.assembly import modal_basis
 from ..model.contact import reference_force
-from ..model.patch import penetration
+from ..model.patch import contact_intervals, penetration
 from ..timedomain.returns import poincare_returns
 from .backend import NONDIM, PALETTE, finish, outcome_words, pyplot, styled, subplots
 
 __all__ = ["CycleView", "cycle_view", "cycle_window", "return_period", "tip_spectrum",
-           "plot_cycle", "plot_cycles"]
+           "first_contact", "plot_cycle", "plot_cycles"]
 
 TAU = "time $t/T_0$"
 Y_TIP = f"tip $y(L)/L$ {NONDIM}"
 #: The quantities of the panels, in the order of :func:`plot_cycles`' rows.
 ROWS = ("snapshots", "modal velocities", "flow rates", "tip", "phase portrait", "spectrum",
-        "modal rms", "impact force")
+        "modal rms", "impact force", "first contact")
 
 
 @dataclass(frozen=True)
@@ -173,15 +176,33 @@ def _view(run_or_view, snapshots: int) -> CycleView:
     return run_or_view if isinstance(run_or_view, CycleView) else cycle_view(run_or_view, snapshots)
 
 
+def first_contact(view: CycleView) -> tuple[float, float, int] | None:
+    """The first contact episode the cycle shows whole: the impacts (the separate
+    contact intervals, :func:`fsicas.model.patch.contact_intervals`) of the first half
+    cycle with contact, a half cycle being the tip's stay on one side of the channel's
+    centre line (between two of its crossings; the cycle's first, cut by its start, only
+    if no other has contact). Returns (t/T0 at its first impact's start, t/T0 at its last
+    impact's end, the number of impacts); None for a cycle without contact."""
+    spans = contact_intervals(view.force)
+    if not len(spans):
+        return None
+    side = np.sign(view.tip)
+    halves = np.r_[0, np.cumsum(side[1:] != side[:-1])]     # the half cycle of each sample
+    whole = spans[halves[spans[:, 0]] > 0]
+    first = (whole if len(whole) else spans)[0, 0]
+    episode = spans[halves[spans[:, 0]] == halves[first]]
+    return float(view.tau[first]), float(view.tau[episode[-1, 1]]), len(episode)
+
+
 @styled
 def plot_cycle(run, path=None, snapshots: int = 24):
-    """Figs. 6–9 of one run's last settled cycle in one figure (2 x 4 panels); a run
-    without a settled cycle shows its last tip-return interval, titled as unsettled.
-    ``run``: a run or its :class:`CycleView`. Returns the Figure."""
+    """Figs. 6–9 of one run's last settled cycle in one figure (3 x 3 panels, the last
+    the first contact zoomed); a run without a settled cycle shows its last tip-return
+    interval, titled as unsettled. ``run``: a run or its :class:`CycleView`. Returns the
+    Figure."""
     view = _view(run, snapshots)
-    fig, ax = subplots(2, 4, figsize=(11.5, 5.0))
-    panels = dict(zip(ROWS, (ax[0, 0], ax[0, 1], ax[0, 2], ax[1, 0], ax[0, 3], ax[1, 1],
-                             ax[1, 2], ax[1, 3])))
+    fig, ax = subplots(3, 3, figsize=(10.5, 7.8))
+    panels = dict(zip(ROWS, ax.flat))
     _draw_case(panels, view, colorbar=True, titles=True)
     fig.suptitle(view.title)
     return finish(fig, path)
@@ -194,24 +215,26 @@ def plot_cycles(runs, path=None, labels=None, snapshots: int = 24):
     (1a), (1b), ...). Returns the Figure."""
     views = [_view(r, snapshots) for r in runs]
     labels = labels or [f"(1{chr(ord('a') + k)})" for k in range(len(views))]
-    fig, ax = subplots(len(ROWS), len(views), figsize=(2.9 * len(views) + 0.9, 13.5))
+    fig, ax = subplots(len(ROWS), len(views), figsize=(2.9 * len(views) + 0.9, 15.2))
     for k, (view, label) in enumerate(zip(views, labels)):
         _draw_case(dict(zip(ROWS, ax[:, k])), view, colorbar=k == len(views) - 1, titles=False)
         T = f"$T_0$ = {view.period:.4g}" if view.settled else f"not settled, $T$ = {view.period:.4g}"
         ax[0, k].set_title(f"{label} $U^*$ = {view.ustar:g}\n{outcome_words(view.outcome)}, {T}")
-    for k in range(1, len(views)):         # one y label per row, on the left column
+    for k in range(1, len(views)):         # one y label and legend per row, on the left
         for row in ax[:, k]:
             row.set_ylabel("")
+            if row.get_legend() is not None:
+                row.get_legend().remove()
     first = views[0] if views else None
     if first is not None:
         fig.suptitle(f"impacting cycles at $M^*$ = {first.mstar:g}, $N$ = {first.modes}, "
-                     f"{first.law}: Figs. 6 (snapshots), 7 ($r_n$, $Q_c$), 8 (tip, spectrum, "
-                     "RMS), 9 (force)")
+                     f"{first.law}\nFigs. 6 (snapshots), 7 ($r_n$, $Q_c$), 8 (tip, "
+                     "walls dashed; spectrum; RMS), 9 (force, its first contact zoomed)")
     return finish(fig, path)
 
 
 _TITLES = {"snapshots": "beam snapshots (Fig. 6)", "modal velocities": "modal velocities (Fig. 7)",
-           "flow rates": "flow rates (Fig. 7)", "tip": "tip displacement (Fig. 8)",
+           "flow rates": "flow rates (Fig. 7)", "tip": "tip displacement, walls dashed (Fig. 8)",
            "phase portrait": "tip phase portrait (Fig. 8)",
            "spectrum": "tip-velocity spectrum (Fig. 8)",
            "modal rms": "RMS of the modal displacements (Fig. 8)",
@@ -226,10 +249,11 @@ def _draw_case(panels: dict, view: CycleView, colorbar: bool, titles: bool) -> N
     _tip_panels(panels["phase portrait"], panels["tip"], view)
     _spectrum_panel(panels["spectrum"], view)
     _rms_panel(panels["modal rms"], view)
-    _force_panel(panels["impact force"], view)
+    _force_panel(panels["impact force"], view, panels["first contact"])
     if titles:
         for name, ax in panels.items():
-            ax.set_title(_TITLES[name])
+            if name in _TITLES:
+                ax.set_title(_TITLES[name])
 
 
 def _walls(ax, view: CycleView, along_x: bool) -> None:
@@ -279,11 +303,14 @@ def _mode_colorbar(ax, n: int) -> None:
 
 def _flow_panel(ax, view: CycleView) -> None:
     """Fig. 7 (right): the two flow rates over the cycle, their steady values dotted."""
+    from matplotlib.lines import Line2D
     for c, label in enumerate(("$Q_1$ (above)", "$Q_2$ (below)")):
         ax.plot(view.tau, view.Q[:, c], color=PALETTE[c], label=label)
         ax.axhline(view.Q_steady[c], color=PALETTE[c], ls=":", lw=0.8)
     ax.set(xlabel=TAU, ylabel="flow rate $Q_c$ (units of $L^2/T$)", xlim=(0, 1))
-    ax.legend(loc="best", fontsize=7, frameon=True, framealpha=0.85, edgecolor="none")
+    handles = [*ax.get_legend_handles_labels()[0], Line2D([], [], color="0.3", ls=":", lw=0.8)]
+    ax.legend(handles, ["$Q_1$ (above)", "$Q_2$ (below)", "steady state"], loc="upper right",
+              fontsize=7)
 
 
 def _tip_panels(ax_phase, ax_tip, view: CycleView) -> None:
@@ -317,7 +344,24 @@ def _rms_panel(ax, view: CycleView) -> None:
     ax.set(xlabel="mode $n$", ylabel=f"RMS of $q_n/L$ {NONDIM}")
 
 
-def _force_panel(ax, view: CycleView) -> None:
-    """Fig. 9: the total impact force / F0 over the cycle."""
+def _force_panel(ax, view: CycleView, zoom) -> None:
+    """Fig. 9: the total impact force / F0 over the cycle, its first contact episode
+    shaded and drawn on ``zoom`` at its own time scale."""
+    force = f"impact force $F/F_0$ {NONDIM}"
     ax.plot(view.tau, view.force, color=PALETTE[1])
-    ax.set(xlabel=TAU, ylabel=f"impact force $F/F_0$ {NONDIM}", xlim=(0, 1))
+    ax.set(xlabel=TAU, ylabel=force, xlim=(0, 1))
+    zoom.set(xlabel=TAU, ylabel=force)
+    episode = first_contact(view)
+    if episode is None:
+        zoom.text(0.5, 0.5, "no wall contact\nin this cycle", transform=zoom.transAxes,
+                  ha="center", va="center")
+        zoom.set_xlim(0, 1)
+        return
+    lo, hi, count = episode
+    pad = max(0.1 * (hi - lo), 0.01)
+    lo, hi = max(0.0, lo - pad), min(1.0, hi + pad)
+    ax.axvspan(lo, hi, color="0.88", lw=0, zorder=0)
+    shown = (view.tau >= lo) & (view.tau <= hi)
+    zoom.plot(view.tau[shown], view.force[shown], color=PALETTE[1], lw=0.8)
+    zoom.set_xlim(lo, hi)
+    zoom.set_title(f"first contact (shaded), zoomed: {count} impact{'s' * (count > 1)}")

@@ -34,6 +34,8 @@ USTAR_C = f"critical velocity $U^*_c$ {NONDIM}"
 RATIO = fr"frequency $\omega/\omega_1$ {NONDIM}"
 #: Grey of the traced Hopf curves and of the connectors at folds.
 CURVE_GREY, LINK_GREY = "0.82", "0.35"
+#: The legend's words for the dotted jump of U*_c where the boundary switches branch.
+SWITCH_WORDS = "jump of $U^*_c$ at a branch switch"
 
 
 @dataclass(frozen=True)
@@ -146,8 +148,9 @@ def draw_boundary(ax, boundary: StabilityBoundary) -> None:
     for k, line in enumerate(branch_lines(boundary)):
         ax.plot(line.ustar, line.mstar, color="k", lw=1.5, zorder=2, gid=f"branch {line.branch}",
                 label="linear stability boundary" if k == 0 else None)
-    for s in boundary.switches:
-        ax.plot([s.ustar_below, s.ustar_above], [s.mstar] * 2, ":", color=LINK_GREY, lw=0.9)
+    for k, s in enumerate(boundary.switches):
+        ax.plot([s.ustar_below, s.ustar_above], [s.mstar] * 2, ":", color=LINK_GREY, lw=0.9,
+                label=SWITCH_WORDS if k == 0 else None, gid="mode switch")
 
 
 def boundary_function(boundary: StabilityBoundary):
@@ -245,8 +248,9 @@ def _onset_panels(left, mid, boundary: StabilityBoundary, lines: list[BranchLine
             m = [p["mstar"] for p in line.samples]
             s = [p["ustar_crit"] if ax is left else p["freq_ratio"] for p in line.samples]
             ax.plot(m, s, "o", ms=2.2, color=color, zorder=3)
-    for s in boundary.switches:
-        left.plot([s.mstar] * 2, [s.ustar_below, s.ustar_above], ":", color=LINK_GREY, lw=0.8)
+    for k, s in enumerate(boundary.switches):
+        left.plot([s.mstar] * 2, [s.ustar_below, s.ustar_above], ":", color=LINK_GREY, lw=0.8,
+                  label=SWITCH_WORDS if k == 0 else None, gid="mode switch")
         mid.plot([s.mstar] * 2, [s.omega_below / w1, s.omega_above / w1], ":", color=LINK_GREY,
                  lw=0.8)
     for letter, line, p in marked_points(boundary):
@@ -333,7 +337,7 @@ def plot_eigenvalues(result, scene, path=None):
     ax.set(xlabel=r"growth rate $\mathrm{Re}\,\lambda$ (units of $1/T$)",
            ylabel=r"frequency $\mathrm{Im}\,\lambda$ (rad per unit $T$)",
            title=f"$M^*$ = {scene.mstar:g}, $U^*$ = {scene.ustar:g}, $N$ = {scene.modes}")
-    ax.legend(loc="best")
+    ax.legend(loc="upper right")       # moved off the data if it covers any
     return finish(fig, path)
 
 

@@ -45,7 +45,7 @@ def plot_run(run, path=None):
     ax[1].plot(tr.t, tr.x[:, -2], lw=0.7, label="$Q_1$ (above)")
     ax[1].plot(tr.t, tr.x[:, -1], lw=0.7, label="$Q_2$ (below)")
     ax[1].set_ylabel("flow rate $Q_c$ (units of $L^2/T$)")
-    ax[1].legend(loc="best")
+    ax[1].legend(loc="upper right")    # moved off the data if it covers any
     total = penetration(model, tr.x, tr.p).load
     ax[2].plot(tr.t, total / reference_force(model), lw=0.7, color=PALETTE[1])
     ax[2].set_ylabel(f"impact force $F/F_0$ {NONDIM}")

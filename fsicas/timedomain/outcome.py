@@ -51,7 +51,7 @@ import scipy.optimize
 
 from ..model.assembly import Model
 from ..model.contact import reference_force
-from ..model.patch import penetration
+from ..model.patch import contact_intervals, penetration
 from .integrators import Trajectory
 from .returns import Cycles, cycles, xdot_rows
 
@@ -364,13 +364,11 @@ def _impacts(X, model, p, m):
     and chattering count over the measured cycles, under the contact law of ``p``
     (:func:`fsicas.model.patch.penetration`)."""
     patch = penetration(model, X, p)
-    on = patch.load > 0
-    starts = np.flatnonzero(on & ~np.r_[False, on[:-1]])
-    ends = np.flatnonzero(on & ~np.r_[on[1:], False])
+    spans = contact_intervals(patch.load)
     positions = sorted({round(float(patch.position[a + np.argmax(patch.depth[a:b + 1])]), 3)
-                        for a, b in zip(starts, ends)})
+                        for a, b in spans})
     return dict(max_impact_force=float(patch.load.max() / reference_force(model)),
-                impacts_per_cycle=starts.size / m, contact_positions=positions)
+                impacts_per_cycle=len(spans) / m, contact_positions=positions)
 
 
 def classify(traj: Trajectory, steady, criteria: Criteria = Criteria()) -> Outcome:
