@@ -38,6 +38,7 @@ from .plots.linear import (boundary_function, plot_boundary, plot_boundary_varia
 from .plots.timedomain import cycle_view, plot_cycle, plot_cycles, plot_map, return_period
 from .scene import Scene
 from .timedomain.impact_map import MAP_SCENE, impact_map
+from .timedomain.outcome import outcome_words
 from .timedomain.impacting_run import (HOLDING_CONTACT, PAPER_CONTACT, impacting_run,
                                        with_truncation)
 
@@ -318,9 +319,9 @@ def _cycle_summary(c: dict) -> str:
     if c["period"] is None:
         why = c["message"] or (f"first contact at t = {c['first_contact_time']:.4g}"
                                if c.get("first_contact_time") is not None else "no cycle")
-        return f"{c['outcome']} ({c['status']}): " + textwrap.shorten(why, 200, placeholder=" ...")
+        return f"{outcome_words(c['outcome'])} ({c['status']}): " + textwrap.shorten(why, 200, placeholder=" ...")
     period = "mean return time" if c["outcome"] == "impacting_nonperiodic" else "period"
-    text = (f"{c['outcome']} ({c['status']}, convergence {c['convergence']:.3g}): {period} "
+    text = (f"{outcome_words(c['outcome'])} ({c['status']}, convergence {c['convergence']:.3g}): {period} "
             f"{c['period']:.5f}, {c['impacts_per_cycle']:g} impacts/cycle, peak force "
             f"{c['max_impact_force']:.4g} F0, flow -{100 * c['mean_flow_reduction']:.1f} %")
     if "truncation_error" in c:

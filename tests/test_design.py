@@ -234,6 +234,20 @@ def test_design_by_the_gap_is_verified_by_an_independent_onset(palate):
                                               rel=1e-8)
 
 
+def test_a_design_beyond_the_models_validity_says_so_once(palate):
+    """The gap that lifts the onset to 10 L/min is beyond the thin-channel model's validity:
+    the design says so once per caveat (each of its scenes warned alike), in Python and
+    in its JSON."""
+    from fsicas.physical import PhysicalValidityWarning
+    physical, _ = palate
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        d = design_for_flow(physical, parse_flow("10L/min"), "gap", modes=MODES)
+    said = [str(w.message) for w in caught if issubclass(w.category, PhysicalValidityWarning)]
+    assert said and len(said) == len(set(said))
+    assert list(d.warnings) == said and d.to_json()["warnings"] == said
+
+
 def test_design_needs_no_change_below_the_onset_and_says_when_none_reaches(palate):
     physical, _ = palate
     d = design_for_flow(physical, parse_flow("2L/min"), "length", modes=MODES)

@@ -173,11 +173,12 @@ def _truncation_warnings(scene: Scene, points) -> list:
                                                or p.truncation > TRUNCATION_RTOL)]
     if not bad:
         return []
-    where = ", ".join(f"{p.mstar:.4g} ({'?' if p.truncation is None else f'{p.truncation:.2g}'})"
+    where = ", ".join(f"{p.mstar:.4g} (" + ("not relocated with twice the modes" if p.truncation
+                                             is None else f"{p.truncation:.2g}") + ")"
                       for p in bad)
     note = (f"{len(bad)} boundary points move with twice the modes (N = {scene.modes} -> "
-            f"{finer_modes(scene.modes)}) by more than {TRUNCATION_RTOL:g} (relative): at "
-            f"M* = {where}; raise modes (--modes auto)")
+            f"{finer_modes(scene.modes)}) by more than {TRUNCATION_RTOL:g} (relative), or "
+            f"could not be relocated there: at M* = {where}; raise modes (--modes auto)")
     warnings.warn(note, ModalTruncationWarning, stacklevel=3)
     return [note]
 

@@ -80,6 +80,8 @@ class Design:
     unstable_above: bool
     evaluations: int
     note: str = ""
+    #: what the designed palate's scenes warned of (e.g. beyond the model's validity), once each
+    warnings: tuple = ()
 
     def _single(self) -> Change:
         if len(self.changes) != 1:
@@ -109,7 +111,8 @@ class Design:
                 "verified": {"stable_below": self.stable_below,
                              "unstable_above": self.unstable_above,
                              "margin": VERIFY_MARGIN},
-                "evaluations": self.evaluations, "note": self.note}
+                "evaluations": self.evaluations, "note": self.note,
+                "warnings": list(self.warnings)}
 
 
 def parse_vary(vary, physical: Physical) -> dict:
@@ -177,10 +180,16 @@ def design_for_flow(physical: Physical, target: Flow, vary, *, ustar_max: float 
                    rtol=1e-12)
     after = path.values(s)
     designed = with_values(physical, after)
-    bound = max(ustar_max, 2.0 * path.ustar_of(designed))
-    designed = palate_sensitivity(designed, ustar_max=bound, **overrides)
-    return _design(physical, weights, start, after, base, designed, q_target, overrides,
-                   path.evaluations)
+    with warnings.catch_warnings(record=True) as caught:   # each of the designed palate's
+        warnings.simplefilter("always")                    # scenes warns alike: say it once
+        bound = max(ustar_max, 2.0 * path.ustar_of(designed))
+        designed = palate_sensitivity(designed, ustar_max=bound, **overrides)
+        design = _design(physical, weights, start, after, base, designed, q_target, overrides,
+                         path.evaluations)
+    said = {(w.category, str(w.message)): w for w in caught}
+    for category, message in said:
+        warnings.warn(message, category, stacklevel=2)
+    return replace(design, warnings=tuple(message for _, message in said))
 
 
 class _Path:

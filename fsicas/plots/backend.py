@@ -18,6 +18,8 @@ from __future__ import annotations
 import functools
 from pathlib import Path
 
+from ..timedomain.outcome import OUTCOME_WORDS, outcome_words   # for titles and legends
+
 __all__ = ["FILE_BACKEND", "PALETTE", "OUTCOME_WORDS", "NONDIM", "pyplot", "select_file_backend",
            "styled", "subplots", "finish", "outcome_words"]
 
@@ -28,12 +30,6 @@ FILE_BACKEND = "Agg"
 #: reference lines; the yellow comes last, it is faint on white).
 PALETTE = ("#0072B2", "#D55E00", "#009E73", "#CC79A7", "#E69F00", "#56B4E9", "#000000",
            "#F0E442")
-
-#: What each time-integration outcome means, in words for titles and legends.
-OUTCOME_WORDS = {"decay": "decays to the steady state", "lco": "limit cycle, no contact",
-                 "contact": "reaches the wall", "impacting_lco": "impacting limit cycle",
-                 "impacting_nonperiodic": "impacting, not periodic",
-                 "unsettled": "not settled", "error": "solver failure"}
 
 #: The unit suffix of a nondimensional quantity's axis label.
 NONDIM = "(nondim.)"
@@ -118,6 +114,3 @@ def finish(fig, path=None):
     return fig
 
 
-def outcome_words(kind: str) -> str:
-    """A time-integration outcome (e.g. ``impacting_lco``) in words."""
-    return OUTCOME_WORDS.get(kind, str(kind).replace("_", " "))

@@ -55,7 +55,8 @@ from ..model.patch import contact_intervals, penetration
 from .integrators import Trajectory
 from .returns import Cycles, cycles, xdot_rows
 
-__all__ = ["Criteria", "Outcome", "OutcomeKind", "classify", "Monitor", "SETTLING_PER_RTOL"]
+__all__ = ["Criteria", "Outcome", "OutcomeKind", "OUTCOME_WORDS", "outcome_words", "classify",
+           "Monitor", "SETTLING_PER_RTOL"]
 
 #: What a run did (module docstring): "decay" back to the steady state; "lco" a limit
 #: cycle without contact; "impacting_lco" a settled cycle with wall contact; "contact" a
@@ -64,6 +65,18 @@ __all__ = ["Criteria", "Outcome", "OutcomeKind", "classify", "Monitor", "SETTLIN
 #: periodic by the end of the run; "unsettled" none of these by the end of the run.
 OutcomeKind = Literal["decay", "lco", "impacting_lco", "impacting_nonperiodic", "contact",
                       "unsettled"]
+
+#: What each outcome means, in words (for reports, titles and legends).
+OUTCOME_WORDS = {"decay": "decays to the steady state", "lco": "limit cycle, no contact",
+                 "contact": "reaches the wall", "impacting_lco": "impacting limit cycle",
+                 "impacting_nonperiodic": "impacting, not periodic",
+                 "unsettled": "not settled", "error": "solver failure"}
+
+
+def outcome_words(kind: str) -> str:
+    """An outcome (e.g. ``impacting_lco``) in words."""
+    return OUTCOME_WORDS.get(kind, str(kind).replace("_", " "))
+
 
 #: The default settling tolerance per unit of the integrator's rtol (module docstring).
 SETTLING_PER_RTOL = 1e3
