@@ -33,7 +33,7 @@ from functools import lru_cache
 from importlib import resources
 
 from .checks import read_toml
-from .scene import Scene
+from .scene import MAX_LOSS, Scene
 from .units import friction_from_reynolds
 
 try:  # Python >= 3.11
@@ -283,7 +283,16 @@ class Physical:
             raise ValueError(f"{self.source}: the friction is taken from the viscosity at the "
                              "airflow: give --flow (e.g. --flow 20L/min) or flow = ... in [physical]")
         re = v["rho_f"] * self.velocity(flow) * (self.gap / 2) / v["viscosity"]
-        return friction_from_reynolds(re), re
+        if not re > 0:
+            raise ValueError(f"{self.source}: the friction is taken from the viscosity at the "
+                             "airflow, and the airflow is zero: give a flow > 0")
+        f = friction_from_reynolds(re)
+        if f > MAX_LOSS:
+            raise ValueError(f"{self.source}: viscosity = {v['viscosity']:g} Pa*s gives the "
+                             f"Reynolds number {re:.3g} at this airflow, and the friction "
+                             f"f = 12/Re = {f:.3g} is beyond {MAX_LOSS:g}: give the fluid's "
+                             "viscosity (air: 1.8e-5 Pa*s)")
+        return f, re
 
     def scene(self, flow: Flow | None = None, **overrides) -> Scene:
         """The Scene at ``flow`` (default: none, U* = 0); ``overrides`` are nondimensional
