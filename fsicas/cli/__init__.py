@@ -45,6 +45,7 @@ from .onset import add_onset_command
 from .outputs import check_outputs
 from .paper import add_paper_command
 from .progress import reporting
+from .scene_options import check_ustar_max
 from .sound import add_sound_command
 from .study import add_study_command
 from .timedomain import add_time_commands
@@ -157,6 +158,7 @@ def _main(argv) -> int:
     start = time.perf_counter()
     try:
         check_outputs(args)
+        check_ustar_max(args)
         if _writes_figures(args):
             select_file_backend()
         with warnings.catch_warnings(record=True) as caught, reporting(args):
