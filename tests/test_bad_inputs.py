@@ -251,3 +251,15 @@ def test_a_map_whose_worker_is_killed_resumes_without_lost_or_repeated_points(tm
     assert json.loads(again.stdout)["computed"] == 4 - len(before)
     rows = [json.loads(line) for line in (tmp_path / "m.jsonl").read_text().splitlines()[1:]]
     assert sorted(r["ustar"] for r in rows) == [6.0, 7.0, 8.0]
+
+
+def test_a_study_over_the_number_of_modes_keeps_them_integers(tmp_path):
+    """``modes = [4, 6]`` in a [grid] are the integers 4 and 6 (they were read as 4.0 and
+    6.0, which every point then refused as an error row)."""
+    from fsicas.scene import Scene
+    from fsicas.studies.spec import load_study
+    path = tmp_path / "s.toml"
+    path.write_text('analysis = "onset"\n[grid]\nmodes = [4, 6]\nzeta = [0, 1]\n')
+    points = load_study(path).points
+    assert [p["modes"] for p in points[::2]] == [4, 6] and points[1]["zeta"] == 1.0
+    assert all(Scene(**p).modes == p["modes"] for p in points)

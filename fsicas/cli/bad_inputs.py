@@ -62,7 +62,9 @@ GROUPS = {
     "study files": "study files: `[settings]` `t_end = -1`, `\"abc\"`, `rtol = 0.5`, `t_end = "
                    "1e12`, `ustar_max = 1e308`; `[scene] modes = 10000`; `sound` without "
                    "`physical`; nested lists in `[grid]`, `[sample]`, `[scene]`, `[settings]`, "
-                   "`physical`; 10^7 points (a grid, an axis, a sample)",
+                   "`physical`; values out of range in `[grid]` or `[sample]` (`mstar = -1`, `modes = 2.5`, a "
+                   "normal zeta); `outcome` without a flow; 10^7 points (a grid, an axis, a "
+                   "sample)",
     "results files": "results files resumed (`map --out`, `study`'s `NAME.jsonl`): a record "
                      "without `ustar` or `index`, a `ustar` that is text, a line that is a list "
                      "or not JSON",
@@ -191,6 +193,10 @@ def _study_cases():
         onset + "[settings]; ustar_max = 1e308; [grid]; mstar = [1.0]": "ustar_max",
         onset + "[settings]; ustar_max = [[40]]; [grid]; mstar = [1.0]": "ustar_max",
         onset + "[scene]; modes = [[3]]; [grid]; mstar = [1.0]": "modes",
+        onset + "[grid]; mstar = [-1.0, 1.0]": "mstar = -1.0",
+        onset + "[grid]; modes = [4, 2.5]": "modes = 2.5",
+        onset + "[sample]; size = 5; zeta = {distribution = \"normal\", mean = 0, std = 1}": "zeta",
+        'analysis = "outcome"; [grid]; mstar = [1.0]': "ustar > 0",
         onset + "[grid]; mstar = [[1, 2]]": "mstar", onset + "[grid]; mstar = [[[1]]]": "mstar",
         onset + "[grid]; mstar = {start = [[1]], stop = 2, num = 3}": "mstar",
         onset + "[grid]; mstar = {start = 1, stop = 2, num = [[3]]}": "num",

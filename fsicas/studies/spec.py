@@ -121,10 +121,28 @@ def load_study(path) -> Study:
     unit = _units(physical)
     points = _grid(doc["grid"], unit, label) if "grid" in doc else \
         _sample(doc["sample"], unit, label)
+    if physical is None:
+        _check_points(analysis, points, scene, label)
     if analysis != "onset":
         _check_run_size(points, scene, settings, label)
     return Study(label, doc.get("description", ""), analysis, physical, scene,
                  settings, tuple(points))
+
+
+def _check_points(analysis: str, points: list, scene: dict, label: str) -> None:
+    """The values of a nondimensional study's parameters, checked as Scene fields when the
+    file is read (each value, or the extremes of more than 100, every bound being a
+    range), and a flow for a time integration: ValueError naming the value."""
+    for key in points[0]:
+        values = sorted({p[key] for p in points})
+        for value in values if len(values) <= 100 else (values[0], values[-1]):
+            try:
+                Scene(**{**scene, key: value})
+            except (ValueError, TypeError) as err:
+                raise ValueError(f"{label}: {key} = {value!r}: {err}") from None
+    if analysis != "onset" and "ustar" not in points[0] and not scene.get("ustar", 0) > 0:
+        raise ValueError(f"{label}: the {analysis} analysis integrates in time at a flow: give "
+                         "ustar > 0 in [grid], [sample] or [scene] (or flow, with physical = ...)")
 
 
 def _check_run_size(points: list, scene: dict, settings: dict, label: str) -> None:
@@ -177,7 +195,8 @@ def _units(physical: str | None):
             if name not in _SCENE_FIELDS:
                 raise ValueError(f"{label}: {name!r} is not a Scene field (without physical = "
                                  f"... the parameters are Scene fields: {', '.join(_SCENE_FIELDS)})")
-            return finite_number(f"{label}: {name}", value)
+            number = finite_number(f"{label}: {name}", value)
+            return value if name in ("modes", "quad_nodes") and isinstance(value, int) else number
         if name not in KEYS:
             raise ValueError(f"{label}: {name!r} is not a [physical] key; allowed: "
                              f"{', '.join(KEYS)}")
