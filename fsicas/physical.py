@@ -131,6 +131,12 @@ class Flow:
     kind: str       # "velocity" or "volume"
     value: float    # SI: m/s or m^3/s
 
+    @classmethod
+    def of(cls, kind: str, value: float) -> "Flow":
+        """The flow of ``value`` (m/s or m^3/s), its text in m/s or L/min."""
+        text = f"{value:.4g} m/s" if kind == "velocity" else f"{value * 6e4:.4g} L/min"
+        return cls(text, kind, value)
+
     def velocity(self, b: float, gap: float) -> float:
         """Mean inlet velocity U0 = Q / (b (H1 + H2)) in m/s."""
         return self.value if self.kind == "velocity" else self.value / (b * gap)

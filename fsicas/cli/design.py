@@ -7,7 +7,7 @@ eigenvalues at 99.5 % and 100.5 % of it.
 """
 from __future__ import annotations
 
-from ..linear.design import ALIASES, DESIGN_MAX_FACTOR, design_for_flow
+from ..linear.design import ALIASES, DESIGN_MAX_FACTOR, design_for_flow, parse_vary
 from ..linear.elasticity import palate_sensitivity
 from ..physical import parse_flow
 from .meta import cli_meta, record
@@ -51,7 +51,14 @@ def _check(args):
     if (args.target_flow is None) != (args.vary is None):
         raise ValueError("--target-flow and --vary go together (e.g. --target-flow 30L/min "
                          "--vary stiffness)")
-    target = None if args.target_flow is None else parse_flow(args.target_flow, "--target-flow")
+    if args.target_flow is None:
+        return given[0], None
+    target = parse_flow(args.target_flow, "--target-flow")
+    parse_vary(args.vary, given[0])                    # names the allowed parameters
+    try:
+        given[0].scene(target)
+    except ValueError as err:
+        raise ValueError(f"--target-flow {args.target_flow}: {err}") from None
     return given[0], target
 
 
