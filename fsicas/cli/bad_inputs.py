@@ -46,9 +46,10 @@ GROUPS = {
     "grids": "`boundary`, `map`: grids that are empty, malformed, not finite, negative on a log "
              "scale, too long, or repeat a value (`--ustar 4,5,4`, `--mstar 1:1:3`); "
              "`--ustar-max` 0 or -5; no pressure losses at all",
-    "other options": "`map`, `lco`, `modes`, `grazing`, `sound`: `--workers` 0 or beyond the "
-                     "cores without `--oversubscribe`, `--t-end 0`, `--max-points 0`, "
-                     "`--ntst 0`, `--ustar-max` -1 or 1e308, `--modes 100000000`, `sound` without "
+    "other options": "`map`, `lco`, `modes`, `grazing`, `sound`, `design`: `--workers` 0 or "
+                     "beyond the cores without `--oversubscribe`, `--t-end 0`, `--max-points 0`, "
+                     "`--ntst 0`, `--ncol` 0 or 100000, `design --vary nonsense`, "
+                     "`--target-flow \"1e308 L/min\"`, `--ustar-max` -1 or 1e308, `--modes 100000000`, `sound` without "
                      "`--physical` or with `--duration 1e-300`",
     "sizes": "sizes that cannot fit: `simulate --dt-out 1e-9`, `--t-end 1e12 --full`, "
              "`--breath-period 1e-300`; `lco --ntst 100000`, `--impact-ntst 100000`; a map of "
@@ -121,7 +122,11 @@ _OPTIONS = {
         (("map", "--workers", "100000"), "--oversubscribe"),
         (("grazing", "--workers", "100000"), "--oversubscribe"),
         (("lco", "--max-points", "0"), "max_points"), (("lco", "--ntst", "0"), "ntst"),
-        (("lco", "--ncol", "0"), "ncol"), (("lco", "--ustar-max", "-1"), "--ustar-max"),
+        (("lco", "--ncol", "0"), "ncol"), (("lco", "--ncol", "100000"), "ncol"),
+    (("design", "--physical", "soft_palate", "--target-flow", "30L/min", "--vary", "nonsense"),
+     "nonsense"),
+    (("design", "--physical", "soft_palate", "--target-flow", "1e308 L/min", "--vary", "E"),
+     "--target-flow"), (("lco", "--ustar-max", "-1"), "--ustar-max"),
         (("grazing", "--ustar-max", "1e308"), "--ustar-max"),
         (("lco", "--contact"), "contact"), (("onset", "--ustar-max", "1e308"), "--ustar-max"),
         (("modes", "--modes", "0"), "modes"), (("modes", "--modes", "100000000"), "modes"),
