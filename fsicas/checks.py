@@ -11,7 +11,11 @@ try:
 except ModuleNotFoundError:  # Python < 3.11
     import tomli as tomllib
 
-__all__ = ["require", "finite_number", "read_toml"]
+__all__ = ["require", "finite_number", "read_toml", "check_points", "MAX_POINTS"]
+
+#: Most points of one sweep (a map or a study): at a second or more a point, 1e5 points
+#: are more than a day of one core; 1e7 would not even fit their list in memory.
+MAX_POINTS = 100_000
 
 
 def require(ok: bool, message: str) -> None:
@@ -26,6 +30,13 @@ def finite_number(name: str, value) -> float:
     require(isinstance(value, (int, float, np.floating, np.integer)) and not isinstance(value, bool)
             and math.isfinite(value), f"{name} must be a finite number, got {value!r}")
     return float(value)
+
+
+def check_points(count: int, what: str, way_round: str) -> None:
+    """ValueError, before the points are made, for a sweep of more than
+    :data:`MAX_POINTS` points; ``way_round`` says how to ask for fewer."""
+    require(count <= MAX_POINTS, f"{what} has {count:.3g} points, more than the {MAX_POINTS:,} "
+            f"a run may have (at a second or more a point, days of work): {way_round}")
 
 
 def read_toml(path, label: str) -> dict:

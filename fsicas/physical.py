@@ -33,7 +33,7 @@ from functools import lru_cache
 from importlib import resources
 
 from .checks import read_toml
-from .scene import Scene
+from .scene import MAX_LOSS, Scene
 from .units import friction_from_reynolds
 
 try:  # Python >= 3.11
@@ -130,6 +130,12 @@ class Flow:
     text: str
     kind: str       # "velocity" or "volume"
     value: float    # SI: m/s or m^3/s
+
+    @classmethod
+    def of(cls, kind: str, value: float) -> "Flow":
+        """The flow of ``value`` (m/s or m^3/s), its text in m/s or L/min."""
+        text = f"{value:.4g} m/s" if kind == "velocity" else f"{value * 6e4:.4g} L/min"
+        return cls(text, kind, value)
 
     def velocity(self, b: float, gap: float) -> float:
         """Mean inlet velocity U0 = Q / (b (H1 + H2)) in m/s."""
@@ -283,7 +289,16 @@ class Physical:
             raise ValueError(f"{self.source}: the friction is taken from the viscosity at the "
                              "airflow: give --flow (e.g. --flow 20L/min) or flow = ... in [physical]")
         re = v["rho_f"] * self.velocity(flow) * (self.gap / 2) / v["viscosity"]
-        return friction_from_reynolds(re), re
+        if not re > 0:
+            raise ValueError(f"{self.source}: the friction is taken from the viscosity at the "
+                             "airflow, and the airflow is zero: give a flow > 0")
+        f = friction_from_reynolds(re)
+        if f > MAX_LOSS:
+            raise ValueError(f"{self.source}: viscosity = {v['viscosity']:g} Pa*s gives the "
+                             f"Reynolds number {re:.3g} at this airflow, and the friction "
+                             f"f = 12/Re = {f:.3g} is beyond {MAX_LOSS:g}: give the fluid's "
+                             "viscosity (air: 1.8e-5 Pa*s)")
+        return f, re
 
     def scene(self, flow: Flow | None = None, **overrides) -> Scene:
         """The Scene at ``flow`` (default: none, U* = 0); ``overrides`` are nondimensional

@@ -13,7 +13,10 @@ depend on (scene, settings); the other lines are one record each. Opening the fi
   other settings are never mixed or reused;
 - refuses, before it writes or cuts a byte, anything that is not a results file: a
   folder, a FIFO or a device, or a file whose first line is not a header record (a
-  user's notes, a figure), which is left exactly as it was.
+  user's notes, a figure), which is left exactly as it was;
+- refuses a record (a line but the torn last one) that is not a JSON object with the
+  ``fields`` the run reads back, of their types, naming the file and the line, and
+  leaves the file as it was.
 
 Each record is appended by one ``write`` of the whole line to a file opened with
 ``O_APPEND``, so a record is either in the file whole or (after a kill) repaired away.
@@ -34,6 +37,7 @@ except ImportError:  # pragma: no cover - not POSIX
 __all__ = ["ResultsFile", "read_records", "is_results_file", "check_results_path"]
 
 _HEADER_START = b'{"header"'
+_KIND_WORDS = {(int, float): "a number", (int,): "an integer", (str,): "a string"}
 
 
 def _normal(value):
@@ -88,11 +92,13 @@ class ResultsFile:
     """``with ResultsFile(path, header) as f:`` ... ``f.records`` (the records already
     there), ``f.append(record)``; ``f.repaired``: bytes of a torn last line cut off.
     ``written_by`` (e.g. :func:`fsicas.provenance.provenance`) is stored beside the header
-    of a new file and not compared on resume."""
+    of a new file and not compared on resume; ``fields``: ``{key: type}`` every record
+    must hold (checked when the file is opened)."""
 
-    def __init__(self, path, header: dict, written_by: dict | None = None):
+    def __init__(self, path, header: dict, written_by: dict | None = None,
+                 fields: dict | None = None):
         self.path, self.header = Path(path), _normal(header)
-        self.written_by = written_by
+        self.written_by, self.fields = written_by, dict(fields or {})
         self.records: list[dict] = []
         self.repaired = 0
         self._fd = None
@@ -104,7 +110,7 @@ class ResultsFile:
         try:
             self._lock()
             self.repaired = self._repair()
-            header, self.records = read_records(self.path)
+            header, self.records = self._read()
             self._check(header)
             if header is None:
                 first = {"header": self.header}
@@ -149,6 +155,27 @@ class ResultsFile:
         os.ftruncate(self._fd, keep)
         return size - keep
 
+    def _read(self) -> tuple[dict | None, list[dict]]:
+        """(header, records), every line checked (the torn tail is repaired before)."""
+        header, records = None, []
+        for number, line in enumerate(self.path.read_bytes().splitlines(), start=1):
+            if not line.strip():
+                continue
+            try:
+                row = json.loads(line)
+            except ValueError:
+                row = None
+            if number == 1 and isinstance(row, dict) and "header" in row:
+                header = row["header"]
+                continue
+            problem = _record_problem(row, self.fields)
+            if problem:
+                raise ValueError(f"{self.path} line {number}: {problem}; the file was left as "
+                                 "it is: delete that line (its point is computed again) or "
+                                 "choose another output file")
+            records.append(row)
+        return header, records
+
     def _check(self, header) -> None:
         if header is None:
             if self.records:
@@ -172,3 +199,17 @@ def _differences(old, new) -> str:
         keys = sorted(k for k in set(old) | set(new) if old.get(k) != new.get(k))
         return ", ".join(f"{k} = {old.get(k)!r} here {new.get(k)!r}" for k in keys)
     return f"{old!r} here {new!r}"
+
+
+def _record_problem(row, fields: dict) -> str | None:
+    """What is wrong with a record read back (None if nothing): not a JSON object, a
+    field of ``fields`` missing or not of its type (a boolean is not a number)."""
+    if not isinstance(row, dict):
+        return "not a record (a JSON object on one line)"
+    for key, kind in fields.items():
+        kinds = kind if isinstance(kind, tuple) else (kind,)
+        if key not in row:
+            return f"the record has no {key!r}"
+        if not isinstance(row[key], kinds) or isinstance(row[key], bool) and bool not in kinds:
+            return f"the record's {key!r} is {row[key]!r}, not {_KIND_WORDS.get(kinds, kinds)}"
+    return None

@@ -31,6 +31,11 @@ MAX_MODES, MAX_QUAD_NODES, MAX_MSTAR, MAX_ABS_USTAR = 200, 2000, 1e6, 1e4
 #: The largest modal damping ratio (100 times critical damping; beyond it the damping
 #: force overflows rather than describing a structure).
 MAX_ZETA = 100.0
+#: The widest channels (H* = H/L; the bulk-flow model asks H* << 1, and physical input is
+#: held to 0.5), the largest loss coefficients (the paper's f is 0.14) and the stiffest
+#: contact law (the paper's k* is 1e6): beyond them the numbers overflow or the
+#: eigen-solver fails instead of describing a channel.
+MAX_HSTAR, MAX_LOSS, MAX_CONTACT_STIFFNESS = 10.0, 1e4, 1e12
 
 #: Beam theories of :class:`Scene`; e/L beyond MAX_SLENDERNESS is outside 1D beam theory.
 EULER_BERNOULLI, TIMOSHENKO = "euler-bernoulli", "timoshenko"
@@ -249,6 +254,15 @@ def _validate_zeta(s: Scene) -> None:
             f"zeta must lie in [0, {MAX_ZETA:g}] (1 is critical damping), got {s.zeta}")
 
 
+def _validate_channel(s: Scene) -> None:
+    """The channels' width H* and the loss coefficients f, K0, KL."""
+    require(0 < finite_number("hstar", s.hstar) <= MAX_HSTAR,
+            f"hstar must lie in (0, {MAX_HSTAR:g}], got {s.hstar}")
+    for name in ("friction", "k0", "kl"):
+        require(0 <= finite_number(name, getattr(s, name)) <= MAX_LOSS,
+                f"{name} must lie in [0, {MAX_LOSS:g}], got {getattr(s, name)}")
+
+
 def _validate_beam(s: Scene) -> None:
     """Beam theory and its parameters (docs/beam.md)."""
     require(s.beam in BEAM_THEORIES, f"beam must be one of {', '.join(BEAM_THEORIES)}, "
@@ -279,10 +293,7 @@ def _validate(s: Scene) -> None:
             f"mstar must lie in (0, {MAX_MSTAR:g}], got {s.mstar}")
     require(abs(finite_number("ustar", s.ustar)) <= MAX_ABS_USTAR,
             f"ustar must lie in [-{MAX_ABS_USTAR:g}, {MAX_ABS_USTAR:g}], got {s.ustar}")
-    require(finite_number("hstar", s.hstar) > 0, f"hstar must be > 0, got {s.hstar}")
-    require(finite_number("friction", s.friction) >= 0, f"friction must be >= 0, got {s.friction}")
-    require(finite_number("k0", s.k0) >= 0, f"k0 must be >= 0, got {s.k0}")
-    require(finite_number("kl", s.kl) >= 0, f"kl must be >= 0, got {s.kl}")
+    _validate_channel(s)
     _validate_zeta(s)
     if s.quad_nodes is not None:
         require(isinstance(s.quad_nodes, (int, np.integer)) and not isinstance(s.quad_nodes, bool)
@@ -304,8 +315,8 @@ def _validate(s: Scene) -> None:
         require(abs(inlet - s.hstar) <= 1e-12 * s.hstar,
                  f"hstar ({s.hstar}) must equal H1(0) + H2(0) = {inlet} of the given channels")
     require(isinstance(s.contact, (bool, np.bool_)), f"contact must be true or false, got {s.contact!r}")
-    require(finite_number("contact_stiffness", s.contact_stiffness) > 0,
-             f"contact_stiffness must be > 0, got {s.contact_stiffness}")
+    require(0 < finite_number("contact_stiffness", s.contact_stiffness) <= MAX_CONTACT_STIFFNESS,
+             f"contact_stiffness must lie in (0, {MAX_CONTACT_STIFFNESS:g}], got {s.contact_stiffness}")
     require(0 < finite_number("contact_eps", s.contact_eps) < 1,
              f"contact_eps (eps/H) must lie in (0, 1), got {s.contact_eps}")
     require(0 <= finite_number("contact_smoothing", s.contact_smoothing) <= 1,

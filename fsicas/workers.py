@@ -8,11 +8,31 @@ import os
 import signal
 import threading
 import time
-from concurrent.futures import ProcessPoolExecutor
+from concurrent.futures import ProcessPoolExecutor, as_completed
+from concurrent.futures.process import BrokenProcessPool
 from contextlib import contextmanager
 
 __all__ = ["die_with_parent", "local_pool", "dask_executor", "DASK_CONNECT_TIMEOUT", "check_workers",
-           "OVERSUBSCRIBE_HELP"]
+           "OVERSUBSCRIBE_HELP", "WorkerLost", "finished"]
+
+
+class WorkerLost(RuntimeError):
+    """A worker process died while it computed a point (killed, out of memory)."""
+
+
+def finished(futures, path):
+    """The results of ``futures`` as they finish; :class:`WorkerLost` when a worker
+    process died (a local pool broken, or Dask's ``KilledWorker``), saying that the
+    points already saved in the results file ``path`` are kept."""
+    try:
+        for fut in as_completed(futures):
+            yield fut.result()
+    except Exception as err:
+        if not isinstance(err, BrokenProcessPool) and type(err).__name__ != "KilledWorker":
+            raise
+        raise WorkerLost(f"a worker process died while computing a point (killed, or out "
+                         f"of memory); the points finished are saved in {path}: run the "
+                         "same command again to compute the rest") from None
 
 
 def die_with_parent(parent: int) -> None:

@@ -25,8 +25,8 @@ def check_clear(run):
 
 #: What a failed run's message must say: where it failed and, for a closed gap, which
 #: contact parameters to raise.
-FAILURE_STARTS = ("a gap closed (h_c", "integrator failed in the chunk starting at t = ",
-                  "non-finite state at output sample ")
+FAILURE_STARTS = ("a gap closed (h_c", "the time integration failed after t = ",
+                  "the state is not finite at t = ")
 
 
 def clear_failure(tr) -> bool:

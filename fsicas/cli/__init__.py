@@ -7,7 +7,8 @@ Exit status: 0 when the command succeeded; 1 when it ran to the end but its resu
 reports a failure (``"status": "failed"``, also of a sub-result such as the impacting
 branch of ``lco --through-contact``: a time integration whose gap closed or whose
 solver failed, a continuation whose corrector failed), the result still printed; 2 for
-bad input or an analysis that could not start (the error on stderr, or as
+bad input, an analysis that could not start or a sweep whose worker process died
+(its finished points kept: run it again to resume) (the error on stderr, or as
 ``{"error": ...}`` with ``--json``); 130 after Ctrl-C (one line on stderr); 141 when the
 reader of stdout went away (``| head``), silently.
 No NaN or Infinity is printed: such a value is written as null and a warning names
@@ -44,9 +45,11 @@ from .onset import add_onset_command
 from .outputs import check_outputs
 from .paper import add_paper_command
 from .progress import reporting
+from .scene_options import check_ustar_max
 from .sound import add_sound_command
 from .study import add_study_command
 from .timedomain import add_time_commands
+from ..workers import WorkerLost
 
 __all__ = ["main", "build_parser", "EXIT_OK", "EXIT_FAILED_RESULT", "EXIT_ERROR",
            "EXIT_INTERRUPTED", "EXIT_BROKEN_PIPE"]
@@ -155,12 +158,13 @@ def _main(argv) -> int:
     start = time.perf_counter()
     try:
         check_outputs(args)
+        check_ustar_max(args)
         if _writes_figures(args):
             select_file_backend()
         with warnings.catch_warnings(record=True) as caught, reporting(args):
             warnings.simplefilter("always", UserWarning)
             result = args.run(args)
-    except (ValueError, SteadyStateError, CriticalVelocityError) as err:
+    except (ValueError, SteadyStateError, CriticalVelocityError, WorkerLost) as err:
         if getattr(args, "json", False):
             print(strict_json.dumps(with_meta({"error": str(err)}, cli_meta(args))))
         else:

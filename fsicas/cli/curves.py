@@ -50,8 +50,6 @@ def _cmd_grazing(args) -> dict:
     check_workers(args.workers, args.oversubscribe)
     if args.ntst < 2:
         raise ValueError(f"--ntst must be >= 2, got {args.ntst}")
-    if not args.ustar_max > 0:
-        raise ValueError(f"--ustar-max must be > 0, got {args.ustar_max}")
     mstars = parse_range(args.mstar_values, "mstar", log=True)
     if mstars.size < 2:
         raise ValueError(f"--mstar must give a window of at least two values, got "

@@ -7,10 +7,9 @@ eigenvalues at 99.5 % and 100.5 % of it.
 """
 from __future__ import annotations
 
-from ..linear.design import ALIASES, DESIGN_MAX_FACTOR, design_for_flow
+from ..linear.design import ALIASES, DESIGN_MAX_FACTOR, design_for_flow, parse_vary
 from ..linear.elasticity import palate_sensitivity
 from ..physical import parse_flow
-from ..scene import MAX_ABS_USTAR
 from .meta import cli_meta, record
 from .scene_options import add_scene_options, physical_from_args, scene_values
 
@@ -52,10 +51,14 @@ def _check(args):
     if (args.target_flow is None) != (args.vary is None):
         raise ValueError("--target-flow and --vary go together (e.g. --target-flow 30L/min "
                          "--vary stiffness)")
-    if not 0.2 < args.ustar_max <= MAX_ABS_USTAR:
-        raise ValueError(f"--ustar-max must lie in (0.2, {MAX_ABS_USTAR:g}], got "
-                         f"{args.ustar_max}")
-    target = None if args.target_flow is None else parse_flow(args.target_flow, "--target-flow")
+    if args.target_flow is None:
+        return given[0], None
+    target = parse_flow(args.target_flow, "--target-flow")
+    parse_vary(args.vary, given[0])                    # names the allowed parameters
+    try:
+        given[0].scene(target)
+    except ValueError as err:
+        raise ValueError(f"--target-flow {args.target_flow}: {err}") from None
     return given[0], target
 
 

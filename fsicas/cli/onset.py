@@ -36,9 +36,6 @@ def add_onset_command(sub) -> None:
 
 def _search_bound(args, reference: float | None) -> float:
     if args.ustar_max is not None:
-        if not 0.2 < args.ustar_max <= MAX_ABS_USTAR:
-            raise ValueError(f"--ustar-max must lie in (0.2, {MAX_ABS_USTAR:g}], got "
-                             f"{args.ustar_max}")
         return args.ustar_max
     return min(max(USTAR_MAX, 1.5 * (reference or 0.0)), MAX_ABS_USTAR)
 

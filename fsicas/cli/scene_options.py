@@ -6,9 +6,9 @@ from __future__ import annotations
 import argparse
 
 from ..physical import Flow, Physical, load_physical, parse_flow, preset_names
-from ..scene import Scene, load_scene
+from ..scene import MAX_ABS_USTAR, Scene, load_scene
 
-__all__ = ["SCENE_OPTIONS", "BEAM_OPTIONS", "add_scene_options", "add_beam_options", "beam_fields",
+__all__ = ["check_ustar_max", "SCENE_OPTIONS", "BEAM_OPTIONS", "add_scene_options", "add_beam_options", "beam_fields",
            "scene_values",
            "scene_from_args", "physical_from_args"]
 
@@ -131,3 +131,14 @@ def scene_from_args(args: argparse.Namespace, need_flow: bool = False) -> Scene:
     if args.scene:
         return load_scene(args.scene, **values)
     return Scene(**values)
+
+
+
+def check_ustar_max(args: argparse.Namespace) -> None:
+    """``--ustar-max`` (the U* up to which a command searches), when the command has it:
+    ValueError unless it lies in (0.2, MAX_ABS_USTAR] (the steady branch is followed from
+    U* = 0.2)."""
+    value = getattr(args, "ustar_max", None)
+    if value is not None and not 0.2 < value <= MAX_ABS_USTAR:
+        raise ValueError(f"--ustar-max must lie in (0.2, {MAX_ABS_USTAR:g}] (the search "
+                         f"starts at U* = 0.2), got {value}")

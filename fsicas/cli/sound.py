@@ -66,8 +66,8 @@ def _check(args) -> None:
             continue
         if not (math.isfinite(value) and value > 0):
             raise ValueError(f"--{option.replace('_', '-')} must be > 0, got {value}")
-    if args.duration > 600:
-        raise ValueError(f"--duration must be at most 600 s, got {args.duration}")
+    if not 0.01 <= args.duration <= 600:
+        raise ValueError(f"--duration must lie in [0.01, 600] s, got {args.duration}")
     if args.out and not args.out.lower().endswith(".wav"):
         raise ValueError(f"--out {args.out}: the sound is written as WAV, name it FILE.wav")
 

@@ -92,6 +92,9 @@ class CycleSettings:
                              f"got {self.stop_at_contact!r}")
         if self.ntst > C.MAX_NTST:
             raise ValueError(f"ntst must be at most {C.MAX_NTST}, got {self.ntst}")
+        if not 2 <= self.ncol <= 7:
+            raise ValueError(f"ncol (collocation points per interval) must be in 2..7, got "
+                             f"{self.ncol}")
 
 
 @dataclass(frozen=True)

@@ -239,7 +239,7 @@ class _Path:
         return scene.scales.m3_per_s(hopf.ustar)
 
     def ustar_of(self, physical: Physical) -> float:
-        return physical_scene(physical, Flow("q", "volume", self.q_target), self.overrides).ustar
+        return physical_scene(physical, Flow.of("volume", self.q_target), self.overrides).ustar
 
     def bracket(self) -> tuple[float, float]:
         """The step of ``s`` in which the onset passes the target (DesignError if none)."""
@@ -270,7 +270,7 @@ def _design(physical, weights, before, after, base, designed, q_target, override
             evaluations, note="") -> Design:
     """The Design, with its verification by eigenvalues at the designed parameters."""
     ph = with_values(physical, after)
-    scenes = [physical_scene(ph, Flow("check", "volume", factor * designed.onset_flow),
+    scenes = [physical_scene(ph, Flow.of("volume", factor * designed.onset_flow),
                              overrides) for factor in (1 - VERIFY_MARGIN, 1 + VERIFY_MARGIN)]
     model = build_model(scenes[0])                 # the two differ in the flow only
     checks = [linear_stability(scene, model).stable for scene in scenes]

@@ -157,7 +157,7 @@ def _nondimensional(s, v: dict, scene: Scene) -> tuple[dict, dict]:
 
 def _friction_slope(physical: Physical, scene: Scene, hopf: HopfPoint) -> float:
     """``d ln f / d ln Re`` of Eq. (15) at the onset's Reynolds number."""
-    flow = Flow("onset", "velocity", scene.scales.m_per_s(hopf.ustar))
+    flow = Flow.of("velocity", scene.scales.m_per_s(hopf.ustar))
     _, re = physical.friction(flow)
     return -1.0 if friction_from_reynolds(re) == 12.0 / re else -0.25
 
@@ -172,7 +172,7 @@ def viscous_friction(physical: Physical, overrides: dict) -> bool:
 def physical_scene(physical: Physical, flow: Flow | None, overrides: dict) -> Scene:
     """The scene at ``flow`` (with a viscosity: at the friction of that flow)."""
     if viscous_friction(physical, overrides) and flow is None:
-        flow = Flow("start", "velocity", 1.0)
+        flow = Flow.of("velocity", 1.0)
     return physical.scene(flow, **overrides)
 
 

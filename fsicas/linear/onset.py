@@ -31,7 +31,7 @@ def onset_at_own_flow(scene: Scene, model, ustar_max: float, physical: Physical 
     for _ in range(FRICTION_STEPS if physical is not None else 0):
         if hopf is None:
             break
-        flow = Flow("onset", "velocity", scene.scales.m_per_s(hopf.ustar))
+        flow = Flow.of("velocity", scene.scales.m_per_s(hopf.ustar))
         friction, reynolds = physical.friction(flow)
         if abs(friction - scene.friction) <= FRICTION_RTOL * scene.friction:
             break

@@ -14,14 +14,14 @@ from __future__ import annotations
 import contextlib
 import csv
 import json
-from concurrent.futures import Executor, as_completed
+from concurrent.futures import Executor
 from pathlib import Path
 
 from tqdm import tqdm
 
 from ..provenance import provenance
 from ..results_file import ResultsFile, check_results_path
-from ..workers import local_pool
+from ..workers import finished, local_pool
 from .analyses import study_point
 from .spec import Study
 
@@ -69,7 +69,8 @@ def run_study(study: Study, table, *, workers: int | None = None,
     instead (e.g. a Dask ``Client.get_executor()``), used as it is and not shut down.
     ``progress``: a bar on stderr (None: on a terminal only)."""
     table = check_table_path(table)
-    with ResultsFile(results_path(table), study.header, provenance()) as out, \
+    with ResultsFile(results_path(table), study.header, provenance(),
+                     fields={"index": int}) as out, \
             contextlib.ExitStack() as stack:
         done = {row["index"]: row for row in out.records}
         todo = [i for i in range(len(study.points)) if i not in done]
@@ -78,8 +79,7 @@ def run_study(study: Study, table, *, workers: int | None = None,
         futures = [executor.submit(study_point, study, i) for i in todo]
         bar = stack.enter_context(tqdm(total=len(study.points), initial=len(done),
                                        desc="study", unit="point", disable=_quiet(progress)))
-        for fut in as_completed(futures):
-            row = fut.result()
+        for row in finished(futures, out.path):
             out.append(row)
             done[row["index"]] = row
             bar.update()

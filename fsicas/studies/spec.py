@@ -42,10 +42,12 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..checks import read_toml
+from ..checks import check_points, finite_number, read_toml
 from ..physical import KEYS, load_physical, parse_flow, parse_quantity
-from ..scene import Scene
+from ..scene import MAX_ABS_USTAR, Scene
 from ..timedomain.integrators import Settings
+from ..timedomain.limits import check_size
+from ..timedomain.breathing import PressureSchedule
 
 __all__ = ["Study", "load_study", "ANALYSES", "SETTINGS", "DISTRIBUTIONS"]
 
@@ -98,6 +100,9 @@ def load_study(path) -> Study:
     if analysis not in ANALYSES:
         raise ValueError(f"{label}: analysis must be one of {', '.join(ANALYSES)}, got {analysis!r}")
     physical = doc.get("physical")
+    for key in ("physical", "description"):
+        if not isinstance(doc.get(key, ""), str):
+            raise ValueError(f"{label}: {key} must be a string, got {doc[key]!r}")
     if physical is not None:
         load_physical(physical)                      # refused here if it does not exist
     scene = _table(doc, "scene", label)
@@ -116,8 +121,39 @@ def load_study(path) -> Study:
     unit = _units(physical)
     points = _grid(doc["grid"], unit, label) if "grid" in doc else \
         _sample(doc["sample"], unit, label)
-    return Study(label, str(doc.get("description", "")), analysis, physical, scene,
+    if physical is None:
+        _check_points(analysis, points, scene, label)
+    if analysis != "onset":
+        _check_run_size(points, scene, settings, label)
+    return Study(label, doc.get("description", ""), analysis, physical, scene,
                  settings, tuple(points))
+
+
+def _check_points(analysis: str, points: list, scene: dict, label: str) -> None:
+    """The values of a nondimensional study's parameters, checked as Scene fields when the
+    file is read (each value, or the extremes of more than 100, every bound being a
+    range), and a flow for a time integration: ValueError naming the value."""
+    for key in points[0]:
+        values = sorted({p[key] for p in points})
+        for value in values if len(values) <= 100 else (values[0], values[-1]):
+            try:
+                Scene(**{**scene, key: value})
+            except (ValueError, TypeError) as err:
+                raise ValueError(f"{label}: {key} = {value!r}: {err}") from None
+    if analysis != "onset" and "ustar" not in points[0] and not scene.get("ustar", 0) > 0:
+        raise ValueError(f"{label}: the {analysis} analysis integrates in time at a flow: give "
+                         "ustar > 0 in [grid], [sample] or [scene] (or flow, with physical = ...)")
+
+
+def _check_run_size(points: list, scene: dict, settings: dict, label: str) -> None:
+    """The memory of each point's run (``t_end / dt_out`` samples of its states), checked
+    when the file is read: ValueError naming the settings."""
+    modes = max(int(p.get("modes", scene.get("modes", Scene.modes))) for p in points)
+    try:
+        check_size(2 * modes + 2, settings["t_end"], settings["dt_out"], PressureSchedule())
+    except ValueError as err:
+        raise ValueError(f"{label}: [settings] {err}".replace(" (--dt-out)", "").replace(
+            " (--t-end)", "")) from None
 
 
 def _check_values(analysis: str, physical, scene: dict, settings: dict, label: str) -> None:
@@ -130,6 +166,9 @@ def _check_values(analysis: str, physical, scene: dict, settings: dict, label: s
         if isinstance(value, bool) or not isinstance(value, (int, float)) \
                 or not math.isfinite(value) or value <= 0:
             raise ValueError(f"{label}: [settings] {key} must be a number > 0, got {value!r}")
+    if settings.get("ustar_max", 0) > MAX_ABS_USTAR:
+        raise ValueError(f"{label}: [settings] ustar_max must be at most {MAX_ABS_USTAR:g}, "
+                         f"got {settings['ustar_max']!r}")
     if analysis != "onset":
         try:
             Settings(rtol=settings["rtol"], atol=settings["atol"], dt_out=settings["dt_out"],
@@ -156,9 +195,8 @@ def _units(physical: str | None):
             if name not in _SCENE_FIELDS:
                 raise ValueError(f"{label}: {name!r} is not a Scene field (without physical = "
                                  f"... the parameters are Scene fields: {', '.join(_SCENE_FIELDS)})")
-            if isinstance(value, str) or isinstance(value, bool):
-                raise ValueError(f"{label}: {name} must be a number, got {value!r}")
-            return float(value)
+            number = finite_number(f"{label}: {name}", value)
+            return value if name in ("modes", "quad_nodes") and isinstance(value, int) else number
         if name not in KEYS:
             raise ValueError(f"{label}: {name!r} is not a [physical] key; allowed: "
                              f"{', '.join(KEYS)}")
@@ -186,6 +224,7 @@ def _grid(grid: dict, convert, label: str) -> list[dict]:
             num = spec["num"]
             if not (isinstance(num, int) and num >= 1):
                 raise ValueError(f"{where}.num must be an integer >= 1, got {num!r}")
+            check_points(num, where, "give a smaller num")
             values = np.geomspace(a, b, num) if spec.get("log", False) else np.linspace(a, b, num)
             axes[name] = [float(v) for v in values]
         elif isinstance(spec, list) and spec:
@@ -196,6 +235,8 @@ def _grid(grid: dict, convert, label: str) -> list[dict]:
         if repeated:
             raise ValueError(f"{where} repeats {', '.join(f'{v:g}' for v in repeated)}: "
                              "give each value once (each point would be computed again)")
+    check_points(math.prod(len(v) for v in axes.values()), f"{label}: [grid]",
+                 "give fewer values per parameter, or split the study into several files")
     return [dict(zip(axes, combo)) for combo in itertools.product(*axes.values())]
 
 
@@ -204,6 +245,7 @@ def _sample(sample: dict, convert, label: str) -> list[dict]:
     size, seed = sample.pop("size", None), sample.pop("seed", 0)
     if not (isinstance(size, int) and size >= 1):
         raise ValueError(f"{label}: sample.size must be an integer >= 1, got {size!r}")
+    check_points(size, f"{label}: [sample]", "give a smaller size")
     if not isinstance(seed, int):
         raise ValueError(f"{label}: sample.seed must be an integer, got {seed!r}")
     if not sample:
@@ -219,7 +261,7 @@ def _sample(sample: dict, convert, label: str) -> list[dict]:
         if set(spec) != {"distribution", *args}:
             raise ValueError(f"{where}: a {kind} distribution takes {', '.join(args)}")
         a = convert(name, spec[args[0]], where)
-        b = float(spec[args[1]]) if kind == "lognormal" else convert(name, spec[args[1]], where)
+        b = finite_number(f"{where}.sigma", spec[args[1]]) if kind == "lognormal" else convert(name, spec[args[1]], where)
         columns[name] = _draw(rng, kind, a, b, size, where)
     return [{k: float(v[i]) for k, v in columns.items()} for i in range(size)]
 

@@ -16,23 +16,24 @@ def solver_message(err: Exception, t0: float, model, x_last) -> str:
     and :func:`closing` says how (``x_last``: the last good state)."""
     text = str(err).strip().splitlines()
     if any("RHSFUNC_FAIL" in line or "RES_FAIL" in line for line in text):
-        return (f"a gap closed (h_c <= 0) in the chunk starting at t = {t0:.6g}: the flow model is "
+        return (f"a gap closed (h_c <= 0) after t = {t0:.6g}: the flow model is "
                 f"singular there; {closing(model, x_last)}")
     key = [line for line in text if "CV_" in line or "IDA_" in line or "solve_ivp" in line]
-    return f"integrator failed in the chunk starting at t = {t0:.6g}: " + (key[-1] if key else text[-1] if text else repr(err))
+    return f"the time integration failed after t = {t0:.6g}: " + (key[-1] if key else text[-1] if text else repr(err))
 
 
-def first_bad(model, X) -> tuple[int, str] | None:
-    """(index of the first bad sample, message) if a sample is not finite or a gap closed."""
+def first_bad(model, X, times) -> tuple[int, str] | None:
+    """(index of the first bad sample, message) if a sample is not finite or a gap closed
+    (``times``: the samples' times)."""
     finite = np.all(np.isfinite(X), axis=1)
     if not finite.all():
         k = int(np.argmin(finite))
-        return k, f"non-finite state at output sample {k} of the chunk"
+        return k, f"the state is not finite at t = {times[k]:.6g}"
     h = gaps(model, X)
     if h.min() <= 0:
         k = int(np.argmax(h.min(axis=(1, 2)) <= 0))
         last = X[k - 1] if k > 0 else None
-        return k, (f"a gap closed (h_c = {h.min():.3g} <= 0) at output sample {k} of the chunk: the "
+        return k, (f"a gap closed (h_c = {h.min():.3g} <= 0) at t = {times[k]:.6g}: the "
                    f"flow model is singular there; {closing(model, last)}")
     return None
 

@@ -19,7 +19,7 @@ from __future__ import annotations
 import contextlib
 import dataclasses
 import time
-from concurrent.futures import Executor, as_completed
+from concurrent.futures import Executor
 from dataclasses import dataclass
 from typing import Literal, Union
 
@@ -28,13 +28,16 @@ from tqdm import tqdm
 
 from ..linear.hopf import critical_velocity
 from ..model.assembly import build_model
+from ..checks import check_points
 from ..provenance import provenance
 from ..results_file import ResultsFile, read_records
-from ..workers import local_pool
+from ..workers import finished, local_pool
 from .outcome import Criteria, OutcomeKind
 from .run import run_case, sweep_model
 from ..scene import Scene
+from .breathing import PressureSchedule
 from .integrators import Settings
+from .limits import check_size
 
 __all__ = ["MAP_SCENE", "MapOutcome", "MapResult", "impact_map", "stability_boundary", "load_points"]
 
@@ -72,6 +75,10 @@ class MapResult:
         return {**described, "grid": self.grid, "points": len(self.points),
                 "computed": self.computed, "counts": self.counts(),
                 "boundary": self.boundary, "wall_time": self.wall_time}
+
+
+#: What a map reads back from each record of its results file.
+RECORD_FIELDS = {"ustar": (int, float), "mstar": (int, float), "outcome": str}
 
 
 def _key(ustar: float, mstar: float) -> tuple[float, float]:
@@ -132,13 +139,16 @@ def impact_map(ustars, mstars, path, *, scene: Scene = MAP_SCENE, t_end: float =
     called after each point.
     """
     ustars, mstars = _grid(ustars, mstars, t_end)
+    check_points(ustars.size * mstars.size, "the map", "give fewer U* or M* values, or "
+                 "split the map into several runs (each with its own --out)")
+    check_size(2 * scene.modes + 2, t_end, settings.dt_out, PressureSchedule())
     if workers is not None and not (isinstance(workers, int) and workers >= 1):
         raise ValueError(f"workers must be an integer >= 1 (or None: the local cores), got {workers!r}")
     start = time.perf_counter()
     criteria = Criteria(stop_on_contact=True)
     base = scene.replace(contact=False)
     header = map_header(base, t_end, settings, criteria)
-    with ResultsFile(path, header, provenance()) as out, \
+    with ResultsFile(path, header, provenance(), fields=RECORD_FIELDS) as out, \
             contextlib.ExitStack() as stack:
         done = {_key(row["ustar"], row["mstar"]): row for row in out.records}
         todo = [(u, m) for m in mstars for u in ustars if _key(u, m) not in done]
@@ -146,8 +156,7 @@ def impact_map(ustars, mstars, path, *, scene: Scene = MAP_SCENE, t_end: float =
             executor = stack.enter_context(local_pool(workers))
         futures = [executor.submit(_point, base, u, m, t_end, settings, criteria) for u, m in todo]
         bar = stack.enter_context(tqdm(total=len(todo), desc="impact map", unit="point", disable=None))
-        for k, fut in enumerate(as_completed(futures), start=1):
-            row = fut.result()
+        for k, row in enumerate(finished(futures, path), start=1):
             out.append(row)
             done[_key(row["ustar"], row["mstar"])] = row
             bar.update()

@@ -302,13 +302,14 @@ def _loop(model, steady, schedule, integrator, x0, n_chunks, monitor, bar) -> Tr
             ts.append(t_good), xs.append(x_good)
             break
         steps += nsteps
-        bad = first_bad(model, X.T)
+        times = k * span + np.linspace(0.0, span, n_out + 1)[1:]
+        bad = first_bad(model, X.T, times)
         if bad is not None:
             status, message = "failed", bad[1]
-            ts.append(k * span + np.linspace(0.0, span, n_out + 1)[1:bad[0] + 1])
+            ts.append(times[:bad[0] + 1])
             xs.append(X.T[:bad[0]])
             break
-        ts.append(k * span + np.linspace(0.0, span, n_out + 1)[1:])
+        ts.append(times)
         xs.append(X.T)
         x = X[:, -1]
         bar.update(round(span, 6))
@@ -367,7 +368,7 @@ def _runs(model, integrator, x, pe, t0, count):
             X, _ = integrator.run(x, np.concatenate([pe[:-1], [start]]))
         except RuntimeError:
             break
-        if first_bad(model, X.T) is not None:
+        if first_bad(model, X.T, start + grid) is not None:
             break
         x = X[:, -1]
         ts.append(start + grid), xs.append(X.T)
