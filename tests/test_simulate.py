@@ -144,7 +144,12 @@ def test_a_step_across_the_whole_contact_layer_is_told_apart(damped_scene_u7):
         bent = x.copy()
         bent[n] += (scene.hstar / 2 - gap) / model.tip.phi[0, 1]
         assert gaps(model, bent[None]).min() == pytest.approx(gap, rel=1e-6)
-        assert words in closing(model, bent)
+        assert words in closing(model, bent, model.parameters(scene))
+    # the same model run with a ten times thicker layer: 3 eps is inside that layer
+    thick = model.parameters(scene.replace(contact_eps=1e-2))
+    bent = x.copy()
+    bent[n] += (scene.hstar / 2 - 3 * eps) / model.tip.phi[0, 1]
+    assert "did not stop the beam" in closing(model, bent, thick)
 
 
 def test_explicit_jacobian_through_the_mass_action_equals_ad_through_m(damped_scene_u7):

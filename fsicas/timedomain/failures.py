@@ -6,25 +6,26 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..model.contact import gaps
+from ..model.contact import gaps, law
 
 __all__ = ["solver_message", "first_bad", "closing"]
 
 
-def solver_message(err: Exception, t0: float, model, x_last) -> str:
+def solver_message(err: Exception, t0: float, model, x_last, p) -> str:
     """Why the solver failed, in words; a failed right-hand side is a gap that closed,
-    and :func:`closing` says how (``x_last``: the last good state)."""
+    and :func:`closing` says how (``x_last``: the last good state; ``p``: the run's
+    parameters)."""
     text = str(err).strip().splitlines()
     if any("RHSFUNC_FAIL" in line or "RES_FAIL" in line for line in text):
         return (f"a gap closed (h_c <= 0) after t = {t0:.6g}: the flow model is "
-                f"singular there; {closing(model, x_last)}")
+                f"singular there; {closing(model, x_last, p)}")
     key = [line for line in text if "CV_" in line or "IDA_" in line or "solve_ivp" in line]
     return f"the time integration failed after t = {t0:.6g}: " + (key[-1] if key else text[-1] if text else repr(err))
 
 
-def first_bad(model, X, times) -> tuple[int, str] | None:
+def first_bad(model, X, times, p) -> tuple[int, str] | None:
     """(index of the first bad sample, message) if a sample is not finite or a gap closed
-    (``times``: the samples' times)."""
+    (``times``: the samples' times; ``p``: the run's parameters)."""
     finite = np.all(np.isfinite(X), axis=1)
     if not finite.all():
         k = int(np.argmin(finite))
@@ -34,18 +35,19 @@ def first_bad(model, X, times) -> tuple[int, str] | None:
         k = int(np.argmax(h.min(axis=(1, 2)) <= 0))
         last = X[k - 1] if k > 0 else None
         return k, (f"a gap closed (h_c = {h.min():.3g} <= 0) at t = {times[k]:.6g}: the "
-                   f"flow model is singular there; {closing(model, last)}")
+                   f"flow model is singular there; {closing(model, last, p)}")
     return None
 
 
-def closing(model, x_last) -> str:
+def closing(model, x_last, p) -> str:
     """How the gap closed, from the last good state: with the contact law on, either one
     step crossed the whole contact layer (the last gap was wider than eps, so no
     stiffness acts in time: the layer must be thicker or the steps shorter) or the law
-    did not stop the beam inside it (a stiffer law or a thicker layer)."""
+    did not stop the beam inside it (a stiffer law or a thicker layer). The layer's
+    eps is that of the run's parameters ``p`` (a model serves many laws)."""
     if model.contact_weights is None:
         return "the beam reached the wall (turn the contact law on to hold it)"
-    eps = model.scene.contact_gap
+    eps = law(model, p)[1]
     gap = -np.inf if x_last is None else gaps(model, np.atleast_2d(x_last)).min()
     if gap > eps:
         return (f"the last state before it was {gap / eps:.3g} eps from the wall, outside the "

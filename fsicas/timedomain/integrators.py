@@ -298,12 +298,12 @@ def _loop(model, steady, schedule, integrator, x0, n_chunks, monitor, bar) -> Tr
         except RuntimeError as err:
             t_good, x_good = _recover(model, integrator, x, pe, k * span)
             last = x_good[-1] if len(x_good) else x
-            status, message = "failed", solver_message(err, k * span, model, last)
+            status, message = "failed", solver_message(err, k * span, model, last, steady.p)
             ts.append(t_good), xs.append(x_good)
             break
         steps += nsteps
         times = k * span + np.linspace(0.0, span, n_out + 1)[1:]
-        bad = first_bad(model, X.T, times)
+        bad = first_bad(model, X.T, times, steady.p)
         if bad is not None:
             status, message = "failed", bad[1]
             ts.append(times[:bad[0] + 1])
@@ -368,7 +368,7 @@ def _runs(model, integrator, x, pe, t0, count):
             X, _ = integrator.run(x, np.concatenate([pe[:-1], [start]]))
         except RuntimeError:
             break
-        if first_bad(model, X.T, start + grid) is not None:
+        if first_bad(model, X.T, start + grid, pe) is not None:
             break
         x = X[:, -1]
         ts.append(start + grid), xs.append(X.T)
