@@ -393,3 +393,15 @@ def test_the_cycle_branch_figure_says_how_the_branch_ended(tmp_path):
     fig = plot_branch(branch, tmp_path / "branch.png")
     assert "stopped at its point budget" in fig.get_suptitle()
     assert "max_points" not in fig.get_suptitle()
+
+
+def test_a_run_without_contact_says_why_its_force_panel_is_empty():
+    """plot_run of a contact-free limit cycle: the impact-force panel says there was no
+    wall contact and that the contact law was off, instead of showing a bare zero line."""
+    from fsicas.plots import plot_run
+    from fsicas.timedomain.run import run_case
+    run = run_case(Scene(mstar=1.0, ustar=6.5, zeta=0.01, modes=2), t_end=3.0)
+    fig = plot_run(run)
+    force = fig.axes[2]
+    assert [t.get_text() for t in force.texts] == ["no wall contact in this run (contact law off)"]
+    assert not np.any(force.lines[0].get_ydata())

@@ -48,6 +48,10 @@ def plot_run(run, path=None):
     ax[1].legend(loc="upper right")    # moved off the data if it covers any
     total = penetration(model, tr.x, tr.p).load
     ax[2].plot(tr.t, total / reference_force(model), lw=0.7, color=PALETTE[1])
+    if not np.any(total > 0):                # say why the panel is empty
+        law = "contact law on" if run.scene.contact else "contact law off"
+        ax[2].text(0.5, 0.5, f"no wall contact in this run ({law})", ha="center",
+                   va="center", transform=ax[2].transAxes)
     ax[2].set_ylabel(f"impact force $F/F_0$ {NONDIM}")
     ax[2].set_xlabel("time $t$ (units of $T$)")
     return finish(fig, path)
