@@ -1,0 +1,112 @@
+"""What the explorer shows, from the library's analyses (no physics of its own): the
+scene of the page's inputs, the instant view (steady state, eigenvalues, the least stable
+mode shape), the onset and the boundary, each as plain data for the page."""
+from __future__ import annotations
+
+import math
+import warnings
+
+import numpy as np
+
+from ..linear import critical_velocity, linear_stability, stability_boundary
+from ..physical import load_physical
+from ..scene import Scene
+from ..timedomain.run import sweep_model
+
+__all__ = ["INPUTS", "scene_of", "preset_scene", "instant_view", "onset_view",
+           "boundary_view", "boundary_grid", "BOUNDARY_PER_DECADE"]
+
+#: The page's inputs: Scene field -> (label, type); their order on the page.
+INPUTS = {"mstar": ("M*", float), "ustar": ("U*", float), "hstar": ("H*", float),
+          "friction": ("f", float), "kl": ("KL", float), "zeta": ("ζ", float),
+          "modes": ("N", int)}
+#: Points of the boundary map per decade of M*; it spans the two decades around M*.
+BOUNDARY_PER_DECADE = 6
+
+
+def _number(name: str, text, kind) -> float | int:
+    """``text`` read as ``kind``; ValueError naming the input otherwise."""
+    try:
+        value = kind(str(text).strip())
+    except ValueError:
+        what = "an integer" if kind is int else "a number"
+        raise ValueError(f"{name} must be {what}, got {str(text)!r}") from None
+    return value
+
+
+def scene_of(base: Scene, texts: dict) -> Scene:
+    """``base`` with the page's inputs (field -> text) applied; the library's
+    ValueError for values it refuses."""
+    values = {k: _number(k, texts[k], INPUTS[k][1]) for k in INPUTS if k in texts}
+    return base.replace(**values)
+
+
+def preset_scene(name: str | None) -> Scene:
+    """The Scene of a physical preset at its default airflow (scales kept for Hz and
+    L/min), or the default Scene."""
+    if name is None:
+        return Scene()
+    physical = load_physical(name)
+    return physical.scene(physical.flow)
+
+
+def _hz(scene: Scene, omega: float) -> float | None:
+    return None if scene.scales is None else scene.scales.hz(omega)
+
+
+def instant_view(scene: Scene) -> dict:
+    """Steady state and eigen-analysis at ``scene`` (``linear_stability``); the least
+    stable eigenvalue lambda_0 = sigma + i omega gives the growth rate sigma and the
+    frequency |omega|; its complex mode shape y(x) with max |y| = 1."""
+    model = sweep_model(scene, guarded=False)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        stab = linear_stability(scene, model)
+    lam = stab.eigenvalues
+    shape = stab.mode_shape(model, 0)
+    steady = stab.steady.to_json(model)
+    return {"stable": stab.stable, "eigenvalues": lam, "growth_rate": float(lam[0].real),
+            "omega": abs(float(lam[0].imag)), "freq_ratio": abs(float(stab.freq_ratio[0])),
+            "hz": _hz(scene, abs(float(lam[0].imag))), "x": shape["x"], "y": shape["y"],
+            "pressure_drop": steady["pressure_drop"], "tip": steady["tip_deflection"],
+            "warnings": [str(w.message) for w in caught]}
+
+
+def onset_view(scene: Scene) -> dict:
+    """The onset of ``scene``'s steady branch (``critical_velocity``) as JSON, with Hz,
+    L/min and Pa where the scene is physical; ``{"kind": "none"}`` if it stays stable."""
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        onset = critical_velocity(scene, sweep_model(scene, guarded=False))
+    out = {"kind": "none"} if onset is None else onset.to_json()
+    out["warnings"] = [str(w.message) for w in caught]
+    scales = scene.scales
+    if onset is not None and scales is not None:
+        out["hz"] = scales.hz(out.get("omega", 0.0))
+        out["pa"] = scales.pa(out["pressure_drop"])
+        if scales.gap is not None:
+            out["l_per_min"] = scales.l_per_min(out["ustar_crit"])
+    return out
+
+
+def boundary_grid(mstar: float) -> np.ndarray:
+    """The M* of the boundary map: the decade of ``mstar`` and the one on each side."""
+    low = math.floor(math.log10(mstar)) - 1
+    return np.logspace(low, low + 3, 3 * BOUNDARY_PER_DECADE + 1)
+
+
+def boundary_view(scene: Scene) -> dict:
+    """The stability boundary U*_c(M*) of ``scene`` (``stability_boundary``) on
+    :func:`boundary_grid` as JSON."""
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        result = stability_boundary(scene, boundary_grid(scene.mstar),
+                                    sweep_model(scene, guarded=False))
+    out = result.to_json()
+    out["warnings"] += [str(w.message) for w in caught]
+    return out
+
+
+def finite(value) -> bool:
+    """True for a finite real number."""
+    return isinstance(value, (int, float)) and math.isfinite(value)
