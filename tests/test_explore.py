@@ -20,6 +20,7 @@ import scipy.linalg
 from fsicas import Scene
 from fsicas.linear import critical_velocity, linear_stability
 from fsicas.model.assembly import build_model
+from fsicas.timedomain.run import run_case
 
 ROOT = Path(__file__).resolve().parents[1]
 CHROMIUM = "/usr/bin/chromium"
@@ -81,7 +82,8 @@ def page(browser, server):
     page.requests = []
     page.on("request", lambda r: page.requests.append(r.url))
     yield page
-    outside = [u for u in page.requests if urlparse(u.removeprefix("blob:")).hostname != "127.0.0.1"]
+    outside = [u for u in page.requests if not u.startswith("data:")
+               and urlparse(u.removeprefix("blob:")).hostname != "127.0.0.1"]
     page.close()
     assert not outside, f"requests left 127.0.0.1: {outside}"
 
@@ -183,3 +185,16 @@ def test_instant_tier_latency_in_the_browser(page, server):
     assert all(t > 0 for t in times), times
     print(f"\ninstant tier latency (ms): median {statistics.median(times):.0f}, "
           f"max {max(times):.0f}, N = 10")
+
+
+def test_a_time_run_in_the_background_shows_the_library_outcome(page, server):
+    scene = Scene(ustar=4.0, zeta=0.01)
+    _open(page, server, ustar=4, zeta=0.01)
+    page.locator("[data-testid=t-end]").fill("5")
+    page.locator("[data-testid=t-end]").press("Enter")             # sent before the click
+    page.get_by_role("button", name="time run").click()
+    page.locator("[data-testid=run-outcome]").wait_for(timeout=60000)
+    run = run_case(scene, 5.0)
+    assert _text(page, "run-outcome") == run.outcome.outcome
+    assert _text(page, "run-status") == run.status
+    assert "fsicas simulate --mstar 1 --ustar 4 " in _text(page, "run-command")

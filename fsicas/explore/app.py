@@ -8,6 +8,7 @@ import math
 import panel as pn
 
 from ..scene import Scene
+from .background import RunPanel
 from .compute import INPUTS, boundary_view, instant_view, onset_view, preset_scene, scene_of
 from .figures import BoundaryMap, ModeShape, RootLocus
 from .jobs import Jobs
@@ -54,6 +55,7 @@ class Explorer:
         self.locus, self.shape, self.map = RootLocus(), ModeShape(), BoundaryMap()
         self.animate = pn.widgets.Toggle(name="animate the mode", value=False, width=160)
         self.phase = 0.0
+        self.run = RunPanel(self.jobs)
         self._wire()
 
     # -- wiring ---------------------------------------------------------------------
@@ -67,6 +69,7 @@ class Explorer:
         self.draw_map = pn.widgets.Button(name="compute the map", button_type="primary", width=150)
         self.draw_map.on_click(lambda _: self._ask("boundary", self._map_key(), boundary_view,
                                                    self.scene))
+        self.run.start.on_click(lambda _: self.run.ask(self.scene, _key(self.scene)))
         self.refresh()
 
     def start(self) -> None:
@@ -143,6 +146,7 @@ class Explorer:
                 status = "idle"                      # a map of a scene left meanwhile
             if status != "idle":
                 self._show(kind, status, value)
+        self.run.poll()
 
     def _show(self, kind: str, status: str, value) -> None:
         if kind == "onset":
@@ -190,7 +194,7 @@ class Explorer:
                             pn.pane.Bokeh(self.shape.figure), pn.pane.Bokeh(self.locus.figure))
         slower = pn.Column("### Onset", self.onset, "### Map", self.background,
                            pn.Row(self.draw_map, self.cancel),
-                           pn.pane.Bokeh(self.map.figure))
+                           pn.pane.Bokeh(self.map.figure), self.run.page())
         title = "fsicas explore" + (f" — {self.preset}" if self.preset else "")
         return pn.Column(f"## {title}", pn.Row(inputs, instant, slower, sizing_mode="stretch_width"),
                          "### Reproduce", self.command, sizing_mode="stretch_width")

@@ -11,10 +11,12 @@ import numpy as np
 from ..linear import critical_velocity, linear_stability, stability_boundary
 from ..physical import load_physical
 from ..scene import Scene
-from ..timedomain.run import sweep_model
+from ..timedomain.run import run_case, sweep_model
+from ..timedomain.sound import AUDIO_RATE, cycle_sound
 
 __all__ = ["INPUTS", "scene_of", "preset_scene", "instant_view", "onset_view",
-           "boundary_view", "boundary_grid", "BOUNDARY_PER_DECADE"]
+           "boundary_view", "boundary_grid", "BOUNDARY_PER_DECADE", "run_view",
+           "SOUND_DISTANCE", "SOUND_DURATION"]
 
 #: The page's inputs: Scene field -> (label, type); their order on the page.
 INPUTS = {"mstar": ("M*", float), "ustar": ("U*", float), "hstar": ("H*", float),
@@ -107,6 +109,28 @@ def boundary_view(scene: Scene) -> dict:
     return out
 
 
-def finite(value) -> bool:
-    """True for a finite real number."""
-    return isinstance(value, (int, float)) and math.isfinite(value)
+#: The listener's distance (m) and the length (s) of the sound of a settled cycle.
+SOUND_DISTANCE, SOUND_DURATION = 0.3, 2.0
+#: Most samples of the tip's history sent to the page.
+HISTORY_POINTS = 2000
+
+
+def run_view(scene: Scene, t_end: float) -> dict:
+    """A time run of ``scene`` to ``t_end`` (``run_case``: the perturbed steady state
+    integrated and classified) as ``fsicas simulate --json``, the tip deflection
+    y(1, t) (at most :data:`HISTORY_POINTS` samples) and, for a physical scene whose run
+    settled on a cycle, its sound (``cycle_sound``: Pa at :data:`SOUND_DISTANCE`)."""
+    if not (math.isfinite(t_end) and 0 < t_end <= 1000):
+        raise ValueError(f"t_end must be in (0, 1000], got {t_end}")
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        run = run_case(scene, t_end)
+    traj, n = run.trajectory, scene.modes
+    step = max(1, traj.t.size // HISTORY_POINTS)
+    tip = traj.x[::step, n:2 * n] @ np.asarray(run.model.tip.phi)[:, 1]
+    out = {**run.to_json(), "t": traj.t[::step], "tip": tip, "sound": None}
+    out["warnings"] = list(dict.fromkeys(out["warnings"] + [str(w.message) for w in caught]))
+    if scene.scales is not None and run.outcome.periodic:
+        sound = cycle_sound(traj, scene.scales, SOUND_DISTANCE, SOUND_DURATION, AUDIO_RATE)
+        out["sound"] = {**sound.to_json(), "pressure": sound.pressure.astype(np.float32)}
+    return out
