@@ -44,7 +44,7 @@ class Explorer:
         self.preset = preset
         self.jobs = Jobs(RESULTS)
         self.scene = self.base
-        self.boxes = {k: NumberBox(value=str(getattr(self.base, k)), label=label, testid=k)
+        self.boxes = {k: NumberBox(value=f"{getattr(self.base, k):.6g}", label=label, testid=k)
                       for k, (label, _) in INPUTS.items()}
         self.boxes["modes"].testid = "modes"
         self.error = pn.pane.HTML(readout("error", ""), styles={"color": "#b00"})
@@ -119,12 +119,14 @@ class Explorer:
 
     def _draw_instant(self, scene: Scene, view: dict) -> None:
         hz = "" if view["hz"] is None else f" ({_fmt(view['hz'], 4, ' Hz')})"
+        flow = ("" if view["l_per_min"] is None else
+                "<br>" + readout("flow", _fmt(view["l_per_min"], 4, " L/min"), "airflow"))
         lines = [readout("stability", "stable" if view["stable"] else "unstable", "steady state"),
                  readout("growth-rate", _fmt(view["growth_rate"], 6), "growth rate σ"),
                  readout("frequency", _fmt(view["omega"], 6), "frequency ω") + hz,
                  readout("freq-ratio", _fmt(view["freq_ratio"]), "ω/ω₁"),
                  readout("pressure-drop", _fmt(view["pressure_drop"]), "pressure drop Δp"),
-                 readout("tip", _fmt(view["tip"]), "static tip deflection")]
+                 readout("tip", _fmt(view["tip"]), "static tip deflection") + flow]
         lines += [readout("warning", w) for w in view["warnings"]]
         self.readouts.object = "<br>".join(lines)
         self.locus.update(view["eigenvalues"])

@@ -45,15 +45,29 @@ def scene_of(base: Scene, texts: dict) -> Scene:
 
 def preset_scene(name: str | None) -> Scene:
     """The Scene of a physical preset at its default airflow (scales kept for Hz and
-    L/min), or the default Scene."""
+    L/min; straight symmetric channels as the default walls of its H*), or the default
+    Scene."""
     if name is None:
         return Scene()
     physical = load_physical(name)
-    return physical.scene(physical.flow)
+    scene = physical.scene(physical.flow)
+    if scene.straight and scene.symmetric:          # the default walls: H* stays an input
+        scene = scene.replace(channel1=None, channel2=None)
+    return scene
 
 
 def _hz(scene: Scene, omega: float) -> float | None:
     return None if scene.scales is None else scene.scales.hz(omega)
+
+
+def _l_per_min(scene: Scene) -> float | None:
+    """The airflow of a physical scene in L/min, where its gap is still the scales'
+    (H* unchanged from the physical input's)."""
+    sc = scene.scales
+    if sc is None or sc.gap is None or not math.isclose(scene.hstar * sc.length, sc.gap,
+                                                         rel_tol=1e-5):
+        return None
+    return sc.l_per_min(scene.ustar)
 
 
 def instant_view(scene: Scene) -> dict:
@@ -70,6 +84,7 @@ def instant_view(scene: Scene) -> dict:
     return {"stable": stab.stable, "eigenvalues": lam, "growth_rate": float(lam[0].real),
             "omega": abs(float(lam[0].imag)), "freq_ratio": abs(float(stab.freq_ratio[0])),
             "hz": _hz(scene, abs(float(lam[0].imag))), "x": shape["x"], "y": shape["y"],
+            "l_per_min": _l_per_min(scene),
             "pressure_drop": steady["pressure_drop"], "tip": steady["tip_deflection"],
             "warnings": [str(w.message) for w in caught]}
 
