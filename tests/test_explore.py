@@ -3,7 +3,7 @@ shows what the library computes, refuses bad input with the library's message, k
 state in the URL, moves the point where the map is clicked, and requests nothing from
 outside 127.0.0.1. Skipped (with the reason) where /usr/bin/chromium is absent; CI
 installs it (.ci/run)."""
-import math
+import json
 import os
 import socket
 import statistics
@@ -185,6 +185,26 @@ def test_instant_tier_latency_in_the_browser(page, server):
     assert all(t > 0 for t in times), times
     print(f"\ninstant tier latency (ms): median {statistics.median(times):.0f}, "
           f"max {max(times):.0f}, N = 10")
+
+
+def test_the_map_runs_in_the_background_and_cancels_and_the_view_exports(page, server):
+    _open(page, server, ustar=4.5)
+    page.get_by_role("button", name="compute the map").click()
+    page.wait_for_function(f"() => ({FIND})(document, 'boundary-status').textContent"
+                           ".startsWith('computing')")
+    _set(page, "ustar", "4.6")                              # the page answers meanwhile
+    assert _number(page, "growth-rate") == pytest.approx(
+        linear_stability(Scene(ustar=4.6)).eigenvalues[0].real, rel=1e-5)
+    page.get_by_role("button", name="cancel", exact=True).click()
+    page.wait_for_function(f"() => ({FIND})(document, 'boundary-status').textContent"
+                           " === 'cancelled'")
+    with page.expect_download() as download:
+        page.get_by_role("button", name="export the view (JSON)").click()
+    exported = json.loads(Path(download.value.path()).read_text())
+    assert exported["scene"]["ustar"] == 4.6
+    assert exported["instant"]["growth_rate"] == pytest.approx(_number(page, "growth-rate"),
+                                                               rel=1e-5)
+    assert exported["command"] == _text(page, "command")
 
 
 def test_a_time_run_in_the_background_shows_the_library_outcome(page, server):

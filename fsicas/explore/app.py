@@ -9,7 +9,7 @@ import panel as pn
 
 from ..scene import Scene
 from .background import RunPanel
-from .compute import INPUTS, boundary_view, instant_view, onset_view, preset_scene, scene_of
+from .compute import INPUTS, boundary_view, export, instant_view, onset_view, preset_scene, scene_of
 from .figures import BoundaryMap, ModeShape, RootLocus
 from .jobs import Jobs
 from .reproduce import command_line, python_lines
@@ -56,6 +56,8 @@ class Explorer:
         self.animate = pn.widgets.Toggle(name="animate the mode", value=False, width=160)
         self.phase = 0.0
         self.run = RunPanel(self.jobs)
+        self.download = pn.widgets.FileDownload(callback=self._export, filename="fsicas_explore.json",
+                                                label="export the view (JSON)", width=220)
         self._wire()
 
     # -- wiring ---------------------------------------------------------------------
@@ -103,7 +105,7 @@ class Explorer:
             self.error.object = readout("error", str(err))
             return
         self.error.object = readout("error", "")
-        self.scene = scene
+        self.scene, self.view = scene, view
         self._draw_instant(scene, view)
         self.command.object = (readout("command", command_line(scene)) + "<pre>"
                                + python_lines(scene) + "</pre>")
@@ -184,6 +186,12 @@ class Explorer:
             lines.append("physical: " + ", ".join(units))
         return "<br>".join(lines)
 
+    def _export(self):
+        """The JSON of the current view (:func:`export`) for the download button."""
+        import io
+        onset = RESULTS.get(("onset", _key(self.scene, "ustar")))
+        return io.StringIO(export(self.scene, self.view, onset, command_line(self.scene)))
+
     def _frame(self) -> None:
         if self.animate.value:
             self.phase = (self.phase + 0.3) % (2 * math.pi)
@@ -199,4 +207,5 @@ class Explorer:
                            pn.pane.Bokeh(self.map.figure), self.run.page())
         title = "fsicas explore" + (f" — {self.preset}" if self.preset else "")
         return pn.Column(f"## {title}", pn.Row(inputs, instant, slower, sizing_mode="stretch_width"),
-                         "### Reproduce", self.command, sizing_mode="stretch_width")
+                         "### Reproduce", self.command, self.download,
+                         sizing_mode="stretch_width")

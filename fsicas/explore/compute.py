@@ -9,6 +9,7 @@ import warnings
 import numpy as np
 
 from ..linear import critical_velocity, linear_stability, stability_boundary
+from .. import strict_json
 from ..physical import load_physical
 from ..scene import Scene
 from ..timedomain.run import run_case, sweep_model
@@ -16,7 +17,7 @@ from ..timedomain.sound import AUDIO_RATE, cycle_sound
 
 __all__ = ["INPUTS", "scene_of", "preset_scene", "instant_view", "onset_view",
            "boundary_view", "boundary_grid", "BOUNDARY_PER_DECADE", "run_view",
-           "SOUND_DISTANCE", "SOUND_DURATION"]
+           "SOUND_DISTANCE", "SOUND_DURATION", "export"]
 
 #: The page's inputs: Scene field -> (label, type); their order on the page.
 INPUTS = {"mstar": ("M*", float), "ustar": ("U*", float), "hstar": ("H*", float),
@@ -149,3 +150,12 @@ def run_view(scene: Scene, t_end: float) -> dict:
         sound = cycle_sound(traj, scene.scales, SOUND_DISTANCE, SOUND_DURATION, AUDIO_RATE)
         out["sound"] = {**sound.to_json(), "pressure": sound.pressure.astype(np.float32)}
     return out
+
+
+def export(scene: Scene, view: dict, onset: dict | None, command: str) -> str:
+    """The current view as JSON: the scene, the instant view (eigenvalues as [Re, Im]
+    pairs, the mode shape dropped), the onset if known, the reproducing command."""
+    instant = {k: v for k, v in view.items() if k not in ("eigenvalues", "x", "y")}
+    instant["eigenvalues"] = [[float(l.real), float(l.imag)] for l in view["eigenvalues"]]
+    return strict_json.dumps({"scene": scene.to_dict(), "instant": instant, "onset": onset,
+                              "command": command}, indent=1)
