@@ -20,6 +20,7 @@ import scipy.linalg
 from fsicas import Scene
 from fsicas.linear import critical_velocity, linear_stability
 from fsicas.model.assembly import build_model
+from fsicas.physical import load_physical
 from fsicas.timedomain.run import run_case
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -218,3 +219,19 @@ def test_a_time_run_in_the_background_shows_the_library_outcome(page, server):
     assert _text(page, "run-outcome") == run.outcome.outcome
     assert _text(page, "run-status") == run.status
     assert "fsicas simulate --mstar 1 --ustar 4 " in _text(page, "run-command")
+
+
+def test_a_physical_preset_gives_hz_and_l_per_min_of_the_library(page, server):
+    _open(page, server)
+    page.get_by_role("combobox").select_option("soft_palate")
+    page.locator("[data-testid=flow]").wait_for(timeout=30000)
+    physical = load_physical("soft_palate")
+    scene = physical.scene(physical.flow)
+    assert float(_text(page, "flow").split()[0]) == pytest.approx(
+        scene.scales.l_per_min(scene.ustar), rel=1e-4)
+    page.locator("[data-testid=onset-ustar]").wait_for(timeout=30000)
+    onset = critical_velocity(scene)
+    hz = page.locator("text=physical:").inner_text()
+    assert f"{scene.scales.l_per_min(onset.ustar):.4g} L/min" in hz
+    assert f"{scene.scales.hz(onset.omega):.4g} Hz" in hz
+    page.wait_for_function("() => location.search.includes('preset=soft_palate')")

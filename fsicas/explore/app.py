@@ -7,6 +7,7 @@ import math
 
 import panel as pn
 
+from ..physical import preset_names
 from ..scene import Scene
 from .background import RunPanel
 from .compute import INPUTS, boundary_view, export, instant_view, onset_view, preset_scene, scene_of
@@ -20,6 +21,7 @@ __all__ = ["Explorer", "RESULTS"]
 #: Finished onsets and boundaries of this server, by (kind, scene): shared by sessions.
 RESULTS: dict = {}
 POLL_MS, FRAME_MS = 150, 100
+NO_PRESET = "none (nondimensional)"
 
 
 def _fmt(value, digits: int = 4, unit: str = "") -> str:
@@ -42,6 +44,9 @@ class Explorer:
     def __init__(self, preset: str | None = None):
         self.base = preset_scene(preset)
         self.preset = preset
+        self.presets = pn.widgets.Select(name="physical preset", value=preset or NO_PRESET,
+                                         options=[NO_PRESET, *preset_names()], width=200)
+        self.holding = False
         self.jobs = Jobs(RESULTS)
         self.scene = self.base
         self.boxes = {k: NumberBox(value=f"{getattr(self.base, k):.6g}", label=label, testid=k)
@@ -64,6 +69,7 @@ class Explorer:
     def _wire(self) -> None:
         for box in self.boxes.values():
             box.param.watch(self._changed, "value")
+        self.presets.param.watch(self._preset, "value")
         from bokeh.events import Tap
         self.map.figure.on_event(Tap, self._tapped)
         self.cancel = pn.widgets.Button(name="cancel", width=90)
@@ -77,6 +83,7 @@ class Explorer:
     def start(self) -> None:
         """Once the page is served: URL sync, polling of the jobs, the animation."""
         if pn.state.location is not None:
+            pn.state.location.sync(self.presets, {"value": "preset"})     # before the boxes
             for name, box in self.boxes.items():
                 pn.state.location.sync(box, {"value": name})
         pn.state.add_periodic_callback(self.poll, period=POLL_MS)
@@ -84,6 +91,17 @@ class Explorer:
         pn.state.on_session_destroyed(lambda _: self.jobs.close())
 
     def _changed(self, _event=None) -> None:
+        if not self.holding:
+            self.refresh()
+
+    def _preset(self, event) -> None:
+        """Start again from the preset's scene (or the default one): every box at once."""
+        self.preset = None if event.new == NO_PRESET else event.new
+        self.base = preset_scene(self.preset)
+        self.holding = True
+        for name, box in self.boxes.items():
+            box.value = f"{getattr(self.base, name):.6g}"
+        self.holding = False
         self.refresh()
 
     def _tapped(self, event) -> None:
@@ -199,13 +217,13 @@ class Explorer:
 
     # -- the page -------------------------------------------------------------------
     def page(self) -> pn.viewable.Viewable:
-        inputs = pn.Column("### Inputs", *self.boxes.values(), self.error, width=260)
+        inputs = pn.Column("### Inputs", self.presets, *self.boxes.values(), self.error, width=260)
         instant = pn.Column("### Now", self.readouts, self.animate,
                             pn.pane.Bokeh(self.shape.figure), pn.pane.Bokeh(self.locus.figure))
         slower = pn.Column("### Onset", self.onset, "### Map", self.background,
                            pn.Row(self.draw_map, self.cancel),
                            pn.pane.Bokeh(self.map.figure), self.run.page())
-        title = "fsicas explore" + (f" — {self.preset}" if self.preset else "")
+        title = "fsicas explore"
         return pn.Column(f"## {title}", pn.Row(inputs, instant, slower, sizing_mode="stretch_width"),
                          "### Reproduce", self.command, self.download,
                          sizing_mode="stretch_width")
