@@ -160,6 +160,16 @@ def test_invalid_input_is_refused_with_the_library_message(page, server):
     assert _text(page, "error") == "modes must be an integer, got 'ten'"
     _set(page, "modes", "10")
     assert _text(page, "error") == ""
+    with pytest.raises(ValueError) as refused:
+        Scene(slenderness=0.1)
+    _set(page, "slenderness", "0.1")                             # with Euler-Bernoulli
+    assert _text(page, "error") == str(refused.value)
+    page.get_by_label("beam").select_option("timoshenko")
+    page.wait_for_function(f"() => ({FIND})(document, 'command').textContent"
+                           ".includes('--beam timoshenko --slenderness 0.1')")
+    assert _text(page, "error") == ""
+    assert _number(page, "growth-rate") == pytest.approx(linear_stability(
+        Scene(beam="timoshenko", slenderness=0.1)).eigenvalues[0].real, rel=1e-5)
 
 
 def test_the_state_is_in_the_url_and_the_map_click_moves_the_point(page, server):
@@ -223,7 +233,7 @@ def test_a_time_run_in_the_background_shows_the_library_outcome(page, server):
 
 def test_a_physical_preset_gives_hz_and_l_per_min_of_the_library(page, server):
     _open(page, server)
-    page.get_by_role("combobox").select_option("soft_palate")
+    page.get_by_label("physical preset").select_option("soft_palate")
     page.locator("[data-testid=flow]").wait_for(timeout=30000)
     physical = load_physical("soft_palate")
     scene = physical.scene(physical.flow)

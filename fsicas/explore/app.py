@@ -47,6 +47,11 @@ class Explorer:
         self.presets = pn.widgets.Select(name="physical preset", value=preset or NO_PRESET,
                                          options=[NO_PRESET, *preset_names()], width=200)
         self.holding = False
+        self.beam = pn.widgets.Select(name="beam", value=self.base.beam,
+                                      options=["euler-bernoulli", "timoshenko"], width=200)
+        self.slenderness = NumberBox(value="" if self.base.slenderness is None else
+                                     f"{self.base.slenderness:.6g}", label="e/L",
+                                     testid="slenderness")
         self.jobs = Jobs(RESULTS)
         self.scene = self.base
         self.boxes = {k: NumberBox(value=f"{getattr(self.base, k):.6g}", label=label, testid=k)
@@ -70,6 +75,8 @@ class Explorer:
         for box in self.boxes.values():
             box.param.watch(self._changed, "value")
         self.presets.param.watch(self._preset, "value")
+        self.beam.param.watch(self._changed, "value")
+        self.slenderness.param.watch(self._changed, "value")
         from bokeh.events import Tap
         self.map.figure.on_event(Tap, self._tapped)
         self.cancel = pn.widgets.Button(name="cancel", width=90)
@@ -86,6 +93,8 @@ class Explorer:
             pn.state.location.sync(self.presets, {"value": "preset"})     # before the boxes
             for name, box in self.boxes.items():
                 pn.state.location.sync(box, {"value": name})
+            pn.state.location.sync(self.beam, {"value": "beam"})
+            pn.state.location.sync(self.slenderness, {"value": "slenderness"})
         pn.state.add_periodic_callback(self.poll, period=POLL_MS)
         pn.state.add_periodic_callback(self._frame, period=FRAME_MS)
         pn.state.on_session_destroyed(lambda _: self.jobs.close())
@@ -101,6 +110,9 @@ class Explorer:
         self.holding = True
         for name, box in self.boxes.items():
             box.value = f"{getattr(self.base, name):.6g}"
+        self.beam.value = self.base.beam
+        self.slenderness.value = ("" if self.base.slenderness is None
+                                  else f"{self.base.slenderness:.6g}")
         self.holding = False
         self.refresh()
 
@@ -117,7 +129,9 @@ class Explorer:
     def refresh(self) -> None:
         """Read the inputs; draw the instant tier; ask for the onset and the map."""
         try:
-            scene = scene_of(self.base, {k: b.value for k, b in self.boxes.items()})
+            texts = {k: b.value for k, b in self.boxes.items()}
+            texts.update(beam=self.beam.value, slenderness=self.slenderness.value)
+            scene = scene_of(self.base, texts)
             view = instant_view(scene)
         except ValueError as err:
             self.error.object = readout("error", str(err))
@@ -217,7 +231,8 @@ class Explorer:
 
     # -- the page -------------------------------------------------------------------
     def page(self) -> pn.viewable.Viewable:
-        inputs = pn.Column("### Inputs", self.presets, *self.boxes.values(), self.error, width=260)
+        inputs = pn.Column("### Inputs", self.presets, *self.boxes.values(), self.beam,
+                           self.slenderness, self.error, width=260)
         instant = pn.Column("### Now", self.readouts, self.animate,
                             pn.pane.Bokeh(self.shape.figure), pn.pane.Bokeh(self.locus.figure))
         slower = pn.Column("### Onset", self.onset, "### Map", self.background,

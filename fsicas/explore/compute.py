@@ -38,9 +38,13 @@ def _number(name: str, text, kind) -> float | int:
 
 
 def scene_of(base: Scene, texts: dict) -> Scene:
-    """``base`` with the page's inputs (field -> text) applied; the library's
-    ValueError for values it refuses."""
+    """``base`` with the page's inputs (field -> text; ``beam`` and ``slenderness``, empty
+    for none, together) applied; the library's ValueError for values it refuses."""
     values = {k: _number(k, texts[k], INPUTS[k][1]) for k in INPUTS if k in texts}
+    if "beam" in texts:
+        text = str(texts.get("slenderness", "")).strip()
+        values["beam"] = texts["beam"]
+        values["slenderness"] = _number("slenderness", text, float) if text else None
     return base.replace(**values)
 
 
