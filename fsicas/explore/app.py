@@ -194,7 +194,7 @@ class Explorer:
             self.background.object = readout("boundary-status",
                                              f"computing… {value:.0f} s", "boundary map")
         elif status == "idle":
-            self.background.object = readout("boundary-status", "not computed (about 20 s "
+            self.background.object = readout("boundary-status", "not computed (tens of seconds "
                                              "at N = 10, in the background)", "boundary map")
         else:
             self.background.object = readout("boundary-status", f"failed: {value}")
