@@ -23,8 +23,9 @@ ALLOWED = {
     "studies": {"top", "model", "linear", "cycles", "timedomain"},
     "plots": {"top", "model", "linear", "cycles", "timedomain"},
     "paper": {"top", "model", "linear", "cycles", "timedomain", "plots", "package"},
+    "explore": {"top", "model", "linear", "cycles", "timedomain"},
     "cli": {"top", "model", "linear", "cycles", "timedomain", "studies", "plots", "paper",
-            "package"},
+            "package", "explore"},
     "package": {"top", "model", "linear", "cycles", "timedomain", "plots"},
 }
 

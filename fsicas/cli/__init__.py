@@ -38,6 +38,7 @@ from ..plots.backend import select_file_backend
 from .curves import add_curve_command
 from .cycles import add_cycle_commands
 from .design import add_design_command
+from .explore import add_explore_command
 from .human import print_report
 from .linear import add_linear_commands
 from .meta import cli_meta, with_meta
@@ -76,6 +77,7 @@ def build_parser() -> argparse.ArgumentParser:
     add_sound_command(sub)          # sound, the radiated snore (docs/sound.md)
     add_design_command(sub)         # design, what change stops the snore (docs/design.md)
     add_study_command(sub)          # study, an analysis over many parameters (docs/studies.md)
+    add_explore_command(sub)        # explore, the model in a browser (docs/explore.md)
     _add_global_options(parser)
     for command in dict.fromkeys(sub.choices.values()):     # aliases share a parser
         _add_global_options(command, argparse.SUPPRESS)

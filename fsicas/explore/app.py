@@ -1,0 +1,244 @@
+"""The explorer's page: inputs, the instant tier (computed on each change), the onset
+(its own process, answered within seconds) and the boundary map (a background job),
+the reproducing command line, the state in the URL."""
+from __future__ import annotations
+
+import math
+
+import panel as pn
+
+from ..physical import preset_names
+from ..scene import Scene
+from .background import RunPanel
+from .compute import INPUTS, boundary_view, export, instant_view, onset_view, preset_scene, scene_of
+from .figures import BoundaryMap, ModeShape, RootLocus
+from .jobs import Jobs
+from .reproduce import command_line, python_lines
+from .widgets import NumberBox, readout
+
+__all__ = ["Explorer", "RESULTS"]
+
+#: Finished onsets and boundaries of this server, by (kind, scene): shared by sessions.
+RESULTS: dict = {}
+POLL_MS, FRAME_MS = 150, 100
+NO_PRESET = "none (nondimensional)"
+
+
+def _fmt(value, digits: int = 4, unit: str = "") -> str:
+    if value is None or (isinstance(value, float) and not math.isfinite(value)):
+        return "—"
+    return f"{value:.{digits}g}{unit}"
+
+
+def _key(scene: Scene, *drop: str) -> str:
+    """The cache key of ``scene`` without the fields ``drop``."""
+    d = scene.to_dict()
+    for name in drop:
+        d.pop(name, None)
+    return repr(sorted(d.items()))
+
+
+class Explorer:
+    """One session's page."""
+
+    def __init__(self, preset: str | None = None):
+        self.base = preset_scene(preset)
+        self.preset = preset
+        self.presets = pn.widgets.Select(name="physical preset", value=preset or NO_PRESET,
+                                         options=[NO_PRESET, *preset_names()], width=200)
+        self.holding = False
+        self.beam = pn.widgets.Select(name="beam", value=self.base.beam,
+                                      options=["euler-bernoulli", "timoshenko"], width=200)
+        self.slenderness = NumberBox(value="" if self.base.slenderness is None else
+                                     f"{self.base.slenderness:.6g}", label="e/L",
+                                     testid="slenderness")
+        self.jobs = Jobs(RESULTS)
+        self.scene = self.base
+        self.boxes = {k: NumberBox(value=f"{getattr(self.base, k):.6g}", label=label, testid=k)
+                      for k, (label, _) in INPUTS.items()}
+        self.boxes["modes"].testid = "modes"
+        self.error = pn.pane.HTML(readout("error", ""), styles={"color": "#b00"})
+        self.readouts = pn.pane.HTML("")
+        self.onset = pn.pane.HTML(readout("onset-kind", "…", "onset"))
+        self.background = pn.pane.HTML(readout("boundary-status", "…", "boundary map"))
+        self.command = pn.pane.HTML("")
+        self.locus, self.shape, self.map = RootLocus(), ModeShape(), BoundaryMap()
+        self.animate = pn.widgets.Toggle(name="animate the mode", value=False, width=160)
+        self.phase = 0.0
+        self.run = RunPanel(self.jobs)
+        self.download = pn.widgets.FileDownload(callback=self._export, filename="fsicas_explore.json",
+                                                label="export the view (JSON)", width=220)
+        self._wire()
+
+    # -- wiring ---------------------------------------------------------------------
+    def _wire(self) -> None:
+        for box in self.boxes.values():
+            box.param.watch(self._changed, "value")
+        self.presets.param.watch(self._preset, "value")
+        self.beam.param.watch(self._changed, "value")
+        self.slenderness.param.watch(self._changed, "value")
+        from bokeh.events import Tap
+        self.map.figure.on_event(Tap, self._tapped)
+        self.cancel = pn.widgets.Button(name="cancel", width=90)
+        self.cancel.on_click(lambda _: self._cancel("boundary"))
+        self.draw_map = pn.widgets.Button(name="compute the map", button_type="primary", width=150)
+        self.draw_map.on_click(lambda _: self._ask("boundary", self._map_key(), boundary_view,
+                                                   self.scene))
+        self.run.start.on_click(lambda _: self.run.ask(self.scene, _key(self.scene)))
+        self.refresh()
+
+    def start(self) -> None:
+        """Once the page is served: URL sync, polling of the jobs, the animation."""
+        if pn.state.location is not None:
+            pn.state.location.sync(self.presets, {"value": "preset"})     # before the boxes
+            for name, box in self.boxes.items():
+                pn.state.location.sync(box, {"value": name})
+            pn.state.location.sync(self.beam, {"value": "beam"})
+            pn.state.location.sync(self.slenderness, {"value": "slenderness"})
+        pn.state.add_periodic_callback(self.poll, period=POLL_MS)
+        pn.state.add_periodic_callback(self._frame, period=FRAME_MS)
+        pn.state.on_session_destroyed(lambda _: self.jobs.close())
+
+    def _changed(self, _event=None) -> None:
+        if not self.holding:
+            self.refresh()
+
+    def _preset(self, event) -> None:
+        """Start again from the preset's scene (or the default one): every box at once."""
+        self.preset = None if event.new == NO_PRESET else event.new
+        self.base = preset_scene(self.preset)
+        self.holding = True
+        for name, box in self.boxes.items():
+            box.value = f"{getattr(self.base, name):.6g}"
+        self.beam.value = self.base.beam
+        self.slenderness.value = ("" if self.base.slenderness is None
+                                  else f"{self.base.slenderness:.6g}")
+        self.holding = False
+        self.refresh()
+
+    def _tapped(self, event) -> None:
+        if event.x is not None and event.y is not None and event.x > 0:
+            self.boxes["mstar"].value = f"{event.x:.4g}"
+            self.boxes["ustar"].value = f"{event.y:.4g}"
+
+    def _cancel(self, kind: str) -> None:
+        if self.jobs.cancel(kind):
+            self.background.object = readout("boundary-status", "cancelled", "boundary map")
+
+    # -- the tiers ------------------------------------------------------------------
+    def refresh(self) -> None:
+        """Read the inputs; draw the instant tier; ask for the onset and the map."""
+        try:
+            texts = {k: b.value for k, b in self.boxes.items()}
+            texts.update(beam=self.beam.value, slenderness=self.slenderness.value)
+            scene = scene_of(self.base, texts)
+            view = instant_view(scene)
+        except ValueError as err:
+            self.error.object = readout("error", str(err))
+            return
+        self.error.object = readout("error", "")
+        self.scene, self.view = scene, view
+        self._draw_instant(scene, view)
+        self.command.object = (readout("command", command_line(scene)) + "<pre>"
+                               + python_lines(scene) + "</pre>")
+        self._ask("onset", _key(scene, "ustar"), onset_view, scene)
+        self.map.crosshair(scene.mstar, scene.ustar)
+        cached = RESULTS.get(("boundary", self._map_key()))
+        self._show("boundary", "done" if cached else "idle", cached)
+
+    def _map_key(self) -> str:
+        """The boundary's cache key: the scene but U* and M*, and the decade of M*."""
+        decade = math.floor(math.log10(self.scene.mstar))
+        return _key(self.scene, "ustar", "mstar") + str(decade)
+
+    def _draw_instant(self, scene: Scene, view: dict) -> None:
+        hz = "" if view["hz"] is None else f" ({_fmt(view['hz'], 4, ' Hz')})"
+        flow = ("" if view["l_per_min"] is None else
+                "<br>" + readout("flow", _fmt(view["l_per_min"], 4, " L/min"), "airflow"))
+        lines = [readout("stability", "stable" if view["stable"] else "unstable", "steady state"),
+                 readout("growth-rate", _fmt(view["growth_rate"], 6), "growth rate σ"),
+                 readout("frequency", _fmt(view["omega"], 6), "frequency ω") + hz,
+                 readout("freq-ratio", _fmt(view["freq_ratio"]), "ω/ω₁"),
+                 readout("pressure-drop", _fmt(view["pressure_drop"]), "pressure drop Δp"),
+                 readout("tip", _fmt(view["tip"]), "static tip deflection") + flow]
+        lines += [readout("warning", w) for w in view["warnings"]]
+        self.readouts.object = "<br>".join(lines)
+        self.locus.update(view["eigenvalues"])
+        self.shape.update(view["x"], view["y"], scene.hstar)
+
+    def _ask(self, kind: str, key: str, target, scene: Scene) -> None:
+        result = self.jobs.start((kind, key), target, scene)
+        if result is not None:
+            self._show(kind, "done", result)
+        else:
+            self._show(kind, "running", 0.0)
+
+    # -- results --------------------------------------------------------------------
+    def poll(self) -> None:
+        for kind in ("onset", "boundary"):
+            status, value = self.jobs.poll(kind)
+            if kind == "boundary" and status == "done" and value is not RESULTS.get(
+                    ("boundary", self._map_key())):
+                status = "idle"                      # a map of a scene left meanwhile
+            if status != "idle":
+                self._show(kind, status, value)
+        self.run.poll()
+
+    def _show(self, kind: str, status: str, value) -> None:
+        if kind == "onset":
+            self.onset.object = self._onset_html(status, value)
+        elif status == "done":
+            self.map.update(value["points"])
+            self.background.object = readout("boundary-status", "done", "boundary map")
+        elif status == "running":
+            self.background.object = readout("boundary-status",
+                                             f"computing… {value:.0f} s", "boundary map")
+        elif status == "idle":
+            self.background.object = readout("boundary-status", "not computed (tens of seconds "
+                                             "at N = 10, in the background)", "boundary map")
+        else:
+            self.background.object = readout("boundary-status", f"failed: {value}")
+
+    def _onset_html(self, status: str, value) -> str:
+        if status == "running":
+            return readout("onset-kind", "computing…", "onset")
+        if status == "error":
+            return readout("onset-kind", "failed", "onset") + f": {value}"
+        if value["kind"] == "none":
+            return readout("onset-kind", "none", "onset") + " (stable up to U* = 40)"
+        units = [_fmt(value.get(k), 4, u) for k, u in (("l_per_min", " L/min"), ("hz", " Hz"),
+                                                       ("pa", " Pa")) if k in value]
+        lines = [readout("onset-kind", value["kind"], "onset"),
+                 readout("onset-ustar", _fmt(value["ustar_crit"], 6), "U*_c"),
+                 readout("onset-omega", _fmt(value.get("omega"), 5), "ω_c")]
+        if value["kind"] == "flutter":
+            lines += [readout("onset-l1", _fmt(value["l1"], 4), "l1"),
+                      readout("onset-criticality", value["criticality"], "criticality")]
+        if units:
+            lines.append("physical: " + ", ".join(units))
+        return "<br>".join(lines)
+
+    def _export(self):
+        """The JSON of the current view (:func:`export`) for the download button."""
+        import io
+        onset = RESULTS.get(("onset", _key(self.scene, "ustar")))
+        return io.StringIO(export(self.scene, self.view, onset, command_line(self.scene)))
+
+    def _frame(self) -> None:
+        if self.animate.value:
+            self.phase = (self.phase + 0.3) % (2 * math.pi)
+            self.shape.animate(self.phase)
+
+    # -- the page -------------------------------------------------------------------
+    def page(self) -> pn.viewable.Viewable:
+        inputs = pn.Column("### Inputs", self.presets, *self.boxes.values(), self.beam,
+                           self.slenderness, self.error, width=260)
+        instant = pn.Column("### Now", self.readouts, self.animate,
+                            pn.pane.Bokeh(self.shape.figure), pn.pane.Bokeh(self.locus.figure))
+        slower = pn.Column("### Onset", self.onset, "### Map", self.background,
+                           pn.Row(self.draw_map, self.cancel),
+                           pn.pane.Bokeh(self.map.figure), self.run.page())
+        title = "fsicas explore"
+        return pn.Column(f"## {title}", pn.Row(inputs, instant, slower, sizing_mode="stretch_width"),
+                         "### Reproduce", self.command, self.download,
+                         sizing_mode="stretch_width")

@@ -1,0 +1,88 @@
+"""The background tier's time run: started on request in its own process (``run_view``),
+with its elapsed time and a cancel button; the tip's history, the outcome and, for a
+physical scene settled on a cycle, the snore as an ``<audio>`` element with its level
+and pitch. Cached by scene and t_end."""
+from __future__ import annotations
+
+import numpy as np
+import panel as pn
+from bokeh.models import ColumnDataSource
+from bokeh.plotting import figure
+
+from ..timedomain.sound import AUDIO_RATE
+from .compute import run_view
+from .jobs import Jobs
+from .reproduce import command_line
+from .widgets import NumberBox, readout
+
+__all__ = ["RunPanel"]
+
+
+def _fmt(value, unit: str = "") -> str:
+    return "—" if value is None else f"{value:.4g}{unit}"
+
+
+class RunPanel:
+    """The time run's controls and results for one page."""
+
+    def __init__(self, jobs: Jobs):
+        self.jobs, self.key, self.command = jobs, None, ""
+        self.t_end = NumberBox(value="20", label="t_end (T)", testid="t-end")
+        self.start = pn.widgets.Button(name="time run", button_type="primary", width=120)
+        self.stop = pn.widgets.Button(name="cancel run", width=110)
+        self.stop.on_click(lambda _: self.jobs.cancel("run") and self.show("cancelled", None))
+        self.status = pn.pane.HTML(readout("run-status", "not run", "time run"))
+        self.source = ColumnDataSource({"t": [], "tip": []})
+        self.figure = figure(title="tip deflection y(1, t)", x_axis_label="t / T",
+                             y_axis_label="y / L", height=220, sizing_mode="stretch_width")
+        self.figure.line("t", "tip", source=self.source)
+        self.audio = pn.pane.Audio(None, sample_rate=AUDIO_RATE, name="snore", visible=False)
+
+    def ask(self, scene, key: str) -> None:
+        """Start (or show the cached) run of ``scene`` to the page's t_end."""
+        try:
+            t_end = float(str(self.t_end.value))
+        except ValueError:
+            return self.show("error", f"t_end must be a number, got {self.t_end.value!r}")
+        self.key = ("run", f"{key}|{t_end!r}")
+        self.command = command_line(scene, "simulate").replace(" --json", f" --t-end {t_end:g} --json")
+        cached = self.jobs.start(self.key, run_view, scene, t_end)
+        self.show("done", cached) if cached is not None else self.show("running", 0.0)
+
+    def poll(self) -> None:
+        running = self.jobs.running.get("run")
+        if running is not None:
+            status, value = self.jobs.poll("run")
+            if status != "idle":
+                self.show(status, value)
+
+    def show(self, status: str, value) -> None:
+        if status == "running":
+            text = f"running… {value:.0f} s"
+        elif status in ("error", "cancelled"):
+            text = status if value is None else f"{status}: {value}"
+        else:
+            return self._done(value)
+        self.status.object = readout("run-status", text, "time run")
+
+    def _done(self, run: dict) -> None:
+        lines = [readout("run-status", run["status"], "time run"),
+                 readout("run-outcome", run["outcome"], "outcome"),
+                 readout("run-amplitude", _fmt(run["tip_amplitude"]), "tip amplitude"),
+                 readout("run-period", _fmt(run["period"]), "period (T)")]
+        lines += [readout("warning", w) for w in run["warnings"]]
+        lines.append(readout("run-command", self.command))
+        self.source.data = {"t": np.asarray(run["t"]).tolist(), "tip": np.asarray(run["tip"]).tolist()}
+        sound = run["sound"]
+        if sound is not None:
+            lines.append(readout("sound-pitch", _fmt(sound["fundamental_hz"], " Hz"), "snore")
+                         + ", " + readout("sound-level", _fmt(sound["spl_db"], " dB SPL"))
+                         + f" at {sound['distance_m']:g} m")
+            peak = float(np.max(np.abs(sound["pressure"]))) or 1.0
+            self.audio.object = (np.asarray(sound["pressure"]) / peak * 32767).astype(np.int16)
+        self.audio.visible = sound is not None
+        self.status.object = "<br>".join(lines)
+
+    def page(self) -> pn.viewable.Viewable:
+        return pn.Column("### Time run", self.t_end, pn.Row(self.start, self.stop), self.status,
+                         self.audio, pn.pane.Bokeh(self.figure))

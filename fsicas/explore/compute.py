@@ -1,0 +1,165 @@
+"""What the explorer shows, from the library's analyses (no physics of its own): the
+scene of the page's inputs, the instant view (steady state, eigenvalues, the least stable
+mode shape), the onset and the boundary, each as plain data for the page."""
+from __future__ import annotations
+
+import math
+import warnings
+
+import numpy as np
+
+from ..linear import critical_velocity, linear_stability, stability_boundary
+from .. import strict_json
+from ..physical import load_physical
+from ..scene import Scene
+from ..timedomain.run import run_case, sweep_model
+from ..timedomain.sound import AUDIO_RATE, cycle_sound
+
+__all__ = ["INPUTS", "scene_of", "preset_scene", "instant_view", "onset_view",
+           "boundary_view", "boundary_grid", "BOUNDARY_PER_DECADE", "run_view",
+           "SOUND_DISTANCE", "SOUND_DURATION", "export"]
+
+#: The page's inputs: Scene field -> (label, type); their order on the page.
+INPUTS = {"mstar": ("M*", float), "ustar": ("U*", float), "hstar": ("H*", float),
+          "friction": ("f", float), "kl": ("KL", float), "zeta": ("ζ", float),
+          "modes": ("N", int)}
+#: Points of the boundary map per decade of M*; it spans the two decades around M*.
+BOUNDARY_PER_DECADE = 6
+
+
+def _number(name: str, text, kind) -> float | int:
+    """``text`` read as ``kind``; ValueError naming the input otherwise."""
+    try:
+        value = kind(str(text).strip())
+    except ValueError:
+        what = "an integer" if kind is int else "a number"
+        raise ValueError(f"{name} must be {what}, got {str(text)!r}") from None
+    return value
+
+
+def scene_of(base: Scene, texts: dict) -> Scene:
+    """``base`` with the page's inputs (field -> text; ``beam`` and ``slenderness``, empty
+    for none, together) applied; the library's ValueError for values it refuses."""
+    values = {k: _number(k, texts[k], INPUTS[k][1]) for k in INPUTS if k in texts}
+    if "beam" in texts:
+        text = str(texts.get("slenderness", "")).strip()
+        values["beam"] = texts["beam"]
+        values["slenderness"] = _number("slenderness", text, float) if text else None
+    return base.replace(**values)
+
+
+def preset_scene(name: str | None) -> Scene:
+    """The Scene of a physical preset at its default airflow (scales kept for Hz and
+    L/min; straight symmetric channels as the default walls of its H*), or the default
+    Scene."""
+    if name is None:
+        return Scene()
+    physical = load_physical(name)
+    scene = physical.scene(physical.flow)
+    if scene.straight and scene.symmetric:          # the default walls: H* stays an input
+        scene = scene.replace(channel1=None, channel2=None)
+    return scene
+
+
+def _hz(scene: Scene, omega: float) -> float | None:
+    return None if scene.scales is None else scene.scales.hz(omega)
+
+
+def _l_per_min(scene: Scene) -> float | None:
+    """The airflow of a physical scene in L/min, where its gap is still the scales'
+    (H* unchanged from the physical input's)."""
+    sc = scene.scales
+    if sc is None or sc.gap is None or not math.isclose(scene.hstar * sc.length, sc.gap,
+                                                         rel_tol=1e-5):
+        return None
+    return sc.l_per_min(scene.ustar)
+
+
+def instant_view(scene: Scene) -> dict:
+    """Steady state and eigen-analysis at ``scene`` (``linear_stability``); the least
+    stable eigenvalue lambda_0 = sigma + i omega gives the growth rate sigma and the
+    frequency |omega|; its complex mode shape y(x) with max |y| = 1."""
+    model = sweep_model(scene, guarded=False)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        stab = linear_stability(scene, model)
+    lam = stab.eigenvalues
+    shape = stab.mode_shape(model, 0)
+    steady = stab.steady.to_json(model)
+    return {"stable": stab.stable, "eigenvalues": lam, "growth_rate": float(lam[0].real),
+            "omega": abs(float(lam[0].imag)), "freq_ratio": abs(float(stab.freq_ratio[0])),
+            "hz": _hz(scene, abs(float(lam[0].imag))), "x": shape["x"], "y": shape["y"],
+            "l_per_min": _l_per_min(scene),
+            "pressure_drop": steady["pressure_drop"], "tip": steady["tip_deflection"],
+            "warnings": [str(w.message) for w in caught]}
+
+
+def onset_view(scene: Scene) -> dict:
+    """The onset of ``scene``'s steady branch (``critical_velocity``) as JSON, with Hz,
+    L/min and Pa where the scene is physical; ``{"kind": "none"}`` if it stays stable."""
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        onset = critical_velocity(scene, sweep_model(scene, guarded=False))
+    out = {"kind": "none"} if onset is None else onset.to_json()
+    out["warnings"] = [str(w.message) for w in caught]
+    scales = scene.scales
+    if onset is not None and scales is not None:
+        out["hz"] = scales.hz(out.get("omega", 0.0))
+        out["pa"] = scales.pa(out["pressure_drop"])
+        if scales.gap is not None:
+            out["l_per_min"] = scales.l_per_min(out["ustar_crit"])
+    return out
+
+
+def boundary_grid(mstar: float) -> np.ndarray:
+    """The M* of the boundary map: the decade of ``mstar`` and the one on each side."""
+    low = math.floor(math.log10(mstar)) - 1
+    return np.logspace(low, low + 3, 3 * BOUNDARY_PER_DECADE + 1)
+
+
+def boundary_view(scene: Scene) -> dict:
+    """The stability boundary U*_c(M*) of ``scene`` (``stability_boundary``) on
+    :func:`boundary_grid` as JSON."""
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        result = stability_boundary(scene, boundary_grid(scene.mstar),
+                                    sweep_model(scene, guarded=False))
+    out = result.to_json()
+    out["warnings"] += [str(w.message) for w in caught]
+    return out
+
+
+#: The listener's distance (m) and the length (s) of the sound of a settled cycle.
+SOUND_DISTANCE, SOUND_DURATION = 0.3, 2.0
+#: Most samples of the tip's history sent to the page.
+HISTORY_POINTS = 2000
+
+
+def run_view(scene: Scene, t_end: float) -> dict:
+    """A time run of ``scene`` to ``t_end`` (``run_case``: the perturbed steady state
+    integrated and classified) as ``fsicas simulate --json``, the tip deflection
+    y(1, t) (at most :data:`HISTORY_POINTS` samples) and, for a physical scene whose run
+    settled on a cycle, its sound (``cycle_sound``: Pa at :data:`SOUND_DISTANCE`)."""
+    if not (math.isfinite(t_end) and 0 < t_end <= 1000):
+        raise ValueError(f"t_end must be in (0, 1000], got {t_end}")
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        run = run_case(scene, t_end)
+    traj, n = run.trajectory, scene.modes
+    step = max(1, traj.t.size // HISTORY_POINTS)
+    tip = traj.x[::step, n:2 * n] @ np.asarray(run.model.tip.phi)[:, 1]
+    out = {**run.to_json(), "t": traj.t[::step], "tip": tip, "sound": None}
+    out["warnings"] = list(dict.fromkeys(out["warnings"] + [str(w.message) for w in caught]))
+    if scene.scales is not None and run.outcome.periodic:
+        sound = cycle_sound(traj, scene.scales, SOUND_DISTANCE, SOUND_DURATION, AUDIO_RATE)
+        out["sound"] = {**sound.to_json(), "pressure": sound.pressure.astype(np.float32)}
+    return out
+
+
+def export(scene: Scene, view: dict, onset: dict | None, command: str) -> str:
+    """The current view as JSON: the scene, the instant view (eigenvalues as [Re, Im]
+    pairs, the mode shape dropped), the onset if known, the reproducing command."""
+    instant = {k: v for k, v in view.items() if k not in ("eigenvalues", "x", "y")}
+    instant["eigenvalues"] = [[float(l.real), float(l.imag)] for l in view["eigenvalues"]]
+    return strict_json.dumps({"scene": scene.to_dict(), "instant": instant, "onset": onset,
+                              "command": command}, indent=1)

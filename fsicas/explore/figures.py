@@ -1,0 +1,100 @@
+"""The explorer's Bokeh figures and the data sources they draw from: the root locus
+(eigenvalues, unstable ones marked), the mode shape in the channel and the boundary map
+with a crosshair at the current point."""
+from __future__ import annotations
+
+import numpy as np
+from bokeh.models import ColumnDataSource, Range1d, Span
+from bokeh.plotting import figure
+
+__all__ = ["RootLocus", "ModeShape", "BoundaryMap", "STABLE_COLOR", "UNSTABLE_COLOR"]
+
+STABLE_COLOR, UNSTABLE_COLOR = "#1f77b4", "#d62728"
+_SIZE = dict(height=300, sizing_mode="stretch_width", toolbar_location="right")
+
+
+class RootLocus:
+    """Eigenvalues lambda = sigma + i omega in the complex plane; Re > 0 in red."""
+
+    def __init__(self):
+        self.source = ColumnDataSource({"re": [], "im": [], "color": []})
+        self.figure = figure(title="eigenvalues λ = σ + iω", x_axis_label="growth rate σ",
+                             y_axis_label="ω", **_SIZE)
+        self.figure.scatter("re", "im", color="color", size=7, source=self.source)
+        self.figure.add_layout(Span(location=0.0, dimension="height", line_dash="dashed",
+                                    line_color="gray"))
+
+    def update(self, eigenvalues: np.ndarray) -> None:
+        lam = np.asarray(eigenvalues)
+        colors = np.where(lam.real > 0, UNSTABLE_COLOR, STABLE_COLOR).tolist()
+        self.source.data = {"re": lam.real.tolist(), "im": lam.imag.tolist(), "color": colors}
+
+
+class ModeShape:
+    """The least stable complex mode y(x) (max |y| = 1) in the channel: the beam at
+    phase phi, Re(y e^{i phi}), its envelope ±|y|, the walls at ±H*/2; the amplitude
+    drawn is 0.8 H*/2 (a shape, not a size)."""
+
+    def __init__(self):
+        self.source = ColumnDataSource({"x": [], "beam": [], "upper": [], "lower": []})
+        self.walls = ColumnDataSource({"x": [0.0, 1.0], "top": [0.05, 0.05],
+                                       "bottom": [-0.05, -0.05]})
+        f = figure(title="least stable mode in the channel", x_axis_label="x / L",
+                   y_axis_label="y / L", **_SIZE)
+        f.line("x", "top", source=self.walls, color="black", line_width=2)
+        f.line("x", "bottom", source=self.walls, color="black", line_width=2)
+        f.varea("x", "lower", "upper", source=self.source, fill_alpha=0.15)
+        f.line("x", "beam", source=self.source, line_width=3, color="#2ca02c")
+        self.figure, self.shape, self.half = f, None, 0.05
+
+    def update(self, x, y, hstar: float) -> None:
+        self.half = hstar / 2
+        self.walls.data = {"x": [0.0, 1.0], "top": [self.half] * 2, "bottom": [-self.half] * 2}
+        self.shape = (np.asarray(x), 0.8 * self.half * np.asarray(y))
+        env = np.abs(self.shape[1])
+        self.source.data = {"x": self.shape[0].tolist(), "beam": self.shape[1].real.tolist(),
+                            "upper": env.tolist(), "lower": (-env).tolist()}
+
+    def animate(self, phase: float) -> None:
+        """The beam at ``phase`` (radians) of the oscillation."""
+        if self.shape is not None:
+            beam = (self.shape[1] * np.exp(1j * phase)).real
+            self.source.patch({"beam": [(slice(0, beam.size), beam.tolist())]})
+
+
+class BoundaryMap:
+    """U*_c(M*) (log M*), flutter and divergence points, a crosshair at (M*, U*)."""
+
+    def __init__(self):
+        self.source = ColumnDataSource({"mstar": [], "ustar": [], "color": []})
+        f = figure(title="stability boundary U*_c(M*) (click to move the point)",
+                   x_axis_type="log", x_axis_label="M*", y_axis_label="U*",
+                   x_range=Range1d(0.1, 10.0), y_range=Range1d(0.0, 10.0), **_SIZE)
+        f.line("mstar", "ustar", source=self.source, color="gray")
+        f.scatter("mstar", "ustar", source=self.source, color="color", size=6)
+        self.vertical = Span(location=1.0, dimension="height", line_color=UNSTABLE_COLOR)
+        self.horizontal = Span(location=5.0, dimension="width", line_color=UNSTABLE_COLOR)
+        f.add_layout(self.vertical)
+        f.add_layout(self.horizontal)
+        self.figure = f
+
+    def update(self, points: list[dict]) -> None:
+        points = [p for p in points if p.get("ustar_crit") is not None]
+        kinds = [p["kind"] for p in points]
+        self.source.data = {"mstar": [p["mstar"] for p in points],
+                            "ustar": [p["ustar_crit"] for p in points],
+                            "color": [UNSTABLE_COLOR if k == "flutter" else "#9467bd"
+                                      for k in kinds]}
+        if points:
+            m = [p["mstar"] for p in points]
+            self.figure.x_range.update(start=min(m), end=max(m))
+            top = max(p["ustar_crit"] for p in points)
+            self.figure.y_range.update(start=0.0, end=max(1.3 * top, self.horizontal.location * 1.1))
+
+    def crosshair(self, mstar: float, ustar: float) -> None:
+        self.vertical.location, self.horizontal.location = mstar, ustar
+        x, y = self.figure.x_range, self.figure.y_range
+        if not x.start <= mstar <= x.end:
+            x.update(start=mstar / 10, end=mstar * 10)
+        if not 0 <= ustar <= y.end:
+            y.update(start=min(0.0, 1.1 * ustar), end=max(y.end, 1.1 * ustar))

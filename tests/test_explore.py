@@ -1,0 +1,251 @@
+"""fsicas explore in a real browser (the system's Chromium driven by Playwright): the page
+shows what the library computes, refuses bad input with the library's message, keeps its
+state in the URL, moves the point where the map is clicked, and requests nothing from
+outside 127.0.0.1. Skipped (with the reason) where /usr/bin/chromium is absent; CI
+installs it (.ci/run)."""
+import json
+import os
+import socket
+import statistics
+import subprocess
+import sys
+import time
+from pathlib import Path
+from urllib.parse import urlparse
+
+import numpy as np
+import pytest
+import scipy.linalg
+
+from fsicas import Scene
+from fsicas.linear import critical_velocity, linear_stability
+from fsicas.model.assembly import build_model
+from fsicas.physical import load_physical
+from fsicas.timedomain.run import run_case
+
+ROOT = Path(__file__).resolve().parents[1]
+CHROMIUM = "/usr/bin/chromium"
+FLAGS = ["--headless", "--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",
+         "--disable-background-networking", "--disable-component-update", "--disable-sync"]
+
+pytestmark = pytest.mark.skipif(not os.path.exists(CHROMIUM),
+                                reason=f"no system Chromium at {CHROMIUM} (apt-get install chromium)")
+sync_api = pytest.importorskip("playwright.sync_api", reason="needs playwright (the test extra)")
+pytest.importorskip("panel", reason="needs panel (the explore extra)")
+
+#: The text of the element with data-testid ``id`` (searched through shadow roots).
+FIND = """(root, id) => { const find = (r) => { const e = r.querySelector(`[data-testid="${id}"]`);
+  if (e) return e; for (const h of r.querySelectorAll('*')) { if (h.shadowRoot) {
+  const f = find(h.shadowRoot); if (f) return f; } } return null; }; return find(root); }"""
+#: Set the input ``id`` to ``value`` and time until the readout ``out`` changes (ms).
+LATENCY = """async ([id, value, out]) => { const find = %s;
+  const box = find(document, id), shown = find(document, out), old = shown.textContent;
+  const t0 = performance.now(); box.value = value; box.dispatchEvent(new Event('change'));
+  while (find(document, out).textContent === old) {
+    await new Promise(r => requestAnimationFrame(r));
+    if (performance.now() - t0 > 10000) return -1; }
+  return performance.now() - t0; }""" % FIND
+
+
+def _free_port() -> int:
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
+
+
+@pytest.fixture(scope="module")
+def server():
+    """``fsicas explore`` on a free port of 127.0.0.1 (this tree's code); its URL."""
+    port = _free_port()
+    env = {**os.environ, "PYTHONPATH": str(ROOT)}
+    proc = subprocess.Popen([sys.executable, "-m", "fsicas.cli", "explore", "--port", str(port)],
+                            env=env, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True,
+                            stdin=subprocess.DEVNULL)
+    lines = [proc.stdout.readline() for _ in range(2)]
+    assert "serving" in lines[-1], "".join(lines) + proc.stdout.read()
+    yield f"http://127.0.0.1:{port}/"
+    proc.terminate()
+    proc.wait(timeout=10)
+
+
+@pytest.fixture(scope="module")
+def browser():
+    with sync_api.sync_playwright() as p:
+        chromium = p.chromium.launch(executable_path=CHROMIUM, args=FLAGS)
+        yield chromium
+        chromium.close()
+
+
+@pytest.fixture
+def page(browser, server):
+    """A page with every request it makes recorded in ``page.requests``."""
+    page = browser.new_page(viewport={"width": 1400, "height": 1000})
+    page.requests = []
+    page.on("request", lambda r: page.requests.append(r.url))
+    yield page
+    outside = [u for u in page.requests if not u.startswith("data:")
+               and urlparse(u.removeprefix("blob:")).hostname != "127.0.0.1"]
+    page.close()
+    assert not outside, f"requests left 127.0.0.1: {outside}"
+
+
+def _open(page, url: str, **values):
+    """Load ``url`` (``values``: its query, e.g. ustar=6) and wait until the page shows
+    the scene of that query (the command line reads ``--ustar 6``)."""
+    query = "&".join(f"{k}={v:g}" for k, v in values.items())
+    page.goto(url + ("?" + query if query else ""))
+    page.locator("[data-testid=command]").wait_for(timeout=30000)
+    for k, v in values.items():
+        page.wait_for_function(f"s => ({FIND})(document, 'command').textContent.includes(s)",
+                               arg=f"--{k} {v:g} ")
+
+
+def _text(page, testid: str) -> str:
+    return page.locator(f"[data-testid={testid}]").inner_text()
+
+
+def _set(page, testid: str, value: str) -> None:
+    """Type ``value`` into the input ``testid`` and wait until the page has answered (its
+    command line or its error changed)."""
+    state = f"() => ['command', 'error'].map(i => ({FIND})(document, i).textContent).join('|')"
+    old = page.evaluate(state)
+    box = page.locator(f"[data-testid={testid}]")
+    box.fill(value)
+    box.press("Enter")
+    page.wait_for_function(f"old => ({state})() !== old", arg=old)
+
+
+def _number(page, testid: str) -> float:
+    return float(_text(page, testid))
+
+
+def test_the_page_shows_the_library_eigen_analysis_and_an_independent_eig(page, server, tmp_path):
+    _open(page, server, ustar=6)
+    scene = Scene(ustar=6.0)
+    stab = linear_stability(scene)
+    assert _text(page, "stability") == ("stable" if stab.stable else "unstable") == "unstable"
+    model = build_model(scene)
+    J = np.array(model.jac_rhs(stab.steady.x, stab.steady.p))
+    M = np.array(model.mass(stab.steady.x, stab.steady.p))
+    lam = scipy.linalg.eig(np.linalg.solve(M, J), right=False)     # standard, not QZ
+    top = lam[np.argmax(lam.real)]
+    assert _number(page, "growth-rate") == pytest.approx(top.real, rel=1e-5)
+    assert _number(page, "frequency") == pytest.approx(abs(top.imag), rel=1e-5)
+    assert "fsicas eig --mstar 1 --ustar 6 " in _text(page, "command")
+    # the docs' screenshot is rewritten only when asked (FSICAS_DOC_SCREENSHOTS=1)
+    shot = ROOT / "docs" / "figures" / "explore.png" if os.environ.get(
+        "FSICAS_DOC_SCREENSHOTS") else tmp_path / "explore.png"
+    page.screenshot(path=str(shot), full_page=True)
+    assert shot.stat().st_size > 10_000
+
+
+def test_stability_flips_at_the_onset_the_library_reports(page, server):
+    onset = critical_velocity(Scene())
+    _open(page, server, ustar=0.98 * onset.ustar)
+    assert _text(page, "stability") == "stable"
+    page.locator("[data-testid=onset-ustar]").wait_for(timeout=20000)
+    assert _text(page, "onset-kind") == onset.kind == "flutter"
+    assert _number(page, "onset-ustar") == pytest.approx(onset.ustar, rel=1e-5)
+    _set(page, "ustar", f"{1.02 * onset.ustar:.6g}")
+    assert _text(page, "stability") == "unstable"
+    assert _number(page, "growth-rate") > 0
+
+
+def test_invalid_input_is_refused_with_the_library_message(page, server):
+    _open(page, server)
+    with pytest.raises(ValueError) as refused:
+        Scene(mstar=-1.0)
+    _set(page, "mstar", "-1")
+    assert _text(page, "error") == str(refused.value)
+    assert _text(page, "stability") == "stable"                  # the last valid view stays
+    _set(page, "mstar", "1")
+    assert _text(page, "error") == ""
+    _set(page, "modes", "ten")
+    assert _text(page, "error") == "modes must be an integer, got 'ten'"
+    _set(page, "modes", "10")
+    assert _text(page, "error") == ""
+    with pytest.raises(ValueError) as refused:
+        Scene(slenderness=0.1)
+    _set(page, "slenderness", "0.1")                             # with Euler-Bernoulli
+    assert _text(page, "error") == str(refused.value)
+    page.get_by_label("beam").select_option("timoshenko")
+    page.wait_for_function(f"() => ({FIND})(document, 'command').textContent"
+                           ".includes('--beam timoshenko --slenderness 0.1')")
+    assert _text(page, "error") == ""
+    assert _number(page, "growth-rate") == pytest.approx(linear_stability(
+        Scene(beam="timoshenko", slenderness=0.1)).eigenvalues[0].real, rel=1e-5)
+
+
+def test_the_state_is_in_the_url_and_the_map_click_moves_the_point(page, server):
+    _open(page, server, mstar=2, ustar=3, modes=8)
+    scene = Scene(mstar=2.0, ustar=3.0, modes=8)
+    assert _number(page, "growth-rate") == pytest.approx(
+        linear_stability(scene).eigenvalues[0].real, rel=1e-5)
+    assert "--mstar 2 --ustar 3 " in _text(page, "command")
+    _set(page, "hstar", "0.12")
+    page.wait_for_function("() => location.search.includes('hstar=0.12')")
+    canvas = page.locator(".bk-Canvas").nth(2)         # the map: the third figure
+    box = canvas.bounding_box()
+    canvas.click(position={"x": box["width"] / 2, "y": box["height"] / 2})
+    page.wait_for_function("() => location.search.indexOf('mstar=2&') < 0")
+    mstar = float(page.url.split("mstar=")[1].split("&")[0])
+    assert 0.3 < mstar < 30 and mstar != 2.0
+
+
+def test_instant_tier_latency_in_the_browser(page, server):
+    """From a change of U* to the redrawn growth rate (N = 10); printed, not asserted."""
+    _open(page, server)
+    times = [page.evaluate(LATENCY, ["ustar", f"{u:.3f}", "growth-rate"])
+             for u in np.linspace(4.0, 6.0, 9)]
+    assert all(t > 0 for t in times), times
+    print(f"\ninstant tier latency (ms): median {statistics.median(times):.0f}, "
+          f"max {max(times):.0f}, N = 10")
+
+
+def test_the_map_runs_in_the_background_and_cancels_and_the_view_exports(page, server):
+    _open(page, server, ustar=4.5)
+    page.get_by_role("button", name="compute the map").click()
+    page.wait_for_function(f"() => ({FIND})(document, 'boundary-status').textContent"
+                           ".startsWith('computing')")
+    _set(page, "ustar", "4.6")                              # the page answers meanwhile
+    assert _number(page, "growth-rate") == pytest.approx(
+        linear_stability(Scene(ustar=4.6)).eigenvalues[0].real, rel=1e-5)
+    page.get_by_role("button", name="cancel", exact=True).click()
+    page.wait_for_function(f"() => ({FIND})(document, 'boundary-status').textContent"
+                           " === 'cancelled'")
+    with page.expect_download() as download:
+        page.get_by_role("button", name="export the view (JSON)").click()
+    exported = json.loads(Path(download.value.path()).read_text())
+    assert exported["scene"]["ustar"] == 4.6
+    assert exported["instant"]["growth_rate"] == pytest.approx(_number(page, "growth-rate"),
+                                                               rel=1e-5)
+    assert exported["command"] == _text(page, "command")
+
+
+def test_a_time_run_in_the_background_shows_the_library_outcome(page, server):
+    scene = Scene(ustar=4.0, zeta=0.01)
+    _open(page, server, ustar=4, zeta=0.01)
+    page.locator("[data-testid=t-end]").fill("5")
+    page.locator("[data-testid=t-end]").press("Enter")             # sent before the click
+    page.get_by_role("button", name="time run").click()
+    page.locator("[data-testid=run-outcome]").wait_for(timeout=60000)
+    run = run_case(scene, 5.0)
+    assert _text(page, "run-outcome") == run.outcome.outcome
+    assert _text(page, "run-status") == run.status
+    assert "fsicas simulate --mstar 1 --ustar 4 " in _text(page, "run-command")
+
+
+def test_a_physical_preset_gives_hz_and_l_per_min_of_the_library(page, server):
+    _open(page, server)
+    page.get_by_label("physical preset").select_option("soft_palate")
+    page.locator("[data-testid=flow]").wait_for(timeout=30000)
+    physical = load_physical("soft_palate")
+    scene = physical.scene(physical.flow)
+    assert float(_text(page, "flow").split()[0]) == pytest.approx(
+        scene.scales.l_per_min(scene.ustar), rel=1e-4)
+    page.locator("[data-testid=onset-ustar]").wait_for(timeout=30000)
+    onset = critical_velocity(scene)
+    hz = page.locator("text=physical:").inner_text()
+    assert f"{scene.scales.l_per_min(onset.ustar):.4g} L/min" in hz
+    assert f"{scene.scales.hz(onset.omega):.4g} Hz" in hz
+    page.wait_for_function("() => location.search.includes('preset=soft_palate')")
