@@ -1,7 +1,7 @@
 """Wall time of each command of the README's "First five minutes", as a new user runs it.
 
 Reads the README's first ``bash`` block after the heading "## First five minutes", runs
-every ``fsicas ...`` line in a fresh temporary folder (the files it writes land there;
+every ``fsicas ...`` line (but the explorer's server) in a fresh temporary folder (the files it writes land there;
 ``examples/`` is linked into it),
 one after the other, and prints a Markdown table: the command, its exit status and its
 wall time in seconds, with the machine's core count and load average before the run.
@@ -23,6 +23,8 @@ import time
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
+#: Commands that serve until stopped, not timed.
+SERVERS = {"fsicas explore"}
 
 
 def readme_commands(readme: Path = ROOT / "README.md") -> list[str]:
@@ -31,7 +33,7 @@ def readme_commands(readme: Path = ROOT / "README.md") -> list[str]:
     section = text.split("## First five minutes", 1)[1]
     block = re.search(r"```bash\n(.*?)```", section, re.S).group(1)
     lines = [line.split("#", 1)[0].strip() for line in block.splitlines()]
-    return [line for line in lines if line.startswith("fsicas ")]
+    return [line for line in lines if line.startswith("fsicas ") and line not in SERVERS]
 
 
 def timed(command: str, folder: Path) -> tuple[int, float]:
