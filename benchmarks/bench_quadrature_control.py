@@ -19,8 +19,8 @@ corrected at the same Π on the reference rule, same uniform mesh; with ``--adap
 
 ``--impacting U*``: an impacting run instead (M* = 1, ζ = 0.01, k* = 1e8, eps/H = 1e-2,
 ``impacting_run``'s settings, t_end = 4 without an early stop), on fixed rules of
-n = 40 · 2^k nodes (the flow's Gauss–Legendre nodes and the impact load's tip-graded
-rule of :func:`fsicas.model.assembly.contact_rule`, which refine together), against the
+n = 40 · 2^k nodes (the flow's Gauss–Legendre nodes and the impact load's cell rule
+of :mod:`fsicas.model.impact_rule`, which refine together), against the
 rule of ``--reference`` nodes: wall time, the run's own ``quadrature_error`` estimate
 and the relative errors of the period and of the peak force.
 
@@ -83,7 +83,7 @@ def impacting(ustar: float, modes: int, nodes: list[int], reference: int) -> Non
     for n in nodes:
         run, seconds = once(n)
         r = run.outcome
-        print(f"| {n} | {len(run.model.contact_weights)} | {seconds:.1f} | "
+        print(f"| {n} | {len(run.model.impact_rule.x)} | {seconds:.1f} | "
               f"{run.quadrature_error:.1e} | {abs(r.period / o.period - 1):.1e} | "
               f"{abs(r.max_impact_force / o.max_impact_force - 1):.1e} | "
               f"{r.impacts_per_cycle} |", flush=True)

@@ -20,7 +20,8 @@ from .beam_timoshenko import TimoshenkoBeam, timoshenko_modes
 from .beam_timoshenko_fe import timoshenko_fe_elements, timoshenko_fe_modes
 from .equations import LiftedEquations
 from .beam_fe import default_n_elements, nonuniform_beam_modes
-from .quadrature import composite_gauss_legendre, gauss_legendre, tip_graded_gauss_legendre
+from .impact_rule import ImpactRule, impact_rule
+from .quadrature import composite_gauss_legendre, gauss_legendre
 from ..scene import CONTACT_PARAMETERS, MODEL_PARAMETERS, STRUCTURE_FIELDS, Scene
 
 __all__ = ["Model", "build_model", "modal_basis", "parameter_names", "per_model", "contact_rule"]
@@ -70,11 +71,10 @@ def quadrature_rule(scene: Scene) -> tuple[np.ndarray, np.ndarray]:
     return composite_gauss_legendre(elements, max(least, -(-scene.n_quad // elements)))
 
 
-def contact_rule(scene: Scene) -> tuple[np.ndarray, np.ndarray]:
-    """Nodes and weights of the impact load ``∫ f_contact phi_n``: Gauss–Legendre pairs
-    on cells graded towards the tip, finer with ``scene.n_quad``
-    (:func:`~.quadrature.tip_graded_gauss_legendre`; 230 nodes at the default 40)."""
-    return tip_graded_gauss_legendre(scene.n_quad)
+def contact_rule(scene: Scene) -> ImpactRule:
+    """The rule of the impact load ``∫ f_contact phi_n``, finer with ``scene.n_quad``
+    (:mod:`.impact_rule`: the exact law's cell rule, 241 nodes at the default 40)."""
+    return impact_rule(scene.n_quad, scene.contact_smoothing)
 
 
 @dataclass(frozen=True, eq=False)
@@ -87,8 +87,8 @@ class Model:
     (the implicit residual ``M z − F`` of time integration), ``jac_mass_action(x, p, v)``
     its derivative ``d(M v)/dx``. ``lifted`` holds ``jac_rhs``, ``jac_mass_action`` and
     ``mass`` as :class:`continuation.Lifted` (their structure ``A + P D L``).
-    ``tip`` maps x to (y(1), dy/dt(1)); ``contact_basis`` and ``contact_weights`` are the
-    modes and weights of the impact load's own rule (:func:`contact_rule`; None without
+    ``tip`` maps x to (y(1), dy/dt(1)); ``contact_basis`` and ``impact_rule`` are the
+    modes at the impact load's own nodes and its rule (:func:`contact_rule`; None without
     contact). Use :meth:`parameters` for the numeric p.
     Models compare and hash by identity (caches keyed by a model die with it).
     """
@@ -106,7 +106,7 @@ class Model:
     jac_mass_action: ca.Function = field(default=None, repr=False)
     lifted: dict = field(default_factory=dict, repr=False)
     contact_basis: ModalBasis | None = field(default=None, repr=False)
-    contact_weights: np.ndarray | None = field(default=None, repr=False)
+    impact_rule: ImpactRule | None = field(default=None, repr=False)
 
     @property
     def n_modes(self) -> int:
@@ -240,8 +240,8 @@ def build_model(scene: Scene, symbolic: str = "MX") -> Model:
     tip = modal_basis(scene, [0.0, 1.0])
     impact = None
     if scene.contact:
-        contact_nodes, contact_weights = contact_rule(scene)
-        impact = modal_basis(scene, contact_nodes), contact_weights
+        rule = contact_rule(scene)
+        impact = modal_basis(scene, rule.x), rule
     eqs = LiftedEquations(scene, basis, tip, weights, getattr(ca, symbolic), names, impact)
     x, p, v = eqs.x, eqs.p, eqs.v
     force = eqs.force()
@@ -258,4 +258,4 @@ def build_model(scene: Scene, symbolic: str = "MX") -> Model:
                  mass_action=fun("Mv", [x, p, v], eqs.mass_action(), xpv),
                  jac_mass_action=fun("dMvdx", [x, p, v], lifted["jac_mass_action"].expr(x, p, v), xpv),
                  lifted=lifted, contact_basis=impact and impact[0],
-                 contact_weights=impact and impact[1])
+                 impact_rule=impact and impact[1])

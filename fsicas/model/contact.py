@@ -19,7 +19,7 @@ import casadi as ca
 import numpy as np
 
 __all__ = ["GAP_POINTS", "WALL_SIGNS", "ramp", "stiffness", "law", "gap", "wall_gaps", "gaps",
-           "wall_load", "modal_load", "reference_force"]
+           "wall_load", "nodal_impact_load", "modal_load", "reference_force"]
 
 GAP_POINTS = np.linspace(0.0, 1.0, 101)
 """Points x/L where gaps are sampled by the gauges and the plots (the impact load and
@@ -72,16 +72,22 @@ def wall_gaps(walls, y) -> tuple:
     return tuple(gap(H, y, s) for H, s in zip(walls, WALL_SIGNS))
 
 
+def nodal_impact_load(rule, scene, y, k, eps):
+    """``W`` at the nodes of the impact ``rule`` (:class:`fsicas.model.impact_rule.ImpactRule`)
+    from the deflection ``y`` there, both walls, so that ``∫ Σ_c f_c phi_n = Σ_i W_i
+    phi_n(x_i)``: ``Σ_c s_c k rule.nodal(eps - h_c)``. Symbolic or NumPy (states in rows)."""
+    width = scene.contact_smoothing * eps if scene.contact_smoothing else 0.0
+    return sum(sign * k * rule.nodal(eps - gap(wall(rule.x), y, sign), lambda g: ramp(g, width))
+               for wall, sign in zip(scene.walls, WALL_SIGNS))
+
+
 def modal_load(model, x, p) -> np.ndarray:
-    """``c_n = Σ_j w_j f(x_j) phi_n(x_j)`` on the model's contact rule, f the law of ``p``
-    (:func:`law`) summed over both walls (the impact term of the equations, in NumPy)."""
-    s, n, basis = model.scene, model.n_modes, model.contact_basis
-    y = basis.phi.T @ x[n:2 * n]
-    H = [w(basis.x) for w in s.walls]
+    """``c_n = ∫ Σ_c f_c phi_n`` by the model's impact rule, f the law of ``p``
+    (:func:`law`; the impact term of the equations, in NumPy)."""
+    n, basis = model.n_modes, model.contact_basis
     k, eps = law(model, p)
-    load = sum(wall_load(h, sign, k, eps, s.contact_smoothing)
-               for h, sign in zip(wall_gaps(H, y), WALL_SIGNS))
-    return basis.phi @ (model.contact_weights * load)
+    load = nodal_impact_load(model.impact_rule, model.scene, basis.phi.T @ x[n:2 * n], k, eps)
+    return basis.phi @ load
 
 
 def gaps(model, X, xs=GAP_POINTS) -> np.ndarray:

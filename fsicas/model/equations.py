@@ -20,9 +20,10 @@ and give, per channel c and mode n,
     kinematics: dq_n/dt = r_n
 
 All integrals are Gauss–Legendre sums over the scene's nodes, but the impact load's
-``∫ f_contact phi_n``: its patch is 1e-3 of L long, so it has its own rule, graded
-towards the tip (:func:`fsicas.model.quadrature.tip_graded_gauss_legendre`). u|u| is C^1, so F is
-smooth except for the contact kink ``max(0, eps - h_c)``.
+``∫ f_contact phi_n``: its patch is 1e-3 of L long, anywhere along the beam, so it has its
+own rule, exact for the law's kink in a quadratic interpolant of the gap on small cells
+(:mod:`fsicas.model.impact_rule`). u|u| is C^1, so F is smooth except for the contact kink
+``max(0, eps - h_c)``.
 
 The state enters the nonlinear terms only through the nodal values
 ``z = L x = (y, dy/dt, ∫_0^x dy/dt at the K nodes, Q_1, Q_2, y(1), ∫_0^1 dy/dt, y at the
@@ -61,8 +62,9 @@ class LiftedEquations:
     def __init__(self, scene, basis, tip, weights, sym, names, contact_rule=None):
         self.scene, self.basis, self.tip, self.w = scene, basis, tip, weights
         self.n, self.K, self.sym, self.names = scene.modes, len(weights), sym, names
-        self.contact_basis, self.contact_w = contact_rule if contact_rule else (None, np.zeros(0))
-        phi, Phi, n, K, Kc = basis.phi, basis.Phi, self.n, self.K, len(self.contact_w)
+        self.contact_basis, self.impact_rule = contact_rule if contact_rule else (None, None)
+        Kc = len(self.impact_rule.x) if contact_rule else 0
+        phi, Phi, n, K = basis.phi, basis.Phi, self.n, self.K
         zero = lambda rows, cols=None: np.zeros((rows, cols if cols is not None else n))
         state = lambda r, q, Q: np.hstack([r, q, Q])
         phi_c = self.contact_basis.phi if Kc else zero(n, 0)
@@ -130,18 +132,16 @@ class LiftedEquations:
             gts.append(gt)
             rows.append(par["pressure_drop"] / mstar
                         - (par["k0"] * u_in * ca.fabs(u_in) + par["kl"] * u_out * ca.fabs(u_out)) / 2)
-        if len(self.contact_w):
-            impact = self.contact_w * self._impact_density(z[3 * K + 4:])
+        if self.impact_rule is not None:
+            impact = self._impact_load(z[3 * K + 4:])
         return ca.vertcat(a, b, *gts, c, *rows, impact)
 
-    def _impact_density(self, y):
-        """``Σ_c f_c`` at the contact rule's nodes from the deflection ``y`` there."""
+    def _impact_load(self, y):
+        """``W`` with ``∫ Σ_c f_c phi_n = Σ_i W_i phi_n(x_i)`` at the impact rule's nodes
+        (:mod:`.impact_rule`), from the deflection ``y`` there."""
         k = contact.stiffness(self.par["contact_stiffness"], self.basis.omega[0])
         eps = self.par["contact_eps"] * self.scene.hstar / 2
-        smoothing = self.scene.contact_smoothing
-        return sum(contact.wall_load(contact.gap(wall(self.contact_basis.x), y, s), s, k, eps,
-                                     smoothing)
-                   for wall, s in zip(self.scene.walls, contact.WALL_SIGNS))
+        return contact.nodal_impact_load(self.impact_rule, self.scene, y, k, eps)
 
     # -- M ------------------------------------------------------------------------------
     def _nodal_mass(self):

@@ -45,7 +45,7 @@ def closing(model, x_last, p) -> str:
     stiffness acts in time: the layer must be thicker or the steps shorter) or the law
     did not stop the beam inside it (a stiffer law or a thicker layer). The layer's
     eps is that of the run's parameters ``p`` (a model serves many laws)."""
-    if model.contact_weights is None:
+    if model.impact_rule is None:
         return "the beam reached the wall (turn the contact law on to hold it)"
     eps = law(model, p)[1]
     gap = -np.inf if x_last is None else gaps(model, np.atleast_2d(x_last)).min()

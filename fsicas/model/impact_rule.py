@@ -1,0 +1,129 @@
+"""The impact load of the equations, ``∫_0^1 k ramp(g_c) phi_n dx`` with ``g_c = eps - h_c``,
+integrated where the law's kink is.
+
+The patch where ``g_c > 0`` is 5e-4 to 2e-3 of L long, anywhere along the beam, and the
+integrand has kinks at its ends: a fixed rule converges only like its cell width squared,
+with a constant set by the patch. The exact law (``contact_smoothing = 0``) has its own
+rule here, a *cell rule*: [0, 1] is cut into ``C`` equal cells of width Δ; on each,
+``g_c`` is replaced by its quadratic interpolant ``p`` at the ends and the midpoint
+(``t = -1, 0, 1``, ``x = x_cell + (t + 1) Δ/2``), and the nodal weights
+
+    W_j = Δ/2 ∫_{-1}^{1} max(0, p(t)) ℓ_j(t) dt,     ℓ_j the quadratic Lagrange basis,
+
+are exact: the roots of ``p`` in closed form, the moments ``∫ t^k`` between them. So
+
+    ∫_0^1 max(0, g_c) phi_n dx ≈ Σ_i W_i phi_n(x_i),
+
+the kink located exactly in the interpolant; the error is that of interpolating ``g_c`` and
+``phi_n`` (O(Δ^3)), not the kink's. Measured against the exact modal integral on the
+located patch: 1.2e-5 of the largest load at 100 cells and 1.3e-6 at 200 for tip impacts
+(M* = 1, U* = 7), 1.3e-4 and 4.6e-6 for the soft palate's mid-beam contacts, where a rule
+graded towards the tip was 0.77 off (``tests/test_impact_rule.py``).
+
+The smoothed law (``contact_smoothing > 0``, the softplus) has no kink but a bend of width
+``smoothing eps`` in g: its nodes are Gauss-Legendre pairs on cells graded towards the tip
+(:func:`fsicas.model.quadrature.tip_graded_gauss_legendre`), the rule of the collocation of
+impacting cycles, whose contacts are at the tip.
+
+The formulas work on NumPy arrays (states in rows, nodes in the last axis) and on CasADi
+symbols (a column of nodes) alike.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import casadi as ca
+import numpy as np
+import scipy.sparse as sp
+
+from .quadrature import tip_graded_gauss_legendre
+
+__all__ = ["ImpactRule", "impact_rule", "CELLS_PER_NODE"]
+
+CELLS_PER_NODE = 3
+"""Cells of the cell rule per flow quadrature node (``scene.n_quad``): 120 cells (241
+nodes) at the default N = 10, twice as many when the flow's nodes are doubled, so the
+quadrature estimate (:mod:`fsicas.model.accuracy`) refines both together."""
+
+_TINY = 1e-300      # keeps sqrt's derivative finite at a double root
+
+
+@dataclass(frozen=True, eq=False)
+class ImpactRule:
+    """Nodes ``x`` of the impact load and how the load at them is formed: the cell rule
+    (``weights`` None; ``x`` the ends and midpoints of ``cells`` equal cells) or, for the
+    smoothed law, the pointwise rule ``W_i = weights_i ramp(g_i)``."""
+
+    x: np.ndarray
+    weights: np.ndarray | None = None
+
+    @property
+    def cells(self) -> int:
+        return (len(self.x) - 1) // 2 if self.weights is None else 0
+
+    def nodal(self, g, ramp):
+        """``W_i`` (module docstring) of the penetrations ``g = eps - h_c`` at the nodes,
+        so that ``∫ ramp(g) phi_n ≈ Σ_i W_i phi_n(x_i)``; ``ramp`` is the law's ramp, used
+        by the pointwise rule only (the cell rule integrates ``max(0, .)``)."""
+        if self.weights is not None:
+            return self.weights * ramp(g)
+        symbolic = isinstance(g, (ca.SX, ca.MX, ca.DM))
+        ends, mids, scatter = _scatter(self.cells)
+        if symbolic:
+            left, mid, right = (ca.mtimes(ca.DM(m), g) for m in (ends[0], mids, ends[1]))
+            weights = _cell_weights(left, mid, right, ca, ca.if_else)
+            return sum(ca.mtimes(ca.DM(s), w) for s, w in zip(scatter, weights)) / (2 * self.cells)
+        g = np.asarray(g, dtype=float)
+        weights = _cell_weights(g[..., 0:-1:2], g[..., 1::2], g[..., 2::2], np, np.where)
+        return sum(w @ s.T for s, w in zip(scatter, weights)) / (2 * self.cells)
+
+
+def impact_rule(n_quad: int, smoothing: float) -> ImpactRule:
+    """The rule of a scene with ``n_quad`` flow nodes and the law's ``smoothing``
+    (module docstring)."""
+    if smoothing:
+        return ImpactRule(*tip_graded_gauss_legendre(n_quad))
+    return ImpactRule(np.linspace(0.0, 1.0, 2 * CELLS_PER_NODE * n_quad + 1))
+
+
+def _scatter(cells: int):
+    """Constant sparse matrices: the cells' left and right end values and midpoint values
+    from the nodes, and the map of the three per-cell weights back onto the nodes."""
+    rows = np.arange(cells)
+    pick = lambda cols: sp.csc_matrix((np.ones(cells), (rows, cols)), shape=(cells, 2 * cells + 1))
+    left, mid, right = pick(2 * rows), pick(2 * rows + 1), pick(2 * rows + 2)
+    return (left, right), mid, (left.T.tocsc(), mid.T.tocsc(), right.T.tocsc())
+
+
+def _cell_weights(gl, g0, gr, lib, where):
+    """``∫_{-1}^{1} max(0, p) ℓ_j dt`` for j = left, mid, right of each cell, p the
+    quadratic through ``(-1, gl), (0, g0), (1, gr)`` (its positive set from the roots,
+    computed stably; a linear p has a root at infinity)."""
+    c0, c1, c2 = g0, (gr - gl) / 2, (gr + gl) / 2 - g0
+    disc = c1 * c1 - 4 * c0 * c2
+    q = -(c1 + where(c1 >= 0, 1.0, -1.0) * lib.sqrt(lib.fmax(disc, _TINY))) / 2
+    roots = _ratio(c0, q, lib, where), _ratio(q, c2, lib, where)
+    clip = lambda t: lib.fmin(lib.fmax(t, -1.0), 1.0)
+    real = disc > 0
+    a = where(real, clip(lib.fmin(*roots)), 0.0)
+    b = where(real, clip(lib.fmax(*roots)), 0.0)
+    between = _lagrange_integrals(c0, c1, c2, a, b)
+    whole = _lagrange_integrals(c0, c1, c2, -1.0 + 0 * a, 1.0 + 0 * a)
+    concave = c2 <= 0
+    return tuple(where(concave, inner, full - inner) for inner, full in zip(between, whole))
+
+
+def _ratio(num, den, lib, where):
+    """``num / den``, or ±2 (outside [-1, 1], the sign of num/den with den = 0 read as
+    0⁻) where its size is at least 2."""
+    den_sign = where(den > 0, 1.0, -1.0)
+    far = lib.fabs(num) >= 2 * lib.fabs(den)
+    safe = where(den == 0, 1.0, den)
+    return where(far, 2.0 * lib.sign(num) * den_sign, num / safe)
+
+
+def _lagrange_integrals(c0, c1, c2, a, b):
+    """``∫_a^b p ℓ_j dt`` for ℓ = ((t² - t)/2, 1 - t², (t² + t)/2), p = c0 + c1 t + c2 t²."""
+    mu = [(b ** (k + 1) - a ** (k + 1)) / (k + 1) for k in range(5)]
+    P = [c0 * mu[i] + c1 * mu[i + 1] + c2 * mu[i + 2] for i in range(3)]
+    return (P[2] - P[1]) / 2, P[0] - P[2], (P[2] + P[1]) / 2
