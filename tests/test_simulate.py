@@ -1,9 +1,13 @@
 """Time integration against the linear analysis, independent routes, and bad input."""
+import re
+
 import numpy as np
 import pytest
+import scipy.integrate
 import scipy.optimize
 
 from fsicas import Scene, build_model, steady_state
+from fsicas.model.contact import law
 from fsicas.timedomain.breathing import PressureSchedule
 from fsicas.timedomain.integrators import Settings, eigenvector_state, gaps, initial_state, simulate
 from fsicas.linear.stability import eigenvalues
@@ -130,6 +134,20 @@ def test_closing_gap_is_a_reported_failure_not_nan(damped_scene_u7, capfd):
     # the last state was inside the layer: the law did not stop the beam there
     assert gaps(model, traj.x[-1:]).min() < scene.contact_gap
     assert "did not stop the beam within the contact layer" in traj.message
+    # and says by how much: the energy the law stored, against a fine trapezoid rule of
+    # k ∫ max(0, eps - h)² / 2 at the last state, and the ratio to the kinetic energy of
+    # the deepest point in mode 1 (effective mass 1/φ1²)
+    stored = float(re.search(r"stored ([0-9.e+-]+),", traj.message).group(1))
+    xs = np.linspace(0.0, 1.0, 200001)
+    k, eps = law(model, steady.p)
+    h = gaps(model, traj.x[-1:], xs)[0]
+    exact = k * scipy.integrate.trapezoid(np.maximum(0.0, eps - h).sum(axis=0) ** 2, xs) / 2
+    assert stored == pytest.approx(exact, rel=0.3)
+    assert "thicker layer (contact_eps)" in traj.message
+    phi = model.basis_at([xs[np.argmin(h.min(axis=0))]]).phi[:, 0]
+    kinetic = 0.5 * (phi @ traj.x[-1, :model.n_modes]) ** 2 / phi[0] ** 2
+    factor = float(re.search(r"order of ([0-9.e+-]+)x stiffer", traj.message).group(1))
+    assert factor == pytest.approx(kinetic / exact, rel=0.35) and factor > 100
 
 
 def test_a_step_across_the_whole_contact_layer_is_told_apart(damped_scene_u7):

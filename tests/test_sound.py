@@ -119,10 +119,11 @@ def test_cli_writes_the_wav_and_json(capsys, tmp_path):
                 "wav_pa_per_count", "onset_s", "offset_s"):
         assert key in out
     assert out["distance_m"] == 0.3 and len(out["harmonics_pa"]) == 10
-    # the breath's quadrature error is measured and judged against a contact run's bound
-    assert out["quadrature_tol"] == IMPACT_QUADRATURE_TOL and out["quadrature_nodes"] == 28
-    assert out["quadrature_error"] > IMPACT_QUADRATURE_TOL and out["status"] == "unconverged"
-    assert any("quadrature error" in w and "raise quad_nodes" in w for w in out["warnings"])
+    # the breath's quadrature is controlled to a contact run's bound: 28 nodes are 3.7e-3
+    # off, the breath is run again on 56
+    assert out["quadrature_tol"] == IMPACT_QUADRATURE_TOL and out["quadrature_nodes"] == 56
+    assert out["quadrature_error"] <= IMPACT_QUADRATURE_TOL and out["status"] == "success"
+    assert not out.get("warnings")
     assert out["meta"]["units"]["spl_db"].startswith("dB SPL")
     rate, counts = wavfile.read(wav)
     assert rate == 44100 and counts.size == pytest.approx(44100, abs=2)

@@ -106,7 +106,7 @@ def _cmd_sound(args) -> dict:
         run = breath_run(scene, t_end, settings, progress=say.bars)
         sound = trajectory_sound(run.trajectory, scene.scales, args.distance, AUDIO_RATE)
     else:
-        run = run_case(scene, t_end, settings=settings, repeat=False, progress=say.bars)
+        run = run_case(scene, t_end, settings=settings, progress=say.bars)
         sound = _sound(run, scene, args)
     traj = run.trajectory      # the run's quadrature, controlled (docs/simulate.md)
     out = {**sound.to_json(), "outcome": run.outcome.outcome, "status": run.status,

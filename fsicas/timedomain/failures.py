@@ -7,6 +7,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..model.contact import gaps, law
+from ..model.patch import penetration
 
 __all__ = ["solver_message", "first_bad", "closing"]
 
@@ -54,5 +55,26 @@ def closing(model, x_last, p) -> str:
                 f"contact layer (eps = {eps:.3g}): one step crossed the whole layer, where no "
                 "contact stiffness can act; make the layer thicker (contact_eps; a tighter "
                 "rtol also shortens the steps)")
-    return ("the impact load did not stop the beam within the contact layer (raise "
-            "contact_stiffness or contact_eps)")
+    return f"the impact load did not stop the beam within the contact layer ({_shortfall(model, x_last, p)})"
+
+
+def _shortfall(model, x_last, p) -> str:
+    """How far the law fell short, from the last state inside the layer: the energy the
+    law stored there, about ``0.4 depth ∫ k max(0, eps - h)`` (0.8 d ∫ g for a parabolic
+    cap of depth d), against the kinetic energy of the deepest point ``x_c`` in mode 1,
+    ``v_c² / (2 φ1(x_c)²)`` (its effective mass 1/φ1², 1/4 at the tip; docs/simulate.md,
+    "The paper's contact parameters"). The flow's suction comes on top, so it is an
+    estimate: at M* = 1, U* = 7, eps/H = 1e-3 it asks 1.2e10 for k* = 1e8, and 1e10
+    holds."""
+    n = model.n_modes
+    found = penetration(model, np.atleast_2d(x_last), p)
+    stored = 0.4 * max(found.depth[0], 0.0) * found.load[0]
+    phi = model.basis_at([found.position[0]]).phi[:, 0]
+    kinetic = 0.5 * float(phi @ x_last[:n]) ** 2 / phi[0] ** 2
+    if not stored < kinetic:
+        return "raise contact_stiffness or contact_eps"
+    factor = kinetic / stored if stored > 0 else np.inf
+    return (f"when the gap closed it had stored {stored:.2g}, against the kinetic energy "
+            f"{kinetic:.2g} of the beam at the wall: it needs a thicker layer (contact_eps) "
+            f"or a law of the order of {factor:.2g}x stiffer (contact_stiffness; an "
+            "estimate from that ratio)")
