@@ -152,12 +152,15 @@ def test_a_closed_pipe_and_ctrl_c_end_the_command_quietly(tmp_path):
     reader.stdout.close()                            # the reader is gone before the output
     assert reader.wait(timeout=120) == 141
     assert b"Traceback" not in reader.stderr.read()
-    run = subprocess.Popen([sys.executable, "-m", "fsicas.cli", "boundary", "--mstar",
-                            "0.01:100:400"], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
-                           text=True)
-    time.sleep(8)
+    run = subprocess.Popen([sys.executable, "-m", "fsicas.cli", "--verbose", "boundary",
+                            "--mstar", "0.01:100:400"], stdout=subprocess.PIPE,
+                           stderr=subprocess.PIPE, text=True)
+    first = run.stderr.readline()          # the command is at work (imports done, however slow)
+    assert first.startswith("fsicas boundary")
+    time.sleep(1)
     run.send_signal(signal.SIGINT)
-    out, err = run.communicate(timeout=60)
+    out, rest = run.communicate(timeout=60)
+    err = first + rest
     assert run.returncode == 130 and "Traceback" not in err
     assert err.strip().splitlines()[-1].startswith("fsicas: interrupted")
 
