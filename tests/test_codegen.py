@@ -87,7 +87,7 @@ def test_second_call_hits_the_cache(tmp_path):
     again = compile_function(build_model(Scene(modes=4, ustar=9.0)).rhs, cache_dir=tmp_path)
     assert codegen.compile_count == start + 1
     assert lib.stat().st_mtime_ns == mtime
-    assert sorted(p.name for p in tmp_path.iterdir()) == [lib.name, lib.name + ".sha256"]
+    assert sorted(p.name for p in tmp_path.iterdir()) == [lib.name, lib.name + ".json"]
     x, p = np.linspace(0.01, 0.3, 10), build_model(Scene(modes=4)).parameters()
     np.testing.assert_array_equal(np.array(again(x, p)), np.array(fn(x, p)))
 
