@@ -7,15 +7,23 @@ into a shared library with the system C compiler (``-fPIC -shared``) and loads i
 or ``~/.cache/continuation``) with a name keyed by the sha256 of ``fn.serialize()``, the
 compiler flags, the compiler identity, the CasADi version and the platform; a later call,
 also in a new process, only loads it (and a second call in the same process returns the
-loaded function). Libraries are built in a private temporary directory and moved into
-place with ``os.replace``, so concurrent processes never see a partial file.
+loaded function).
+
+Each library has a record beside it (``<library>.json``: its key, size and sha256, the
+compiler and the flags). A library is loaded only if it matches its record: one without
+a record, or whose size or sha256 differs (planted, truncated, altered), is rebuilt with
+a ``RuntimeWarning`` naming it, never loaded (loading a truncated library can crash the
+process). Files are written in a private temporary directory and moved into place with
+``os.replace``, the record before the library, so concurrent builders of one key never
+expose a partial file, and a reader that finds the record but not yet the library just
+builds it too (the builds are byte-identical).
 
 Loading a library runs its code, so the cache is trusted only as far as it is private:
 the cache directory is created with mode 0700 and refused (``RuntimeError``) when it or
-a library in it belongs to another user or is writable by group or others; every
-library has the sha256 of its bytes recorded beside it (``<library>.sha256``) when it
-is built, and a library whose bytes do not match its record (planted, truncated or
-altered after the build) is rebuilt instead of loaded.
+a library in it belongs to another user or is writable by group or others. A cache
+directory that cannot be used (the path is a file, not writable, on a read-only file
+system) is replaced, with one ``RuntimeWarning``, by a temporary directory of the process
+(removed at exit): the function is still compiled, but not kept for later processes.
 
 Default flags: ``-O1`` for SX functions (straight-line code, where -O2/-O3 compile times
 grow superlinearly with the size of one function body for no run-time gain) and ``-O3``
@@ -28,8 +36,10 @@ compiler is found or compilation fails (the caller keeps the CasADi function).
 
 from __future__ import annotations
 
+import atexit
 import functools
 import hashlib
+import json
 import os
 import platform
 import shlex
@@ -48,11 +58,13 @@ __all__ = ["compile_function", "compiled_or_none", "default_cache_dir", "default
 _FLAGS_SX = ("-O1",)
 _FLAGS_OTHER = ("-O3",)
 _COMMON = ("-fPIC", "-shared")
-_FORMAT = "continuation-compile-1"     # bump to invalidate all cache entries
+_FORMAT = "continuation-compile-2"     # bump to invalidate all cache entries
 
 #: Number of compilations done by this process (cache misses); for tests and benchmarks.
 compile_count = 0
 _LOADED: dict = {}
+_SCRATCH: dict = {}          # process id -> its temporary cache directory
+_WARNED: set = set()         # unusable cache directories already warned about
 
 
 def default_cache_dir() -> Path:
@@ -146,20 +158,27 @@ def _digest(path: Path) -> str:
 
 
 def _record(target: Path) -> Path:
-    """Where the sha256 of the library ``target`` is recorded."""
-    return target.with_name(target.name + ".sha256")
+    """The record of the library ``target``."""
+    return target.with_name(target.name + ".json")
 
 
-def _trusted(target: Path) -> bool:
-    """Whether ``target`` exists, is private and matches its recorded sha256."""
-    if not target.exists():
-        return False
-    check_private(target)
-    record = _record(target)
+def _mismatch(target: Path, key: str) -> str | None:
+    """None if the existing library ``target`` matches its record, else why not."""
     try:
-        return record.read_text().strip() == _digest(target)
-    except OSError:
-        return False
+        record = json.loads(_record(target).read_text())
+        size, digest = int(record["size"]), record["sha256"]
+        if record["key"] != key:
+            return "its record is that of another function"
+    except FileNotFoundError:
+        return "it has no record"
+    except (OSError, ValueError, KeyError, TypeError) as exc:
+        return f"its record is unreadable ({type(exc).__name__}: {exc})"
+    actual = target.stat().st_size
+    if actual != size:
+        return f"it has {actual} bytes, its record {size} (truncated or altered)"
+    if _digest(target) != digest:
+        return "its sha256 differs from its record (altered)"
+    return None
 
 
 def _cache_directory(cache: Path) -> Path:
@@ -169,10 +188,19 @@ def _cache_directory(cache: Path) -> Path:
     return cache
 
 
+def _scratch() -> Path:
+    """This process's temporary cache directory (mode 0700, removed at exit)."""
+    pid = os.getpid()
+    if pid not in _SCRATCH:
+        _SCRATCH[pid] = Path(tempfile.mkdtemp(prefix="continuation-cache-"))
+        atexit.register(shutil.rmtree, _SCRATCH[pid], True)
+    return _SCRATCH[pid]
+
+
 def _build(fn: ca.Function, compiler: str, flags: tuple, derivatives: bool,
-           target: Path, timeout) -> None:
-    """Generate, compile and atomically move the library of ``fn`` and its sha256
-    record to ``target``."""
+           target: Path, key: str, timeout) -> None:
+    """Generate and compile the library of ``fn``, then move its record and the library
+    to ``target`` (each atomically, the record first)."""
     global compile_count
     with tempfile.TemporaryDirectory(dir=target.parent, prefix=".build-") as tmp:
         source = ca.CodeGenerator(f"{fn.name()}.c", {"with_header": False})
@@ -180,30 +208,55 @@ def _build(fn: ca.Function, compiler: str, flags: tuple, derivatives: bool,
         if derivatives:
             source.add(fn.jacobian())      # named jac_<name>: found by casadi.external
         c_file = source.generate(tmp + os.sep)
-        so_tmp = os.path.join(tmp, "out.so")
-        cmd = [compiler, *flags, *_COMMON, c_file, "-o", so_tmp, "-lm"]
+        so_tmp = Path(tmp) / "out.so"
+        cmd = [compiler, *flags, *_COMMON, c_file, "-o", str(so_tmp), "-lm"]
         try:
             done = subprocess.run(cmd, capture_output=True, text=True, timeout=timeout)
         except subprocess.TimeoutExpired as exc:
             raise RuntimeError(f"compiling {fn.name()} took more than {timeout} s") from exc
+        except OSError as exc:
+            raise RuntimeError(f"C compiler {compiler} does not run: {exc}") from exc
         if done.returncode != 0:
             raise RuntimeError(f"compiling {fn.name()} failed ({' '.join(cmd)}):\n"
                                f"{done.stderr[-2000:]}")
         os.chmod(so_tmp, 0o700)
-        record_tmp = Path(tmp) / "out.sha256"
-        record_tmp.write_text(_digest(Path(so_tmp)) + "\n")
+        record = {"format": _FORMAT, "key": key, "size": so_tmp.stat().st_size,
+                  "sha256": _digest(so_tmp), "compiler": _compiler_identity(compiler),
+                  "flags": [*flags, *_COMMON]}
+        record_tmp = Path(tmp) / "out.json"
+        record_tmp.write_text(json.dumps(record, indent=1) + "\n")
         os.replace(record_tmp, _record(target))
         os.replace(so_tmp, target)
         compile_count += 1
 
 
+def _locate(fn: ca.Function, cache_dir, flags, derivatives: bool):
+    """``(library path, key, compiler, flags)`` of ``fn``."""
+    compiler = find_compiler()
+    opt = default_flags(fn) if flags is None else tuple(flags)
+    key = cache_key(fn, compiler, opt, derivatives)
+    cache = Path(cache_dir).expanduser() if cache_dir is not None else default_cache_dir()
+    return cache / f"{fn.name()}_{key[:32]}.so", key, compiler, opt
+
+
 def library_path(fn: ca.Function, cache_dir=None, flags=None,
                  derivatives: bool = False) -> Path:
     """Where the compiled library of ``fn`` is (or would be) cached."""
-    compiler = find_compiler()
-    opt = default_flags(fn) if flags is None else tuple(flags)
-    cache = Path(cache_dir).expanduser() if cache_dir is not None else default_cache_dir()
-    return cache / f"{fn.name()}_{cache_key(fn, compiler, opt, derivatives)[:32]}.so"
+    return _locate(fn, cache_dir, flags, derivatives)[0]
+
+
+def _load_or_build(fn: ca.Function, target: Path, key: str, compiler: str, flags: tuple,
+                   derivatives: bool, timeout) -> None:
+    """Make ``target`` a library of ``fn`` that matches its record."""
+    _cache_directory(target.parent)
+    if target.exists():
+        check_private(target)
+        why = _mismatch(target, key)
+        if why is None:
+            return
+        warnings.warn(f"rebuilding the compiled library {target}: {why}", RuntimeWarning,
+                      stacklevel=3)
+    _build(fn, compiler, flags, derivatives, target, key, timeout)
 
 
 def compile_function(fn: ca.Function, cache_dir=None, flags=None,
@@ -214,17 +267,28 @@ def compile_function(fn: ca.Function, cache_dir=None, flags=None,
     ``timeout``: seconds allowed to the compiler. ``derivatives``: also compile
     ``fn.jacobian()`` so the result can be differentiated (first derivatives only).
     Raises RuntimeError when no C compiler is available, compilation fails or the
-    cache is not private (module docstring).
+    cache is not private; an unusable cache directory is replaced by a temporary one
+    with a warning (module docstring).
     """
-    target = library_path(fn, cache_dir, flags, derivatives)
-    key = (str(target), fn.name())
-    if key not in _LOADED:
-        _cache_directory(target.parent)
-        if not _trusted(target):
-            opt = default_flags(fn) if flags is None else tuple(flags)
-            _build(fn, find_compiler(), opt, derivatives, target, timeout)
-        _LOADED[key] = ca.external(fn.name(), str(target))
-    return _LOADED[key]
+    target, key, compiler, opt = _locate(fn, cache_dir, flags, derivatives)
+    if (str(target), fn.name()) in _LOADED:
+        return _LOADED[str(target), fn.name()]
+    try:
+        _load_or_build(fn, target, key, compiler, opt, derivatives, timeout)
+    except OSError as exc:
+        cache, target = target.parent, _scratch() / target.name
+        if cache not in _WARNED:
+            _WARNED.add(cache)
+            why = "not a directory" if cache.is_file() else exc.strerror or str(exc)
+            warnings.warn(
+                f"cannot use the compiled-code cache {cache} ({why}): "
+                f"compiling into {target.parent} for this process only", RuntimeWarning,
+                stacklevel=2)
+        if (str(target), fn.name()) in _LOADED:
+            return _LOADED[str(target), fn.name()]
+        _load_or_build(fn, target, key, compiler, opt, derivatives, timeout)
+    _LOADED[str(target), fn.name()] = ca.external(fn.name(), str(target))
+    return _LOADED[str(target), fn.name()]
 
 
 def compiled_or_none(fn: ca.Function, cache_dir=None, flags=None) -> ca.Function | None:
@@ -234,7 +298,7 @@ def compiled_or_none(fn: ca.Function, cache_dir=None, flags=None) -> ca.Function
         return None
     try:
         return compile_function(fn, cache_dir, flags)
-    except RuntimeError as exc:
+    except (RuntimeError, OSError) as exc:
         warnings.warn(f"falling back to the CasADi function: {exc}", RuntimeWarning,
                       stacklevel=2)
         return None

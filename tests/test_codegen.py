@@ -1,12 +1,14 @@
 """Compiled C code (fsicas.model.codegen): agreement with CasADi, on-disk cache, errors."""
 import subprocess
 import sys
+import tempfile
 import textwrap
 
 import casadi as ca
 import numpy as np
 import pytest
 
+from continuation import compilation
 from fsicas import Profile, Scene, build_model, steady_state
 from fsicas.model import codegen
 from fsicas.model.codegen import compile_function, compile_model
@@ -87,7 +89,7 @@ def test_second_call_hits_the_cache(tmp_path):
     again = compile_function(build_model(Scene(modes=4, ustar=9.0)).rhs, cache_dir=tmp_path)
     assert codegen.compile_count == start + 1
     assert lib.stat().st_mtime_ns == mtime
-    assert sorted(p.name for p in tmp_path.iterdir()) == [lib.name, lib.name + ".sha256"]
+    assert sorted(p.name for p in tmp_path.iterdir()) == [lib.name, lib.name + ".json"]
     x, p = np.linspace(0.01, 0.3, 10), build_model(Scene(modes=4)).parameters()
     np.testing.assert_array_equal(np.array(again(x, p)), np.array(fn(x, p)))
 
@@ -114,6 +116,21 @@ def test_env_var_sets_default_cache_dir(tmp_path, monkeypatch):
     x = ca.SX.sym("x", 2)
     compile_function(ca.Function("tiny", [x], [ca.sin(x) * x[0]]))
     assert len(list((tmp_path / "env-cache").glob("tiny_*.so"))) == 1
+
+
+def test_cache_path_that_is_a_file_still_compiles(tmp_path, monkeypatch):
+    """``$FSICAS_CACHE`` names a file: the function is compiled in a temporary directory
+    (a RuntimeWarning names the path) and the file is left alone."""
+    monkeypatch.setattr(compilation, "_SCRATCH", {})
+    monkeypatch.setattr(tempfile, "tempdir", str(tmp_path))
+    monkeypatch.setenv("FSICAS_CACHE", str(tmp_path / "cache"))
+    (tmp_path / "cache").write_text("a file")
+    x = ca.SX.sym("x")
+    with pytest.warns(RuntimeWarning, match=f"cannot use the compiled-code cache "
+                                            f"{tmp_path / 'cache'} .not a directory"):
+        g = compile_function(ca.Function("tiny_file", [x], [x ** 2 + ca.sin(x)]))
+    assert float(g(2.0)) == pytest.approx(4 + np.sin(2.0), rel=1e-15)
+    assert (tmp_path / "cache").read_text() == "a file"
 
 
 def test_different_structures_get_different_entries(tmp_path):

@@ -2,8 +2,10 @@
 
 The generic machinery lives in the continuation library (``continuation.compilation``:
 code generation, the system C compiler, the on-disk cache keyed by ``fn.serialize()``
-and the flags, atomic writes); this module sets fsicas' cache directory
-(``$FSICAS_CACHE`` or ``~/.cache/fsicas``) and compiles a whole model.
+and the flags, atomic writes, each library checked against its record before it is
+loaded, a temporary directory when the cache directory cannot be used); this module
+sets fsicas' cache directory (``$FSICAS_CACHE`` or ``~/.cache/fsicas``) and compiles a
+whole model.
 
 ``compile_function(fn)`` generates C for ``fn``, compiles it into a shared library and
 loads it with ``casadi.external``; a later call, also in a new process, only loads it.
@@ -49,7 +51,9 @@ def compile_function(fn: ca.Function, cache_dir=None, flags=None,
     ``flags``: optimization flags (e.g. ``["-O2"]``); None: :func:`default_flags`.
     ``timeout``: seconds allowed to the compiler. ``derivatives``: also compile
     ``fn.jacobian()`` so the result can be differentiated.
-    Raises RuntimeError when no C compiler is available or compilation fails.
+    Raises RuntimeError when no C compiler is available, compilation fails or the cache
+    directory is not private; a cache directory that cannot be used (a file, not
+    writable) is replaced by a temporary one with a RuntimeWarning.
     """
     global compile_count
     before = compilation.compile_count

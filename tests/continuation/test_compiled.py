@@ -138,7 +138,7 @@ def test_kernel_library_is_shared_by_meshes_and_processes(models, cache):
     assert out.stdout.split() == ["0", "compiled"]
     assert {p: p.stat().st_mtime_ns for p in cache.glob("*.so")} == libraries
     assert sorted(p.name for p in cache.iterdir() if p.suffix != ".so") == \
-        sorted(p.name + ".sha256" for p in libraries)        # their records, no build dirs
+        sorted(p.name + ".json" for p in libraries)        # their records, no build dirs
 
 
 def test_missing_compiler_falls_back_to_mx(models, cache, monkeypatch):
