@@ -31,7 +31,7 @@ import numpy as np  # noqa: E402
 
 from fsicas import Scene  # noqa: E402
 from fsicas.cycles import (CollocationImpactSettings, CycleSettings, ImpactSettings,  # noqa: E402
-                           cycle_branch, impacting_branch, impacting_collocation_branch,
+                           StartCycle, cycle_branch, impacting_cycles,
                            pre_contact_start)
 from fsicas.linear.steady import steady_state  # noqa: E402
 from fsicas.model import build_model  # noqa: E402
@@ -47,10 +47,9 @@ def target_guess(modes: int, ustar: float, ntst: int = 200):
     start = pre_contact_start(cycle_branch(base, ustar_max=10.0, settings=CycleSettings(ntst=40)))
     scene = base.replace(ustar=start.ustar, **IMPACT)
     model = build_model(scene)
-    br = impacting_collocation_branch(
-        scene, start.state, start.period, start.pressure_drop, model=model, ustar_max=ustar + 0.1,
-        settings=CollocationImpactSettings(ntst=ntst, max_points=80, ds=0.05, ds_max=0.6,
-                                           detect=False))
+    br = impacting_cycles(scene, start, model=model, ustar_max=ustar + 0.1,
+                          settings=CollocationImpactSettings(ntst=ntst, max_points=80, ds=0.05, ds_max=0.6,
+                                                             detect=False))
     near = min(br.points, key=lambda p: abs(p.ustar - ustar))
     target = scene.replace(ustar=ustar)
     return target, model, near.state, near.period, steady_state(target, model).pressure_drop
@@ -60,7 +59,7 @@ def colloc_run(case, ntst: int, points: int, ds: float):
     scene, model, state, period, dp = case
     s = CollocationImpactSettings(ntst=ntst, max_points=points, ds=ds * np.sqrt(ntst / 20),
                                   ds_max=ds * np.sqrt(ntst / 20), detect=False, max_turn=0.0)
-    return impacting_collocation_branch(scene, state, period, dp, model=model, settings=s)
+    return impacting_cycles(scene, StartCycle(state, period, dp), model=model, settings=s)
 
 
 def shoot_run(case, segments: int, tol: float, points: int, ds: float):
@@ -68,7 +67,8 @@ def shoot_run(case, segments: int, tol: float, points: int, ds: float):
     s = ImpactSettings(segments=segments, tol=tol, newton_tol=max(1e-10, 100 * tol),
                        max_points=points, ds=ds * np.sqrt(segments / 12),
                        ds_max=ds * np.sqrt(segments / 12))
-    return impacting_branch(scene, state, period, dp, model=model, settings=s)
+    return impacting_cycles(scene, StartCycle(state, period, dp), method="shooting", model=model,
+                            settings=s)
 
 
 def measures(point) -> dict:

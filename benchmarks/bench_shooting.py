@@ -12,7 +12,7 @@ the working tree: the collocation branch up to contact, its last cycle with a mi
 wall (gap < eps, impacts >= 1); ``--starts`` keeps them in a file for later runs.
 
 Each measurement is a fresh process (``baseline.run_child``) on one tree: it builds the
-problem at that cycle as its tree's ``impacting_branch`` does (at the baseline
+problem at that cycle as its tree's shooting route does (at the baseline
 ``fsicas.impacting._BlockShooting``, in the working tree ``continuation.ShootingProblem``
 with ``shooting_settings(ImpactSettings(sensitivities=..., threads=...))``), corrects
 the start point once (``ContinuationIterator.start``: also builds CasADi's derived
@@ -104,13 +104,14 @@ import json, sys
 import numpy as np
 import fsicas
 from fsicas.cycles import cycle_branch
-from fsicas.cycles.impacting import ImpactSettings, impacting_branch, pre_contact_start
+from fsicas.cycles import impacting_cycles
+from fsicas.cycles.impacting import ImpactSettings, pre_contact_start
 N = int(sys.argv[1])
 IMPACT = dict(contact=True, contact_stiffness=1e8, contact_eps=1e-2, contact_smoothing=0.1)
 base = fsicas.Scene(mstar=1.0, zeta=0.01, modes=N, contact_eps=1e-2)
 s = pre_contact_start(cycle_branch(base, ustar_max=10.0), 1.05)
 scene = base.replace(ustar=s.ustar, **IMPACT)
-br = impacting_branch(scene, s.state, s.period, s.pressure_drop,
+br = impacting_cycles(scene, s, method="shooting",
                       settings=ImpactSettings(max_points=12, ds=0.02, ds_max=0.2,
                                               sensitivities="fast"))
 p = next(p for p in br.points if p.gap_ratio < 1 and p.impacts >= 1)

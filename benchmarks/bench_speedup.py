@@ -96,15 +96,14 @@ done(t, [br.points[-1].ustar, br.points[-1].period])
     "impacting": """
 from fsicas.cycles import cycle_branch
 from fsicas.cycles.impacting import pre_contact_start
-from fsicas.cycles.impacting_collocation import (CollocationImpactSettings,
-                                                 impacting_collocation_branch)
+from fsicas.cycles import CollocationImpactSettings, impacting_cycles
 scene = fsicas.Scene(mstar=1.0, zeta=0.01, modes=n, contact=True, contact_stiffness=1e8,
                      contact_eps=1e-2, contact_smoothing=0.1)
 model = fsicas.build_model(scene)
 start = pre_contact_start(cycle_branch(scene.replace(contact=False), ustar_max=12), 3.0)
-run = lambda points: impacting_collocation_branch(
-    scene.replace(ustar=start.ustar), start.state, start.period, start.pressure_drop,
-    model=model, ustar_max=12, settings=CollocationImpactSettings(max_points=points))
+run = lambda points: impacting_cycles(
+    scene.replace(ustar=start.ustar), start, model=model, ustar_max=12,
+    settings=CollocationImpactSettings(max_points=points))
 run(2)
 t0 = time.perf_counter()
 br = run(int(sys.argv[3]))

@@ -74,9 +74,9 @@ def main() -> None:
     for n, b in boundaries.items():
         if b is finest:
             continue
-        err = [abs(p["ustar_crit"] - q["ustar_crit"]) / q["ustar_crit"]
+        err = [abs(p.ustar_crit - q.ustar_crit) / q.ustar_crit
                for p, q in zip(b.points, finest.points)
-               if p["ustar_crit"] and q["ustar_crit"] and p["dominant_mode"] == q["dominant_mode"]]
+               if p.ustar_crit and q.ustar_crit and p.dominant_mode == q.dominant_mode]
         print(f"  N = {n}: median {np.median(err):.1e}, max {np.max(err):.1e} over {len(err)} points")
 
 

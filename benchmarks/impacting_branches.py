@@ -7,7 +7,7 @@ M* = 1, zeta = 0.01, H* = 1/10, f = 0.14, contact k* = 1e8, eps/H = 1e-2, smooth
 (the law that holds the beam, docs/simulate.md). Per N:
 
 1. the contact-free collocation branch up to its last cycle with gap >= 3 eps, then the
-   impacting branch by adaptive collocation (``impacting_collocation_branch``, NTST fixed,
+   impacting branch by adaptive collocation (``impacting_cycles``, NTST fixed,
    special cycles detected and refined by Newton on their minimally extended systems) up
    to ``--ustar-max``;
 2. where that branch fails before ``--ustar-max`` (a re-meshed restart that does not
@@ -46,8 +46,7 @@ import numpy as np  # noqa: E402
 
 from fsicas import Scene  # noqa: E402
 from fsicas.cycles import (CollocatedImpactBranch, CollocationImpactSettings,  # noqa: E402
-                           branch_through_contact, impacting_collocation_branch,
-                           period_doubled_branch)
+                           StartCycle, impacting_cycles, period_doubled_branch)
 from fsicas.cycles.impacting import cycle_from_trajectory  # noqa: E402
 from fsicas.linear.steady import steady_state  # noqa: E402
 from fsicas.model import build_model  # noqa: E402
@@ -69,8 +68,8 @@ def branches(modes, args):
     if main_path.exists():
         main = CollocatedImpactBranch.load(main_path)
     else:
-        main = branch_through_contact(base.replace(**IMPACT), ustar_max=args.ustar_max,
-                                      settings=settings)
+        main = impacting_cycles(base.replace(**IMPACT), ustar_max=args.ustar_max,
+                                settings=settings)
         main.save(main_path)
     found = [("period-1", main)]
     reached = main
@@ -82,9 +81,8 @@ def branches(modes, args):
         if path.exists():
             reached = CollocatedImpactBranch.load(path)
         else:
-            reached = impacting_collocation_branch(
-                main.scene.replace(ustar=last.ustar), last.state, last.period,
-                last.pressure_drop, ustar_max=args.ustar_max, settings=settings)
+            reached = impacting_cycles(main.scene.replace(ustar=last.ustar), last,
+                                       ustar_max=args.ustar_max, settings=settings)
             reached.save(path)
         found.append((f"period-1 from U* = {last.ustar:.4f}", reached))
         if reached.points[-1].ustar < last.ustar + 1e-3:
@@ -96,9 +94,8 @@ def branches(modes, args):
             fine = CollocatedImpactBranch.load(path)
         else:
             p = before[-1]
-            fine = impacting_collocation_branch(
-                main.scene, p.state, p.period, p.pressure_drop, ustar_max=args.ustar_max,
-                settings=replace(settings, ntst=args.fine_ntst))
+            fine = impacting_cycles(main.scene, p, ustar_max=args.ustar_max,
+                                    settings=replace(settings, ntst=args.fine_ntst))
             fine.save(path)
         found.append((f"period-1, NTST = {args.fine_ntst}", fine))
     for j, pd in enumerate(p for _, b in list(found) for p in b.special if p.kind == "pd"):
@@ -125,8 +122,8 @@ def at_ustar(branch, target, model, args):
     cycles = []
     for i in passes:
         near = branch.points[i if abs(u[i] - target) < abs(u[i + 1] - target) else i + 1]
-        cyc = impacting_collocation_branch(scene, near.state, near.period, dp, model=model,
-                                           settings=one)
+        cyc = impacting_cycles(scene, StartCycle(near.state, near.period, dp), model=model,
+                               settings=one)
         if cyc.points:
             cycles.append(cyc.points[0])
     return cycles
@@ -152,9 +149,9 @@ def from_integration(modes, target, args):
     # time units and the double cover (two swings) was picked; Newton refines either way
     state, period, _ = cycle_from_trajectory(model, run.trajectory.t, run.trajectory.x,
                                              tol=1e-2)
-    cyc = impacting_collocation_branch(scene, state, period, run.steady.pressure_drop,
-                                       model=model, settings=CollocationImpactSettings(
-                                           ntst=args.ntst, max_points=1, detect=False))
+    cyc = impacting_cycles(scene, StartCycle(state, period, run.steady.pressure_drop),
+                           model=model, settings=CollocationImpactSettings(
+                               ntst=args.ntst, max_points=1, detect=False))
     return model, cyc.points
 
 

@@ -6,7 +6,7 @@
 k* = 1e8, eps/H = 1e-2, smoothing 0.1, zeta = 0.01, NTST = 200. Two parts:
 
 1. ``--scan``: in the symmetric channel, the period-1 impacting branch from the first
-   contact (``impacting_collocation_branch``, special cycles located) at each M*: its
+   contact (``impacting_cycles``, special cycles located) at each M*: its
    special cycles and the real multiplier nearest -1 along it. A symmetric cycle
    cannot period-double (docs/cycles.md), so none is expected. ``--ns-curve M*``: the
    located Neimark-Sacker point of that branch nearest -1, continued as a curve in
@@ -31,7 +31,7 @@ import numpy as np  # noqa: E402
 import continuation as C  # noqa: E402
 from fsicas import Scene  # noqa: E402
 from fsicas.cycles import (CollocationImpactSettings, CycleSettings,  # noqa: E402
-                           branch_through_contact, period_doubled_branch)
+                           impacting_cycles, period_doubled_branch)
 from fsicas.cycles.impacting_collocation import impacting_collocation_problem  # noqa: E402
 from fsicas.linear.adapter import LOG_M, PI  # noqa: E402
 from fsicas.model import build_model  # noqa: E402
@@ -45,7 +45,7 @@ def impacting(base: Scene, ustar_max: float, points: int, refine_ntst: int = 0):
     """(scene, model, branch): the period-1 impacting branch from 3 eps before contact."""
     scene = base.replace(**IMPACT)
     model = build_model(scene)                    # independent of U*: one build
-    branch = branch_through_contact(
+    branch = impacting_cycles(
         scene, model=model, ustar_max=ustar_max,
         cycle_settings=CycleSettings(quadrature_tol=None), settings=CollocationImpactSettings(
             ntst=200, max_points=points, ds=0.1, refine_ntst=refine_ntst))

@@ -119,16 +119,15 @@ def cycle(N: int, points: int):
 
 def impacting(N: int, points: int):
     from fsicas import Scene, build_model
-    from fsicas.cycles import (CollocationImpactSettings, cycle_branch,
-                               impacting_collocation_branch)
+    from fsicas.cycles import CollocationImpactSettings, cycle_branch, impacting_cycles
     from fsicas.cycles.impacting import pre_contact_start
     scene = Scene(mstar=1.0, zeta=0.01, modes=N, contact=True, contact_stiffness=1e8,
                   contact_eps=1e-2, contact_smoothing=0.1)
     model = build_model(scene)
     start = pre_contact_start(cycle_branch(scene.replace(contact=False), ustar_max=12), 3.0)
-    return lambda k: len(impacting_collocation_branch(
-        scene.replace(ustar=start.ustar), start.state, start.period, start.pressure_drop,
-        model=model, ustar_max=12, settings=CollocationImpactSettings(max_points=k)).points)
+    return lambda k: len(impacting_cycles(
+        scene.replace(ustar=start.ustar), start, model=model, ustar_max=12,
+        settings=CollocationImpactSettings(max_points=k)).points)
 
 
 WORKLOADS = {"brusselator": brusselator, "cycle": cycle, "impacting": impacting}

@@ -5,7 +5,7 @@ doublings it opens.
         [--points 60] [--checks 3] [--doubled] [--refine-ntst 0] [--out runs/symmetry]
 
 k* = 1e8, eps/H = 1e-2, smoothing 0.1, zeta = 0.01, NTST = 200. The period-1 impacting
-branch from the first contact (``impacting_collocation_branch``) to ``--ustar-max``, its
+branch from the first contact (``impacting_cycles``) to ``--ustar-max``, its
 branch points ("bp": a real multiplier through +1 where the branch does not turn), the
 branch of asymmetric cycles from the first (``symmetry_broken_branch``, ``--points``
 points) with its special cycles (located again on ``--refine-ntst`` intervals where
@@ -29,7 +29,7 @@ os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")   # before NumPy: docs/contin
 
 from fsicas import Scene  # noqa: E402
 from fsicas.cycles import (CollocatedImpactBranch, CollocationImpactSettings,  # noqa: E402
-                           branch_through_contact, period_doubled_branch,
+                           impacting_cycles, period_doubled_branch,
                            symmetry_broken_branch)
 from fsicas.model import build_model  # noqa: E402
 from fsicas.timedomain.settled import mirror_distance, settled_cycle  # noqa: E402
@@ -81,7 +81,7 @@ def main(argv=None) -> None:
     settings = CollocationImpactSettings(ntst=200, max_points=400, ds=0.05, max_turn=0.3,
                                          refine_ntst=args.refine_ntst)
     model = build_model(scene)                    # independent of U*: one build
-    main_branch = computed(out / f"symmetric_{tag}.json", lambda: branch_through_contact(
+    main_branch = computed(out / f"symmetric_{tag}.json", lambda: impacting_cycles(
         scene, model=model, ustar_max=args.ustar_max, settings=settings))
     specials("symmetric", main_branch)
     bps = [p for p in main_branch.special if p.kind == "bp"]

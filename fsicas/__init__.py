@@ -6,8 +6,9 @@ The wings (``fsicas.model``, ``fsicas.linear``, ``fsicas.cycles``, ``fsicas.time
 """
 from .provenance import __version__
 
-from .cycles import (CycleBranch, CyclePoint, CycleSettings, ImpactBranch, ImpactPoint,
-                     ImpactSettings, cycle_branch, impacting_branch)
+from .cycles import (CollocationImpactSettings, CycleBranch, CyclePoint, CycleSettings,
+                     ImpactBranch, ImpactPoint, ImpactSettings, StartCycle, cycle_branch,
+                     impacting_cycles)
 from .linear import (CriticalVelocityError, HopfPoint, LinearStability, StabilityBoundary,
                      SteadyState, SteadyStateError, critical_velocity, design_for_flow,
                      hopf_points, linear_stability, onset_sensitivity, palate_sensitivity,
@@ -32,7 +33,8 @@ __all__ = [
     "critical_velocity", "hopf_points", "StabilityBoundary", "stability_boundary",
     "onset_sensitivity", "palate_sensitivity", "design_for_flow",
     "CycleSettings", "CyclePoint", "CycleBranch", "cycle_branch",
-    "ImpactSettings", "ImpactPoint", "ImpactBranch", "impacting_branch",
+    "ImpactSettings", "CollocationImpactSettings", "ImpactPoint", "ImpactBranch",
+    "StartCycle", "impacting_cycles",
     "PressureSchedule", "Trajectory", "simulate", "Criteria", "Outcome", "classify",
     "Run", "run_case", "MapResult", "impact_map", "energy_balance",
 ]

@@ -33,8 +33,8 @@ from .linear.steady import steady_state, straight_pressure_drop
 from .model.assembly import build_model
 from .model.beam import clamped_free_betas
 from .provenance import with_meta
-from .plots.linear import (boundary_function, plot_boundary, plot_boundary_variants,
-                           plot_mode_shapes)
+from .linear.stretches import boundary_function
+from .plots.linear import plot_boundary, plot_boundary_variants, plot_mode_shapes
 from .plots.timedomain import cycle_view, plot_cycle, plot_cycles, plot_map, return_period
 from .scene import Scene
 from .timedomain.impact_map import MAP_SCENE, impact_map
@@ -163,9 +163,9 @@ def _variants(scene, mstars, reference, path):
               for label, variant in scenes.items()}
     plot_boundary_variants(curves, path)
     return ({label: {"scene": held(scenes[label]),
-                     "points": [{"mstar": p["mstar"], "ustar_crit": p["ustar_crit"],
-                                 "freq_ratio": p["freq_ratio"]}
-                                for p in b.points if p["ustar_crit"] is not None]}
+                     "points": [{"mstar": p.mstar, "ustar_crit": p.ustar_crit,
+                                 "freq_ratio": p.freq_ratio}
+                                for p in b.points if p.ustar_crit is not None]}
              for label, b in curves.items()}, curves["zeta = 0.01"])
 
 

@@ -10,8 +10,9 @@ import continuation as C
 from fsicas import Scene
 from fsicas.cycles import CycleSettings
 from fsicas.linear.adapter import PI, PI_SCALE, TIME_SCALE, flutter_field
+from fsicas.cycles import StartCycle, impacting_cycles
 from fsicas.cycles.impacting import ImpactSettings, cycle_from_trajectory, \
-    impacting_branch, pre_contact_start, shooting_points
+    pre_contact_start, shooting_points
 from fsicas.model import build_model
 from fsicas.timedomain.integrators import Settings, simulate
 from fsicas.linear.steady import steady_state
@@ -87,7 +88,7 @@ def test_shooting_passes_first_contact_onto_unstable_impacting_cycles():
     assert 3 < start.gap_ratio < 4
     scene = base.replace(ustar=start.ustar, **IMPACT)
     model = build_model(scene)
-    br = impacting_branch(scene, start.state, start.period, start.pressure_drop, model=model,
+    br = impacting_cycles(scene, start, method="shooting", model=model,
                           settings=ImpactSettings(max_points=10, ds=0.02, ds_max=0.2,
                                                   quadrature_tol=None))
     assert br.status == "max_points" and len(br.points) == 10
@@ -122,7 +123,8 @@ def test_period3_impacting_cycle_matches_time_integration(period3_impacting_run)
     r = period3_impacting_run
     period = r.period
     assert r.swings == 3
-    br = impacting_branch(r.scene, r.state, period, r.run.steady.pressure_drop, model=r.model,
+    br = impacting_cycles(r.scene, StartCycle(r.state, period, r.run.steady.pressure_drop),
+                          method="shooting", model=r.model,
                           settings=ImpactSettings(max_points=2, ds=0.05, ds_max=0.5,
                                                   quadrature_tol=None))
     assert len(br.points) == 2
@@ -145,7 +147,7 @@ def test_impact_settings_validation():
     with pytest.raises(ValueError, match="threads"):
         ImpactSettings(threads=0)
     with pytest.raises(ValueError, match="contact"):
-        impacting_branch(Scene(modes=2), np.zeros(6), 0.1, 1.0)
+        impacting_cycles(Scene(modes=2), StartCycle(np.zeros(6), 0.1, 1.0), method="shooting")
 
 
 @pytest.fixture(scope="module")
@@ -157,7 +159,7 @@ def through_contact():
                  contact_stiffness=1e8)
     start = pre_contact_start(cycle_branch(base, ustar_max=8.0, settings=SCENE_NODES))
     scene = base.replace(ustar=start.ustar, contact=True)
-    return scene, impacting_branch(scene, start.state, start.period, start.pressure_drop,
+    return scene, impacting_cycles(scene, start, method="shooting",
                                    settings=replace(THROUGH, quadrature_tol=None))
 
 
@@ -244,7 +246,7 @@ def test_quadrature_control_of_shooting_cycles(through_contact):
     from fsicas.model.accuracy import IMPACT_QUADRATURE_TOL
     scene, plain = through_contact
     start = plain.points[0]
-    controlled = impacting_branch(scene, start.state, start.period, start.pressure_drop,
+    controlled = impacting_cycles(scene, start, method="shooting",
                                   settings=THROUGH)
     nodes = controlled.scene.n_quad
     assert nodes > scene.n_quad and {p.quadrature_nodes for p in controlled.points} == {nodes}

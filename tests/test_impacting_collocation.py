@@ -9,9 +9,8 @@ import pytest
 
 from fsicas import Scene
 from fsicas.cycles import (CollocatedImpactBranch, CollocationImpactSettings, CycleSettings,
-                           ImpactSettings, cycle_branch, impacting_branch,
-                           impacting_collocation_branch, period_doubled_branch,
-                           branch_through_contact, pre_contact_start,
+                           ImpactSettings, StartCycle, cycle_branch, impacting_cycles,
+                           period_doubled_branch, pre_contact_start,
                            symmetry_broken_branch)
 from fsicas.linear.steady import steady_state
 from fsicas.model import build_model
@@ -46,13 +45,13 @@ def _one_period(model, scene, point, method="radau", rtol=1e-11):
 
 def _through_contact(modes, ustar_max, settings, mstar=1.0):
     """k* = 1e8, eps/H = 1e-2, smoothing 0.1: the impacting branch by collocation from the
-    contact-free collocation cycle at gap >= 3 eps (``branch_through_contact``);
+    contact-free collocation cycle at gap >= 3 eps (``impacting_cycles`` from the scene);
     (scene, model, branch)."""
     scene = Scene(mstar=mstar, zeta=0.01, modes=modes, **IMPACT)
     model = build_model(scene)
-    br = branch_through_contact(scene, model=model, ustar_max=ustar_max,
-                                settings=replace(settings, quadrature_tol=None),
-                                cycle_settings=SCENE_NODES)
+    br = impacting_cycles(scene, model=model, ustar_max=ustar_max,
+                          settings=replace(settings, quadrature_tol=None),
+                          cycle_settings=SCENE_NODES)
     return br.scene, model, br
 
 
@@ -109,7 +108,7 @@ def test_save_load_and_validation(n3_branch, tmp_path):
     with pytest.raises(ValueError, match="detect"):
         CollocationImpactSettings(detect="yes")
     with pytest.raises(ValueError, match="contact_smoothing"):
-        impacting_collocation_branch(scene.replace(contact_smoothing=0.0), np.zeros(8), 0.1, 1.0)
+        impacting_cycles(scene.replace(contact_smoothing=0.0), StartCycle(np.zeros(8), 0.1, 1.0))
     with pytest.raises(ValueError, match="kind 'pd'"):
         period_doubled_branch(scene, br.points[-1])
     with pytest.raises(ValueError, match="kind 'bp'"):
@@ -118,12 +117,12 @@ def test_save_load_and_validation(n3_branch, tmp_path):
         symmetry_broken_branch(scene, replace(br.points[-1], kind="bp"), amplitude=-1e-3)
 
 
-def test_branch_through_contact_says_what_is_missing():
-    with pytest.raises(ValueError, match="contact=True"):
-        branch_through_contact(Scene(mstar=1.0, modes=3))
+def test_impacting_cycles_say_what_is_missing():
+    with pytest.raises(ValueError, match="contact = True and scene.contact_smoothing > 0"):
+        impacting_cycles(Scene(mstar=1.0, modes=3))
     with pytest.raises(ValueError, match="do not reach the wall below U. = 5.6"):
-        branch_through_contact(Scene(mstar=1.0, zeta=0.01, modes=3, **IMPACT), ustar_max=5.6,
-                               cycle_settings=SCENE_NODES)
+        impacting_cycles(Scene(mstar=1.0, zeta=0.01, modes=3, **IMPACT), ustar_max=5.6,
+                         cycle_settings=SCENE_NODES)
 
 
 @pytest.mark.slow
@@ -138,9 +137,10 @@ def test_collocation_equals_shooting_at_the_same_ustar():
     near = min(br.points, key=lambda p: abs(p.ustar - 6.8))
     target = scene.replace(ustar=6.8)
     dp = steady_state(target, model).pressure_drop
-    co = impacting_collocation_branch(target, near.state, near.period, dp, model=model,
-                                      settings=CollocationImpactSettings(quadrature_tol=None, ntst=400, max_points=1))
-    sh = impacting_branch(target, near.state, near.period, dp, model=model,
+    co = impacting_cycles(target, StartCycle(near.state, near.period, dp), model=model,
+                          settings=CollocationImpactSettings(quadrature_tol=None, ntst=400, max_points=1))
+    sh = impacting_cycles(target, StartCycle(near.state, near.period, dp), method="shooting",
+                          model=model,
                           settings=ImpactSettings(segments=12, tol=1e-11, newton_tol=1e-9,
                                                   max_points=1, quadrature_tol=None))
     c, s = co.points[0], sh.points[0]
@@ -165,9 +165,9 @@ def test_subharmonic_cycle_from_time_integration(period3_impacting_run):
     r = period3_impacting_run
     scene, model, period = r.scene, r.model, r.period
     assert r.swings == 3
-    br = impacting_collocation_branch(scene, r.state, period, r.run.steady.pressure_drop,
-                                      model=model, settings=CollocationImpactSettings(quadrature_tol=None,
-                                          ntst=300, max_points=2, ds=0.1, ds_max=1.0))
+    br = impacting_cycles(scene, StartCycle(r.state, period, r.run.steady.pressure_drop),
+                          model=model, settings=CollocationImpactSettings(quadrature_tol=None,
+                              ntst=300, max_points=2, ds=0.1, ds_max=1.0))
     p = br.points[0]
     assert len(br.points) == 2 and abs(p.ustar - 7.0) < 1e-8
     assert abs(p.period / period - 1) < 1e-5
@@ -192,10 +192,10 @@ def test_fold_of_the_period3_isola_by_its_poincare_multiplier(period3_impacting_
     1.5e-7 from +1 (NCOL = 4: 9e-6 and 5e-7) and the monodromy's pair split by 7e-4.
     The located fold bounds the branch's own points (the turn)."""
     r = period3_impacting_run
-    br = impacting_collocation_branch(r.scene, r.state, r.period, r.run.steady.pressure_drop,
-                                      model=r.model, ustar_max=7.7,
-                                      settings=CollocationImpactSettings(quadrature_tol=None,
-                                          ntst=300, max_points=60, ds=0.1, refine_ntst=1200))
+    br = impacting_cycles(r.scene, StartCycle(r.state, r.period, r.run.steady.pressure_drop),
+                          model=r.model, ustar_max=7.7,
+                          settings=CollocationImpactSettings(quadrature_tol=None,
+                              ntst=300, max_points=60, ds=0.1, refine_ntst=1200))
     (fold,) = [p for p in br.special if p.kind == "fold"]
     assert fold.located and (fold.ntst, fold.ncol) == (1200, 6)
     assert abs(fold.ustar - 7.6521) < 1e-4
@@ -237,8 +237,7 @@ def test_neimark_sacker_located_where_shooting_multipliers_cross_the_circle(n4_t
     assert 1 < ns.gap_ratio < 1.5 and 6.59 < ns.ustar < 6.62
     back = CollocatedImpactBranch.from_json(br.to_json())
     assert [(p.kind, p.ustar) for p in back.special] == [("ns", ns.ustar)]
-    shot = impacting_branch(scene.replace(ustar=ns.ustar), ns.state, ns.period,
-                            ns.pressure_drop, model=model,
+    shot = impacting_cycles(scene.replace(ustar=ns.ustar), ns, method="shooting", model=model,
                             settings=ImpactSettings(segments=12, max_points=1,
                                                     quadrature_tol=None))
     (point,) = shot.points
@@ -307,10 +306,10 @@ def test_case_1a_at_n10_matches_time_integration():
         ntst=200, max_points=150))
     near = min(br.points, key=lambda p: abs(p.ustar - 7.0))
     at = scene.replace(ustar=7.0)
-    one = impacting_collocation_branch(at, near.state, near.period,
-                                       steady_state(at, model).pressure_drop, model=model,
-                                       settings=CollocationImpactSettings(quadrature_tol=None, ntst=200, max_points=1,
-                                                                          detect=False))
+    one = impacting_cycles(at, StartCycle(near.state, near.period,
+                                          steady_state(at, model).pressure_drop), model=model,
+                           settings=CollocationImpactSettings(quadrature_tol=None, ntst=200,
+                                                              max_points=1, detect=False))
     (p,) = one.points
     assert abs(p.ustar - 7.0) < 1e-9 and p.stable and p.impacts == 2 and p.gap_ratio < 1
     run = settled_cycle(model, at, p.state, p.period, periods=40)
@@ -346,8 +345,7 @@ def test_period_doubling_of_an_asymmetric_cycle_and_its_doubled_branch():
     scene = base.replace(ustar=start.ustar, **IMPACT)
     model = build_model(scene)
     settings = CollocationImpactSettings(quadrature_tol=None, ntst=200, max_points=20, ds=0.1)
-    br = impacting_collocation_branch(scene, start.state, start.period, start.pressure_drop,
-                                      model=model, ustar_max=9.25, settings=settings)
+    br = impacting_cycles(scene, start, model=model, ustar_max=9.25, settings=settings)
     pd = next(p for p in br.special if p.kind == "pd")
     assert pd.located and abs(pd.ustar - 9.2004) < 1e-3 and pd.impacts == 1
     assert abs(pd.critical_multiplier + 1) < 1e-8
@@ -427,10 +425,10 @@ def test_quadrature_control_of_impacting_cycles(n3_branch):
     far closer than from the uncontrolled branch's last cycle."""
     from fsicas.model.accuracy import IMPACT_QUADRATURE_TOL
     _, scene, model, plain = n3_branch
-    controlled = branch_through_contact(Scene(mstar=1.0, zeta=0.01, modes=3, **IMPACT),
-                                        ustar_max=12.0, cycle_settings=SCENE_NODES,
-                                        settings=CollocationImpactSettings(
-                                            ntst=100, max_points=5, ds=0.1, ds_max=1.0))
+    controlled = impacting_cycles(Scene(mstar=1.0, zeta=0.01, modes=3, **IMPACT),
+                                  ustar_max=12.0, cycle_settings=SCENE_NODES,
+                                  settings=CollocationImpactSettings(
+                                      ntst=100, max_points=5, ds=0.1, ds_max=1.0))
     nodes = controlled.points[-1].quadrature_nodes
     assert nodes > model.scene.n_quad and controlled.scene.n_quad == nodes
     assert max(p.quadrature_error for p in controlled.points) <= IMPACT_QUADRATURE_TOL

@@ -132,7 +132,7 @@ def test_fig2_draws_each_branch_up_to_its_located_switch(boundary6):
     assert "$M^*$" in left.get_xlabel() and "$U^*_c$" in left.get_ylabel()
     assert r"$\omega/\omega_1$" in mid.get_ylabel() and r"$\ell_1$" in crit.get_ylabel()
     # l1 is not joined across a switch: one line per stretch of one branch
-    branches = [p["branch"] for p in boundary.points if p.get("l1") is not None]
+    branches = [p.branch for p in boundary.points if p.l1 is not None]
     stretches = 1 + sum(a != b for a, b in zip(branches[:-1], branches[1:]))
     assert len(crit.lines) - 1 == stretches >= len(switches) + 1      # less the zero line
     assert all("nondim" in ax.get_ylabel() for ax in (left, mid, crit))
@@ -144,7 +144,7 @@ def test_fig2_draws_each_branch_up_to_its_located_switch(boundary6):
 
 def test_fig3_shows_the_marked_points_on_a_labelled_grid(boundary6):
     from fsicas.plots import plot_mode_shapes
-    from fsicas.plots.linear import marked_points
+    from fsicas.linear.stretches import marked_points
     boundary, model = boundary6
     fig = plot_mode_shapes(boundary, model)
     panels, marks = _panels(fig), marked_points(boundary)
@@ -153,7 +153,7 @@ def test_fig3_shows_the_marked_points_on_a_labelled_grid(boundary6):
     cols = {ax.get_subplotspec().colspan.start for ax in panels}
     assert len(rows) == 2 and len(cols) == 4
     for ax, (letter, _, p) in zip(panels, marks):
-        assert ax.get_title().startswith(f"({letter}) $M^*$ = {p['mstar']:.3g}")
+        assert ax.get_title().startswith(f"({letter}) $M^*$ = {p.mstar:.3g}")
         if ax.get_subplotspec().colspan.start == 0:
             assert "$y/" in ax.get_ylabel()
     assert sum("$x/L$" in ax.get_xlabel() for ax in panels) == 4   # bottom of each column

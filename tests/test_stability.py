@@ -143,10 +143,10 @@ def boundary(paper_n10):
 def test_boundary_points_are_refined_hopf_points(boundary):
     b, model = boundary
     for p in b.points:
-        assert p["refined"]
-        scene = b.scene.replace(mstar=p["mstar"])
-        below = eigenvalues(model, steady_state(scene.replace(ustar=0.999 * p["ustar_crit"]), model))
-        above = eigenvalues(model, steady_state(scene.replace(ustar=1.001 * p["ustar_crit"]), model))
+        assert p.refined
+        scene = b.scene.replace(mstar=p.mstar)
+        below = eigenvalues(model, steady_state(scene.replace(ustar=0.999 * p.ustar_crit), model))
+        above = eigenvalues(model, steady_state(scene.replace(ustar=1.001 * p.ustar_crit), model))
         assert below[0].real < 0 < above[0].real
 
 
@@ -172,9 +172,9 @@ def test_boundary_is_continuous_between_switches(boundary):
     b, _ = boundary
     switch_m = [s.mstar for s in b.switches]
     for p, q in zip(b.points[:-1], b.points[1:]):
-        if not any(p["mstar"] < m < q["mstar"] for m in switch_m):
-            assert p["branch"] == q["branch"]
-            assert abs(q["ustar_crit"] - p["ustar_crit"]) < 0.5 * p["ustar_crit"]
+        if not any(p.mstar < m < q.mstar for m in switch_m):
+            assert p.branch == q.branch
+            assert abs(q.ustar_crit - p.ustar_crit) < 0.5 * p.ustar_crit
 
 
 def test_the_boundary_does_not_depend_on_how_mstar_is_sampled(boundary):

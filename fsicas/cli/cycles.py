@@ -12,9 +12,9 @@ import math
 import continuation as C
 
 from ..cycles.collocation import CycleSettings, cycle_branch
-from ..cycles.impacting import ImpactSettings, impacting_branch, pre_contact_start
-from ..cycles.impacting_collocation import (CollocationImpactSettings,
-                                            impacting_collocation_branch)
+from ..cycles.impacting import ImpactSettings
+from ..cycles.impacting_collocation import CollocationImpactSettings
+from ..cycles.impacting_routes import impacting_cycles, impacting_start
 from ..model import build_model
 from ..model.accuracy import QUADRATURE_TOL
 from ..model.contact import reference_force
@@ -121,18 +121,17 @@ def _cmd_cycles(args) -> dict:
 
 
 def _through_contact(scene, branch, args, say) -> dict:
-    """The impacting branch from the last contact-free cycle well before the wall
-    (:func:`fsicas.cycles.impacting.pre_contact_start`), on the model with contact."""
+    """The impacting branch on the model with contact from the contact-free ``branch``
+    (:func:`fsicas.cycles.impacting_cycles`: from its last cycle well before the wall)."""
     if branch.contact is None:
         return {"status": "not_reached", "message": "the contact-free branch did not reach "
                 "the wall below --ustar-max", "points": []}
-    start = pre_contact_start(branch)
-    scene = scene.replace(ustar=start.ustar, contact=True)
+    scene, start = impacting_start(scene.replace(contact=True), branch)
     model = build_model(scene)
     imp = _impacting_branch(scene, model, start, args, say)
-    special = getattr(imp, "special", [])
-    say.stats(f"{len(imp.points)} impacting cycles, {len(special)} special, status {imp.status}")
-    worst = max((getattr(p, "error_estimate", 0.0) for p in imp.points), default=0.0)
+    say.stats(f"{len(imp.points)} impacting cycles, {len(imp.special)} special, "
+              f"status {imp.status}")
+    worst = imp.max_error_estimate
     if worst > COARSE_MESH:
         say.stage(f"warning: the collocation error indicator reached {worst:.2g} (> "
                   f"{COARSE_MESH:g}): the mesh is too coarse for these cycles; raise "
@@ -145,7 +144,7 @@ def _through_contact(scene, branch, args, say) -> dict:
             "reference_force": reference_force(model), "route": args.impact_route,
             "start_ustar": start.ustar, "wall_time": imp.wall_time,
             "points": [{k: getattr(p, k) for k in _IMPACT_KEYS} for p in imp.points],
-            "special": [_special_summary(p) for p in special]}
+            "special": [_special_summary(p) for p in imp.special]}
 
 
 def _impacting_branch(scene, model, start, args, say):
@@ -155,17 +154,14 @@ def _impacting_branch(scene, model, start, args, say):
     points = args.impact_points or UNLIMITED_POINTS
     if args.impact_route == "shooting":
         settings = ImpactSettings(max_points=points)
-        say.stage(f"through contact from U* = {start.ustar:.5g} by multiple shooting "
-                  f"({settings.segments} segments, {law})")
-        return impacting_branch(scene, start.state, start.period, start.pressure_drop,
-                                model=model, ustar_max=args.ustar_max, settings=settings)
-    settings = CollocationImpactSettings(ntst=args.impact_ntst, max_points=points,
-                                         refine_ntst=args.special_ntst)
-    say.stage(f"through contact from U* = {start.ustar:.5g} by adaptive collocation "
-              f"(NTST = {settings.ntst}, {law})")
-    return impacting_collocation_branch(scene, start.state, start.period, start.pressure_drop,
-                                        model=model, ustar_max=args.ustar_max,
-                                        settings=settings)
+        how = f"multiple shooting ({settings.segments} segments, {law})"
+    else:
+        settings = CollocationImpactSettings(ntst=args.impact_ntst, max_points=points,
+                                             refine_ntst=args.special_ntst)
+        how = f"adaptive collocation (NTST = {settings.ntst}, {law})"
+    say.stage(f"through contact from U* = {start.ustar:.5g} by {how}")
+    return impacting_cycles(scene, start, method=args.impact_route, settings=settings,
+                            model=model, ustar_max=args.ustar_max)
 
 
 def _stop(status: str, message: str, option: str, value, args) -> dict:

@@ -1,26 +1,25 @@
 """The cycles wing: flutter limit cycles continued in U* by collocation up to the first
-wall contact, and on through contact into the impacting regime by multiple shooting, or by
-adaptive collocation of the smoothed contact law (its folds, period doublings,
-Neimark-Sacker and branch points located, the period-doubled and symmetry-broken
-branches switched onto; ``branch_through_contact`` from the scene alone); and the
-curves of special cycles in (M*, U*): grazing (first contact) and fold of cycles."""
+wall contact, and on through contact into the impacting regime (``impacting_cycles``:
+by adaptive collocation of the smoothed contact law, its folds, period doublings,
+Neimark-Sacker and branch points located, or by multiple shooting; from the scene alone,
+a contact-free branch or one cycle), the period-doubled and symmetry-broken branches
+switched onto; and the curves of special cycles in (M*, U*): grazing (first contact) and
+fold of cycles."""
 
 from .collocation import CycleBranch, CyclePoint, CycleSettings, cycle_branch
 from .curves import (CurveMap, CurvePoint, CurveSettings, CycleCurve, cycle_curves, curve_seeds,
                      fold_curves, grazing_curve)
 from .impacting import (ImpactBranch, ImpactPoint, ImpactSettings, cycle_from_trajectory,
-                        impacting_branch, pre_contact_start)
+                        pre_contact_start)
 from .branch_switching import period_doubled_branch, symmetry_broken_branch
 from .impacting_collocation import (CollocatedImpactBranch, CollocatedImpactPoint,
-                                    CollocationImpactSettings, impacting_collocation_branch,
-                                    impacting_collocation_problem)
-from .through_contact import branch_through_contact
+                                    CollocationImpactSettings, impacting_collocation_problem)
+from .impacting_routes import ImpactMethod, StartCycle, impacting_cycles, impacting_start
 
 __all__ = ["CycleBranch", "CyclePoint", "CycleSettings", "cycle_branch", "ImpactBranch",
-           "ImpactPoint", "ImpactSettings", "cycle_from_trajectory", "impacting_branch",
-           "pre_contact_start", "CollocatedImpactBranch", "CollocatedImpactPoint",
-           "CollocationImpactSettings", "impacting_collocation_branch",
+           "ImpactPoint", "ImpactSettings", "cycle_from_trajectory", "pre_contact_start",
+           "CollocatedImpactBranch", "CollocatedImpactPoint", "CollocationImpactSettings",
            "impacting_collocation_problem", "period_doubled_branch", "symmetry_broken_branch",
-           "branch_through_contact",
+           "ImpactMethod", "StartCycle", "impacting_cycles", "impacting_start",
            "CurveMap", "CurvePoint", "CurveSettings",
            "CycleCurve", "cycle_curves", "curve_seeds", "fold_curves", "grazing_curve"]

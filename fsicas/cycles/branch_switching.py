@@ -25,7 +25,7 @@ def period_doubled_branch(scene: Scene, point: "CollocatedImpactPoint", *,
                           settings: CollocationImpactSettings = CollocationImpactSettings()
                           ) -> CollocatedImpactBranch:
     """The branch of cycles of twice the period born at the period doubling ``point`` (a
-    special point of kind "pd" of :func:`impacting_collocation_branch` on ``scene``).
+    special point of kind "pd" of :func:`fsicas.cycles.impacting_cycles` (collocation) on ``scene``).
 
     The PD cycle is rebuilt from the point's state (one integrated period, the start mesh
     equidistributed on it) and refined by Newton on its minimally extended system; the
@@ -42,7 +42,7 @@ def symmetry_broken_branch(scene: Scene, point: "CollocatedImpactPoint", *,
                            settings: CollocationImpactSettings = CollocationImpactSettings()
                            ) -> CollocatedImpactBranch:
     """The branch of cycles that break the channel's symmetry, born at the branch point
-    ``point`` (kind "bp" of :func:`impacting_collocation_branch` on ``scene``).
+    ``point`` (kind "bp" of :func:`fsicas.cycles.impacting_cycles` (collocation) on ``scene``).
 
     The cycle is rebuilt from the point's state (as for :func:`period_doubled_branch`)
     and kept as the guess (Newton at fixed U* is singular at a branch point: two null

@@ -35,7 +35,6 @@ taken on ``samples`` outputs per segment (not refined).
 """
 from __future__ import annotations
 
-import math
 import time
 from dataclasses import dataclass, field, replace
 from typing import Literal
@@ -45,15 +44,15 @@ import numpy as np
 
 import continuation as C
 
-from ..linear.adapter import LOG_M, PI, PI_SCALE, TIME_SCALE, flutter_field, pi_of
+from ..linear.adapter import PI, TIME_SCALE, field_parameters, flutter_field, pi_range
 from ..model.accuracy import IMPACT_QUADRATURE_TOL
 from ..model.assembly import Model, build_model
 from ..scene import Scene
 from ..linear.steady import steady_state
 from .gauge import Gauge, model_parameters, quadrature_controlled
-from .records import BranchRecord, CycleMeasures, check_settings
+from .records import START_FAILED, BranchRecord, CycleMeasures, branch_end, check_settings
 
-__all__ = ["ImpactSettings", "ImpactPoint", "ImpactBranch", "impacting_branch",
+__all__ = ["ImpactSettings", "ImpactPoint", "ImpactBranch", "shooting_branch",
            "cycle_from_trajectory", "pre_contact_start", "shooting_points", "shooting_settings",
            "ImpactStatus"]
 
@@ -118,8 +117,12 @@ class ImpactPoint(CycleMeasures):
 
 @dataclass(frozen=True)
 class ImpactBranch(BranchRecord):
-    """Shooting branch in U* from a start cycle. ``status``: "bound" (U* left
-    [ustar_min, ustar_max]), "max_points" or "failed" (``message`` says why)."""
+    """A branch of impacting cycles in U* from a start cycle, by either route
+    (:func:`fsicas.cycles.impacting_cycles`). ``status``: "bound" (U* left
+    [ustar_min, ustar_max]), "max_points" or "failed" (``message`` says why);
+    ``special``: its located special cycles in the order met (the collocation route's,
+    :class:`~fsicas.cycles.impacting_collocation.CollocatedImpactBranch`; shooting
+    locates none)."""
 
     scene: Scene
     eps: float
@@ -127,33 +130,40 @@ class ImpactBranch(BranchRecord):
     status: ImpactStatus
     message: str
     wall_time: float
+    special: list = field(default_factory=list)
+
+    @property
+    def max_error_estimate(self) -> float:
+        """The largest discretization error indicator of its points: 0 here (shooting's
+        CVODES steps are error-controlled); the collocation route's mesh indicator."""
+        return 0.0
 
     def to_json(self) -> dict:
         return {"scene": self.scene.to_dict(), "eps": self.eps,
                 "points": [p.to_json() for p in self.points], "status": self.status,
-                "message": self.message, "wall_time": self.wall_time}
+                "message": self.message, "wall_time": self.wall_time,
+                "special": [p.to_json() for p in self.special]}
 
     @classmethod
     def from_json(cls, d: dict) -> "ImpactBranch":
         return cls(Scene.from_dict(d["scene"]), d["eps"],
                    [ImpactPoint.from_json(p) for p in d["points"]], d["status"], d["message"],
-                   d["wall_time"])
+                   d["wall_time"], [ImpactPoint.from_json(p) for p in d.get("special", [])])
 
 
-def impacting_branch(scene: Scene, state, period: float, pressure_drop: float, *,
-                     model: Model | None = None, ustar_min: float = 0.0, ustar_max: float = 12.0,
-                     direction: int = 1, settings: ImpactSettings = ImpactSettings()
-                     ) -> ImpactBranch:
+def shooting_branch(scene: Scene, state, period: float, pressure_drop: float, *,
+                    model: Model | None = None, ustar_min: float = 0.0, ustar_max: float = 12.0,
+                    direction: int = 1, settings: ImpactSettings = ImpactSettings()
+                    ) -> ImpactBranch:
     """Continue the cycle through ``state`` (phase 0) with ``period`` (units of T) at
     ``pressure_drop`` by multiple shooting in U*, on ``scene`` (contact on: the
-    penalty law acts). ``direction`` = +1 continues towards larger Δp (U*).
-
-    A start from :func:`fsicas.cycles.cycle_branch`'s ``contact`` point passes the first
-    contact; a start from a settled time integration needs the state at one crossing
-    and the full period (a cycle with several sub-cycles, see docs/cycles.md)."""
+    penalty law acts). ``direction`` = +1 continues towards larger Δp (U*). The
+    shooting route of :func:`fsicas.cycles.impacting_cycles`, which says where starts
+    come from."""
     start = time.perf_counter()
     if not scene.contact:
-        raise ValueError("impacting_branch needs scene.contact = True (the impact law)")
+        raise ValueError("impacting cycles by shooting need scene.contact = True (the impact "
+                         "law)")
     model = model or build_model(scene)
     state = np.asarray(state, float)
 
@@ -164,18 +174,17 @@ def impacting_branch(scene: Scene, state, period: float, pressure_drop: float, *
     try:
         branch = quadrature_controlled(compute, model, settings.quadrature_tol)
     except RuntimeError as err:                  # CVODES failure, e.g. a gap closing
-        return ImpactBranch(scene, scene.contact_gap, [], "failed",
-                            f"the start cycle could not be integrated over one period: {err}",
+        return ImpactBranch(scene, scene.contact_gap, [], "failed", START_FAILED.format(err),
                             time.perf_counter() - start)
     return replace(branch, wall_time=time.perf_counter() - start)
 
 
 def _shot(scene, model, state, period, pressure_drop, ustar_range, direction, settings):
-    """:func:`impacting_branch` on ``model``, and its gauge (RuntimeError if the start
+    """:func:`shooting_branch` on ``model``, and its gauge (RuntimeError if the start
     cycle cannot be integrated)."""
     start = time.perf_counter()
     vf, st = flutter_field(model), steady_state(scene, model)
-    params = _field_parameters(vf, model, st, scene, pressure_drop)
+    params = field_parameters(vf, model, st, scene, pressure_drop)
     shoot = shooting_settings(settings)
     orbit = shooting_points(vf, state, period * TIME_SCALE, params, settings.segments, shoot)
     problem = C.ShootingProblem(vf, orbit, period * TIME_SCALE, params, PI, settings=shoot)
@@ -192,21 +201,12 @@ def shooting_settings(settings: ImpactSettings) -> C.ShootingSettings:
                               sensitivities=settings.sensitivities, threads=settings.threads)
 
 
-def _field_parameters(vf, model, steady, scene, pressure_drop) -> dict:
-    """The adapter's parameters (Π, log10 M*, the rest) at ``pressure_drop``."""
-    values = dict(zip(model.parameter_names, steady.p))
-    params = {PI: pressure_drop / (scene.mstar * PI_SCALE), LOG_M: math.log10(scene.mstar)}
-    params.update({k: values[k] for k in vf.par_names[2:]})
-    return params
-
-
 def _steps(scene, model, ustar_min, ustar_max, direction, settings) -> C.ContinuationSettings:
     """Arclength steps in Π between the steady Π of ``ustar_min`` and ``ustar_max``."""
-    pi_lo = pi_of(scene, model, ustar_min) if ustar_min > 0 else 0.0
     return C.ContinuationSettings(
         ds=settings.ds, ds_min=1e-6, ds_max=settings.ds_max, direction=direction,
         max_steps=max(settings.max_points - 1, 1),
-        bounds={PI: (pi_lo, pi_of(scene, model, ustar_max))},
+        bounds={PI: pi_range(scene, model, ustar_min, ustar_max)},
         newton=C.NewtonSettings(tol=settings.newton_tol, max_iter=8), detect=False)
 
 
@@ -214,9 +214,8 @@ def _result(scene, model, branch, settings, wall_time) -> ImpactBranch:
     """The branch's points as :class:`ImpactPoint` records, with the status."""
     points = [ImpactPoint.from_columns(branch.columns, k) for k in range(len(branch.s))]
     points = points[:settings.max_points]
-    status = "max_points" if len(points) == settings.max_points else \
-        {"bound": "bound", "max_steps": "max_points"}.get(branch.status, "failed")
-    return ImpactBranch(scene, scene.contact_gap, points, status, branch.message,
+    return ImpactBranch(scene, scene.contact_gap, points,
+                        branch_end(branch.status, points, settings.max_points), branch.message,
                         wall_time)
 
 
@@ -225,8 +224,8 @@ def pre_contact_start(branch, min_gap_ratio: float = 3.0):
     is at least ``min_gap_ratio`` eps: there the smoothed law's force (width w = σ eps)
     is below exp(-(min_gap_ratio - 1)/σ) of its value at contact, so the cycle is also
     a cycle of the model with contact to that accuracy, and a start for
-    :func:`impacting_branch` (closer to contact works too, e.g. at M* = 1, N = 4,
-    k* = 1e8, σ = 0.1 from gap = 1.05 eps, but the start then differs from the
+    :func:`fsicas.cycles.impacting_cycles` (closer to contact works too, e.g. at M* = 1,
+    N = 4, k* = 1e8, σ = 0.1 from gap = 1.05 eps, but the start then differs from the
     collocation cycle by 1e-4 in period: the softplus already pushes)."""
     points = [p for p in branch.points if p.gap_ratio >= min_gap_ratio]
     if not points:

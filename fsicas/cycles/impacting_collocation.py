@@ -7,8 +7,8 @@ collocation polynomial converges at its order once the mesh resolves the contact
 The mesh is re-equidistributed at every accepted point (``adapt_every``): its intervals
 concentrate at the impacts; NTST is fixed during a run (a few hundred intervals).
 
-Start: a cycle's state at phase 0, its period and pressure drop, as for
-:func:`fsicas.cycles.impacting.impacting_branch`; one period is integrated from it
+Start: a cycle's state at phase 0, its period and pressure drop, as for the shooting
+route (:func:`fsicas.cycles.impacting_cycles` says where starts come from); one period is integrated from it
 (CVODES) and the start mesh equidistributed on that guess (``mesh_passes`` passes).
 
 Per point the measures of the shooting route (:class:`ImpactPoint`) plus NTST and the
@@ -36,18 +36,17 @@ import scipy.interpolate
 
 import continuation as C
 
-from ..linear.adapter import LOG_M, PI, PI_SCALE, TIME_SCALE, flutter_field, pi_of
+from ..linear.adapter import PI, TIME_SCALE, field_parameters, flutter_field, pi_range
 from ..linear.steady import steady_state
 from ..model.accuracy import IMPACT_QUADRATURE_TOL
 from ..model.assembly import Model, build_model
 from ..scene import Scene
 from .gauge import PolynomialGauge, quadrature_controlled
 from .impacting import ImpactBranch, ImpactPoint, shooting_points
-from .records import check_settings
+from .records import START_FAILED, branch_end, check_settings
 
 __all__ = ["CollocationImpactSettings", "CollocatedImpactPoint", "CollocatedImpactBranch",
-           "impacting_collocation_branch", "impacting_collocation_problem", "field_parameters",
-           "ImpactKind"]
+           "collocation_branch", "impacting_collocation_problem", "ImpactKind"]
 
 ImpactKind = Literal["regular", "fold", "pd", "ns", "bp"]
 """A branch point ("regular") or a special cycle: "fold" (a second multiplier at +1),
@@ -167,10 +166,10 @@ class CollocatedImpactBranch(ImpactBranch):
     ``special``: its located special cycles (:class:`CollocatedImpactPoint` of kind
     "fold", "pd", "ns" or "bp"), in the order met."""
 
-    special: list = field(default_factory=list)
-
-    def to_json(self) -> dict:
-        return {**super().to_json(), "special": [p.to_json() for p in self.special]}
+    @property
+    def max_error_estimate(self) -> float:
+        """The largest collocation error indicator of its points (0 without points)."""
+        return max((p.error_estimate for p in self.points), default=0.0)
 
     @classmethod
     def from_json(cls, d: dict) -> "CollocatedImpactBranch":
@@ -190,7 +189,7 @@ def impacting_collocation_problem(scene: Scene, state, period: float, pressure_d
     fails (e.g. the gap closes)."""
     model = model or build_model(scene)
     vf = flutter_field(model)
-    params = field_parameters(vf, model, scene, pressure_drop)
+    params = field_parameters(vf, model, steady_state(scene, model), scene, pressure_drop)
     orbit = _integrated_orbit(vf, np.asarray(state, float), period * TIME_SCALE, params, settings)
     cs = C.CollocationSettings(ntst=settings.ntst, ncol=settings.ncol, floquet="product",
                                adapt_every=settings.adapt_every)
@@ -202,15 +201,16 @@ def impacting_collocation_problem(scene: Scene, state, period: float, pressure_d
     return problem
 
 
-def impacting_collocation_branch(scene: Scene, state, period: float, pressure_drop: float, *,
-                                 model: Model | None = None, ustar_min: float = 0.0,
-                                 ustar_max: float = 12.0, direction: int = 1,
-                                 settings: CollocationImpactSettings = CollocationImpactSettings()
-                                 ) -> CollocatedImpactBranch:
+def collocation_branch(scene: Scene, state, period: float, pressure_drop: float, *,
+                       model: Model | None = None, ustar_min: float = 0.0,
+                       ustar_max: float = 12.0, direction: int = 1,
+                       settings: CollocationImpactSettings = CollocationImpactSettings()
+                       ) -> CollocatedImpactBranch:
     """Continue the cycle through ``state`` (phase 0) with ``period`` (units of T) at
     ``pressure_drop`` by adaptive collocation in U* on ``scene`` (contact on, smoothed:
     ``contact_smoothing`` > 0). ``direction`` = +1 continues towards larger Δp (U*).
-    The arguments are those of :func:`fsicas.cycles.impacting.impacting_branch`."""
+    The collocation route of :func:`fsicas.cycles.impacting_cycles`; the arguments are
+    those of :func:`fsicas.cycles.impacting.shooting_branch`."""
     start = time.perf_counter()
     check_smooth(scene)
     model = model or build_model(scene)
@@ -218,8 +218,7 @@ def impacting_collocation_branch(scene: Scene, state, period: float, pressure_dr
         problem = impacting_collocation_problem(scene, state, period, pressure_drop,
                                                 model=model, settings=settings)
     except RuntimeError as err:                  # CVODES failure, e.g. a gap closing
-        return failed_branch(scene, model, "the start cycle could not be integrated over "
-                             f"one period: {err}", start)
+        return failed_branch(scene, model, START_FAILED.format(err), start)
     return continued_branch(scene, model, problem, (ustar_min, ustar_max), direction, settings, start)
 
 
@@ -357,14 +356,6 @@ def _locate(problem, X, kind, mirror, newton) -> tuple:
     return square, result, square.section_multipliers, problem
 
 
-def field_parameters(vf, model: Model, scene: Scene, pressure_drop: float) -> dict:
-    """The adapter's parameters (Π, log10 M*, the rest) at ``pressure_drop``."""
-    values = dict(zip(model.parameter_names, steady_state(scene, model).p))
-    params = {PI: pressure_drop / (scene.mstar * PI_SCALE), LOG_M: float(np.log10(scene.mstar))}
-    params.update({k: values[k] for k in vf.par_names[2:]})
-    return params
-
-
 def _integrated_orbit(vf, x0, period, params, settings):
     """``t -> x`` on [0, 1): one integrated period (``guess_samples`` outputs), a periodic
     cubic spline through them (the end point replaced by the start: the guess closes)."""
@@ -377,11 +368,10 @@ def _integrated_orbit(vf, x0, period, params, settings):
 
 def _steps(scene, model, ustar_min, ustar_max, direction, settings) -> C.ContinuationSettings:
     """Arclength steps in Π between the steady Π of ``ustar_min`` and ``ustar_max``."""
-    pi_lo = pi_of(scene, model, ustar_min) if ustar_min > 0 else 0.0
     return C.ContinuationSettings(
         ds=settings.ds, ds_min=1e-8, ds_max=settings.ds_max, direction=direction,
         max_steps=max(settings.max_points - 1, 1),
-        bounds={PI: (pi_lo, pi_of(scene, model, ustar_max))},
+        bounds={PI: pi_range(scene, model, ustar_min, ustar_max)},
         newton=C.NewtonSettings(tol=settings.tol), compute_eigenvalues=settings.detect,
         detect=settings.detect, max_turn=settings.max_turn)
 
@@ -390,7 +380,6 @@ def _result(scene, eps, branch, special, settings, wall_time) -> CollocatedImpac
     """The branch's points as :class:`CollocatedImpactPoint` records, with the status."""
     points = [CollocatedImpactPoint.from_columns(branch.columns, k) for k in range(len(branch.s))]
     points = points[:settings.max_points]
-    status = "max_points" if len(points) == settings.max_points else \
-        {"bound": "bound", "max_steps": "max_points"}.get(branch.status, "failed")
-    return CollocatedImpactBranch(scene, eps, points, status, branch.message, wall_time,
-                                  special)
+    return CollocatedImpactBranch(scene, eps, points,
+                                  branch_end(branch.status, points, settings.max_points),
+                                  branch.message, wall_time, special)

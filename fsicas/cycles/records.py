@@ -14,7 +14,11 @@ import numpy as np
 from .. import strict_json
 from ..checks import finite_number, require
 
-__all__ = ["CycleRecord", "CycleMeasures", "BranchRecord", "plain_value", "check_settings"]
+__all__ = ["CycleRecord", "CycleMeasures", "BranchRecord", "plain_value", "check_settings",
+           "branch_end", "START_FAILED"]
+
+#: Why an impacting branch has no point: its start could not be integrated.
+START_FAILED = "the start cycle could not be integrated over one period: {}"
 
 
 class CycleRecord:
@@ -126,3 +130,10 @@ def check_settings(settings, integers: tuple = (), positives: tuple = (),
         v = getattr(settings, name)
         require(finite_number(f"{kind}.{name}", v) > 0,
                 f"{kind}.{name} must be a positive number, got {v!r}")
+
+
+def branch_end(status: str, points: list, max_points: int) -> str:
+    """Why a branch of at most ``max_points`` ``points`` ended, from the library's
+    ``status``: "max_points" (the budget), "bound" (U* left its range) or "failed"."""
+    return "max_points" if len(points) == max_points else \
+        {"bound": "bound", "max_steps": "max_points"}.get(status, "failed")

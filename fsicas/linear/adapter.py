@@ -13,6 +13,8 @@ coefficient l1 is invariant under that time scaling.
 """
 from __future__ import annotations
 
+import math
+
 import casadi as ca
 import numpy as np
 
@@ -20,10 +22,10 @@ import continuation as C
 
 from ..model.assembly import Model, per_model
 from ..scene import Scene
-from .steady import SteadyStateError, steady_state
+from .steady import SteadyState, SteadyStateError, steady_state
 
 __all__ = ["PI", "LOG_M", "PI_SCALE", "TIME_SCALE", "reparametrized_field", "flutter_field",
-           "pi_of", "steady_ustar", "dense"]
+           "pi_of", "pi_range", "field_parameters", "steady_ustar", "dense"]
 
 PI, LOG_M = "kinematic_pressure_drop", "log10_mstar"
 PI_SCALE, TIME_SCALE = 100.0, 100.0
@@ -115,3 +117,21 @@ def pi_of(scene: Scene, model: Model, ustar: float) -> float:
                          "boundary and cycle analyses are continued in the pressure drop and "
                          "need friction, k0 or kl > 0 (eig works at any U*)")
     return pi
+
+
+def pi_range(scene: Scene, model: Model, ustar_min: float, ustar_max: float
+             ) -> tuple[float, float]:
+    """The bounds of Π between the steady states at ``ustar_min`` (Π = 0 where
+    ``ustar_min`` is 0) and ``ustar_max``: where a continuation in Π stops."""
+    return pi_of(scene, model, ustar_min) if ustar_min > 0 else 0.0, \
+        pi_of(scene, model, ustar_max)
+
+
+def field_parameters(vf: C.VectorField, model: Model, steady: SteadyState, scene: Scene,
+                     pressure_drop: float) -> dict:
+    """The parameters of :func:`flutter_field` ``vf`` at ``pressure_drop``: Π, log10 M*,
+    and the rest those of the ``steady`` state of ``scene``."""
+    values = dict(zip(model.parameter_names, steady.p))
+    params = {PI: pressure_drop / (scene.mstar * PI_SCALE), LOG_M: math.log10(scene.mstar)}
+    params.update({k: values[k] for k in vf.par_names[2:]})
+    return params

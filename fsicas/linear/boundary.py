@@ -22,7 +22,6 @@ from __future__ import annotations
 import math
 import time
 import warnings
-from collections.abc import Mapping
 from dataclasses import dataclass, field, replace
 
 import numpy as np
@@ -41,13 +40,11 @@ from ..scene import Scene
 __all__ = ["BoundaryPoint", "OnsetCurve", "ModeSwitch", "StabilityBoundary",
            "stability_boundary"]
 
+
 @dataclass(frozen=True)
-class BoundaryPoint(Mapping):
+class BoundaryPoint:
     """The stability boundary at one M*: the lowest curve of onsets there, of ``kind``
     "flutter" or "divergence" (then omega = freq_ratio = 0, no l1).
-
-    Also a read-only mapping of its JSON (:meth:`to_json`): ``point["ustar_crit"]``,
-    ``"l1" in point`` (only after a refinement) read as on the CLI's JSON.
 
     ``ustar_crit``, ``omega``, ``freq_ratio`` (= omega/omega_1) and ``branch`` (the piece of
     the lowest curve) are None where no traced curve reaches this M*. ``refined``: the
@@ -88,15 +85,6 @@ class BoundaryPoint(Mapping):
             if self.kind == "flutter":
                 out.update(l1=self.l1, criticality=self.criticality)
         return out
-
-    def __getitem__(self, key: str):
-        return self.to_json()[key]
-
-    def __iter__(self):
-        return iter(self.to_json())
-
-    def __len__(self) -> int:
-        return len(self.to_json())
 
 
 @dataclass(frozen=True)

@@ -4,8 +4,9 @@ from __future__ import annotations
 import numpy as np
 
 from ..cycles.curves import lowest_ustar
+from ..linear.stretches import boundary_function
 from .backend import NONDIM, PALETTE, finish, styled, subplots
-from .linear import boundary_function, draw_boundary
+from .linear import draw_boundary
 
 __all__ = ["plot_branch", "plot_curves", "draw_curves", "mark_cases"]
 

@@ -9,12 +9,13 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..linear.stretches import boundary_function, branch_lines
 from ..model.contact import reference_force
 from ..model.patch import penetration
 from .backend import NONDIM, PALETTE, finish, outcome_words, styled, subplots
 from .impacting import cycle_view, cycle_window, plot_cycle, plot_cycles, return_period
 from .cycles import draw_curves, mark_cases
-from .linear import boundary_function, branch_lines, draw_boundary
+from .linear import draw_boundary
 
 __all__ = ["plot_run", "plot_map", "plot_cycle", "plot_cycles", "cycle_view", "cycle_window",
            "return_period"]
