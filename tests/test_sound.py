@@ -144,11 +144,22 @@ def test_cli_writes_the_wav_and_json(capsys, tmp_path):
     (["sound", "--physical", "soft_palate", "--plot", "spec.xyz"], "--plot"),
     (["sound", "--physical", "soft_palate", "--flow", "20kg"], "--flow"),
     (["sound", "--physical", "soft_palate", "--mstar", "1"], "--mstar"),
+    (["sound", "--physical", "soft_palate", "--quadrature-tol", "2"], "--quadrature-tol"),
+    (["sound", "--physical", "soft_palate", "--quadrature-tol", "abc"], "--quadrature-tol"),
 ])
 def test_bad_inputs_are_refused(capsys, argv, option):
     assert main([*argv, "--json"]) == 2
     error = json.loads(capsys.readouterr().out)["error"]
     assert option in error
+
+
+def test_quadrature_not_controlled_when_asked(capsys, tmp_path):
+    """``--quadrature-tol none``: one run on the scene's 28 nodes, its error reported
+    (3.7e-3 here) and not judged; the default run repeats it on 56 nodes
+    (test_cli_writes_the_wav_and_json)."""
+    code, out = _sound_cli(capsys, tmp_path, "--quadrature-tol", "none")
+    assert code == 0 and out["quadrature_nodes"] == 28 and out["quadrature_tol"] is None
+    assert out["quadrature_error"] > IMPACT_QUADRATURE_TOL and out["status"] == "success"
 
 
 def test_the_default_run_is_long_enough_for_the_sound_asked(capsys, monkeypatch):
