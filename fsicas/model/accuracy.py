@@ -46,8 +46,8 @@ IMPACT_QUADRATURE_TOL = 1e-4
 there is set by the flow's integrands, sharp where a gap is inside the contact layer
 (and for the smoothed law by the impact load's bend, its rule's error falling like n^-2),
 and 1e-8 would need over a thousand nodes. At M* = 1, U* = 7, N = 10, k* = 1e8, eps/H = 1e-2 the
-default 40 nodes estimate 1.9e-2 with the period 1.5e-5 and the peak force 2.7e-4 off,
-80 nodes 6.8e-5 with 3.9e-8 and 1.9e-5 (``benchmarks/bench_quadrature_control.py
+default 40 nodes estimate 1.9e-2 with the period 1.5e-5 and the peak force 2.5e-4 off,
+80 nodes 6.8e-5 with 5.3e-8 and 6.5e-6 (``benchmarks/bench_quadrature_control.py
 --impacting 7``): below 1e-4 the period is within 1e-6 and the peak force within 1e-3."""
 
 

@@ -190,7 +190,7 @@ def sensitive_states(run: Run) -> np.ndarray | None:
     whose amplitude near a wall moves with the rule (1.5e-6 at 40 eps on the default
     nodes, M* = 3); and every run with the contact law on that did not decay: at 40
     nodes an impacting run's equations were 1.9e-2 off, its period 1.5e-5 and its peak
-    force 2.7e-4 (80 nodes: 6.8e-5, 3.9e-8, 1.9e-5; docs/simulate.md). A contact-free run stopped by contact is
+    force 2.5e-4 (80 nodes: 6.8e-5, 5.3e-8, 6.5e-6; docs/simulate.md). A contact-free run stopped by contact is
     not repeated: the estimate grows without bound as the gap closes to eps (a graze
     needed 1280 nodes for 1e-8, 15x the run's cost), so it is reported; nor is a failed
     run."""
