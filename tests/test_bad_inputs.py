@@ -157,7 +157,7 @@ def test_a_closed_pipe_and_ctrl_c_end_the_command_quietly(tmp_path):
                            stderr=subprocess.PIPE, text=True)
     first = run.stderr.readline()          # the command is at work (imports done, however slow)
     assert first.startswith("fsicas boundary")
-    time.sleep(1)
+    time.sleep(8)                          # past the first continuation steps' compilation
     run.send_signal(signal.SIGINT)
     out, rest = run.communicate(timeout=300)        # 1.3 s on an idle machine
     err = first + rest
