@@ -152,9 +152,12 @@ def test_a_closed_pipe_and_ctrl_c_end_the_command_quietly(tmp_path):
     reader.stdout.close()                            # the reader is gone before the output
     assert reader.wait(timeout=120) == 141
     assert b"Traceback" not in reader.stderr.read()
+    # as from a shell: SIGINT at its default (a test worker may ignore it, and a child
+    # inherits an ignored SIGINT: the interrupt would be lost)
     run = subprocess.Popen([sys.executable, "-m", "fsicas.cli", "--verbose", "boundary",
                             "--mstar", "0.01:100:400"], stdout=subprocess.PIPE,
-                           stderr=subprocess.PIPE, text=True)
+                           stderr=subprocess.PIPE, text=True,
+                           preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
     first = run.stderr.readline()          # the command is at work (imports done, however slow)
     assert first.startswith("fsicas boundary")
     time.sleep(8)                          # past the first continuation steps' compilation
