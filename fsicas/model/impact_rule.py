@@ -30,6 +30,7 @@ symbols (a column of nodes) alike.
 """
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass
 
 import casadi as ca
@@ -86,6 +87,7 @@ def impact_rule(n_quad: int, smoothing: float) -> ImpactRule:
     return ImpactRule(np.linspace(0.0, 1.0, 2 * CELLS_PER_NODE * n_quad + 1))
 
 
+@functools.lru_cache(maxsize=16)
 def _scatter(cells: int):
     """Constant sparse matrices: the cells' left and right end values and midpoint values
     from the nodes, and the map of the three per-cell weights back onto the nodes."""
