@@ -27,6 +27,8 @@ ALLOWED = {
     "cli": {"top", "model", "linear", "cycles", "timedomain", "studies", "plots", "paper",
             "package", "explore"},
     "package": {"top", "model", "linear", "cycles", "timedomain", "plots"},
+    "console": {"cli"},
+    "__main__": {"console"},
 }
 
 

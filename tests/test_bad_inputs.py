@@ -168,6 +168,37 @@ def test_a_closed_pipe_and_ctrl_c_end_the_command_quietly(tmp_path):
     assert err.strip().splitlines()[-1].startswith("fsicas: interrupted")
 
 
+def test_ctrl_c_while_the_command_starts_ends_it_quietly():
+    """SIGINT while the libraries load (0.3 s in: the command line's imports take 1-2 s):
+    one line and exit 130, as during a run; run as the installed ``fsicas`` script runs."""
+    import signal
+    import subprocess
+    import sys
+    import time
+    script = "import sys; from fsicas.console import main; sys.exit(main())"
+    run = subprocess.Popen([sys.executable, "-c", script, "boundary", "--mstar", "0.01:100:400"],
+                           stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                           preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
+    time.sleep(0.3)
+    run.send_signal(signal.SIGINT)
+    out, err = run.communicate(timeout=300)
+    assert run.returncode == 130 and "Traceback" not in err, err
+    assert err.strip().splitlines()[-1].startswith("fsicas: interrupted"), err
+
+
+def test_the_package_loads_its_wings_on_first_use():
+    """``import fsicas`` loads none of the numerical libraries (a fresh interpreter); each
+    public name comes from its wing on first use, and every name of ``__all__`` exists."""
+    import subprocess
+    import sys
+    probe = ("import sys, fsicas; heavy = [m for m in ('casadi', 'scipy', 'numpy', 'matplotlib')"
+             " if m in sys.modules]; print(heavy); fsicas.Scene; print(fsicas.Scene.__module__);"
+             " print(all(hasattr(fsicas, n) for n in fsicas.__all__))")
+    out = subprocess.run([sys.executable, "-c", probe], capture_output=True, text=True,
+                         timeout=300, check=True).stdout.split()
+    assert out == ["[]", "fsicas.scene", "True"]
+
+
 def test_an_unreachable_dask_scheduler_fails_fast_and_clearly(capsys, tripwire, monkeypatch):
     pytest.importorskip("distributed")
     import time
