@@ -47,13 +47,15 @@ import shutil
 import stat
 import subprocess
 import tempfile
+import time
 import warnings
 from pathlib import Path
 
 import casadi as ca
 
-__all__ = ["compile_function", "compiled_or_none", "default_cache_dir", "default_flags",
-           "find_compiler", "has_compiler", "library_path", "check_private"]
+__all__ = ["compile_function", "compile_in_background", "compiled_or_none", "Deferred",
+           "default_cache_dir", "default_flags", "find_compiler", "has_compiler",
+           "library_path", "check_private", "background_slots"]
 
 _FLAGS_SX = ("-O1",)
 _FLAGS_OTHER = ("-O3",)
@@ -62,7 +64,6 @@ _FORMAT = "continuation-compile-2"     # bump to invalidate all cache entries
 
 #: Number of compilations done by this process (cache misses); for tests and benchmarks.
 compile_count = 0
-_LOADED: dict = {}
 _SCRATCH: dict = {}          # process id -> its temporary cache directory
 _WARNED: set = set()         # unusable cache directories already warned about
 
@@ -192,42 +193,94 @@ def _scratch() -> Path:
     """This process's temporary cache directory (mode 0700, removed at exit)."""
     pid = os.getpid()
     if pid not in _SCRATCH:
-        _SCRATCH[pid] = Path(tempfile.mkdtemp(prefix="continuation-cache-"))
-        atexit.register(shutil.rmtree, _SCRATCH[pid], True)
+        _SCRATCH[pid] = Path(tempfile.mkdtemp(prefix="continuation-cache-"))   # see _at_exit
     return _SCRATCH[pid]
 
 
-def _build(fn: ca.Function, compiler: str, flags: tuple, derivatives: bool,
-           target: Path, key: str, timeout) -> None:
-    """Generate and compile the library of ``fn``, then move its record and the library
-    to ``target`` (each atomically, the record first)."""
-    global compile_count
-    with tempfile.TemporaryDirectory(dir=target.parent, prefix=".build-") as tmp:
-        source = ca.CodeGenerator(f"{fn.name()}.c", {"with_header": False})
-        source.add(fn)
-        if derivatives:
-            source.add(fn.jacobian())      # named jac_<name>: found by casadi.external
-        c_file = source.generate(tmp + os.sep)
-        so_tmp = Path(tmp) / "out.so"
-        cmd = [compiler, *flags, *_COMMON, c_file, "-o", str(so_tmp), "-lm"]
+class _Build:
+    """One library being made in a private temporary directory beside the target: its C
+    source generated and the compiler started as a subprocess (:meth:`start`; no thread:
+    CasADi is only used by the caller's); once the compiler has ended,
+    :meth:`finish` checks it and moves the record and the library to ``target`` (each
+    atomically, the record first)."""
+
+    def __init__(self, fn: ca.Function, compiler: str, flags: tuple, derivatives: bool,
+                 target: Path, key: str, timeout):
+        self.fn, self.compiler, self.flags, self.derivatives = fn, compiler, flags, derivatives
+        self.target, self.key, self.timeout = target, key, timeout
+        self.proc, self.timed_out = None, False
+        # OSError here when the cache directory cannot take it (the caller falls back)
+        self.tmp = Path(tempfile.mkdtemp(dir=target.parent, prefix=".build-"))
+
+    def start(self) -> None:
+        """Generate the C source and start the compiler (RuntimeError when the
+        compiler does not run)."""
+        source = ca.CodeGenerator(f"{self.fn.name()}.c", {"with_header": False})
+        source.add(self.fn)
+        if self.derivatives:
+            source.add(self.fn.jacobian())      # named jac_<name>: found by casadi.external
+        c_file = source.generate(str(self.tmp) + os.sep)
+        self.cmd = [self.compiler, *self.flags, *_COMMON, c_file, "-o",
+                    str(self.tmp / "out.so"), "-lm"]
         try:
-            done = subprocess.run(cmd, capture_output=True, text=True, timeout=timeout)
-        except subprocess.TimeoutExpired as exc:
-            raise RuntimeError(f"compiling {fn.name()} took more than {timeout} s") from exc
+            with open(self.tmp / "stderr.txt", "w") as err:
+                self.proc = subprocess.Popen(self.cmd, stdin=subprocess.DEVNULL,
+                                             stdout=subprocess.DEVNULL, stderr=err)
         except OSError as exc:
-            raise RuntimeError(f"C compiler {compiler} does not run: {exc}") from exc
-        if done.returncode != 0:
-            raise RuntimeError(f"compiling {fn.name()} failed ({' '.join(cmd)}):\n"
-                               f"{done.stderr[-2000:]}")
-        os.chmod(so_tmp, 0o700)
-        record = {"format": _FORMAT, "key": key, "size": so_tmp.stat().st_size,
-                  "sha256": _digest(so_tmp), "compiler": _compiler_identity(compiler),
-                  "flags": [*flags, *_COMMON]}
-        record_tmp = Path(tmp) / "out.json"
-        record_tmp.write_text(json.dumps(record, indent=1) + "\n")
-        os.replace(record_tmp, _record(target))
-        os.replace(so_tmp, target)
-        compile_count += 1
+            self.discard()
+            raise RuntimeError(f"C compiler {self.compiler} does not run: {exc}") from exc
+        self.started, self.pid = time.monotonic(), os.getpid()
+
+    def ended(self, wait: bool = False) -> bool:
+        """Whether the compiler has ended (``wait``: wait for it); one that runs longer
+        than ``timeout`` is killed."""
+        left = None if self.timeout is None else \
+            self.started + self.timeout - time.monotonic()
+        try:
+            if wait:
+                self.proc.wait(timeout=left)
+            elif self.proc.poll() is None:
+                if left is None or left > 0:
+                    return False
+                raise subprocess.TimeoutExpired(self.cmd, self.timeout)
+        except subprocess.TimeoutExpired:
+            self.proc.kill()
+            self.proc.wait()
+            self.timed_out = True
+        return True
+
+    def finish(self) -> None:
+        """After the compiler ended: RuntimeError if it failed, else the record and the
+        library moved into place."""
+        global compile_count
+        try:
+            if self.timed_out:
+                raise RuntimeError(f"compiling {self.fn.name()} took more than "
+                                   f"{self.timeout} s")
+            if self.proc.returncode != 0:
+                stderr = (self.tmp / "stderr.txt").read_text(errors="replace")
+                raise RuntimeError(f"compiling {self.fn.name()} failed "
+                                   f"({' '.join(self.cmd)}):\n{stderr[-2000:]}")
+            so_tmp = self.tmp / "out.so"
+            os.chmod(so_tmp, 0o700)
+            record = {"format": _FORMAT, "key": self.key, "size": so_tmp.stat().st_size,
+                      "sha256": _digest(so_tmp), "compiler": _compiler_identity(self.compiler),
+                      "flags": [*self.flags, *_COMMON]}
+            record_tmp = self.tmp / "out.json"
+            record_tmp.write_text(json.dumps(record, indent=1) + "\n")
+            os.replace(record_tmp, _record(self.target))
+            os.replace(so_tmp, self.target)
+            compile_count += 1
+        finally:
+            self.discard()
+
+    def discard(self) -> None:
+        """Kill the compiler if it still runs (in this process) and remove the temporary
+        directory."""
+        if self.proc is not None and self.pid == os.getpid() and self.proc.poll() is None:
+            self.proc.kill()
+            self.proc.wait()
+        shutil.rmtree(self.tmp, ignore_errors=True)
 
 
 def _locate(fn: ca.Function, cache_dir, flags, derivatives: bool):
@@ -245,18 +298,164 @@ def library_path(fn: ca.Function, cache_dir=None, flags=None,
     return _locate(fn, cache_dir, flags, derivatives)[0]
 
 
-def _load_or_build(fn: ca.Function, target: Path, key: str, compiler: str, flags: tuple,
-                   derivatives: bool, timeout) -> None:
-    """Make ``target`` a library of ``fn`` that matches its record."""
+def _cached(target: Path, key: str) -> bool:
+    """Whether ``target`` is a library that matches its record (its directory created
+    private if missing; a mismatch is warned about: the library is then rebuilt)."""
     _cache_directory(target.parent)
-    if target.exists():
-        check_private(target)
-        why = _mismatch(target, key)
-        if why is None:
-            return
+    if not target.exists():
+        return False
+    check_private(target)
+    why = _mismatch(target, key)
+    if why is not None:
         warnings.warn(f"rebuilding the compiled library {target}: {why}", RuntimeWarning,
-                      stacklevel=3)
-    _build(fn, compiler, flags, derivatives, target, key, timeout)
+                      stacklevel=4)
+    return why is None
+
+
+class Deferred:
+    """A CasADi Function and its compiled library, which may still be being built
+    (:func:`compile_in_background`): :meth:`poll` gives the function to call, :meth:`wait`
+    the compiled one."""
+
+    def __init__(self, fn: ca.Function, target: Path | None = None, build=None):
+        self.fn, self.target, self.build = fn, target, build
+        #: the compiled function once loaded; the reason it could not be, an exception
+        self.compiled, self.error = None, None
+        self._warned = False
+
+    def poll(self) -> ca.Function | None:
+        """None while the library is being built; then the function to call from now on:
+        the compiled one or, if it could not be built, ``fn`` (with one RuntimeWarning)."""
+        if self.build is not None:
+            _pump()
+            if self.build is not None:
+                return None
+        if self.error is not None and not self._warned:
+            self._warned = True
+            warnings.warn(f"falling back to the CasADi function: {self.error}",
+                          RuntimeWarning, stacklevel=2)
+        return self.fn if self.compiled is None else self.compiled
+
+    def wait(self) -> ca.Function:
+        """The compiled function, built now if it is still waiting for a compiler;
+        RuntimeError (or OSError) if it cannot be built."""
+        if self in _QUEUED:
+            _QUEUED.remove(self)
+            self._start()
+        if self in _RUNNING:
+            _RUNNING.remove(self)
+            self.build.ended(wait=True)
+            self._complete()
+        if self.error is not None:
+            raise self.error
+        if self.compiled is None:
+            raise RuntimeError(f"{self.fn.name()} was not compiled (no C compiler, or its "
+                               "build was left by a parent process)")
+        return self.compiled
+
+    def _start(self) -> None:
+        try:
+            self.build.start()
+        except (RuntimeError, OSError) as exc:
+            self._fail(exc)
+        else:
+            _RUNNING.append(self)
+
+    def _complete(self) -> None:
+        """Finish the build whose compiler ended and load the library."""
+        try:
+            self.build.finish()
+            self.compiled = _load(self.target, self.fn.name())
+        except (RuntimeError, OSError) as exc:
+            self._fail(exc)
+        self.build = None
+
+    def _fail(self, exc: Exception) -> None:
+        self.build, self.error = None, exc
+        _REQUESTS.pop((str(self.target), self.fn.name()), None)     # a later request retries
+
+
+_REQUESTS: dict = {}         # (library, name) -> its Deferred
+_QUEUED: list = []           # Deferreds whose compiler has not started yet
+_RUNNING: list = []          # Deferreds whose compiler runs
+_OWNER = [os.getpid()]       # the process whose builds these are
+
+
+def background_slots() -> int:
+    """How many compilers run at once in the background: the cores this process may
+    use but one (the computation's), at least one."""
+    try:
+        cores = len(os.sched_getaffinity(0))
+    except AttributeError:
+        cores = os.cpu_count() or 1
+    return max(1, cores - 1)
+
+
+def _pump() -> None:
+    """Complete the background builds whose compiler ended and start queued ones while
+    fewer than :func:`background_slots` run, the latest request first (the one most
+    likely still in use). A forked process leaves its parent's builds to the parent:
+    their functions stay uncompiled there."""
+    if _OWNER[0] != os.getpid():
+        _OWNER[0] = os.getpid()
+        for deferred in _QUEUED + _RUNNING:
+            deferred.build = None
+            _REQUESTS.pop((str(deferred.target), deferred.fn.name()), None)
+        _QUEUED.clear()
+        _RUNNING.clear()
+    for deferred in [d for d in _RUNNING if d.build.ended()]:
+        _RUNNING.remove(deferred)
+        deferred._complete()
+    while _QUEUED and len(_RUNNING) < background_slots():
+        _QUEUED.pop()._start()
+
+
+@atexit.register
+def _at_exit() -> None:
+    """Kill this process's compilers still running, drop the queued builds (nothing is
+    kept half-built) and remove the temporary cache directory."""
+    if _OWNER[0] == os.getpid():
+        for deferred in _QUEUED + _RUNNING:
+            deferred.build.discard()
+    if os.getpid() in _SCRATCH:
+        shutil.rmtree(_SCRATCH[os.getpid()], ignore_errors=True)
+
+
+def _load(target: Path, name: str) -> ca.Function:
+    return ca.external(name, str(target))
+
+
+def _request(fn: ca.Function, cache_dir, flags, timeout, derivatives: bool) -> Deferred:
+    """The Deferred of ``fn``'s library: loaded if the cache holds it, else its build
+    queued (one per library and process). RuntimeError without a compiler or when the
+    cache is not private; an unusable cache directory is replaced by a temporary one."""
+    target, key, compiler, opt = _locate(fn, cache_dir, flags, derivatives)
+    try:
+        return _deferred(fn, target, key, compiler, opt, derivatives, timeout)
+    except OSError as exc:
+        cache, target = target.parent, _scratch() / target.name
+        if cache not in _WARNED:
+            _WARNED.add(cache)
+            why = "not a directory" if cache.is_file() else exc.strerror or str(exc)
+            warnings.warn(
+                f"cannot use the compiled-code cache {cache} ({why}): "
+                f"compiling into {target.parent} for this process only", RuntimeWarning,
+                stacklevel=3)
+        return _deferred(fn, target, key, compiler, opt, derivatives, timeout)
+
+
+def _deferred(fn, target, key, compiler, flags, derivatives, timeout) -> Deferred:
+    ident = (str(target), fn.name())
+    if ident not in _REQUESTS:
+        if _cached(target, key):
+            deferred = Deferred(fn, target)
+            deferred.compiled = _load(target, fn.name())
+        else:
+            build = _Build(fn, compiler, flags, derivatives, target, key, timeout)
+            deferred = Deferred(fn, target, build)
+            _QUEUED.append(deferred)
+        _REQUESTS[ident] = deferred
+    return _REQUESTS[ident]
 
 
 def compile_function(fn: ca.Function, cache_dir=None, flags=None,
@@ -270,25 +469,24 @@ def compile_function(fn: ca.Function, cache_dir=None, flags=None,
     cache is not private; an unusable cache directory is replaced by a temporary one
     with a warning (module docstring).
     """
-    target, key, compiler, opt = _locate(fn, cache_dir, flags, derivatives)
-    if (str(target), fn.name()) in _LOADED:
-        return _LOADED[str(target), fn.name()]
+    return _request(fn, cache_dir, flags, timeout, derivatives).wait()
+
+
+def compile_in_background(fn: ca.Function, cache_dir=None, flags=None,
+                          timeout: float | None = None) -> Deferred:
+    """``fn``'s compiled library as a :class:`Deferred`: loaded at once if the cache
+    holds it, else built by a compiler running beside this process (started and
+    collected whenever a Deferred is polled; :func:`background_slots` at once), while
+    the caller goes on with ``fn``. Never raises: without a compiler, or when the cache
+    is refused, ``poll()`` gives ``fn`` at once (the latter with a RuntimeWarning)."""
+    if not has_compiler():
+        return Deferred(fn)
     try:
-        _load_or_build(fn, target, key, compiler, opt, derivatives, timeout)
-    except OSError as exc:
-        cache, target = target.parent, _scratch() / target.name
-        if cache not in _WARNED:
-            _WARNED.add(cache)
-            why = "not a directory" if cache.is_file() else exc.strerror or str(exc)
-            warnings.warn(
-                f"cannot use the compiled-code cache {cache} ({why}): "
-                f"compiling into {target.parent} for this process only", RuntimeWarning,
-                stacklevel=2)
-        if (str(target), fn.name()) in _LOADED:
-            return _LOADED[str(target), fn.name()]
-        _load_or_build(fn, target, key, compiler, opt, derivatives, timeout)
-    _LOADED[str(target), fn.name()] = ca.external(fn.name(), str(target))
-    return _LOADED[str(target), fn.name()]
+        return _request(fn, cache_dir, flags, timeout, False)
+    except (RuntimeError, OSError) as exc:
+        deferred = Deferred(fn)
+        deferred.error = exc
+        return deferred
 
 
 def compiled_or_none(fn: ca.Function, cache_dir=None, flags=None) -> ca.Function | None:
