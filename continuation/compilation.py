@@ -53,7 +53,7 @@ from pathlib import Path
 
 import casadi as ca
 
-__all__ = ["compile_function", "compile_in_background", "compiled_or_none", "Deferred",
+__all__ = ["compile_function", "compile_later", "compiled_or_none", "Deferred",
            "default_cache_dir", "default_flags", "find_compiler", "has_compiler",
            "library_path", "check_private", "background_slots"]
 
@@ -313,9 +313,9 @@ def _cached(target: Path, key: str) -> bool:
 
 
 class Deferred:
-    """A CasADi Function and its compiled library, which may still be being built
-    (:func:`compile_in_background`): :meth:`poll` gives the function to call, :meth:`wait`
-    the compiled one."""
+    """A CasADi Function and its compiled library (:func:`compile_later`): loaded at once
+    when the cache holds it, else built when asked for: :meth:`poll` builds it in the
+    background and gives the function to call meanwhile, :meth:`wait` builds it now."""
 
     def __init__(self, fn: ca.Function, target: Path | None = None, build=None):
         self.fn, self.target, self.build = fn, target, build
@@ -323,10 +323,18 @@ class Deferred:
         self.compiled, self.error = None, None
         self._warned = False
 
+    @property
+    def done(self) -> bool:
+        """Whether nothing is left to build (the library loaded, or it cannot be)."""
+        return self.build is None
+
     def poll(self) -> ca.Function | None:
-        """None while the library is being built; then the function to call from now on:
-        the compiled one or, if it could not be built, ``fn`` (with one RuntimeWarning)."""
+        """None while the library is being built (its build queued at the first poll);
+        then the function to call from now on: the compiled one or, if it could not be
+        built, ``fn`` (with one RuntimeWarning)."""
         if self.build is not None:
+            if self not in _RUNNING and self not in _QUEUED:
+                _QUEUED.append(self)
             _pump()
             if self.build is not None:
                 return None
@@ -339,8 +347,9 @@ class Deferred:
     def wait(self) -> ca.Function:
         """The compiled function, built now if it is still waiting for a compiler;
         RuntimeError (or OSError) if it cannot be built."""
-        if self in _QUEUED:
-            _QUEUED.remove(self)
+        if self.build is not None and self not in _RUNNING:
+            if self in _QUEUED:
+                _QUEUED.remove(self)
             self._start()
         if self in _RUNNING:
             _RUNNING.remove(self)
@@ -426,8 +435,8 @@ def _load(target: Path, name: str) -> ca.Function:
 
 
 def _request(fn: ca.Function, cache_dir, flags, timeout, derivatives: bool) -> Deferred:
-    """The Deferred of ``fn``'s library: loaded if the cache holds it, else its build
-    queued (one per library and process). RuntimeError without a compiler or when the
+    """The Deferred of ``fn``'s library: loaded if the cache holds it, else to be built
+    (one per library and process). RuntimeError without a compiler or when the
     cache is not private; an unusable cache directory is replaced by a temporary one."""
     target, key, compiler, opt = _locate(fn, cache_dir, flags, derivatives)
     try:
@@ -453,7 +462,6 @@ def _deferred(fn, target, key, compiler, flags, derivatives, timeout) -> Deferre
         else:
             build = _Build(fn, compiler, flags, derivatives, target, key, timeout)
             deferred = Deferred(fn, target, build)
-            _QUEUED.append(deferred)
         _REQUESTS[ident] = deferred
     return _REQUESTS[ident]
 
@@ -472,13 +480,14 @@ def compile_function(fn: ca.Function, cache_dir=None, flags=None,
     return _request(fn, cache_dir, flags, timeout, derivatives).wait()
 
 
-def compile_in_background(fn: ca.Function, cache_dir=None, flags=None,
-                          timeout: float | None = None) -> Deferred:
+def compile_later(fn: ca.Function, cache_dir=None, flags=None,
+                  timeout: float | None = None) -> Deferred:
     """``fn``'s compiled library as a :class:`Deferred`: loaded at once if the cache
-    holds it, else built by a compiler running beside this process (started and
-    collected whenever a Deferred is polled; :func:`background_slots` at once), while
-    the caller goes on with ``fn``. Never raises: without a compiler, or when the cache
-    is refused, ``poll()`` gives ``fn`` at once (the latter with a RuntimeWarning)."""
+    holds it, else built when asked for, by ``wait()`` or in the background by
+    ``poll()``: a compiler runs beside this process (started and collected whenever a
+    Deferred is polled, :func:`background_slots` at once) while the caller goes on with
+    ``fn``. Never raises: without a compiler, or when the cache is refused, ``poll()``
+    gives ``fn`` at once (the latter with a RuntimeWarning)."""
     if not has_compiler():
         return Deferred(fn)
     try:
