@@ -39,8 +39,8 @@ from ._intervals import KINEMATIC_MIN_ROWS, PointwiseTerm, interval_band, kinema
 from ._lazyjit import jit
 from ._lifted import LiftedBatch
 from ._sparse import Layout, layout
-from .compilation import compile_later, default_flags, has_compiler
-from ._symbolic import BufferedFunction, as_sx_function, later_as
+from .compilation import default_flags, has_compiler
+from ._symbolic import BufferedFunction, as_sx_function, compiled_later, later_as
 from ._systems import system
 
 #: outputs of the Jacobian kernel, in order
@@ -51,9 +51,8 @@ KERNEL_OUTPUTS = ("F", "Mv", "Fx", "Mvx", "M", "Fp", "Mvp")
 #: 3 s once, cached on disk, and run 1.05-1.3x faster than in the virtual machine)
 SX_COMPILE_MAX = 2000
 
-#: 'auto' compiles a function once its evaluations in the virtual machine have taken this
-#: many seconds (a build takes about 1 s of a spare core and then saves 30-60 % of every
-#: call on the flutter model): what is used briefly is never compiled
+#: 'auto' compiles a function once it has taken this many seconds in the virtual machine
+#: (a build takes ~1 s of a spare core, then saves 30-60 % of a call on the flutter model)
 COMPILE_AFTER = 2.0
 
 
@@ -116,10 +115,8 @@ class PointKernel:
     independently of ``K``) and mapped; ``values`` too, since a corrector evaluates the
     residual at every iterate (the flutter model at N = 10: 0.40 ms against 0.84 ms in
     the virtual machine; N = 40: 2.5 against 3.4 ms). When a function cannot be compiled
-    the kernel stays 'mx'. 'auto' loads what the cache holds and compiles the rest in
-    the background once it pays (``COMPILE_AFTER``): each function is evaluated in the
-    virtual machine until its library is built, so a first run costs about what a later
-    one does; 'compiled' waits for the compiler before the first call.
+    the kernel stays 'mx'. 'auto' loads what the cache holds and compiles the rest in the
+    background once it pays (``COMPILE_AFTER``); 'compiled' builds before the first call.
     """
 
     def __init__(self, vf, K: int, backend: str = "mx", cache_dir=None):
@@ -133,9 +130,7 @@ class PointKernel:
                         for name, e in self.pointwise.own_entries().items()}
         self.expand, self.cache_dir = vf.sym is ca.SX, cache_dir
         values = self.pointwise.values()
-        #: 'mx' or 'compiled'; ``wait``: compile before the first call ('compiled' asked
-        #: for), else in the background ('auto')
-        self.backend, self.wait = _backend(backend, vf, values)
+        self.backend, self.wait = _backend(backend, vf, values)   # 'mx' or 'compiled', bool
         self.lifted = {name: LiftedBatch(lifted, K, self._later(lifted.D))
                        for name, lifted in vf.lifted.items()}
         self.values = self._mapped(values)
@@ -167,31 +162,12 @@ class PointKernel:
                 for name, batch in self.lifted.items()}
 
     def _later(self, fun: ca.Function, flags=None, fallback=None):
-        """None when the backend is 'mx'; else the ``later`` of a
-        :class:`BufferedFunction` that evaluates ``fun`` (or ``fallback``): None until
-        ``fun``, once it has taken ``COMPILE_AFTER`` seconds, is compiled in the
-        background (at once when the cache holds it), then the compiled function, or
-        ``fallback`` (default ``fun``) if it could not be built (with a RuntimeWarning;
-        the backend is then 'mx')."""
+        """None when the backend is 'mx', else :func:`compiled_later` of ``fun`` once it
+        has taken ``COMPILE_AFTER`` seconds (the backend is 'mx' if it cannot be built)."""
         if self.backend != "compiled":
             return None
-        deferred = compile_later(fun, self.cache_dir, flags)
-        if self.wait:
-            try:
-                deferred.wait()
-            except (RuntimeError, OSError):
-                pass                                  # poll warns and gives fun
-
-        def later(spent: float):
-            if not deferred.done and spent < COMPILE_AFTER:
-                return None                           # not worth a build (yet)
-            ready = deferred.poll()
-            if ready is None or deferred.compiled is not None:
-                return ready
-            self.backend = "mx"
-            return fun if fallback is None else fallback
-
-        return later
+        return compiled_later(fun, self.cache_dir, flags, self.wait, COMPILE_AFTER, fallback,
+                              failed=lambda: setattr(self, "backend", "mx"))
 
     def _mapped(self, fun: ca.Function) -> BufferedFunction:
         """``fun`` mapped over ``K`` columns of ``x, v`` (the other inputs shared).
@@ -205,8 +181,7 @@ class PointKernel:
         dwarf the call); without compiling, the map runs in the virtual machine
         (expanded to SX when the field is SX)."""
         fun = as_sx_function(fun) if self.expand else fun
-        shared = list(range(2, fun.n_in()))
-        name = fun.name() + f"_{self.K}"
+        name, shared = fun.name() + f"_{self.K}", list(range(2, fun.n_in()))
         mapped = lambda f: f.map(name, "serial", self.K, shared, [])
         if self.expand:
             whole, vm = mapped(fun), as_sx_function(mapped(fun))
@@ -234,11 +209,10 @@ class SeededKernel:
 
 
 def _backend(backend: str, vf, values: ca.Function) -> tuple:
-    """``(backend, wait)`` of the kernel for ``vf``: 'auto' is 'compiled' in the
-    background (``wait`` False) for MX fields (dense modal blocks, where C pays) and for
-    SX fields whose ``values`` (F, M v) take at most ``SX_COMPILE_MAX`` instructions
-    (small straight-line code: quick to compile), 'mx' for larger SX fields; 'compiled'
-    waits for the compiler and needs one."""
+    """``(backend, wait)`` for ``vf``: 'auto' is 'compiled' in the background (not
+    ``wait``) for MX fields (dense modal blocks, where C pays) and for SX fields whose
+    ``values`` (F, M v) take at most ``SX_COMPILE_MAX`` instructions (small straight-line
+    code), 'mx' for larger SX fields; 'compiled' waits for the compiler (needs one)."""
     wait = backend == "compiled"
     if backend == "auto":
         small = vf.sym is ca.MX or values.n_instructions() <= SX_COMPILE_MAX

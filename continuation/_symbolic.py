@@ -15,6 +15,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from ._sparse import columns_appended
+from .compilation import compile_later
 
 
 def as_sx_function(fun: ca.Function) -> ca.Function:
@@ -79,6 +80,34 @@ class BufferedFunction:
 
     def __getstate__(self):
         return {"fun": self.fun, "later": None, "_buffer": None}
+
+
+def compiled_later(fun: ca.Function, cache_dir=None, flags=None, wait: bool = False,
+                   after: float = 0.0, fallback=None, failed=None):
+    """The ``later`` of a :class:`BufferedFunction` that evaluates ``fun`` (or
+    ``fallback``): None until ``fun``, once its calls have taken ``after`` seconds, is
+    compiled in the background (``continuation.compilation.compile_later``; loaded at
+    once when the cache holds it, built before the first call with ``wait``), then the
+    compiled function, or ``fallback`` (default ``fun``) if it could not be built (with
+    a RuntimeWarning; ``failed()`` is called then)."""
+    deferred = compile_later(fun, cache_dir, flags)
+    if wait:
+        try:
+            deferred.wait()
+        except (RuntimeError, OSError):
+            pass                                      # poll warns and gives fun
+
+    def later(spent: float):
+        if not deferred.done and spent < after:
+            return None                               # not worth a build (yet)
+        ready = deferred.poll()
+        if ready is None or deferred.compiled is not None:
+            return ready
+        if failed is not None:
+            failed()
+        return fun if fallback is None else fallback
+
+    return later
 
 
 def later_as(later, wrap):

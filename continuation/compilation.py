@@ -9,21 +9,12 @@ compiler flags, the compiler identity, the CasADi version and the platform; a la
 also in a new process, only loads it (and a second call in the same process returns the
 loaded function).
 
-Each library has a record beside it (``<library>.json``: its key, size and sha256, the
-compiler and the flags). A library is loaded only if it matches its record: one without
-a record, or whose size or sha256 differs (planted, truncated, altered), is rebuilt with
-a ``RuntimeWarning`` naming it, never loaded (loading a truncated library can crash the
-process). Files are written in a private temporary directory and moved into place with
-``os.replace``, the record before the library, so concurrent builders of one key never
-expose a partial file, and a reader that finds the record but not yet the library just
-builds it too (the builds are byte-identical).
-
-Loading a library runs its code, so the cache is trusted only as far as it is private:
-the cache directory is created with mode 0700 and refused (``RuntimeError``) when it or
-a library in it belongs to another user or is writable by group or others. A cache
-directory that cannot be used (the path is a file, not writable, on a read-only file
-system) is replaced, with one ``RuntimeWarning``, by a temporary directory of the process
-(removed at exit): the function is still compiled, but not kept for later processes.
+Each library has a record beside it and is loaded only if it matches it, from a private
+cache (``continuation._library_cache``, where the rules are stated); a cache directory
+that cannot be used is replaced, with one ``RuntimeWarning``, by a temporary directory of
+the process (removed at exit). Files are written in a private temporary directory and
+moved into place with ``os.replace``, the record before the library, so concurrent
+builders of one key never expose a partial file (the builds are byte-identical).
 
 Default flags: ``-O1`` for SX functions (straight-line code, where -O2/-O3 compile times
 grow superlinearly with the size of one function body for no run-time gain) and ``-O3``
@@ -32,19 +23,24 @@ for MX functions (loops over dense matrix products: measured 1.2x faster than -O
 
 :func:`compiled_or_none` is the fallback form: ``None`` instead of an exception when no
 compiler is found or compilation fails (the caller keeps the CasADi function).
+
+:func:`compile_later` builds in the background: it returns a :class:`Deferred` (the
+library loaded at once if the cache holds it); its ``poll()`` queues the build and gives
+None until the library is loaded, then the function to call from then on, while the
+caller goes on evaluating the CasADi function. The compiler is a subprocess, started and
+collected by the polls (no threads: CasADi is only used by the caller's thread), at most
+:func:`background_slots` at once (the cores but one), the latest request first. A
+compiler still running when the process ends is killed and its temporary directory
+removed; :func:`compile_function` waits for the same build.
 """
 
 from __future__ import annotations
 
 import atexit
-import functools
-import hashlib
 import json
 import os
-import platform
 import shlex
 import shutil
-import stat
 import subprocess
 import tempfile
 import time
@@ -53,6 +49,9 @@ from pathlib import Path
 
 import casadi as ca
 
+from ._library_cache import (FORMAT, cache_key, check_private, compiler_identity,
+                             default_cache_dir, digest, holds, record_path)
+
 __all__ = ["compile_function", "compile_later", "compiled_or_none", "Deferred",
            "default_cache_dir", "default_flags", "find_compiler", "has_compiler",
            "library_path", "check_private", "background_slots"]
@@ -60,22 +59,11 @@ __all__ = ["compile_function", "compile_later", "compiled_or_none", "Deferred",
 _FLAGS_SX = ("-O1",)
 _FLAGS_OTHER = ("-O3",)
 _COMMON = ("-fPIC", "-shared")
-_FORMAT = "continuation-compile-2"     # bump to invalidate all cache entries
 
 #: Number of compilations done by this process (cache misses); for tests and benchmarks.
 compile_count = 0
 _SCRATCH: dict = {}          # process id -> its temporary cache directory
 _WARNED: set = set()         # unusable cache directories already warned about
-
-
-def default_cache_dir() -> Path:
-    """``$CONTINUATION_CACHE`` if set, else ``$XDG_CACHE_HOME/continuation`` or
-    ``~/.cache/continuation``."""
-    env = os.environ.get("CONTINUATION_CACHE")
-    if env:
-        return Path(env).expanduser()
-    base = os.environ.get("XDG_CACHE_HOME")
-    return (Path(base).expanduser() if base else Path.home() / ".cache") / "continuation"
 
 
 def find_compiler() -> str:
@@ -99,94 +87,9 @@ def has_compiler() -> bool:
     return True
 
 
-@functools.lru_cache(maxsize=None)
-def _compiler_identity(path: str) -> str:
-    """``path`` and the first line of ``path --version``."""
-    try:
-        out = subprocess.run([path, "--version"], capture_output=True, text=True, timeout=30)
-        return f"{path}|{out.stdout.splitlines()[0] if out.stdout else ''}"
-    except (OSError, subprocess.SubprocessError) as exc:
-        raise RuntimeError(f"C compiler {path} does not run: {exc}") from exc
-
-
 def default_flags(fn: ca.Function) -> tuple:
     """``-O1`` for SX functions, ``-O3`` otherwise (module docstring)."""
     return _FLAGS_SX if fn.is_a("SXFunction") else _FLAGS_OTHER
-
-
-def _cpu() -> str:
-    """The CPU model (part of the key of ``-march=native`` builds)."""
-    try:
-        with open("/proc/cpuinfo") as f:
-            return next((line for line in f if line.startswith("model name")), "")
-    except OSError:
-        return platform.processor()
-
-
-def cache_key(fn: ca.Function, compiler: str, flags: tuple, derivatives: bool) -> str:
-    """sha256 of the format, CasADi version, platform, compiler, flags and ``fn``."""
-    h = hashlib.sha256()
-    parts = [_FORMAT, ca.__version__, platform.system(), platform.machine(),
-             _compiler_identity(compiler), " ".join(flags), f"derivatives={bool(derivatives)}"]
-    if any("native" in flag for flag in flags):
-        parts.append(_cpu())
-    for part in parts:
-        h.update(part.encode())
-        h.update(b"\0")
-    h.update(fn.serialize().encode())
-    return h.hexdigest()
-
-
-def check_private(path: Path) -> None:
-    """RuntimeError unless ``path`` belongs to this user and is not writable by group or
-    others (POSIX; nothing is checked where there are no user ids)."""
-    if not hasattr(os, "getuid"):
-        return
-    st = path.stat()
-    problems = []
-    if st.st_uid != os.getuid():
-        problems.append(f"owned by user id {st.st_uid}")
-    if st.st_mode & (stat.S_IWGRP | stat.S_IWOTH):
-        problems.append(f"writable by group or others (mode {oct(st.st_mode & 0o777)})")
-    if problems:
-        raise RuntimeError(
-            f"refusing to load compiled code from {path}: it is {' and '.join(problems)}; "
-            "use a private cache directory (CONTINUATION_CACHE or FSICAS_CACHE, or chmod go-w)")
-
-
-def _digest(path: Path) -> str:
-    return hashlib.sha256(path.read_bytes()).hexdigest()
-
-
-def _record(target: Path) -> Path:
-    """The record of the library ``target``."""
-    return target.with_name(target.name + ".json")
-
-
-def _mismatch(target: Path, key: str) -> str | None:
-    """None if the existing library ``target`` matches its record, else why not."""
-    try:
-        record = json.loads(_record(target).read_text())
-        size, digest = int(record["size"]), record["sha256"]
-        if record["key"] != key:
-            return "its record is that of another function"
-    except FileNotFoundError:
-        return "it has no record"
-    except (OSError, ValueError, KeyError, TypeError) as exc:
-        return f"its record is unreadable ({type(exc).__name__}: {exc})"
-    actual = target.stat().st_size
-    if actual != size:
-        return f"it has {actual} bytes, its record {size} (truncated or altered)"
-    if _digest(target) != digest:
-        return "its sha256 differs from its record (altered)"
-    return None
-
-
-def _cache_directory(cache: Path) -> Path:
-    """``cache``, created with mode 0700 if missing, and checked private."""
-    cache.mkdir(mode=0o700, parents=True, exist_ok=True)
-    check_private(cache)
-    return cache
 
 
 def _scratch() -> Path:
@@ -199,10 +102,9 @@ def _scratch() -> Path:
 
 class _Build:
     """One library being made in a private temporary directory beside the target: its C
-    source generated and the compiler started as a subprocess (:meth:`start`; no thread:
-    CasADi is only used by the caller's); once the compiler has ended,
-    :meth:`finish` checks it and moves the record and the library to ``target`` (each
-    atomically, the record first)."""
+    source generated and the compiler started as a subprocess (:meth:`start`); once the
+    compiler has ended, :meth:`finish` checks it and moves the record and the library to
+    ``target`` (each atomically, the record first)."""
 
     def __init__(self, fn: ca.Function, compiler: str, flags: tuple, derivatives: bool,
                  target: Path, key: str, timeout):
@@ -263,12 +165,12 @@ class _Build:
                                    f"({' '.join(self.cmd)}):\n{stderr[-2000:]}")
             so_tmp = self.tmp / "out.so"
             os.chmod(so_tmp, 0o700)
-            record = {"format": _FORMAT, "key": self.key, "size": so_tmp.stat().st_size,
-                      "sha256": _digest(so_tmp), "compiler": _compiler_identity(self.compiler),
+            record = {"format": FORMAT, "key": self.key, "size": so_tmp.stat().st_size,
+                      "sha256": digest(so_tmp), "compiler": compiler_identity(self.compiler),
                       "flags": [*self.flags, *_COMMON]}
             record_tmp = self.tmp / "out.json"
             record_tmp.write_text(json.dumps(record, indent=1) + "\n")
-            os.replace(record_tmp, _record(self.target))
+            os.replace(record_tmp, record_path(self.target))
             os.replace(so_tmp, self.target)
             compile_count += 1
         finally:
@@ -296,20 +198,6 @@ def library_path(fn: ca.Function, cache_dir=None, flags=None,
                  derivatives: bool = False) -> Path:
     """Where the compiled library of ``fn`` is (or would be) cached."""
     return _locate(fn, cache_dir, flags, derivatives)[0]
-
-
-def _cached(target: Path, key: str) -> bool:
-    """Whether ``target`` is a library that matches its record (its directory created
-    private if missing; a mismatch is warned about: the library is then rebuilt)."""
-    _cache_directory(target.parent)
-    if not target.exists():
-        return False
-    check_private(target)
-    why = _mismatch(target, key)
-    if why is not None:
-        warnings.warn(f"rebuilding the compiled library {target}: {why}", RuntimeWarning,
-                      stacklevel=4)
-    return why is None
 
 
 class Deferred:
@@ -456,7 +344,7 @@ def _request(fn: ca.Function, cache_dir, flags, timeout, derivatives: bool) -> D
 def _deferred(fn, target, key, compiler, flags, derivatives, timeout) -> Deferred:
     ident = (str(target), fn.name())
     if ident not in _REQUESTS:
-        if _cached(target, key):
+        if holds(target, key):
             deferred = Deferred(fn, target)
             deferred.compiled = _load(target, fn.name())
         else:
