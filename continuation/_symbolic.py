@@ -79,7 +79,7 @@ class BufferedFunction:
             self.fun, self.later, self._buffer = fun, None, None
 
     def __getstate__(self):
-        return {"fun": self.fun, "later": None, "_buffer": None}
+        return {"fun": self.fun, "later": None, "spent": 0.0, "_buffer": None}
 
 
 def compiled_later(fun: ca.Function, cache_dir=None, flags=None, wait: bool = False,

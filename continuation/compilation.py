@@ -235,6 +235,7 @@ class Deferred:
     def wait(self) -> ca.Function:
         """The compiled function, built now if it is still waiting for a compiler;
         RuntimeError (or OSError) if it cannot be built."""
+        _own()
         if self.build is not None and self not in _RUNNING:
             if self in _QUEUED:
                 _QUEUED.remove(self)
@@ -246,8 +247,7 @@ class Deferred:
         if self.error is not None:
             raise self.error
         if self.compiled is None:
-            raise RuntimeError(f"{self.fn.name()} was not compiled (no C compiler, or its "
-                               "build was left by a parent process)")
+            raise RuntimeError(f"{self.fn.name()} is not compiled (no compiler; a parent's)")
         return self.compiled
 
     def _start(self) -> None:
@@ -262,7 +262,7 @@ class Deferred:
         """Finish the build whose compiler ended and load the library."""
         try:
             self.build.finish()
-            self.compiled = _load(self.target, self.fn.name())
+            self.compiled = ca.external(self.fn.name(), str(self.target))
         except (RuntimeError, OSError) as exc:
             self._fail(exc)
         self.build = None
@@ -288,11 +288,9 @@ def background_slots() -> int:
     return max(1, cores - 1)
 
 
-def _pump() -> None:
-    """Complete the background builds whose compiler ended and start queued ones while
-    fewer than :func:`background_slots` run, the latest request first (the one most
-    likely still in use). A forked process leaves its parent's builds to the parent:
-    their functions stay uncompiled there."""
+def _own() -> None:
+    """In a forked process, leave the parent's builds to the parent (their functions stay
+    uncompiled here; waiting for a compiler that is not our child would see it end)."""
     if _OWNER[0] != os.getpid():
         _OWNER[0] = os.getpid()
         for deferred in _QUEUED + _RUNNING:
@@ -300,6 +298,13 @@ def _pump() -> None:
             _REQUESTS.pop((str(deferred.target), deferred.fn.name()), None)
         _QUEUED.clear()
         _RUNNING.clear()
+
+
+def _pump() -> None:
+    """Complete the background builds whose compiler ended and start queued ones while
+    fewer than :func:`background_slots` run, the latest request first (the one most
+    likely still in use)."""
+    _own()
     for deferred in [d for d in _RUNNING if d.build.ended()]:
         _RUNNING.remove(deferred)
         deferred._complete()
@@ -316,10 +321,6 @@ def _at_exit() -> None:
             deferred.build.discard()
     if os.getpid() in _SCRATCH:
         shutil.rmtree(_SCRATCH[os.getpid()], ignore_errors=True)
-
-
-def _load(target: Path, name: str) -> ca.Function:
-    return ca.external(name, str(target))
 
 
 def _request(fn: ca.Function, cache_dir, flags, timeout, derivatives: bool) -> Deferred:
@@ -346,7 +347,7 @@ def _deferred(fn, target, key, compiler, flags, derivatives, timeout) -> Deferre
     if ident not in _REQUESTS:
         if holds(target, key):
             deferred = Deferred(fn, target)
-            deferred.compiled = _load(target, fn.name())
+            deferred.compiled = ca.external(fn.name(), str(target))
         else:
             build = _Build(fn, compiler, flags, derivatives, target, key, timeout)
             deferred = Deferred(fn, target, build)
