@@ -35,9 +35,9 @@ COMMANDS = {
 }
 
 
-def run(args: list, cache: Path, backend: str | None = None) -> float:
+def run(args: list, cache: Path, label: str, backend: str | None = None) -> float:
     """Wall seconds of ``fsicas ARGS --json`` in a new process with its caches in
-    ``cache`` (the command must succeed)."""
+    ``cache`` (the command must succeed; the time is printed on stderr with ``label``)."""
     env = {**os.environ, "FSICAS_CACHE": str(cache / "fsicas"),
            "CONTINUATION_CACHE": str(cache / "continuation")}
     env.pop("CONTINUATION_BACKEND", None)
@@ -47,6 +47,7 @@ def run(args: list, cache: Path, backend: str | None = None) -> float:
     done = subprocess.run([sys.executable, "-m", "fsicas", *args, "--json"], env=env,
                           stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
     seconds = time.perf_counter() - start
+    print(f"  {args[0]} {label}: {seconds:.1f} s", file=sys.stderr, flush=True)
     if done.returncode != 0:
         raise SystemExit(f"fsicas {' '.join(args)} failed ({done.returncode}):\n"
                          f"{done.stderr[-2000:]}")
@@ -56,16 +57,16 @@ def run(args: list, cache: Path, backend: str | None = None) -> float:
 def measure(args: list, repeats: int, compiled: bool, root: Path) -> dict:
     """``{"cold": [...], "warm": [...], ("compiled": [...])}`` seconds, alternating."""
     warm, full = root / "warm", root / "compiled"
-    run(args, warm)                                   # fills the caches (and numba's)
+    run(args, warm, "first")                          # fills the caches (and numba's)
     if compiled:
-        run(args, full, "compiled")
+        run(args, full, "first, compiled", "compiled")
     times = {"cold": [], "warm": [], **({"compiled": []} if compiled else {})}
     for i in range(repeats):
         with tempfile.TemporaryDirectory(dir=root) as fresh:
-            times["cold"].append(run(args, Path(fresh)))
-        times["warm"].append(run(args, warm))
+            times["cold"].append(run(args, Path(fresh), "cold"))
+        times["warm"].append(run(args, warm, "warm"))
         if compiled:
-            times["compiled"].append(run(args, full, "compiled"))
+            times["compiled"].append(run(args, full, "warm, compiled", "compiled"))
     return times
 
 

@@ -110,34 +110,34 @@ class _Build:
                  target: Path, key: str, timeout):
         self.fn, self.compiler, self.flags, self.derivatives = fn, compiler, flags, derivatives
         self.target, self.key, self.timeout = target, key, timeout
-        self.proc, self.timed_out = None, False
-        # OSError here when the cache directory cannot take it (the caller falls back)
-        self.tmp = Path(tempfile.mkdtemp(dir=target.parent, prefix=".build-"))
+        self.proc, self.tmp, self.timed_out = None, None, False
+        # OSError here when the cache directory cannot take a build (the caller falls back)
+        os.rmdir(tempfile.mkdtemp(dir=target.parent, prefix=".build-"))
 
     def start(self) -> None:
-        """Generate the C source and start the compiler (RuntimeError when the
-        compiler does not run)."""
-        source = ca.CodeGenerator(f"{self.fn.name()}.c", {"with_header": False})
-        source.add(self.fn)
-        if self.derivatives:
-            source.add(self.fn.jacobian())      # named jac_<name>: found by casadi.external
-        c_file = source.generate(str(self.tmp) + os.sep)
-        self.cmd = [self.compiler, *self.flags, *_COMMON, c_file, "-o",
-                    str(self.tmp / "out.so"), "-lm"]
+        """Generate the C source and start the compiler (RuntimeError when it does not
+        run; OSError when the cache directory cannot take a build)."""
+        self.tmp = Path(tempfile.mkdtemp(dir=self.target.parent, prefix=".build-"))
         try:
+            source = ca.CodeGenerator(f"{self.fn.name()}.c", {"with_header": False})
+            source.add(self.fn)
+            if self.derivatives:
+                source.add(self.fn.jacobian())  # named jac_<name>: found by casadi.external
+            c_file = source.generate(str(self.tmp) + os.sep)
+            self.cmd = [self.compiler, *self.flags, *_COMMON, c_file, "-o",
+                        str(self.tmp / "out.so"), "-lm"]
             with open(self.tmp / "stderr.txt", "w") as err:
                 self.proc = subprocess.Popen(self.cmd, stdin=subprocess.DEVNULL,
                                              stdout=subprocess.DEVNULL, stderr=err)
         except OSError as exc:
             self.discard()
-            raise RuntimeError(f"C compiler {self.compiler} does not run: {exc}") from exc
+            raise RuntimeError(f"cannot compile with {self.compiler}: {exc}") from exc
         self.started, self.pid = time.monotonic(), os.getpid()
 
     def ended(self, wait: bool = False) -> bool:
         """Whether the compiler has ended (``wait``: wait for it); one that runs longer
         than ``timeout`` is killed."""
-        left = None if self.timeout is None else \
-            self.started + self.timeout - time.monotonic()
+        left = None if self.timeout is None else self.started + self.timeout - time.monotonic()
         try:
             if wait:
                 self.proc.wait(timeout=left)
@@ -157,8 +157,7 @@ class _Build:
         global compile_count
         try:
             if self.timed_out:
-                raise RuntimeError(f"compiling {self.fn.name()} took more than "
-                                   f"{self.timeout} s")
+                raise RuntimeError(f"compiling {self.fn.name()} took over {self.timeout} s")
             if self.proc.returncode != 0:
                 stderr = (self.tmp / "stderr.txt").read_text(errors="replace")
                 raise RuntimeError(f"compiling {self.fn.name()} failed "
@@ -182,7 +181,8 @@ class _Build:
         if self.proc is not None and self.pid == os.getpid() and self.proc.poll() is None:
             self.proc.kill()
             self.proc.wait()
-        shutil.rmtree(self.tmp, ignore_errors=True)
+        if self.tmp is not None:
+            shutil.rmtree(self.tmp, ignore_errors=True)
 
 
 def _locate(fn: ca.Function, cache_dir, flags, derivatives: bool):

@@ -237,6 +237,7 @@ def test_auto_compiles_only_what_pays_and_loads_what_is_cached(models, cache):
     auto = _problem(case, "auto")
     auto.residual(auto.X0), auto.jacobian(auto.X0)
     assert compilation.compile_count == before and not list(cache.glob("*.so"))
+    assert not list(cache.glob(".build-*"))          # nothing started, nothing left
     assert not any(map(_compiled, _kernel_functions(auto)))
     _problem(case, "compiled").jacobian(auto.X0)
     assert compilation.compile_count > before
