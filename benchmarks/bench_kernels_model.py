@@ -94,7 +94,7 @@ def flutter_cycle(eq, hopf, jacobian: str, backend: str, ntst: int):
 def cached_load(eq, hopf, ntst: int) -> float:
     """Build time of the compiled variant once its libraries are on disk (new field)."""
     from continuation import compilation
-    compilation._LOADED.clear()
+    compilation._REQUESTS.clear()
     eq2, hopf2 = flutter_start(eq.vf.n // 2 - 1)
     return flutter_cycle(eq2, hopf2, "blocks", "compiled", ntst)[1]
 

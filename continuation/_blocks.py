@@ -39,8 +39,8 @@ from ._intervals import KINEMATIC_MIN_ROWS, PointwiseTerm, interval_band, kinema
 from ._lazyjit import jit
 from ._lifted import LiftedBatch
 from ._sparse import Layout, layout
-from .compilation import compiled_or_none, default_flags, has_compiler
-from ._symbolic import BufferedFunction, as_sx_function
+from .compilation import default_flags, has_compiler
+from ._symbolic import BufferedFunction, as_sx_function, compiled_later, later_as
 from ._systems import system
 
 #: outputs of the Jacobian kernel, in order
@@ -50,6 +50,10 @@ KERNEL_OUTPUTS = ("F", "Mv", "Fx", "Mvx", "M", "Fp", "Mvp")
 #: instructions (a Brusselator chain of 150 states; its kernels then compile in about
 #: 3 s once, cached on disk, and run 1.05-1.3x faster than in the virtual machine)
 SX_COMPILE_MAX = 2000
+
+#: 'auto' compiles a function once it has taken this many seconds in the virtual machine
+#: (a build takes ~1 s of a spare core, then saves 30-60 % of a call on the flutter model)
+COMPILE_AFTER = 2.0
 
 
 class Pointwise:
@@ -111,7 +115,8 @@ class PointKernel:
     independently of ``K``) and mapped; ``values`` too, since a corrector evaluates the
     residual at every iterate (the flutter model at N = 10: 0.40 ms against 0.84 ms in
     the virtual machine; N = 40: 2.5 against 3.4 ms). When a function cannot be compiled
-    the kernel stays 'mx'.
+    the kernel stays 'mx'. 'auto' loads what the cache holds and compiles the rest in the
+    background once it pays (``COMPILE_AFTER``); 'compiled' builds before the first call.
     """
 
     def __init__(self, vf, K: int, backend: str = "mx", cache_dir=None):
@@ -125,8 +130,8 @@ class PointKernel:
                         for name, e in self.pointwise.own_entries().items()}
         self.expand, self.cache_dir = vf.sym is ca.SX, cache_dir
         values = self.pointwise.values()
-        self.backend = _backend(backend, vf, values)
-        self.lifted = {name: LiftedBatch(lifted, K, self._compiled(lifted.D))
+        self.backend, self.wait = _backend(backend, vf, values)   # 'mx' or 'compiled', bool
+        self.lifted = {name: LiftedBatch(lifted, K, self._later(lifted.D))
                        for name, lifted in vf.lifted.items()}
         self.values = self._mapped(values)
         self._jacobians, self._seeded = {}, {}
@@ -156,15 +161,13 @@ class PointKernel:
         return {name: batch(*args[name])[:, self.rows, self.cols]
                 for name, batch in self.lifted.items()}
 
-    def _compiled(self, fun: ca.Function, flags=None) -> ca.Function | None:
-        """``fun`` as compiled C when the backend is 'compiled' (else, or if compiling
-        fails, None and the backend falls back to 'mx')."""
+    def _later(self, fun: ca.Function, flags=None, fallback=None):
+        """None when the backend is 'mx', else :func:`compiled_later` of ``fun`` once it
+        has taken ``COMPILE_AFTER`` seconds (the backend is 'mx' if it cannot be built)."""
         if self.backend != "compiled":
             return None
-        fast = compiled_or_none(fun, self.cache_dir, flags)
-        if fast is None:
-            self.backend = "mx"
-        return fast
+        return compiled_later(fun, self.cache_dir, flags, self.wait, COMPILE_AFTER, fallback,
+                              failed=lambda: setattr(self, "backend", "mx"))
 
     def _mapped(self, fun: ca.Function) -> BufferedFunction:
         """``fun`` mapped over ``K`` columns of ``x, v`` (the other inputs shared).
@@ -178,15 +181,12 @@ class PointKernel:
         dwarf the call); without compiling, the map runs in the virtual machine
         (expanded to SX when the field is SX)."""
         fun = as_sx_function(fun) if self.expand else fun
-        shared = list(range(2, fun.n_in()))
-        name = fun.name() + f"_{self.K}"
+        name, shared = fun.name() + f"_{self.K}", list(range(2, fun.n_in()))
+        mapped = lambda f: f.map(name, "serial", self.K, shared, [])
         if self.expand:
-            mapped = fun.map(name, "serial", self.K, shared, [])
-            fast = self._compiled(mapped, default_flags(fun))
-            return BufferedFunction(fast if fast is not None else as_sx_function(mapped))
-        fast = self._compiled(fun)
-        fun = fast if fast is not None else fun
-        return BufferedFunction(fun.map(name, "serial", self.K, shared, []))
+            whole, vm = mapped(fun), as_sx_function(mapped(fun))
+            return BufferedFunction(vm, self._later(whole, default_flags(fun), vm))
+        return BufferedFunction(mapped(fun), later_as(self._later(fun), mapped))
 
     def evaluate(self, fun, x, v, p, **kw) -> list:
         """Outputs of ``fun`` at points ``x, v`` (``(K, n)`` each) as ``(K, size)`` arrays."""
@@ -208,15 +208,16 @@ class SeededKernel:
         return [extra[name] if name in extra else next(out) for name in KERNEL_OUTPUTS]
 
 
-def _backend(backend: str, vf, values: ca.Function) -> str:
-    """The kernel backend for ``vf``: 'auto' is 'compiled' for MX fields (dense modal
-    blocks, where C pays) and for SX fields whose ``values`` (F, M v) take at most
-    ``SX_COMPILE_MAX`` instructions (small straight-line code: quick to compile), 'mx'
-    for larger SX fields; 'compiled' needs a C compiler."""
+def _backend(backend: str, vf, values: ca.Function) -> tuple:
+    """``(backend, wait)`` for ``vf``: 'auto' is 'compiled' in the background (not
+    ``wait``) for MX fields (dense modal blocks, where C pays) and for SX fields whose
+    ``values`` (F, M v) take at most ``SX_COMPILE_MAX`` instructions (small straight-line
+    code), 'mx' for larger SX fields; 'compiled' waits for the compiler (needs one)."""
+    wait = backend == "compiled"
     if backend == "auto":
         small = vf.sym is ca.MX or values.n_instructions() <= SX_COMPILE_MAX
         backend = "compiled" if small else "mx"
-    return backend if backend == "mx" or has_compiler() else "mx"
+    return (backend if backend == "mx" or has_compiler() else "mx"), wait
 
 
 def point_kernel(vf, K: int, backend: str = "mx") -> PointKernel:

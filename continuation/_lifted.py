@@ -29,7 +29,7 @@ import casadi as ca
 import numpy as np
 import scipy.sparse as sp
 
-from ._symbolic import BufferedFunction
+from ._symbolic import BufferedFunction, later_as
 
 
 @dataclass(frozen=True, eq=False)
@@ -91,12 +91,13 @@ class LiftedBatch:
     """``J`` of a :class:`Lifted` at ``K`` points: ``batch(x, p[, v]) -> (K, n, n)`` with
     ``x``, ``v`` of shape ``(K, n)`` (module docstring)."""
 
-    def __init__(self, lifted: Lifted, K: int, D: ca.Function | None = None):
-        """``D``: an equivalent function to evaluate instead of ``lifted.D`` (compiled)."""
+    def __init__(self, lifted: Lifted, K: int, later=None):
+        """``later``: None, or a callable giving None until an equivalent function of
+        ``lifted.D`` (compiled) is ready, then that function (:class:`BufferedFunction`)."""
         self.lifted, self.K, self.n = lifted, K, lifted.n
-        D = lifted.D if D is None else D
-        shared = [1]                                     # p is common to all points
-        self._D = BufferedFunction(D.map(f"{D.name()}_{K}", "serial", K, shared, []))
+        D = lifted.D
+        mapped = lambda D: D.map(f"{D.name()}_{K}", "serial", K, [1], [])   # p shared
+        self._D = BufferedFunction(mapped(D), later_as(later, mapped))
         A = lifted.A
         self._A = None if A is None else BufferedFunction(
             ca.Function("A_dense", [A.mx_in(0)], [ca.densify(A(A.mx_in(0)))]))

@@ -8,11 +8,14 @@ arrays and ``scipy.sparse.csc_matrix``.
 
 from __future__ import annotations
 
+import time
+
 import casadi as ca
 import numpy as np
 import scipy.sparse as sp
 
 from ._sparse import columns_appended
+from .compilation import compile_later
 
 
 def as_sx_function(fun: ca.Function) -> ca.Function:
@@ -34,18 +37,30 @@ class BufferedFunction:
     """Call a CasADi Function through its zero-copy buffer: the arguments are copied
     into fixed NumPy arrays and the outputs' nonzeros written into NumPy arrays, with
     no DM conversion (3-5x faster than ``fun(...).full()`` for ~1e5 nonzeros). Errors
-    raise ``RuntimeError`` as a plain call does. Returns copies of the outputs."""
+    raise ``RuntimeError`` as a plain call does. Returns copies of the outputs.
 
-    def __init__(self, fun: ca.Function):
-        self.fun = fun
-        self._buffer = None
+    ``later``: None, or a callable of the seconds spent so far in calls of ``fun`` that
+    gives None until an equivalent function is ready (compiled C,
+    ``continuation.compilation.compile_later``), then the function to call from then on;
+    it is asked before each call until it gives one."""
+
+    def __init__(self, fun: ca.Function, later=None):
+        self.fun, self.later = fun, later
+        self._buffer, self.spent = None, 0.0
 
     def __call__(self, *args) -> list:
+        if self.later is not None:
+            self._switch()
         if self._buffer is None:
             self._open()
         for a, x in zip(self._args, args):
             a[:] = np.ravel(x)
-        self._eval()
+        if self.later is None:
+            self._eval()
+        else:
+            start = time.perf_counter()
+            self._eval()
+            self.spent += time.perf_counter() - start
         return [r.copy() for r in self._res]
 
     def _open(self):
@@ -58,8 +73,49 @@ class BufferedFunction:
         for i, r in enumerate(self._res):
             self._buffer.set_res(i, memoryview(r))
 
+    def _switch(self):
+        fun = self.later(self.spent)
+        if fun is not None:
+            self.fun, self.later, self._buffer = fun, None, None
+
     def __getstate__(self):
-        return {"fun": self.fun, "_buffer": None}
+        return {"fun": self.fun, "later": None, "spent": 0.0, "_buffer": None}
+
+
+def compiled_later(fun: ca.Function, cache_dir=None, flags=None, wait: bool = False,
+                   after: float = 0.0, fallback=None, failed=None):
+    """The ``later`` of a :class:`BufferedFunction` that evaluates ``fun`` (or
+    ``fallback``): None until ``fun``, once its calls have taken ``after`` seconds, is
+    compiled in the background (``continuation.compilation.compile_later``; loaded at
+    once when the cache holds it, built before the first call with ``wait``), then the
+    compiled function, or ``fallback`` (default ``fun``) if it could not be built (with
+    a RuntimeWarning; ``failed()`` is called then)."""
+    deferred = compile_later(fun, cache_dir, flags)
+    if wait:
+        try:
+            deferred.wait()
+        except (RuntimeError, OSError):
+            pass                                      # poll warns and gives fun
+
+    def later(spent: float):
+        if not deferred.done and spent < after:
+            return None                               # not worth a build (yet)
+        ready = deferred.poll()
+        if ready is None or deferred.compiled is not None:
+            return ready
+        if failed is not None:
+            failed()
+        return fun if fallback is None else fallback
+
+    return later
+
+
+def later_as(later, wrap):
+    """``later`` (see :class:`BufferedFunction`) with ``wrap`` applied to the function it
+    gives (e.g. a map over points), or None when ``later`` is None."""
+    if later is None:
+        return None
+    return lambda spent: None if (fun := later(spent)) is None else wrap(fun)
 
 
 def to_csc(values: np.ndarray, pattern: tuple) -> sp.csc_matrix:

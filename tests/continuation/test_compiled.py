@@ -186,3 +186,108 @@ def test_auto_backend_compiles_mx_and_small_sx_fields(cache):
     compiled = "compiled" if compilation.has_compiler() else "mx"
     assert kinds[False].backend == kinds[True].backend == compiled
     assert kinds["large"].backend == "mx"
+
+
+def _kernel_functions(problem) -> list:
+    """The BufferedFunctions of a problem's kernel: values, Jacobians, lifted matrices."""
+    kernel = problem.system.compiled.kernel
+    return [kernel.values, *kernel._jacobians.values(),
+            *(batch._D for batch in kernel.lifted.values())]
+
+
+def _compiled(buffered) -> bool:
+    """Whether a BufferedFunction calls a compiled library (itself or mapped)."""
+    fun = buffered.fun
+    return fun.is_a("External") or any(f.is_a("External") for f in fun.find_functions())
+
+
+@needs_compiler
+@pytest.mark.parametrize("name", ["mass_model_mx", "van_der_pol"])
+def test_background_compilation_switches_mid_run_to_equal_results(models, cache, name,
+                                                                  monkeypatch):
+    """'auto' evaluates in the virtual machine while the compiler runs beside it and
+    switches to the library once it is built: every evaluation on the way equals the
+    virtual machine's."""
+    from continuation import _blocks
+    monkeypatch.setattr(_blocks, "COMPILE_AFTER", 0.0)        # worth a build at once
+    case = _cases(models)[name]
+    mx, auto = _problem(case, "mx"), _problem(case, "auto")
+    auto.system.D = mx.system.D.copy()
+    X = mx.X0 + 0.05 * np.random.default_rng(0).standard_normal(mx.X0.size)
+    Y, p, D = X[:-1], mx.params(X), mx.system.D
+    Jm = mx.system.compiled.jacobian(Y, p, D, (0,)).toarray()
+    switched = False
+    for _ in range(2000):
+        assert _rel(mx.residual(X), auto.residual(X)) < RTOL
+        assert _rel(Jm, auto.system.compiled.jacobian(Y, p, D, (0,)).toarray()) < RTOL
+        switched = all(f.later is None for f in _kernel_functions(auto))
+        if switched:
+            break
+    assert switched and all(map(_compiled, _kernel_functions(auto)))
+    assert list(cache.glob("*.so"))
+
+
+@needs_compiler
+def test_auto_compiles_only_what_pays_and_loads_what_is_cached(models, cache):
+    """'auto' compiles nothing for a few evaluations (less than ``COMPILE_AFTER``
+    seconds); once 'compiled' has built the libraries, 'auto' calls them from the
+    first evaluation."""
+    case = _cases(models)["mass_model_mx"]
+    before = compilation.compile_count
+    auto = _problem(case, "auto")
+    auto.residual(auto.X0), auto.jacobian(auto.X0)
+    assert compilation.compile_count == before and not list(cache.glob("*.so"))
+    assert not list(cache.glob(".build-*"))          # nothing started, nothing left
+    assert not any(map(_compiled, _kernel_functions(auto)))
+    _problem(case, "compiled").jacobian(auto.X0)
+    assert compilation.compile_count > before
+    compilation._REQUESTS.clear()          # as a new process: what is cached is loaded
+    again = _problem(case, "auto")
+    again.residual(again.X0), again.jacobian(again.X0)
+    assert all(map(_compiled, _kernel_functions(again)))
+
+
+@needs_compiler
+def test_failing_compiler_in_the_background_falls_back_with_a_warning(models, cache,
+                                                                       monkeypatch, tmp_path):
+    from continuation import _blocks
+    monkeypatch.setattr(_blocks, "COMPILE_AFTER", 0.0)
+    failing = tmp_path / "failing-cc"
+    failing.write_text("#!/bin/sh\necho 'cc: internal error' >&2\nexit 1\n")
+    failing.chmod(0o755)
+    monkeypatch.setenv("CC", str(failing))
+    case = _cases(models)["mass_model_mx"]
+    mx, auto = _problem(case, "mx"), _problem(case, "auto")
+    with pytest.warns(RuntimeWarning, match="(?s)falling back.*internal error"):
+        for _ in range(200):
+            auto.residual(auto.X0)
+            if auto.system.compiled.kernel.backend == "mx":
+                break
+    assert auto.system.compiled.kernel.backend == "mx"
+    assert _rel(mx.residual(mx.X0), auto.residual(auto.X0)) < RTOL
+    assert not list(cache.glob("*.so")) and not list(cache.glob(".build-*"))
+
+
+@needs_compiler
+def test_a_build_left_running_at_exit_is_killed_and_leaves_nothing(tmp_path):
+    """A process that ends while its background compiler runs kills the compiler and
+    keeps nothing half-built."""
+    slow = tmp_path / "slow-cc"
+    slow.write_text(f"#!/bin/sh\n[ \"$1\" = --version ] && exec {compilation.find_compiler()} "
+                    "--version\nexec sleep 60\n")        # a compiler that never ends
+    slow.chmod(0o755)
+    script = textwrap.dedent("""
+        import casadi as ca
+        from continuation import compilation
+        x = ca.SX.sym("x")
+        deferred = compilation.compile_later(ca.Function("g", [x], [x ** 3]))
+        assert deferred.poll() is None
+        print(deferred.build.proc.pid)
+    """)
+    cache = tmp_path / "cache"
+    env = {**os.environ, "CONTINUATION_CACHE": str(cache), "CC": str(slow)}
+    out = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True,
+                         env=env, timeout=50)
+    assert out.returncode == 0, out.stderr
+    assert not pathlib.Path(f"/proc/{int(out.stdout)}").exists()
+    assert not list(cache.iterdir())
