@@ -14,11 +14,10 @@ import numpy as np
 import scipy.sparse as sp
 from scipy.sparse.csgraph import reverse_cuthill_mckee
 
-from ._lazyjit import KINEMATIC, SCALE_TOL
+from ._stacks import StackLU
 
-#: a band is used for interval matrices of more than ``BAND_MIN_ROWS`` rows (smaller ones
-#: are factorized by plain loops, ``_dense``) whose band storage ``2 kl + ku + 1`` is at
-#: most their size (measured at 40 rows with 34: the interval factors 1.35x faster)
+#: a band is used for interval matrices of more than ``BAND_MIN_ROWS`` rows whose band
+#: storage ``2 kl + ku + 1`` is at most their size
 BAND_MIN_ROWS = 32
 
 
@@ -50,9 +49,20 @@ class IntervalBand:
         return rank
 
     @property
-    def args(self) -> tuple:
-        """``(order, kl, ku)`` for the compiled solver."""
-        return self.order, self.lower, self.upper
+    def width(self) -> int:
+        """The rows of LAPACK's band storage, ``2 kl + ku + 1``."""
+        return 2 * self.lower + self.upper + 1
+
+    def places(self, rows: np.ndarray, cols: np.ndarray) -> tuple:
+        """``(M, L)``: where the entries ``(rows[e], cols[e])`` of a pointwise pattern sit,
+        for point ``k`` and node ``l``: ``M[k, l - 1, e]`` in the flat band storage of an
+        interval (``_stacks.BandStackLU``; nodes ``1 .. NCOL``), ``L[k, e]`` in its node 0
+        columns ``(m, n)``, rows reordered."""
+        ncol, d = self.ncol, self.lower + self.upper
+        r = self.rank[rows] * ncol + np.arange(ncol)[:, None]           # (k, e)
+        c = self.rank[cols] * ncol + np.arange(ncol)[:, None]           # (l - 1, e)
+        M = c[None] * self.width + d + r[:, None] - c[None]
+        return M, r * self.states.size + cols
 
 
 def interval_band(n: int, ncol: int, prow: np.ndarray, pcol: np.ndarray):
@@ -79,9 +89,12 @@ def interval_band(n: int, ncol: int, prow: np.ndarray, pcol: np.ndarray):
 
 
 #: kinematic rows are eliminated in dense interval matrices of more than this many rows
-#: (measured on blocks of the flutter model's structure, NTST = 20: even at 40 and 48
-#: rows, 1.3x faster at 56, 1.5x at 88, 2x at 328)
+#: (smaller ones take the plain LU, as fast there: ``docs/performance.md``)
 KINEMATIC_MIN_ROWS = 48
+
+#: the relative rounding allowed between a kinematic row's entries on its own position
+#: and ``c Dm`` (:func:`kinematic_rows`, :meth:`KinematicRows.factorize`)
+SCALE_TOL = 1e-15
 
 
 @dataclass(frozen=True, eq=False)
@@ -90,8 +103,8 @@ class KinematicRows:
     ``M_i`` at point ``k`` reading ``Dm[k, l]`` on the position at node ``l``, anything
     on its velocity ``velocities[j]`` and nothing else (``d q/dt = r``, or ``g(r)``:
     ``M`` row ``c e_q``, ``F`` a function of ``r`` alone), so that the positions at the
-    nodes ``1 .. NCOL`` follow from the velocities there (``_dense.kinematic_factor``).
-    ``D1 = Dm[:, 1:]``."""
+    nodes ``1 .. NCOL`` follow from the velocities there (:meth:`factorize`).
+    ``others``: the remaining states (the velocities among them), ``D1 = Dm[:, 1:]``."""
 
     positions: np.ndarray
     velocities: np.ndarray
@@ -99,18 +112,92 @@ class KinematicRows:
     D1: np.ndarray
 
     @cached_property
-    def args(self) -> tuple:
-        """``(order, kl, ku)`` for the compiled solver: ``order`` the positions, their
-        velocities, the other states and the velocities' places among those, ``kl``
-        :data:`KINEMATIC`, ``ku`` the number of positions."""
-        places = np.searchsorted(self.others, self.velocities)
-        order = np.concatenate([self.positions, self.velocities, self.others, places])
-        return order.astype(np.int64), KINEMATIC, self.positions.size
+    def places(self) -> np.ndarray:
+        """The place of each position's velocity among :attr:`others`."""
+        return np.searchsorted(self.others, self.velocities)
 
     @cached_property
-    def D(self) -> np.ndarray:
-        """``(D1, D1^-1)``, stacked."""
-        return np.stack([self.D1, np.linalg.inv(self.D1)])
+    def distinct(self) -> bool:
+        """Whether every position has a velocity of its own."""
+        return np.unique(self.velocities).size == self.velocities.size
+
+    @cached_property
+    def D1inv(self) -> np.ndarray:
+        return np.linalg.inv(self.D1)
+
+    def factorize(self, blocks: np.ndarray) -> "KinematicLU | None":
+        """:class:`KinematicLU` of the interval matrices ``M_i = blocks[i, :, n:]``
+        (``blocks``: ``(NTST, m, m + n)``); None if an ``M_i`` lacks the structure
+        (checked exactly) or its Schur complement is singular."""
+        return KinematicLU.of(self, blocks)
+
+
+class KinematicLU:
+    """Block LU of interval matrices with :class:`KinematicRows`. Position ``q_j``'s rows
+    read ``c_j D1 x_q + V_j x_v = b_q`` (``x_q``, ``x_v``: the position and its velocity
+    at the nodes ``1 .. NCOL``), so ``x_q = D1^-1 b_q / c_j - W_j x_v`` with ``W_j = D1^-1
+    V_j / c_j``, and the other states ``s`` (the velocities among them) solve the Schur
+    complement ``S x_s = b_s - A_sq D1^-1 b_q / c`` with ``S = A_ss - A_sq W``: an LU of
+    ``(n - nq) NCOL`` rows instead of ``n NCOL``. All steps run on the whole stack (NumPy's
+    batched products), the LUs of ``S_i`` by LAPACK (:class:`_stacks.StackLU`)."""
+
+    def __init__(self, rows: KinematicRows, S, Asq, W, c):
+        #: ``S_i`` factorized, ``A_sq`` ``(NTST, ms, NCOL nq)`` (columns node-major),
+        #: ``W`` ``(NTST, nq, NCOL, NCOL)``, ``c`` ``(NTST, nq)``
+        self.rows, self.S, self.Asq, self.W, self.c = rows, S, Asq, W, c
+
+    @classmethod
+    def of(cls, rows: KinematicRows, blocks: np.ndarray) -> "KinematicLU | None":
+        pos, vel, oth, D1 = rows.positions, rows.velocities, rows.others, rows.D1
+        ntst, m, _ = blocks.shape
+        ncol, nq = D1.shape[0], pos.size
+        n = m // ncol
+        ns = n - nq
+        B5 = blocks.reshape(ntst, ncol, n, ncol + 1, n)             # (i, k, a, l, s)
+        rows5 = B5[:, :, np.concatenate([oth, pos]), 1:]           # M's rows, reordered
+        Mo, Mq, j = rows5[:, :, :ns], rows5[:, :, ns:], np.arange(nq)
+        own, V = Mq[:, :, j, :, pos], Mq[:, :, j, :, vel]           # (nq, i, k, l)
+        c = own[:, :, 0, 0] / D1[0, 0]
+        scaled = c[:, :, None, None] * D1
+        with np.errstate(invalid="ignore"):
+            if not (np.all(np.isfinite(c)) and np.all(c != 0.0) and np.all(
+                    np.abs(own - scaled) <= SCALE_TOL * np.abs(scaled))):
+                return None
+        Mq[:, :, j, :, pos] = Mq[:, :, j, :, vel] = 0.0
+        if Mq.any():                                                # a third state
+            return None
+        c = np.ascontiguousarray(c.T)                               # (i, nq)
+        W = rows.D1inv @ V.transpose(1, 0, 2, 3) / c[:, :, None, None]  # (i, nq, l, l)
+        S, Asq = Mo[..., oth], Mo[..., pos]         # (i, k, s, l, t|j)
+        # S[:, (k, s), (l, v_j)] -= sum_b A_sq[:, (k, s), (b, j)] W_j[b, l]
+        T = (Asq.transpose(0, 4, 1, 2, 3).reshape(ntst, nq, -1, ncol) @ W).reshape(
+            ntst, nq, ncol, ns, ncol).transpose(0, 2, 3, 4, 1)      # (i, k, s, l, j)
+        if rows.distinct:
+            S[..., rows.places] -= T
+        else:                                # positions sharing a velocity: sum them
+            np.subtract.at(S, (Ellipsis, rows.places), T)
+        ms = (n - nq) * ncol
+        S = StackLU.of(S.reshape(ntst, ms, ms), overwrite=True)
+        if S is None:
+            return None
+        return cls(rows, S, Asq.reshape(ntst, ms, ncol * nq), W, c)
+
+    def solve(self, b: np.ndarray) -> np.ndarray:
+        """``x_i = M_i^-1 b_i`` for ``b``: ``(NTST, m, r)``."""
+        rows, (ntst, m, r) = self.rows, b.shape
+        ncol, nq = rows.D1.shape[0], rows.positions.size
+        n = m // ncol
+        b4 = b.reshape(ntst, ncol, n, r)
+        xq = (rows.D1inv @ b4[:, :, rows.positions].reshape(ntst, ncol, nq * r))
+        xq = xq.reshape(ntst, ncol, nq, r) / self.c[:, None, :, None]    # D1^-1 b_q / c
+        bs = b4[:, :, rows.others].reshape(ntst, -1, r)
+        xs = self.S.solve(bs - self.Asq @ xq.reshape(ntst, ncol * nq, r))
+        xs = xs.reshape(ntst, ncol, n - nq, r)
+        xv = xs[:, :, rows.places].transpose(0, 2, 1, 3)        # (i, j, l, r)
+        xq -= (self.W @ xv).transpose(0, 2, 1, 3)                      # x_q -= W_j x_v
+        x = np.empty((ntst, ncol, n, r))
+        x[:, :, rows.others], x[:, :, rows.positions] = xs, xq
+        return x.reshape(b.shape)
 
 
 def kinematic_rows(blocks: np.ndarray, Dm: np.ndarray) -> KinematicRows | None:

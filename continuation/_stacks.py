@@ -1,0 +1,69 @@
+"""LU factors of a stack of matrices ``A_i`` by LAPACK (SciPy's ``getrf``/``getrs``, and
+``gbtrf``/``gbtrs`` for banded ones), one call per matrix, for the solves
+``x_i = A_i^-1 b_i`` of every matrix at once.
+
+NumPy's batched ``linalg.solve`` factorizes at every call and ``linalg.inv`` costs three
+times an LU; SciPy's ``lu_factor`` over a stack loops over the matrices in Python too,
+with more checks per call. A C-ordered matrix is the transpose of a Fortran-ordered one:
+``getrf`` factorizes ``A_i^T`` in place (no copy) and ``getrs`` solves with its
+transpose (``trans=1``), which is ``A_i``.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from scipy.linalg import lapack
+
+
+class StackLU:
+    """``A_i = P_i L_i U_i`` (partial pivoting) of every ``A_i`` of a stack ``(N, m, m)``."""
+
+    def __init__(self, lu: np.ndarray, piv: np.ndarray):
+        self.lu, self.piv = lu, piv
+
+    @classmethod
+    def of(cls, A: np.ndarray, overwrite: bool = False) -> "StackLU | None":
+        """The factors of the stack ``A``; None if an ``A_i`` is singular (a zero pivot).
+        ``overwrite``: ``A`` (C-ordered, float) may hold the factors."""
+        lu = A if overwrite and A.flags.c_contiguous and A.dtype == np.float64 else \
+            np.array(A, dtype=np.float64, order="C")
+        piv = np.empty(lu.shape[:2], np.int32)
+        for a, p in zip(lu, piv):
+            _, p[:], info = lapack.dgetrf(a.T, overwrite_a=True)
+            if info != 0:
+                return None
+        return cls(lu, piv)
+
+    def solve(self, b: np.ndarray) -> np.ndarray:
+        """``x_i = A_i^-1 b_i`` for ``b``: ``(N, m, r)``."""
+        x = np.empty(b.shape)
+        for i, (a, p) in enumerate(zip(self.lu, self.piv)):
+            x[i] = lapack.dgetrs(a.T, p, b[i], trans=1)[0]
+        return x
+
+
+class BandStackLU:
+    """The LU (partial pivoting) of every banded ``A_i`` of a stack, ``kl`` sub- and ``ku``
+    super-diagonals, given in LAPACK's band storage transposed: ``ab[i, c, kl + ku + r - c]
+    = A_i[r, c]`` (``ab``: ``(N, m, 2 kl + ku + 1)``, C-ordered; the first ``kl`` entries
+    of each column are room for the fill-in)."""
+
+    def __init__(self, ab: np.ndarray, piv: np.ndarray, kl: int, ku: int):
+        self.ab, self.piv, self.kl, self.ku = ab, piv, kl, ku
+
+    @classmethod
+    def of(cls, ab: np.ndarray, kl: int, ku: int) -> "BandStackLU | None":
+        """Factorizes ``ab`` in place; None if an ``A_i`` is singular."""
+        piv = np.empty(ab.shape[:2], np.int32)
+        for a, p in zip(ab, piv):
+            _, p[:], info = lapack.dgbtrf(a.T, kl, ku, overwrite_ab=True)
+            if info != 0:
+                return None
+        return cls(ab, piv, kl, ku)
+
+    def solve(self, b: np.ndarray) -> np.ndarray:
+        """``x_i = A_i^-1 b_i`` for ``b``: ``(N, m, r)``."""
+        x = np.empty(b.shape)
+        for i, (a, p) in enumerate(zip(self.ab, self.piv)):
+            x[i] = lapack.dgbtrs(a.T, self.kl, self.ku, b[i], p)[0]
+        return x
