@@ -1,15 +1,15 @@
 """Where the time of a continuation point goes: model kernels, linear algebra, the rest.
 
 Each workload continues a branch for ``--points`` points after a warm-up run (which
-builds the systems and loads the compiled code) and times, by wrapping the functions
+builds the systems) and times, by wrapping the functions
 (``time.perf_counter``; a call inside an already timed one is not counted twice):
 
 * **model kernels**: every CasADi call of the model's functions (``BufferedFunction``:
   the pointwise kernels at the collocation points, the lifted matrices' nonzeros, the
   residuals) and the lifted matrices' dense products (``LiftedBatch``), i.e. what the
   model itself costs at the points the analysis needs;
-* **linear algebra**: the condensed solver's compiled loops (interval LUs and maps, the
-  chain's QRs, solves, the interval products of the refinement), SuperLU, the Floquet
+* **linear algebra**: the condensed solver (interval LUs and maps, the chain's QRs,
+  solves, the interval products of the refinement), SuperLU, the Floquet
   condensation of a sparse Jacobian, the monodromy and the eigenvalues of the
   multipliers;
 * **rest**: everything else (assembly of the Jacobian from the pointwise matrices,
