@@ -1,12 +1,14 @@
 """LU factors of a stack of matrices ``A_i`` by LAPACK (SciPy's ``getrf``/``getrs``, and
-``gbtrf``/``gbtrs`` for banded ones), one call per matrix, for the solves
-``x_i = A_i^-1 b_i`` of every matrix at once.
+``gbtrf``/``gbtrs`` for banded ones), for the solves ``x_i = A_i^-1 b_i`` of every
+matrix at once.
 
 NumPy's batched ``linalg.solve`` factorizes at every call and ``linalg.inv`` costs three
 times an LU; SciPy's ``lu_factor`` over a stack loops over the matrices in Python too,
-with more checks per call. A C-ordered matrix is the transpose of a Fortran-ordered one:
-``getrf`` factorizes ``A_i^T`` in place (no copy) and ``getrs`` solves with its
-transpose (``trans=1``), which is ``A_i``.
+with more checks per call. Dense matrices take one ``getrf``/``getrs`` call each. A
+C-ordered matrix is the transpose of a Fortran-ordered one: ``getrf`` factorizes
+``A_i^T`` in place (no copy) and ``getrs`` solves with its transpose (``trans=1``),
+which is ``A_i``. A stack of banded matrices is one banded matrix (:class:`BandStackLU`):
+one ``gbtrf`` and one ``gbtrs`` call for the whole stack.
 """
 
 from __future__ import annotations
@@ -46,7 +48,13 @@ class BandStackLU:
     """The LU (partial pivoting) of every banded ``A_i`` of a stack, ``kl`` sub- and ``ku``
     super-diagonals, given in LAPACK's band storage transposed: ``ab[i, c, kl + ku + r - c]
     = A_i[r, c]`` (``ab``: ``(N, m, 2 kl + ku + 1)``, C-ordered; the first ``kl`` entries
-    of each column are room for the fill-in)."""
+    of each column are room for the fill-in, the entries outside ``A_i`` zero).
+
+    The stack is one banded matrix, ``diag(A_0, ..., A_N-1)`` with the same band, and its
+    band storage is ``ab`` read as ``(N m, 2 kl + ku + 1)``: one ``gbtrf`` and one
+    ``gbtrs`` per call instead of one per matrix. Partial pivoting never leaves a block
+    (the rows of the others are exactly zero in its columns), so the factors are those
+    of every ``A_i``."""
 
     def __init__(self, ab: np.ndarray, piv: np.ndarray, kl: int, ku: int):
         self.ab, self.piv, self.kl, self.ku = ab, piv, kl, ku
@@ -54,16 +62,13 @@ class BandStackLU:
     @classmethod
     def of(cls, ab: np.ndarray, kl: int, ku: int) -> "BandStackLU | None":
         """Factorizes ``ab`` in place; None if an ``A_i`` is singular."""
-        piv = np.empty(ab.shape[:2], np.int32)
-        for a, p in zip(ab, piv):
-            _, p[:], info = lapack.dgbtrf(a.T, kl, ku, overwrite_ab=True)
-            if info != 0:
-                return None
-        return cls(ab, piv, kl, ku)
+        N, m, width = ab.shape
+        _, piv, info = lapack.dgbtrf(ab.reshape(N * m, width).T, kl, ku, overwrite_ab=True)
+        return None if info != 0 else cls(ab, piv, kl, ku)
 
     def solve(self, b: np.ndarray) -> np.ndarray:
         """``x_i = A_i^-1 b_i`` for ``b``: ``(N, m, r)``."""
-        x = np.empty(b.shape)
-        for i, (a, p) in enumerate(zip(self.ab, self.piv)):
-            x[i] = lapack.dgbtrs(a.T, self.kl, self.ku, b[i], p)[0]
-        return x
+        N, m, width = self.ab.shape
+        x = lapack.dgbtrs(self.ab.reshape(N * m, width).T, self.kl, self.ku,
+                          b.reshape(N * m, -1), self.piv)[0]
+        return x.reshape(b.shape)

@@ -375,7 +375,7 @@ def test_banded_interval_factors_and_solves_equal_dense_lapack():
     extra = rng.standard_normal((ntst, m, k))
     J = CollocationJacobian(n, ntst, ncol, terms, extra, np.zeros(ntst * m), band)
     Z = J.maps
-    assert np.any(J.intervals.lu.piv != np.arange(m))               # rows were exchanged
+    assert np.any(J.intervals.lu.piv != np.arange(ntst * m))        # rows were exchanged
     blocks = _explicit_blocks(terms, n, ntst, ncol)
     b = rng.standard_normal((ntst, m, 4))
     x1, x4 = J.intervals.solve(b[:, :, :1]), J.intervals.solve(b)
