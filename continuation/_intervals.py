@@ -125,6 +125,27 @@ class KinematicRows:
     def D1inv(self) -> np.ndarray:
         return np.linalg.inv(self.D1)
 
+    @cached_property
+    def gather(self) -> dict:
+        """Where the pieces of an ``M_i`` sit in ``blocks[i].ravel()`` (point ``k``, node
+        ``l = 1 .. NCOL``, ``b`` a node index ``0 .. NCOL - 1`` of ``D1``): ``'S'``
+        ``A_ss`` ``((k, s), (l, t))``; ``'Asq'`` ``A_sq`` ``((k, s), (b, j))``;
+        ``'own'``, ``'V'`` position ``j``'s row at point ``k`` on its own and on its
+        velocity's node ``l``, ``(j, k, l)``; ``'rows'`` the positions' rows, all of
+        ``M_i`` (for the check that they hold nothing else)."""
+        pos, vel, oth = self.positions, self.velocities, self.others
+        ncol, n = self.D1.shape[0], pos.size + oth.size
+        stride, k, l = (ncol + 1) * n, np.arange(ncol), np.arange(1, ncol + 1)
+        row = lambda a: (k[:, None] * n + a[None, :]) * stride          # (k, a)
+        col = lambda a: (l[:, None] * n + a[None, :])                   # (l, a)
+        own_row = (k[None, :, None] * n + pos[:, None, None]) * stride  # (j, k, 1)
+        return {
+            "S": (row(oth)[:, :, None, None] + col(oth)[None, None]).ravel(),
+            "Asq": (row(oth)[:, :, None, None] + col(pos)[None, None]).ravel(),
+            "own": (own_row + l * n + pos[:, None, None]).ravel(),
+            "V": (own_row + l * n + vel[:, None, None]).ravel(),
+            "rows": (row(pos)[:, :, None] + (n + np.arange(ncol * n))).ravel()}
+
     def factorize(self, blocks: np.ndarray) -> "KinematicLU | None":
         """:class:`KinematicLU` of the interval matrices ``M_i = blocks[i, :, n:]``
         (``blocks``: ``(NTST, m, m + n)``); None if an ``M_i`` lacks the structure
@@ -138,8 +159,9 @@ class KinematicLU:
     at the nodes ``1 .. NCOL``), so ``x_q = D1^-1 b_q / c_j - W_j x_v`` with ``W_j = D1^-1
     V_j / c_j``, and the other states ``s`` (the velocities among them) solve the Schur
     complement ``S x_s = b_s - A_sq D1^-1 b_q / c`` with ``S = A_ss - A_sq W``: an LU of
-    ``(n - nq) NCOL`` rows instead of ``n NCOL``. All steps run on the whole stack (NumPy's
-    batched products), the LUs of ``S_i`` by LAPACK (:class:`_stacks.StackLU`)."""
+    ``(n - nq) NCOL`` rows instead of ``n NCOL``. The pieces are gathered from the blocks
+    at precomputed places (:attr:`KinematicRows.gather`), the products are NumPy's batched
+    ones over the stack, the LUs of ``S_i`` LAPACK's (:class:`_stacks.StackLU`)."""
 
     def __init__(self, rows: KinematicRows, S, Asq, W, c):
         #: ``S_i`` factorized, ``A_sq`` ``(NTST, ms, NCOL nq)`` (columns node-major),
@@ -148,39 +170,32 @@ class KinematicLU:
 
     @classmethod
     def of(cls, rows: KinematicRows, blocks: np.ndarray) -> "KinematicLU | None":
-        pos, vel, oth, D1 = rows.positions, rows.velocities, rows.others, rows.D1
-        ntst, m, _ = blocks.shape
-        ncol, nq = D1.shape[0], pos.size
-        n = m // ncol
-        ns = n - nq
-        B5 = blocks.reshape(ntst, ncol, n, ncol + 1, n)             # (i, k, a, l, s)
-        rows5 = B5[:, :, np.concatenate([oth, pos]), 1:]           # M's rows, reordered
-        Mo, Mq, j = rows5[:, :, :ns], rows5[:, :, ns:], np.arange(nq)
-        own, V = Mq[:, :, j, :, pos], Mq[:, :, j, :, vel]           # (nq, i, k, l)
-        c = own[:, :, 0, 0] / D1[0, 0]
-        scaled = c[:, :, None, None] * D1
+        ntst, ncol, nq = blocks.shape[0], rows.D1.shape[0], rows.positions.size
+        ms, at = rows.others.size * ncol, rows.gather
+        flat = blocks.reshape(ntst, -1)
+        own, V = (flat.take(at[key], axis=1).reshape(ntst, nq, ncol, ncol)
+                  for key in ("own", "V"))
+        c = own[:, :, 0, 0] / rows.D1[0, 0]
+        scaled = c[:, :, None, None] * rows.D1
         with np.errstate(invalid="ignore"):
             if not (np.all(np.isfinite(c)) and np.all(c != 0.0) and np.all(
                     np.abs(own - scaled) <= SCALE_TOL * np.abs(scaled))):
                 return None
-        Mq[:, :, j, :, pos] = Mq[:, :, j, :, vel] = 0.0
-        if Mq.any():                                                # a third state
-            return None
-        c = np.ascontiguousarray(c.T)                               # (i, nq)
-        W = rows.D1inv @ V.transpose(1, 0, 2, 3) / c[:, :, None, None]  # (i, nq, l, l)
-        S, Asq = Mo[..., oth], Mo[..., pos]         # (i, k, s, l, t|j)
+        if np.count_nonzero(flat.take(at["rows"], axis=1)) != \
+                np.count_nonzero(own) + np.count_nonzero(V):
+            return None                                             # a third state
+        W = rows.D1inv @ V / c[:, :, None, None]                    # (i, j, b, l)
+        S = flat.take(at["S"], axis=1).reshape(ntst, ms, ms)
+        Asq = flat.take(at["Asq"], axis=1).reshape(ntst, ms, ncol * nq)
         # S[:, (k, s), (l, v_j)] -= sum_b A_sq[:, (k, s), (b, j)] W_j[b, l]
-        T = (Asq.transpose(0, 4, 1, 2, 3).reshape(ntst, nq, -1, ncol) @ W).reshape(
-            ntst, nq, ncol, ns, ncol).transpose(0, 2, 3, 4, 1)      # (i, k, s, l, j)
+        T = (Asq.reshape(ntst, ms, ncol, nq).transpose(0, 3, 1, 2) @ W).transpose(0, 2, 3, 1)
+        S4 = S.reshape(ntst, ms, ncol, -1)
         if rows.distinct:
-            S[..., rows.places] -= T
+            S4[..., rows.places] -= T
         else:                                # positions sharing a velocity: sum them
-            np.subtract.at(S, (Ellipsis, rows.places), T)
-        ms = (n - nq) * ncol
-        S = StackLU.of(S.reshape(ntst, ms, ms), overwrite=True)
-        if S is None:
-            return None
-        return cls(rows, S, Asq.reshape(ntst, ms, ncol * nq), W, c)
+            np.subtract.at(S4, (Ellipsis, rows.places), T)
+        S = StackLU.of(S, overwrite=True)
+        return None if S is None else cls(rows, S, Asq, W, c)
 
     def solve(self, b: np.ndarray) -> np.ndarray:
         """``x_i = M_i^-1 b_i`` for ``b``: ``(NTST, m, r)``."""
@@ -188,13 +203,13 @@ class KinematicLU:
         ncol, nq = rows.D1.shape[0], rows.positions.size
         n = m // ncol
         b4 = b.reshape(ntst, ncol, n, r)
-        xq = (rows.D1inv @ b4[:, :, rows.positions].reshape(ntst, ncol, nq * r))
-        xq = xq.reshape(ntst, ncol, nq, r) / self.c[:, None, :, None]    # D1^-1 b_q / c
+        xq = rows.D1inv @ b4[:, :, rows.positions].reshape(ntst, ncol, nq * r)
+        xq = xq.reshape(ntst, ncol, nq, r) / self.c[:, None, :, None]  # D1^-1 b_q / c
         bs = b4[:, :, rows.others].reshape(ntst, -1, r)
         xs = self.S.solve(bs - self.Asq @ xq.reshape(ntst, ncol * nq, r))
         xs = xs.reshape(ntst, ncol, n - nq, r)
-        xv = xs[:, :, rows.places].transpose(0, 2, 1, 3)        # (i, j, l, r)
-        xq -= (self.W @ xv).transpose(0, 2, 1, 3)                      # x_q -= W_j x_v
+        xv = xs[:, :, rows.places].transpose(0, 2, 1, 3)                # (i, j, l, r)
+        xq -= (self.W @ xv).transpose(0, 2, 1, 3)                       # x_q -= W_j x_v
         x = np.empty((ntst, ncol, n, r))
         x[:, :, rows.others], x[:, :, rows.positions] = xs, xq
         return x.reshape(b.shape)
