@@ -7,7 +7,7 @@ out of their LU.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from functools import cached_property
 
 import numpy as np
@@ -33,6 +33,8 @@ class IntervalBand:
     ncol: int
     lower: int
     upper: int
+    #: :meth:`assembly` per number of intervals and patterns, built once
+    _assemblies: dict = field(default_factory=dict, repr=False)
 
     @cached_property
     def order(self) -> np.ndarray:
@@ -54,15 +56,32 @@ class IntervalBand:
         return 2 * self.lower + self.upper + 1
 
     def places(self, rows: np.ndarray, cols: np.ndarray) -> tuple:
-        """``(M, L)``: where the entries ``(rows[e], cols[e])`` of a pointwise pattern sit,
+        """``(M, R)``: where the entries ``(rows[e], cols[e])`` of a pointwise pattern sit,
         for point ``k`` and node ``l``: ``M[k, l - 1, e]`` in the flat band storage of an
-        interval (``_stacks.BandStackLU``; nodes ``1 .. NCOL``), ``L[k, e]`` in its node 0
-        columns ``(m, n)``, rows reordered."""
+        interval (``_stacks.BandStackLU``; nodes ``1 .. NCOL``), ``R[k, e]`` the row
+        (reordered) of its entry in the node 0 columns."""
         ncol, d = self.ncol, self.lower + self.upper
         r = self.rank[rows] * ncol + np.arange(ncol)[:, None]           # (k, e)
         c = self.rank[cols] * ncol + np.arange(ncol)[:, None]           # (l - 1, e)
-        M = c[None] * self.width + d + r[:, None] - c[None]
-        return M, r * self.states.size + cols
+        return c[None] * self.width + d + r[:, None] - c[None], r
+
+    def assembly(self, patterns: tuple, ntst: int) -> tuple:
+        """``(inside, first)``: the places of the entries of pointwise terms on
+        ``patterns`` (``(rows, cols)`` each) in the flat band storage of ``ntst`` intervals
+        (``(NTST, m, width)``) and in their node 0 columns, ``(n, NTST, m)`` (column by
+        column, rows reordered), interval by interval, term after term, each in the order
+        of :meth:`places`."""
+        key = (ntst,) + tuple(a.tobytes() for pattern in patterns for a in pattern)
+        if key not in self._assemblies:
+            m = self.ncol * self.states.size
+            inside, first = zip(*(self.places(*pattern) for pattern in patterns))
+            cols = [np.broadcast_to(c, r.shape) for (_, c), r in zip(patterns, first)]
+            i = np.arange(ntst)[:, None]
+            self._assemblies[key] = (
+                (i * m * self.width + np.concatenate([a.ravel() for a in inside])).ravel(),
+                (i * m + np.concatenate([(c * ntst * m + r).ravel() for c, r in
+                                         zip(cols, first)])).ravel())
+        return self._assemblies[key]
 
 
 def interval_band(n: int, ncol: int, prow: np.ndarray, pcol: np.ndarray):

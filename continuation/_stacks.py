@@ -45,30 +45,39 @@ class StackLU:
 
 
 class BandStackLU:
-    """The LU (partial pivoting) of every banded ``A_i`` of a stack, ``kl`` sub- and ``ku``
-    super-diagonals, given in LAPACK's band storage transposed: ``ab[i, c, kl + ku + r - c]
-    = A_i[r, c]`` (``ab``: ``(N, m, 2 kl + ku + 1)``, C-ordered; the first ``kl`` entries
-    of each column are room for the fill-in, the entries outside ``A_i`` zero).
+    """The LU (partial pivoting) of every banded ``A_i[order][:, order]`` of a stack, ``kl``
+    sub- and ``ku`` super-diagonals, given in LAPACK's band storage transposed:
+    ``ab[i, c, kl + ku + r - c] = A_i[order][:, order][r, c]`` (``ab``: ``(N, m, 2 kl + ku
+    + 1)``, C-ordered; the first ``kl`` entries of each column are room for the fill-in,
+    the entries outside ``A_i`` zero); it solves with the ``A_i``.
 
     The stack is one banded matrix, ``diag(A_0, ..., A_N-1)`` with the same band, and its
     band storage is ``ab`` read as ``(N m, 2 kl + ku + 1)``: one ``gbtrf`` and one
     ``gbtrs`` per call instead of one per matrix. Partial pivoting never leaves a block
     (the rows of the others are exactly zero in its columns), so the factors are those
-    of every ``A_i``."""
+    of every ``A_i``. Right-hand sides are solved in place in Fortran order, ``(r, N,
+    m)`` C-ordered: the ``r`` columns one after the other."""
 
-    def __init__(self, ab: np.ndarray, piv: np.ndarray, kl: int, ku: int):
-        self.ab, self.piv, self.kl, self.ku = ab, piv, kl, ku
+    def __init__(self, ab: np.ndarray, piv: np.ndarray, kl: int, ku: int, order: np.ndarray):
+        self.ab, self.piv, self.kl, self.ku, self.order = ab, piv, kl, ku, order
+        self.inverse = np.argsort(order)
 
     @classmethod
-    def of(cls, ab: np.ndarray, kl: int, ku: int) -> "BandStackLU | None":
+    def of(cls, ab: np.ndarray, kl: int, ku: int, order: np.ndarray) -> "BandStackLU | None":
         """Factorizes ``ab`` in place; None if an ``A_i`` is singular."""
         N, m, width = ab.shape
         _, piv, info = lapack.dgbtrf(ab.reshape(N * m, width).T, kl, ku, overwrite_ab=True)
-        return None if info != 0 else cls(ab, piv, kl, ku)
+        return None if info != 0 else cls(ab, piv, kl, ku, order)
+
+    def solve_columns(self, x: np.ndarray) -> np.ndarray:
+        """Overwrites ``x`` (``(r, N, m)``, C-ordered, rows in ``order``) with ``x_i =
+        (A_i[order][:, order])^-1 x_i``, column by column; returns it."""
+        r, N, m = x.shape
+        lapack.dgbtrs(self.ab.reshape(N * m, -1).T, self.kl, self.ku, x.reshape(r, N * m).T,
+                      self.piv, overwrite_b=True)
+        return x
 
     def solve(self, b: np.ndarray) -> np.ndarray:
-        """``x_i = A_i^-1 b_i`` for ``b``: ``(N, m, r)``."""
-        N, m, width = self.ab.shape
-        x = lapack.dgbtrs(self.ab.reshape(N * m, width).T, self.kl, self.ku,
-                          b.reshape(N * m, -1), self.piv)[0]
-        return x.reshape(b.shape)
+        """``x_i = A_i^-1 b_i`` for ``b``: ``(N, m, r)`` (a view of a ``(r, N, m)`` array)."""
+        x = self.solve_columns(b.transpose(2, 0, 1).take(self.order, axis=2))
+        return x.take(self.inverse, axis=2).transpose(1, 2, 0)

@@ -92,9 +92,9 @@ def _chain(decades: float, N: int = 21, n: int = 4, k: int = 2):
     return A, G, Bv, By, dense, rng
 
 
-def _chain_backward_error(A, C_, G, Bv, By, dense, rng) -> float:
+def _chain_backward_error(A, C_, G, Bv, By, dense, rng, dense_rows=0) -> float:
     N, n, k = G.shape
-    chain = Chain.of(A, C_, G)
+    chain = Chain.of(A, C_, G, dense_rows)
     factors = chain.bordered(Bv, By)
     rhs = rng.standard_normal((N * n + k, 2))
     v, y = chain.solve(factors, rhs[:N * n].reshape(N, n, 2), rhs[N * n:])
@@ -103,14 +103,17 @@ def _chain_backward_error(A, C_, G, Bv, By, dense, rng) -> float:
 
 
 @pytest.mark.parametrize("unit", [False, True])
-def test_chain_reduction_is_stable_where_a_transfer_recursion_is_not(unit):
+@pytest.mark.parametrize("dense_rows", [0, 40])
+def test_chain_reduction_is_stable_where_a_transfer_recursion_is_not(unit, dense_rows):
     """A chain whose monodromy has multipliers 1e+-20 (a recursion over the transfer
     maps, single shooting, loses everything there): the pairwise QR reduction solves it
     with a backward error at round-off, also when told its ``C_i`` are identities
-    (``C = None``: its maps, ``|A_i| ~ 9``, are too large for the identity pivot)."""
+    (``C = None``: its maps, ``|A_i| ~ 9``, are too large for the identity pivot), down
+    to one equation or to the dense LU of the last levels' equations (here 6 of them)."""
     A, G, Bv, By, dense, rng = _chain(20.0)
     C_ = None if unit else np.broadcast_to(np.eye(A.shape[1]), A.shape)
-    assert _chain_backward_error(A, C_, G, Bv, By, dense, rng) < 1e-14
+    assert _chain_backward_error(A, C_, G, Bv, By, dense, rng, dense_rows) < 1e-14
+    assert len(Chain.of(A, C_, G, dense_rows).levels) == (5 if dense_rows == 0 else 2)
     mono = np.eye(A.shape[1])
     for Ai in A:
         mono = -Ai @ mono
@@ -135,7 +138,7 @@ def test_identity_pivots_solve_a_chain_of_bounded_maps_to_round_off(scale):
     As, Gs, Bvs = D[:, None] * A / D[None, :], D[:, None] * G, Bv / D[None, None, :]
     errors = []
     for C_ in (None, np.broadcast_to(np.eye(n), A.shape)):
-        chain = Chain.of(As, C_, Gs)
+        chain = Chain.of(As, C_, Gs, dense_rows=0)
         rhs = rng.standard_normal((N * n + k, 2))
         z = rhs[:N * n].reshape(N, n, 2) * D[None, :, None]        # the scaled equations
         v, y = chain.solve(chain.bordered(Bvs, By), z, rhs[N * n:])
@@ -143,7 +146,7 @@ def test_identity_pivots_solve_a_chain_of_bounded_maps_to_round_off(scale):
         errors.append(np.max(np.abs(dense @ x - rhs)) / (np.max(np.abs(dense))
                                                         * np.max(np.abs(x))))
     assert errors[0] < 1e-15 and errors[1] < 1e-15 * scale
-    by_pivot = [level.a0.shape[0] for level, _ in Chain.of(As, None, Gs).levels
+    by_pivot = [level.a0.shape[0] for level, _ in Chain.of(As, None, Gs, 0).levels
                 if hasattr(level, "a0")]
     assert sum(by_pivot) >= 10 + 5                  # the first two levels at least
     assert scale == 1.0 or np.abs(As).sum(axis=2).max() > UNIT_GROWTH
@@ -375,7 +378,7 @@ def test_banded_interval_factors_and_solves_equal_dense_lapack():
     extra = rng.standard_normal((ntst, m, k))
     J = CollocationJacobian(n, ntst, ncol, terms, extra, np.zeros(ntst * m), band)
     Z = J.maps
-    assert np.any(J.intervals.lu.piv != np.arange(ntst * m))        # rows were exchanged
+    assert np.any(J.intervals.piv != np.arange(ntst * m))           # rows were exchanged
     blocks = _explicit_blocks(terms, n, ntst, ncol)
     b = rng.standard_normal((ntst, m, 4))
     x1, x4 = J.intervals.solve(b[:, :, :1]), J.intervals.solve(b)
