@@ -13,16 +13,21 @@ from ._stacks import StackLU
 #: identity pivot; a level with a larger one takes the QR
 UNIT_GROWTH = 16.0
 
+#: the reduction stops at the first level whose equations and border rows make a dense
+#: system of at most ``DENSE_ROWS`` rows (a few small levels cost more than its LU)
+DENSE_ROWS = 96
+
 
 class Chain:
     """The cyclic chain ``A_i v_i + C_i v_{i+1} + G_i y = z_i`` (``i < N``,
     ``v_N = v_0``) reduced pairwise: equations ``2j`` and ``2j + 1`` share the point
     ``2j + 1``, which each level eliminates (the point from its neighbours, and a new
-    equation between ``v_2j`` and ``v_2j+2``); ``log2 N`` levels (an odd last equation
-    carried to the next) leave ``(A + C) v_0 + G y = z``. Stable like a QR of each pair
-    (no recursion over transfer maps). The ``k`` border rows ``sum_i Bv_i v_i + By y = s``
-    that make the system square (:meth:`bordered`) follow the eliminations, and with the
-    last equation form an ``n + k`` dense system.
+    equation between ``v_2j`` and ``v_2j+2``); up to ``log2 N`` levels (an odd last
+    equation carried to the next) leave ``L`` equations, down to ``(A + C) v_0 + G y =
+    z``. Stable like a QR of each pair (no recursion over transfer maps). The ``k`` border
+    rows ``sum_i Bv_i v_i + By y = s`` that make the system square (:meth:`bordered`)
+    follow the eliminations, and with the ``L`` equations left form a dense system of
+    ``L n + k`` rows (at most :data:`DENSE_ROWS`, or ``L = 1``), solved by LU.
 
     A level eliminates its points by the QR of each pair's column ``[C_2j; A_2j+1]``
     (:class:`_Rotations`), or, when every ``C_i`` is still the identity (the condensed
@@ -33,15 +38,17 @@ class Chain:
 
     def __init__(self, levels, last):
         #: per level its elimination (:class:`_Pivots` or :class:`_Rotations`) and whether
-        #: it carries an odd last equation; the last equation ``(A + C, G)``
+        #: it carries an odd last equation; the equations left ``(A, C, G)`` (``C`` None
+        #: for identities)
         self.levels, self.last = levels, last
 
     @classmethod
-    def of(cls, A, C, G):
+    def of(cls, A, C, G, dense_rows: int = DENSE_ROWS):
         """``A, C``: ``(N, n, n)``, ``C`` None for identities (the condensed chain);
-        ``G``: ``(N, n, k)``. None when a pair's column is rank-deficient."""
-        levels = []
-        while A.shape[0] > 1:
+        ``G``: ``(N, n, k)``; ``dense_rows``: :data:`DENSE_ROWS`. None when a pair's
+        column is rank-deficient."""
+        levels, (n, k) = [], G.shape[1:]
+        while A.shape[0] > 1 and A.shape[0] * n + k > dense_rows:
             q, odd = divmod(A.shape[0], 2)
             a0, a1, g0, g1 = A[0:2 * q:2], A[1:2 * q:2], G[0:2 * q:2], G[1:2 * q:2]
             if C is None and _bounded(a1, a0):
@@ -58,7 +65,7 @@ class Chain:
                 A2, G2 = np.concatenate([A2, A[-1:]]), np.concatenate([G2, G[-1:]])
                 C2 = None if C2 is None else np.concatenate([C2, C[-1:]])
             A, C, G = A2, C2, G2
-        return cls(levels, (A[0] + (np.eye(A.shape[1]) if C is None else C[0]), G[0]))
+        return cls(levels, (A, C, G))
 
     def bordered(self, Bv, By):
         """``(shares, lu)``: per level the border rows' share of its eliminated points,
@@ -72,10 +79,16 @@ class Chain:
             kept = B[0::2].copy() if not odd else np.concatenate([B[0:2 * q + 1:2], B[-1:]])
             shares.append(level.border(B[1:2 * q:2], kept, By))
             B = kept
-        AC, G0 = self.last
-        final = np.empty((1, n + k, n + k))
-        final[0, :n, :n], final[0, :n, n:] = AC, G0
-        final[0, n:, :n], final[0, n:, n:] = B[0] + B[1], By
+        A, C, G = self.last
+        L = A.shape[0]
+        B[0] += B[L]                                        # point L is point 0
+        final = np.zeros((1, L * n + k, L * n + k))
+        F, j = final[0, :L * n, :L * n].reshape(L, n, L, n), np.arange(L)
+        F[j, :, j] = A
+        F[j, :, (j + 1) % L] += np.eye(n) if C is None else C
+        final[0, :L * n, L * n:] = G.reshape(L * n, k)
+        final[0, L * n:, :L * n] = B[:L].transpose(1, 0, 2).reshape(k, L * n)
+        final[0, L * n:, L * n:] = By
         lu = StackLU.of(final, overwrite=True)
         return None if lu is None else (shares, lu)
 
@@ -89,13 +102,13 @@ class Chain:
             new, s, kept = level.forward(z[0:2 * q:2], z[1:2 * q:2], s, share)
             z = np.concatenate([new, z[-1:]]) if odd else new
             saved.append(kept)
-        x = lu.solve(np.concatenate([z[0], s])[None])[0]
-        v0, y = x[:n], x[n:]
-        vals = np.empty((2,) + v0.shape)                            # v_0 and v_N = v_0
-        vals[:] = v0
+        L, r = z.shape[0], z.shape[2]
+        x = lu.solve(np.concatenate([z.reshape(L * n, r), s])[None])[0]
+        vals, y = np.empty((L + 1, n, r)), x[L * n:]                # v_0 .. v_L = v_0
+        vals[:L], vals[L] = x[:L * n].reshape(L, n, r), x[:n]
         for (level, odd), kept in zip(reversed(self.levels), reversed(saved)):
             q = kept.shape[0]
-            out = np.empty((2 * q + 1 + odd,) + v0.shape)
+            out = np.empty((2 * q + 1 + odd, n, r))
             out[0:2 * q + 1:2] = vals[:q + 1]
             out[1:2 * q:2] = level.back(kept, vals[:q], vals[1:q + 1], y)
             if odd:
