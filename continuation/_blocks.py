@@ -266,7 +266,7 @@ class BlockCollocationSystem:
         self.col = collocation(ncol)
         #: ``P[k, l]`` and ``Dm[k, l]`` of every collocation point ``i NCOL + k``
         self._weights = (np.tile(self.col.P, (ntst, 1)), np.tile(self.col.Dm, (ntst, 1)))
-        self._PD = np.stack([self.col.P, self.col.Dm])[:, None]     # (2, 1, NCOL, NCOL + 1)
+        self._points = _points_operator(self.col.P, self.col.Dm, kernel.n, ntst, ncol)
         self.n_state = self.n_equations = kernel.n * ntst * ncol + 1
         self._layouts: dict = {}
         #: the interval matrices' band (on the pattern; lifted matrices come dense)
@@ -294,11 +294,8 @@ class BlockCollocationSystem:
     def points(self, U) -> tuple:
         """``(u_k, u'_k)`` at the ``K`` collocation points, each ``(K, n)``:
         ``u_k = sum_l P[k, l] u_l``, ``u'_k = sum_l Dm[k, l] u_l``."""
-        n, ntst, ncol = self.kernel.n, self.ntst, self.ncol
-        nodes = np.asarray(U, dtype=float).reshape(ntst, ncol, n)
-        nodes = np.concatenate([nodes, np.roll(nodes[:, :1], -1, axis=0)], axis=1)
-        x, v = self._PD @ nodes                  # node (i, NCOL) is (i + 1, 0), wrapping
-        return x.reshape(-1, n), v.reshape(-1, n)
+        x, v = (self._points @ np.asarray(U, dtype=float)).reshape(2, -1, self.kernel.n)
+        return x, v
 
     def residual(self, Y, P, D) -> np.ndarray:
         """``G = (vec(M(u_k) u'_k - h_i T F(u_k)), c . U)``."""
@@ -384,3 +381,16 @@ def builder(ntst: int, ncol: int, backend: str = "mx"):
         return BlockCollocationSystem(kernel, ntst, ncol)
 
     return build
+
+
+def _points_operator(P, Dm, n: int, ntst: int, ncol: int) -> sp.csr_matrix:
+    """The sparse ``(2 K n, K n)`` operator of :meth:`BlockCollocationSystem.points`:
+    ``x_ik = sum_l P[k, l] u_(i, l)`` over ``v_ik = sum_l Dm[k, l] u_(i, l)`` at the ``K =
+    NTST NCOL`` points (node ``(i, NCOL)`` is ``(i + 1, 0)``, wrapping)."""
+    K = ntst * ncol
+    w, i, k, l, a = np.meshgrid(np.arange(2), np.arange(ntst), np.arange(ncol),
+                                np.arange(ncol + 1), np.arange(n), indexing="ij")
+    rows = ((w * K + i * ncol + k) * n + a).ravel()
+    cols = (((i * ncol + l) % K) * n + a).ravel()
+    values = np.stack([P, Dm])[w, k, l].ravel()
+    return sp.csr_matrix((values, (rows, cols)), shape=(2 * K * n, K * n))
