@@ -14,7 +14,8 @@ from ._stacks import StackLU
 UNIT_GROWTH = 16.0
 
 #: the reduction stops at the first level whose equations and border rows make a dense
-#: system of at most ``DENSE_ROWS`` rows (a few small levels cost more than its LU)
+#: system of at most ``DENSE_ROWS`` rows (a few small levels cost more than its LU), or
+#: of at most twice that when the level would take the QR
 DENSE_ROWS = 96
 
 
@@ -27,7 +28,7 @@ class Chain:
     z``. Stable like a QR of each pair (no recursion over transfer maps). The ``k`` border
     rows ``sum_i Bv_i v_i + By y = s`` that make the system square (:meth:`bordered`)
     follow the eliminations, and with the ``L`` equations left form a dense system of
-    ``L n + k`` rows (at most :data:`DENSE_ROWS`, or ``L = 1``), solved by LU.
+    ``L n + k`` rows (:data:`DENSE_ROWS`, or ``L = 1``), solved by LU.
 
     A level eliminates its points by the QR of each pair's column ``[C_2j; A_2j+1]``
     (:class:`_Rotations`), or, when every ``C_i`` is still the identity (the condensed
@@ -53,6 +54,8 @@ class Chain:
             a0, a1, g0, g1 = A[0:2 * q:2], A[1:2 * q:2], G[0:2 * q:2], G[1:2 * q:2]
             if C is None and _bounded(a1, a0):
                 level, A2, G2, C2 = _Pivots(a0, a1, g0), -(a1 @ a0), g1 - a1 @ g0, None
+            elif A.shape[0] * n + k <= 2 * dense_rows:
+                break
             else:
                 if C is None:
                     C = np.broadcast_to(np.eye(A.shape[1]), A.shape)
@@ -161,17 +164,15 @@ class _Rotations:
     def of(cls, a0, c0, a1, c1, g0, g1):
         """``(rotations, A2, C2, G2)``: the eliminations and the new equations; None when
         an ``R`` is numerically rank-deficient (``|R_jj| <= n eps max |R_ii|``)."""
-        q, n, k = a0.shape[0], a0.shape[1], g0.shape[2]
+        n = a0.shape[1]
         Q, R = np.linalg.qr(np.concatenate([c0, a1], axis=1), mode="complete")
         d = np.abs(np.diagonal(R[:, :n], axis1=1, axis2=2))
         if not (np.all(np.isfinite(d)) and np.all(d.min(axis=1) > n * np.finfo(float).eps
                                                    * d.max(axis=1))):
             return None
-        W = np.zeros((q, 2 * n, 4 * n + k))                # [I | a0, 0, g0; 0, c1, g1]
-        W[:, :, :2 * n] = np.eye(2 * n)
-        W[:, :n, 2 * n:3 * n], W[:, n:, 3 * n:4 * n] = a0, c1
-        W[:, :n, 4 * n:], W[:, n:, 4 * n:] = g0, g1
-        QtW = Q.transpose(0, 2, 1) @ W
+        Qt = Q.transpose(0, 2, 1)            # Q^T W, W = [I | a0, 0, g0; 0, c1, g1]
+        QtW = np.concatenate([Qt, Qt[:, :, :n] @ a0, Qt[:, :, n:] @ c1,
+                              Qt[:, :, :n] @ g0 + Qt[:, :, n:] @ g1], axis=2)
         top = np.linalg.solve(R[:, :n], QtW[:, :n])        # R^-1 Q_top^T W
         bottom = QtW[:, n:]
         return (cls(bottom[:, :, :2 * n], top[:, :, :2 * n], top[:, :, 2 * n:]),

@@ -113,11 +113,17 @@ class CollocationJacobian:
     def band_blocks(self) -> tuple:
         """``(ab, left)``: the ``M_i`` reordered by the band in LAPACK's band storage
         (``_stacks.BandStackLU``, ``(NTST, m, 2 kl + ku + 1)``) and the first ``n``
-        columns of every interval (node 0), rows reordered, ``(NTST, m, n)`` (a view of an
-        ``(n, NTST, m)`` array, the layout of the band solves' right-hand sides), summed
-        from the terms' entries by one ``bincount`` each (no dense blocks)."""
+        columns of every interval (node 0), rows reordered, ``(NTST, m, n)``."""
+        ab, rhs = self._band_system()
+        return ab, rhs[:self.n].transpose(1, 2, 0)
+
+    def _band_system(self) -> tuple:
+        """``(ab, rhs)``: :meth:`band_blocks`'s ``ab`` and the right-hand sides of the
+        maps, ``[B_i^L, E_i]`` with rows reordered, in the band solves' layout ``(n + k,
+        NTST, m)``; summed from the terms' entries by one ``bincount`` each (no dense
+        blocks)."""
         b, n, ntst, ncol = self.band, self.n, self.ntst, self.ncol
-        m = n * ncol
+        m, k = n * ncol, self.extra.shape[2]
         inside, first = b.assembly(tuple((t.rows, t.cols) for t in self.terms), ntst)
         w = [t.weights.reshape(ntst, ncol, ncol + 1, 1) for t in self.terms]
         v = [t.values.reshape(ntst, ncol, 1, -1) for t in self.terms]
@@ -126,8 +132,10 @@ class CollocationJacobian:
         node0 = np.concatenate([(wt[:, :, 0] * vt[:, :, 0]).reshape(ntst, -1)
                                 for wt, vt in zip(w, v)], axis=1)
         ab = np.bincount(inside, nodes.ravel(), minlength=ntst * m * b.width)
-        left = np.bincount(first, node0.ravel(), minlength=ntst * m * n)
-        return ab.reshape(ntst, m, b.width), left.reshape(n, ntst, m).transpose(1, 2, 0)
+        rhs = np.bincount(first, node0.ravel(), minlength=(n + k) * ntst * m)
+        rhs = rhs.reshape(n + k, ntst, m)
+        rhs[n:] = self.extra.transpose(2, 0, 1).take(b.order, axis=2)
+        return ab.reshape(ntst, m, b.width), rhs
 
     def collocation_times(self, x: np.ndarray) -> np.ndarray:
         """``[B, E] x`` for ``x`` of shape ``(columns,)`` or ``(columns, r)``."""
@@ -169,13 +177,11 @@ class CollocationJacobian:
         n = self.n
         if self.band is not None:
             band = self.band
-            ab, left = self.band_blocks()
+            ab, rhs = self._band_system()
             lu = BandStackLU.of(ab, band.lower, band.upper, band.order)
             if lu is None:
                 return None, None
-            extra = self.extra.transpose(2, 0, 1).take(band.order, axis=2)
-            Z = lu.solve_columns(np.concatenate([left.transpose(2, 0, 1), extra]))
-            return lu, Z.take(lu.inverse, axis=2).transpose(1, 2, 0)
+            return lu, lu.solve_columns(rhs).take(lu.inverse, axis=2).transpose(1, 2, 0)
         M, right = self.blocks[:, :, n:], np.concatenate([self.blocks[:, :, :n], self.extra],
                                                          axis=2)
         lu = None if self.kinematic is None else self.kinematic.factorize(self.blocks)
