@@ -136,6 +136,13 @@ class KinematicRows:
         return np.searchsorted(self.others, self.velocities)
 
     @cached_property
+    def index(self) -> tuple:
+        """:attr:`positions`, :attr:`others` and :attr:`places` as indices: a slice where
+        they are a range (a view instead of a copy; the mechanical models order their
+        states so: positions, velocities, the rest)."""
+        return tuple(_as_index(a) for a in (self.positions, self.others, self.places))
+
+    @cached_property
     def distinct(self) -> bool:
         """Whether every position has a velocity of its own."""
         return np.unique(self.velocities).size == self.velocities.size
@@ -146,24 +153,15 @@ class KinematicRows:
 
     @cached_property
     def gather(self) -> dict:
-        """Where the pieces of an ``M_i`` sit in ``blocks[i].ravel()`` (point ``k``, node
-        ``l = 1 .. NCOL``, ``b`` a node index ``0 .. NCOL - 1`` of ``D1``): ``'S'``
-        ``A_ss`` ``((k, s), (l, t))``; ``'Asq'`` ``A_sq`` ``((k, s), (b, j))``;
-        ``'own'``, ``'V'`` position ``j``'s row at point ``k`` on its own and on its
-        velocity's node ``l``, ``(j, k, l)``; ``'rows'`` the positions' rows, all of
-        ``M_i`` (for the check that they hold nothing else)."""
-        pos, vel, oth = self.positions, self.velocities, self.others
-        ncol, n = self.D1.shape[0], pos.size + oth.size
-        stride, k, l = (ncol + 1) * n, np.arange(ncol), np.arange(1, ncol + 1)
-        row = lambda a: (k[:, None] * n + a[None, :]) * stride          # (k, a)
-        col = lambda a: (l[:, None] * n + a[None, :])                   # (l, a)
-        own_row = (k[None, :, None] * n + pos[:, None, None]) * stride  # (j, k, 1)
-        return {
-            "S": (row(oth)[:, :, None, None] + col(oth)[None, None]).ravel(),
-            "Asq": (row(oth)[:, :, None, None] + col(pos)[None, None]).ravel(),
-            "own": (own_row + l * n + pos[:, None, None]).ravel(),
-            "V": (own_row + l * n + vel[:, None, None]).ravel(),
-            "rows": (row(pos)[:, :, None] + (n + np.arange(ncol * n))).ravel()}
+        """Where position ``j``'s row at point ``k`` has its entries on its own node ``l =
+        1 .. NCOL`` (``'own'``) and on its velocity's (``'V'``) in ``blocks[i].ravel()``,
+        ``(j, k, l)``."""
+        pos, vel = self.positions, self.velocities
+        ncol, n = self.D1.shape[0], pos.size + self.others.size
+        k, l = np.arange(ncol), np.arange(1, ncol + 1)
+        row = (k[None, :, None] * n + pos[:, None, None]) * (ncol + 1) * n + l * n
+        return {"own": (row + pos[:, None, None]).ravel(),
+                "V": (row + vel[:, None, None]).ravel()}
 
     def factorize(self, blocks: np.ndarray) -> "KinematicLU | None":
         """:class:`KinematicLU` of the interval matrices ``M_i = blocks[i, :, n:]``
@@ -178,9 +176,10 @@ class KinematicLU:
     at the nodes ``1 .. NCOL``), so ``x_q = D1^-1 b_q / c_j - W_j x_v`` with ``W_j = D1^-1
     V_j / c_j``, and the other states ``s`` (the velocities among them) solve the Schur
     complement ``S x_s = b_s - A_sq D1^-1 b_q / c`` with ``S = A_ss - A_sq W``: an LU of
-    ``(n - nq) NCOL`` rows instead of ``n NCOL``. The pieces are gathered from the blocks
-    at precomputed places (:attr:`KinematicRows.gather`), the products are NumPy's batched
-    ones over the stack, the LUs of ``S_i`` LAPACK's (:class:`_stacks.StackLU`)."""
+    ``(n - nq) NCOL`` rows instead of ``n NCOL``. The pieces are views of the blocks
+    where the states are ranges (:attr:`KinematicRows.index`), else gathered; the
+    products are NumPy's batched ones over the stack, the LUs of ``S_i`` LAPACK's
+    (:class:`_stacks.StackLU`)."""
 
     def __init__(self, rows: KinematicRows, S, Asq, W, c):
         #: ``S_i`` factorized, ``A_sq`` ``(NTST, ms, NCOL nq)`` (columns node-major),
@@ -190,7 +189,7 @@ class KinematicLU:
     @classmethod
     def of(cls, rows: KinematicRows, blocks: np.ndarray) -> "KinematicLU | None":
         ntst, ncol, nq = blocks.shape[0], rows.D1.shape[0], rows.positions.size
-        ms, at = rows.others.size * ncol, rows.gather
+        ms, at, (pos, oth, places) = rows.others.size * ncol, rows.gather, rows.index
         flat = blocks.reshape(ntst, -1)
         own, V = (flat.take(at[key], axis=1).reshape(ntst, nq, ncol, ncol)
                   for key in ("own", "V"))
@@ -200,17 +199,18 @@ class KinematicLU:
             if not (np.all(np.isfinite(c)) and np.all(c != 0.0) and np.all(
                     np.abs(own - scaled) <= SCALE_TOL * np.abs(scaled))):
                 return None
-        if np.count_nonzero(flat.take(at["rows"], axis=1)) != \
-                np.count_nonzero(own) + np.count_nonzero(V):
+        M = blocks.reshape(ntst, ncol, -1, ncol + 1, blocks.shape[2] // (ncol + 1))[..., 1:, :]
+        if np.count_nonzero(_rows(M, pos, 2)) != np.count_nonzero(own) + np.count_nonzero(V):
             return None                                             # a third state
         W = rows.D1inv @ V / c[:, :, None, None]                    # (i, j, b, l)
-        S = flat.take(at["S"], axis=1).reshape(ntst, ms, ms)
-        Asq = flat.take(at["Asq"], axis=1).reshape(ntst, ms, ncol * nq)
+        Mo = _rows(M, oth, 2)                                       # (i, k, s, l, t)
+        S = np.ascontiguousarray(_rows(Mo, oth, 4)).reshape(ntst, ms, ms)
+        Asq = np.ascontiguousarray(_rows(Mo, pos, 4)).reshape(ntst, ms, ncol * nq)
         # S[:, (k, s), (l, v_j)] -= sum_b A_sq[:, (k, s), (b, j)] W_j[b, l]
         T = (Asq.reshape(ntst, ms, ncol, nq).transpose(0, 3, 1, 2) @ W).transpose(0, 2, 3, 1)
         S4 = S.reshape(ntst, ms, ncol, -1)
         if rows.distinct:
-            S4[..., rows.places] -= T
+            S4[..., places] -= T
         else:                                # positions sharing a velocity: sum them
             np.subtract.at(S4, (Ellipsis, rows.places), T)
         S = StackLU.of(S, overwrite=True)
@@ -220,18 +220,31 @@ class KinematicLU:
         """``x_i = M_i^-1 b_i`` for ``b``: ``(NTST, m, r)``."""
         rows, (ntst, m, r) = self.rows, b.shape
         ncol, nq = rows.D1.shape[0], rows.positions.size
+        pos, oth, places = rows.index
         n = m // ncol
         b4 = b.reshape(ntst, ncol, n, r)
-        xq = rows.D1inv @ b4[:, :, rows.positions].reshape(ntst, ncol, nq * r)
+        xq = rows.D1inv @ b4[:, :, pos].reshape(ntst, ncol, nq * r)
         xq = xq.reshape(ntst, ncol, nq, r) / self.c[:, None, :, None]  # D1^-1 b_q / c
-        bs = b4[:, :, rows.others].reshape(ntst, -1, r)
+        bs = b4[:, :, oth].reshape(ntst, -1, r)
         xs = self.S.solve(bs - self.Asq @ xq.reshape(ntst, ncol * nq, r))
         xs = xs.reshape(ntst, ncol, n - nq, r)
-        xv = xs[:, :, rows.places].transpose(0, 2, 1, 3)                # (i, j, l, r)
+        xv = xs[:, :, places].transpose(0, 2, 1, 3)                     # (i, j, l, r)
         xq -= (self.W @ xv).transpose(0, 2, 1, 3)                       # x_q -= W_j x_v
         x = np.empty((ntst, ncol, n, r))
-        x[:, :, rows.others], x[:, :, rows.positions] = xs, xq
+        x[:, :, oth], x[:, :, pos] = xs, xq
         return x.reshape(b.shape)
+
+
+def _as_index(a: np.ndarray):
+    """``a`` as a slice where it is a range, else itself."""
+    return slice(int(a[0]), int(a[-1]) + 1) if a.size and np.array_equal(
+        a, np.arange(a[0], a[-1] + 1)) else a
+
+
+def _rows(a: np.ndarray, index, axis: int) -> np.ndarray:
+    """``a`` at ``index`` (:func:`_as_index`) along ``axis``: a view for a slice."""
+    return a[(slice(None),) * axis + (index,)] if isinstance(index, slice) else \
+        a.take(index, axis=axis)
 
 
 def kinematic_rows(blocks: np.ndarray, Dm: np.ndarray) -> KinematicRows | None:
