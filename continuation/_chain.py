@@ -204,12 +204,12 @@ def _bounded(a1, a0) -> bool:
     badly scaled states (modal displacements, velocities) fairly. The rounding of
     ``a1 a0`` is then at most a few eps of the identity's scale."""
     a1, a0 = np.abs(a1), np.abs(a0)
-    x = np.ones(a0.shape[:2] + (1,))
-    bound = np.full(a0.shape[0], np.inf)
-    for _ in range(6):
-        y = a1 @ (a0 @ x)
-        bound = np.minimum(bound, (y / x).max(axis=(1, 2)))
+    y = a1 @ a0.sum(axis=2, keepdims=True)                  # B x, x = 1
+    bound = y.max(axis=(1, 2))
+    for _ in range(5):
         if np.all(bound <= UNIT_GROWTH):
             return True
         x = y / np.maximum(y.max(axis=1, keepdims=True), 1e-300) + 1e-12
-    return False
+        y = a1 @ (a0 @ x)
+        bound = np.minimum(bound, (y / x).max(axis=(1, 2)))
+    return bool(np.all(bound <= UNIT_GROWTH))
