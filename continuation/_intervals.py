@@ -203,9 +203,8 @@ class KinematicLU:
         if np.count_nonzero(_rows(M, pos, 2)) != np.count_nonzero(own) + np.count_nonzero(V):
             return None                                             # a third state
         W = rows.D1inv @ V / c[:, :, None, None]                    # (i, j, b, l)
-        Mo = _rows(M, oth, 2)                                       # (i, k, s, l, t)
-        S = np.ascontiguousarray(_rows(Mo, oth, 4)).reshape(ntst, ms, ms)
-        Asq = np.ascontiguousarray(_rows(Mo, pos, 4)).reshape(ntst, ms, ncol * nq)
+        S = _block(M, oth, oth).reshape(ntst, ms, ms)               # (i, k, s, l, t)
+        Asq = _block(M, oth, pos).reshape(ntst, ms, ncol * nq)
         # S[:, (k, s), (l, v_j)] -= sum_b A_sq[:, (k, s), (b, j)] W_j[b, l]
         T = (Asq.reshape(ntst, ms, ncol, nq).transpose(0, 3, 1, 2) @ W).transpose(0, 2, 3, 1)
         S4 = S.reshape(ntst, ms, ncol, -1)
@@ -239,6 +238,16 @@ def _as_index(a: np.ndarray):
     """``a`` as a slice where it is a range, else itself."""
     return slice(int(a[0]), int(a[-1]) + 1) if a.size and np.array_equal(
         a, np.arange(a[0], a[-1] + 1)) else a
+
+
+def _block(M: np.ndarray, rows, cols) -> np.ndarray:
+    """``M[:, :, rows][..., cols]`` (``M``: ``(i, k, a, l, b)``; :func:`_as_index`) as a new
+    C-ordered array: a copy of a view for two ranges, else one gather."""
+    if isinstance(rows, slice) and isinstance(cols, slice):
+        return np.ascontiguousarray(M[:, :, rows, :, cols])
+    r, c = (np.arange(M.shape[axis])[ix] if isinstance(ix, slice) else ix
+            for axis, ix in ((2, rows), (4, cols)))
+    return M[:, :, r[:, None, None], np.arange(M.shape[3])[None, :, None], c[None, None, :]]
 
 
 def _rows(a: np.ndarray, index, axis: int) -> np.ndarray:
