@@ -72,8 +72,8 @@ class Chain:
 
     def bordered(self, Bv, By):
         """``(shares, lu)``: per level the border rows' share of its eliminated points,
-        and the LU of the final ``n + k`` system; None when it is singular. ``Bv``:
-        ``(N, k, n)``, ``By``: ``(k, k)``."""
+        and the LU of the dense system of the ``L`` equations left with the border rows
+        (``L n + k``); None when it is singular. ``Bv``: ``(N, k, n)``, ``By``: ``(k, k)``."""
         N, k, n = Bv.shape
         B = np.concatenate([Bv, np.zeros((1, k, n))])     # point N (= point 0): none yet
         By, shares = By.copy(), []
