@@ -3,12 +3,9 @@ and with the caches a previous run left (warm), alternating in one run.
 
 Each command runs in a new process (``python -m fsicas ... --json``). Cold: fresh,
 empty ``FSICAS_CACHE`` and ``CONTINUATION_CACHE`` directories; warm: the directories a
-first, untimed run of the same command filled. Numba's disk cache (``NUMBA_CACHE_DIR``)
-is kept warm in both, as that first run leaves it: numba compiles its kernels once per
-installation, not per model (and is on its way out of the library). With
-``--compiled``, a third column: warm with every collocation kernel compiled
-(``CONTINUATION_BACKEND=compiled``, its libraries built by the untimed run), what a
-cache of compiled kernels would gain. Printed: the median wall time of each, and
+first, untimed run of the same command filled. With ``--compiled``, a third column:
+warm with every collocation kernel compiled (``CONTINUATION_BACKEND=compiled``, its
+libraries built by the untimed run), what a cache of compiled kernels would gain. Printed: the median wall time of each, and
 cold/warm (the median of the pairwise ratios), as a Markdown table.
 
     python benchmarks/bench_cold_start.py [--repeats 3] [--compiled] [--only lco]
@@ -57,7 +54,7 @@ def run(args: list, cache: Path, label: str, backend: str | None = None) -> floa
 def measure(args: list, repeats: int, compiled: bool, root: Path) -> dict:
     """``{"cold": [...], "warm": [...], ("compiled": [...])}`` seconds, alternating."""
     warm, full = root / "warm", root / "compiled"
-    run(args, warm, "first")                          # fills the caches (and numba's)
+    run(args, warm, "first")                          # fills the caches
     if compiled:
         run(args, full, "first, compiled", "compiled")
     times = {"cold": [], "warm": [], **({"compiled": []} if compiled else {})}

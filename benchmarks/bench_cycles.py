@@ -96,8 +96,8 @@ def ours(n: int, points: int, floquet: str):
     t0 = time.perf_counter()
     cyc, it = stepper(eq, hopf, floquet, points - 1)
     first = it.start()           # the start and one step, untimed: they build the
-    mus = [cyc.multipliers(first.X)]   # systems and load the compiled code (numba's
-    second = it.advance(first)   # cache: ~0.5 s in a new process)
+    mus = [cyc.multipliers(first.X)]   # systems (CasADi functions, compiled kernels)
+    second = it.advance(first)
     mus.append(cyc.multipliers(second.X))
     build = time.perf_counter() - t0
     # the points are kept without their factors: a run keeps only the last point's (a

@@ -17,20 +17,22 @@ from bench_kernels import Case, factorize, instrument, once
 class TimedLU:
     """Time spent in the linear algebra of the Newton and tangent systems and of the
     Floquet condensation: SuperLU (``scipy.sparse.linalg.splu`` and the solves of its
-    result), the compiled condensed solver (the loops of ``continuation._jit``) and its
-    interval products (the refinement's residuals)."""
+    result), the condensed solver (the interval factors and the chain, ``STEPS``) and
+    its interval products (the refinement's residuals)."""
 
-    #: the compiled linear-algebra functions of ``continuation._jit``
-    COMPILED = ("interval_factors", "band_interval_factors", "side_interval_factors",
-                "chain_reduce", "chain_border",
-                "chain_solve", "condensed_solve")
+    #: ``(module, class, method)`` of the condensed solver's linear algebra
+    STEPS = tuple((module, cls, name) for module, cls in (
+        ("_stacks", "StackLU"), ("_stacks", "BandStackLU"), ("_intervals", "KinematicLU"))
+        for name in ("of", "solve")) + tuple(("_chain", "Chain", name) for name in (
+            "of", "bordered", "solve"))
 
     def __init__(self):
-        self.total, self._saved = 0.0, {}
+        self.total, self._saved, self._depth = 0.0, {}, 0
 
     def __enter__(self):
+        import importlib
+
         import scipy.sparse.linalg as spla
-        from continuation import _jit
         from continuation._condensed import CollocationJacobian
         timer = self
 
@@ -44,15 +46,23 @@ class TimedLU:
             def solve(self, *args, **kw):
                 return timer.timed(self.lu.solve, *args, **kw)
 
+        owners = {(module, cls): getattr(importlib.import_module(f"continuation.{module}"),
+                                         cls) for module, cls, _ in self.STEPS}
         self._saved = {(spla, "splu"): spla.splu,
                        (CollocationJacobian, "collocation_times"):
                            CollocationJacobian.collocation_times,
-                       **{(_jit, name): getattr(_jit, name) for name in self.COMPILED}}
+                       **{(owners[m, c], name): owners[m, c].__dict__[name]
+                          for m, c, name in self.STEPS}}
         splu = spla.splu
         spla.splu = lambda *a, **kw: Factor(self.timed(splu, *a, **kw))
-        for name in self.COMPILED:
-            fun = getattr(_jit, name)
-            setattr(_jit, name, lambda *a, fun=fun: self.timed(fun, *a))
+        for m, c, name in self.STEPS:
+            fun = owners[m, c].__dict__[name]
+            if isinstance(fun, classmethod):
+                fun = fun.__func__
+                setattr(owners[m, c], name, classmethod(
+                    lambda *a, fun=fun: self.timed(fun, *a)))
+            else:
+                setattr(owners[m, c], name, lambda *a, fun=fun: self.timed(fun, *a))
         times = CollocationJacobian.collocation_times
         CollocationJacobian.collocation_times = lambda *a: self.timed(times, *a)
         return self
@@ -62,11 +72,16 @@ class TimedLU:
             setattr(module, name, fun)
 
     def timed(self, fun, *args, **kw):
+        """``fun(*args, **kw)``, timed unless inside a timed call."""
+        if self._depth:
+            return fun(*args, **kw)
+        self._depth += 1
         t0 = time.perf_counter()
         try:
             return fun(*args, **kw)
         finally:
             self.total += time.perf_counter() - t0
+            self._depth -= 1
 
 
 MODEL_VARIANTS = (("graph", "mx"), ("blocks", "mx"), ("blocks", "compiled"))

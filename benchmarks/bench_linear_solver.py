@@ -113,7 +113,8 @@ def shares(make, size: int, points: int) -> tuple:
                  if "casadi" in f or f.endswith("_symbolic.py") or f.endswith("_lifted.py")
                  or "Function_call" in name)
     algebra = sum(v[2] for (f, _, name), v in stats.items()
-                  if f.endswith(("_condensed.py", "_jit.py", "_floquet.py", "_newton.py"))
+                  if f.endswith(("_condensed.py", "_chain.py", "_stacks.py", "_intervals.py",
+                                "_floquet.py", "_newton.py"))
                   or "linalg" in f or "lapack" in name or "getr" in name or "gstrf" in name
                   or "SuperLU" in name or "matmul" in name or "einsum" in name)
     return kernel / total, algebra / total

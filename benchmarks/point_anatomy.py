@@ -1,15 +1,15 @@
 """Where the time of a continuation point goes: model kernels, linear algebra, the rest.
 
 Each workload continues a branch for ``--points`` points after a warm-up run (which
-builds the systems and loads the compiled code) and times, by wrapping the functions
+builds the systems) and times, by wrapping the functions
 (``time.perf_counter``; a call inside an already timed one is not counted twice):
 
 * **model kernels**: every CasADi call of the model's functions (``BufferedFunction``:
   the pointwise kernels at the collocation points, the lifted matrices' nonzeros, the
   residuals) and the lifted matrices' dense products (``LiftedBatch``), i.e. what the
   model itself costs at the points the analysis needs;
-* **linear algebra**: the condensed solver's compiled loops (interval LUs and maps, the
-  chain's QRs, solves, the interval products of the refinement), SuperLU, the Floquet
+* **linear algebra**: the condensed solver (interval LUs and maps, the chain's QRs,
+  solves, the interval products of the refinement), SuperLU, the Floquet
   condensation of a sparse Jacobian, the monodromy and the eigenvalues of the
   multipliers;
 * **rest**: everything else (assembly of the Jacobian from the pointwise matrices,
@@ -40,12 +40,15 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 TIMED = [
     ("continuation._symbolic", "BufferedFunction.__call__", "kernels"),
     ("continuation._lifted", "LiftedBatch.__call__", "kernels"),
-    ("continuation._jit", "interval_factors", "algebra"),
-    ("continuation._jit", "band_interval_factors", "algebra"),
-    ("continuation._jit", "side_interval_factors", "algebra"),
-    ("continuation._jit", "chain_reduce", "algebra"),
-    ("continuation._jit", "chain_border", "algebra"),
-    ("continuation._jit", "condensed_solve", "algebra"),
+    ("continuation._stacks", "StackLU.of", "algebra"),
+    ("continuation._stacks", "StackLU.solve", "algebra"),
+    ("continuation._stacks", "BandStackLU.of", "algebra"),
+    ("continuation._stacks", "BandStackLU.solve", "algebra"),
+    ("continuation._intervals", "KinematicLU.of", "algebra"),
+    ("continuation._intervals", "KinematicLU.solve", "algebra"),
+    ("continuation._chain", "Chain.of", "algebra"),
+    ("continuation._chain", "Chain.bordered", "algebra"),
+    ("continuation._chain", "Chain.solve", "algebra"),
     ("continuation._condensed", "CollocationJacobian.collocation_times", "algebra"),
     ("scipy.sparse.linalg", "splu", "algebra"),
     ("continuation._newton", "LU.solve", "algebra"),

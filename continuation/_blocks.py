@@ -36,7 +36,6 @@ import scipy.sparse as sp
 from ._collocation import collocation
 from ._condensed import CollocationJacobian
 from ._intervals import KINEMATIC_MIN_ROWS, PointwiseTerm, interval_band, kinematic_rows
-from ._lazyjit import jit
 from ._lifted import LiftedBatch
 from ._sparse import Layout, layout
 from .compilation import default_flags, has_compiler
@@ -267,6 +266,7 @@ class BlockCollocationSystem:
         self.col = collocation(ncol)
         #: ``P[k, l]`` and ``Dm[k, l]`` of every collocation point ``i NCOL + k``
         self._weights = (np.tile(self.col.P, (ntst, 1)), np.tile(self.col.Dm, (ntst, 1)))
+        self._points = _points_operator(self.col.P, self.col.Dm, kernel.n, ntst, ncol)
         self.n_state = self.n_equations = kernel.n * ntst * ncol + 1
         self._layouts: dict = {}
         #: the interval matrices' band (on the pattern; lifted matrices come dense)
@@ -294,8 +294,8 @@ class BlockCollocationSystem:
     def points(self, U) -> tuple:
         """``(u_k, u'_k)`` at the ``K`` collocation points, each ``(K, n)``:
         ``u_k = sum_l P[k, l] u_l``, ``u'_k = sum_l Dm[k, l] u_l``."""
-        return _collocation_points(np.ascontiguousarray(U, dtype=float), self.col.P,
-                                   self.col.Dm, self.kernel.n, self.ntst, self.ncol)
+        x, v = (self._points @ np.asarray(U, dtype=float)).reshape(2, -1, self.kernel.n)
+        return x, v
 
     def residual(self, Y, P, D) -> np.ndarray:
         """``G = (vec(M(u_k) u'_k - h_i T F(u_k)), c . U)``."""
@@ -383,18 +383,14 @@ def builder(ntst: int, ncol: int, backend: str = "mx"):
     return build
 
 
-@jit
-def _collocation_points(U, P, Dm, n, ntst, ncol):
-    """``(x, v)``: ``x_ik = sum_l P[k, l] u_(i, l)``, ``v_ik = sum_l Dm[k, l] u_(i, l)``
-    at the ``K = NTST NCOL`` points (node ``(i, NCOL)`` is ``(i + 1, 0)``, wrapping)."""
+def _points_operator(P, Dm, n: int, ntst: int, ncol: int) -> sp.csr_matrix:
+    """The sparse ``(2 K n, K n)`` operator of :meth:`BlockCollocationSystem.points`:
+    ``x_ik = sum_l P[k, l] u_(i, l)`` over ``v_ik = sum_l Dm[k, l] u_(i, l)`` at the ``K =
+    NTST NCOL`` points (node ``(i, NCOL)`` is ``(i + 1, 0)``, wrapping)."""
     K = ntst * ncol
-    x, v = np.zeros((K, n)), np.zeros((K, n))
-    for i in range(ntst):
-        for l in range(ncol + 1):
-            node = ((i * ncol + l) % K) * n
-            for k in range(ncol):
-                pk, dk, row = P[k, l], Dm[k, l], i * ncol + k
-                for a in range(n):
-                    x[row, a] += pk * U[node + a]
-                    v[row, a] += dk * U[node + a]
-    return x, v
+    w, i, k, l, a = np.meshgrid(np.arange(2), np.arange(ntst), np.arange(ncol),
+                                np.arange(ncol + 1), np.arange(n), indexing="ij")
+    rows = ((w * K + i * ncol + k) * n + a).ravel()
+    cols = (((i * ncol + l) % K) * n + a).ravel()
+    values = np.stack([P, Dm])[w, k, l].ravel()
+    return sp.csr_matrix((values, (rows, cols)), shape=(2 * K * n, K * n))

@@ -233,8 +233,8 @@ class CycleProblem(PeriodicProblem):
         if isinstance(J, CollocationJacobian):
             if J.maps is None:                  # a singular interval: LAPACK says so
                 return _floquet.block_transfer_matrices(J.blocks, self.vf.n, full)
-            maps = -J.maps[:, :, :self.vf.n]
-            return maps if full else maps[:, -self.vf.n:]
+            n = self.vf.n
+            return -(J.maps[:, :, :n] if full else J.maps[:, -n:, :n])
         return _floquet.transfer_matrices(J, self.vf.n, self.ntst, self.ncol, full)
 
     def evaluate(self, X, t) -> np.ndarray:

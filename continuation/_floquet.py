@@ -28,7 +28,6 @@ import numpy as np
 import scipy.linalg as sla
 import scipy.sparse as sp
 
-from ._lazyjit import SMALL, jit
 from ._newton import factorize
 from ._sparse import PatternCache
 from ._threads import single_threaded
@@ -182,28 +181,14 @@ def section_multipliers(mono: np.ndarray, f: np.ndarray) -> np.ndarray:
 
 
 def monodromy(A: np.ndarray) -> np.ndarray:
-    """``Phi = A_{N-1} ... A_0``."""
-    return _product(np.ascontiguousarray(A, dtype=float))
-
-
-@jit
-def _product(A):
-    """``A_{N-1} ... A_0`` by BLAS for large blocks, by loops for small ones (whose BLAS
-    calls cost more than their arithmetic)."""
-    n = A.shape[1]
-    mono = np.eye(n)
-    for i in range(A.shape[0]):
-        if n > SMALL:
-            mono = np.ascontiguousarray(A[i]) @ mono
-            continue
-        out = np.zeros((n, n))
-        for r in range(n):
-            for l in range(n):
-                a = A[i, r, l]
-                for c in range(n):
-                    out[r, c] += a * mono[l, c]
-        mono = out
-    return mono
+    """``Phi = A_{N-1} ... A_0``, by products of adjacent pairs (one batched product per
+    level)."""
+    A = np.asarray(A, dtype=float)
+    while A.shape[0] > 1:
+        q = A.shape[0] // 2
+        pairs = A[1:2 * q:2] @ A[0:2 * q:2]
+        A = np.concatenate([pairs, A[2 * q:]]) if A.shape[0] % 2 else pairs
+    return A[0].copy() if A.shape[0] else np.eye(A.shape[1])
 
 
 def _by_modulus(mu: np.ndarray) -> np.ndarray:

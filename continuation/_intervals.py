@@ -7,18 +7,17 @@ out of their LU.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from functools import cached_property
 
 import numpy as np
 import scipy.sparse as sp
 from scipy.sparse.csgraph import reverse_cuthill_mckee
 
-from ._lazyjit import KINEMATIC, SCALE_TOL
+from ._stacks import StackLU
 
-#: a band is used for interval matrices of more than ``BAND_MIN_ROWS`` rows (smaller ones
-#: are factorized by plain loops, ``_dense``) whose band storage ``2 kl + ku + 1`` is at
-#: most their size (measured at 40 rows with 34: the interval factors 1.35x faster)
+#: a band is used for interval matrices of more than ``BAND_MIN_ROWS`` rows whose band
+#: storage ``2 kl + ku + 1`` is at most their size
 BAND_MIN_ROWS = 32
 
 
@@ -34,6 +33,8 @@ class IntervalBand:
     ncol: int
     lower: int
     upper: int
+    #: :meth:`assembly` per number of intervals and patterns, built once
+    _assemblies: dict = field(default_factory=dict, repr=False)
 
     @cached_property
     def order(self) -> np.ndarray:
@@ -50,9 +51,37 @@ class IntervalBand:
         return rank
 
     @property
-    def args(self) -> tuple:
-        """``(order, kl, ku)`` for the compiled solver."""
-        return self.order, self.lower, self.upper
+    def width(self) -> int:
+        """The rows of LAPACK's band storage, ``2 kl + ku + 1``."""
+        return 2 * self.lower + self.upper + 1
+
+    def places(self, rows: np.ndarray, cols: np.ndarray) -> tuple:
+        """``(M, R)``: where the entries ``(rows[e], cols[e])`` of a pointwise pattern sit,
+        for point ``k`` and node ``l``: ``M[k, l - 1, e]`` in the flat band storage of an
+        interval (``_stacks.BandStackLU``; nodes ``1 .. NCOL``), ``R[k, e]`` the row
+        (reordered) of its entry in the node 0 columns."""
+        ncol, d = self.ncol, self.lower + self.upper
+        r = self.rank[rows] * ncol + np.arange(ncol)[:, None]           # (k, e)
+        c = self.rank[cols] * ncol + np.arange(ncol)[:, None]           # (l - 1, e)
+        return c[None] * self.width + d + r[:, None] - c[None], r
+
+    def assembly(self, patterns: tuple, ntst: int) -> tuple:
+        """``(inside, first)``: the places of the entries of pointwise terms on
+        ``patterns`` (``(rows, cols)`` each) in the flat band storage of ``ntst`` intervals
+        (``(NTST, m, width)``) and in their node 0 columns, ``(n, NTST, m)`` (column by
+        column, rows reordered), interval by interval, term after term, each in the order
+        of :meth:`places`."""
+        key = (ntst,) + tuple(a.tobytes() for pattern in patterns for a in pattern)
+        if key not in self._assemblies:
+            m = self.ncol * self.states.size
+            inside, first = zip(*(self.places(*pattern) for pattern in patterns))
+            cols = [np.broadcast_to(c, r.shape) for (_, c), r in zip(patterns, first)]
+            i = np.arange(ntst)[:, None]
+            self._assemblies[key] = (
+                (i * m * self.width + np.concatenate([a.ravel() for a in inside])).ravel(),
+                (i * m + np.concatenate([(c * ntst * m + r).ravel() for c, r in
+                                         zip(cols, first)])).ravel())
+        return self._assemblies[key]
 
 
 def interval_band(n: int, ncol: int, prow: np.ndarray, pcol: np.ndarray):
@@ -79,9 +108,12 @@ def interval_band(n: int, ncol: int, prow: np.ndarray, pcol: np.ndarray):
 
 
 #: kinematic rows are eliminated in dense interval matrices of more than this many rows
-#: (measured on blocks of the flutter model's structure, NTST = 20: even at 40 and 48
-#: rows, 1.3x faster at 56, 1.5x at 88, 2x at 328)
+#: (smaller ones take the plain LU, as fast there: ``docs/performance.md``)
 KINEMATIC_MIN_ROWS = 48
+
+#: the relative rounding allowed between a kinematic row's entries on its own position
+#: and ``c Dm`` (:func:`kinematic_rows`, :meth:`KinematicRows.factorize`)
+SCALE_TOL = 1e-15
 
 
 @dataclass(frozen=True, eq=False)
@@ -90,8 +122,8 @@ class KinematicRows:
     ``M_i`` at point ``k`` reading ``Dm[k, l]`` on the position at node ``l``, anything
     on its velocity ``velocities[j]`` and nothing else (``d q/dt = r``, or ``g(r)``:
     ``M`` row ``c e_q``, ``F`` a function of ``r`` alone), so that the positions at the
-    nodes ``1 .. NCOL`` follow from the velocities there (``_dense.kinematic_factor``).
-    ``D1 = Dm[:, 1:]``."""
+    nodes ``1 .. NCOL`` follow from the velocities there (:meth:`factorize`).
+    ``others``: the remaining states (the velocities among them), ``D1 = Dm[:, 1:]``."""
 
     positions: np.ndarray
     velocities: np.ndarray
@@ -99,18 +131,129 @@ class KinematicRows:
     D1: np.ndarray
 
     @cached_property
-    def args(self) -> tuple:
-        """``(order, kl, ku)`` for the compiled solver: ``order`` the positions, their
-        velocities, the other states and the velocities' places among those, ``kl``
-        :data:`KINEMATIC`, ``ku`` the number of positions."""
-        places = np.searchsorted(self.others, self.velocities)
-        order = np.concatenate([self.positions, self.velocities, self.others, places])
-        return order.astype(np.int64), KINEMATIC, self.positions.size
+    def places(self) -> np.ndarray:
+        """The place of each position's velocity among :attr:`others`."""
+        return np.searchsorted(self.others, self.velocities)
 
     @cached_property
-    def D(self) -> np.ndarray:
-        """``(D1, D1^-1)``, stacked."""
-        return np.stack([self.D1, np.linalg.inv(self.D1)])
+    def index(self) -> tuple:
+        """:attr:`positions`, :attr:`others` and :attr:`places` as indices: a slice where
+        they are a range (a view instead of a copy; the mechanical models order their
+        states so: positions, velocities, the rest)."""
+        return tuple(_as_index(a) for a in (self.positions, self.others, self.places))
+
+    @cached_property
+    def distinct(self) -> bool:
+        """Whether every position has a velocity of its own."""
+        return np.unique(self.velocities).size == self.velocities.size
+
+    @cached_property
+    def D1inv(self) -> np.ndarray:
+        return np.linalg.inv(self.D1)
+
+    @cached_property
+    def gather(self) -> dict:
+        """Where position ``j``'s row at point ``k`` has its entries on its own node ``l =
+        1 .. NCOL`` (``'own'``) and on its velocity's (``'V'``) in ``blocks[i].ravel()``,
+        ``(j, k, l)``."""
+        pos, vel = self.positions, self.velocities
+        ncol, n = self.D1.shape[0], pos.size + self.others.size
+        k, l = np.arange(ncol), np.arange(1, ncol + 1)
+        row = (k[None, :, None] * n + pos[:, None, None]) * (ncol + 1) * n + l * n
+        return {"own": (row + pos[:, None, None]).ravel(),
+                "V": (row + vel[:, None, None]).ravel()}
+
+    def factorize(self, blocks: np.ndarray) -> "KinematicLU | None":
+        """:class:`KinematicLU` of the interval matrices ``M_i = blocks[i, :, n:]``
+        (``blocks``: ``(NTST, m, m + n)``); None if an ``M_i`` lacks the structure
+        (checked exactly) or its Schur complement is singular."""
+        return KinematicLU.of(self, blocks)
+
+
+class KinematicLU:
+    """Block LU of interval matrices with :class:`KinematicRows`. Position ``q_j``'s rows
+    read ``c_j D1 x_q + V_j x_v = b_q`` (``x_q``, ``x_v``: the position and its velocity
+    at the nodes ``1 .. NCOL``), so ``x_q = D1^-1 b_q / c_j - W_j x_v`` with ``W_j = D1^-1
+    V_j / c_j``, and the other states ``s`` (the velocities among them) solve the Schur
+    complement ``S x_s = b_s - A_sq D1^-1 b_q / c`` with ``S = A_ss - A_sq W``: an LU of
+    ``(n - nq) NCOL`` rows instead of ``n NCOL``. The pieces are views of the blocks
+    where the states are ranges (:attr:`KinematicRows.index`), else gathered; the
+    products are NumPy's batched ones over the stack, the LUs of ``S_i`` LAPACK's
+    (:class:`_stacks.StackLU`)."""
+
+    def __init__(self, rows: KinematicRows, S, Asq, W, c):
+        #: ``S_i`` factorized, ``A_sq`` ``(NTST, ms, NCOL nq)`` (columns node-major),
+        #: ``W`` ``(NTST, nq, NCOL, NCOL)``, ``c`` ``(NTST, nq)``
+        self.rows, self.S, self.Asq, self.W, self.c = rows, S, Asq, W, c
+
+    @classmethod
+    def of(cls, rows: KinematicRows, blocks: np.ndarray) -> "KinematicLU | None":
+        ntst, ncol, nq = blocks.shape[0], rows.D1.shape[0], rows.positions.size
+        ms, at, (pos, oth, places) = rows.others.size * ncol, rows.gather, rows.index
+        flat = blocks.reshape(ntst, -1)
+        own, V = (flat.take(at[key], axis=1).reshape(ntst, nq, ncol, ncol)
+                  for key in ("own", "V"))
+        c = own[:, :, 0, 0] / rows.D1[0, 0]
+        scaled = c[:, :, None, None] * rows.D1
+        with np.errstate(invalid="ignore"):
+            if not (np.all(np.isfinite(c)) and np.all(c != 0.0) and np.all(
+                    np.abs(own - scaled) <= SCALE_TOL * np.abs(scaled))):
+                return None
+        M = blocks.reshape(ntst, ncol, -1, ncol + 1, blocks.shape[2] // (ncol + 1))[..., 1:, :]
+        if np.count_nonzero(_rows(M, pos, 2)) != np.count_nonzero(own) + np.count_nonzero(V):
+            return None                                             # a third state
+        W = rows.D1inv @ V / c[:, :, None, None]                    # (i, j, b, l)
+        S = _block(M, oth, oth).reshape(ntst, ms, ms)               # (i, k, s, l, t)
+        Asq = _block(M, oth, pos).reshape(ntst, ms, ncol * nq)
+        # S[:, (k, s), (l, v_j)] -= sum_b A_sq[:, (k, s), (b, j)] W_j[b, l]
+        T = (Asq.reshape(ntst, ms, ncol, nq).transpose(0, 3, 1, 2) @ W).transpose(0, 2, 3, 1)
+        S4 = S.reshape(ntst, ms, ncol, -1)
+        if rows.distinct:
+            S4[..., places] -= T
+        else:                                # positions sharing a velocity: sum them
+            np.subtract.at(S4, (Ellipsis, rows.places), T)
+        S = StackLU.of(S, overwrite=True)
+        return None if S is None else cls(rows, S, Asq, W, c)
+
+    def solve(self, b: np.ndarray) -> np.ndarray:
+        """``x_i = M_i^-1 b_i`` for ``b``: ``(NTST, m, r)``."""
+        rows, (ntst, m, r) = self.rows, b.shape
+        ncol, nq = rows.D1.shape[0], rows.positions.size
+        pos, oth, places = rows.index
+        n = m // ncol
+        b4 = b.reshape(ntst, ncol, n, r)
+        xq = rows.D1inv @ b4[:, :, pos].reshape(ntst, ncol, nq * r)
+        xq = xq.reshape(ntst, ncol, nq, r) / self.c[:, None, :, None]  # D1^-1 b_q / c
+        bs = b4[:, :, oth].reshape(ntst, -1, r)
+        xs = self.S.solve(bs - self.Asq @ xq.reshape(ntst, ncol * nq, r))
+        xs = xs.reshape(ntst, ncol, n - nq, r)
+        xv = xs[:, :, places].transpose(0, 2, 1, 3)                     # (i, j, l, r)
+        xq -= (self.W @ xv).transpose(0, 2, 1, 3)                       # x_q -= W_j x_v
+        x = np.empty((ntst, ncol, n, r))
+        x[:, :, oth], x[:, :, pos] = xs, xq
+        return x.reshape(b.shape)
+
+
+def _as_index(a: np.ndarray):
+    """``a`` as a slice where it is a range, else itself."""
+    return slice(int(a[0]), int(a[-1]) + 1) if a.size and np.array_equal(
+        a, np.arange(a[0], a[-1] + 1)) else a
+
+
+def _block(M: np.ndarray, rows, cols) -> np.ndarray:
+    """``M[:, :, rows][..., cols]`` (``M``: ``(i, k, a, l, b)``; :func:`_as_index`) as a new
+    C-ordered array: a copy of a view for two ranges, else one gather."""
+    if isinstance(rows, slice) and isinstance(cols, slice):
+        return np.ascontiguousarray(M[:, :, rows, :, cols])
+    r, c = (np.arange(M.shape[axis])[ix] if isinstance(ix, slice) else ix
+            for axis, ix in ((2, rows), (4, cols)))
+    return M[:, :, r[:, None, None], np.arange(M.shape[3])[None, :, None], c[None, None, :]]
+
+
+def _rows(a: np.ndarray, index, axis: int) -> np.ndarray:
+    """``a`` at ``index`` (:func:`_as_index`) along ``axis``: a view for a slice."""
+    return a[(slice(None),) * axis + (index,)] if isinstance(index, slice) else \
+        a.take(index, axis=axis)
 
 
 def kinematic_rows(blocks: np.ndarray, Dm: np.ndarray) -> KinematicRows | None:

@@ -9,15 +9,8 @@ import numpy as np
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
-from ._lazyjit import jit
 from ._settings import NewtonSettings
 from ._sparse import PatternCache
-
-#: right-hand sides from which a solve runs by rows of the factors in compiled code
-#: (``_solve_columns``): SuperLU solves column by column (at n = 40, NCOL = 4, NTST =
-#: 50 the 40 columns of the Floquet maps' block-diagonal system 4.5x slower)
-MANY_RHS = 8
-
 
 @dataclass(frozen=True)
 class NewtonResult:
@@ -46,16 +39,13 @@ class LU:
     """SuperLU factors of ``A[:, q]``, solving with ``A`` (``q`` a column ordering).
 
     Exposes ``solve(b, trans)``, ``U``, ``perm_r`` and ``perm_c`` (the column
-    permutation of ``A`` itself) like ``scipy``'s ``SuperLU``. A solve with at least
-    ``MANY_RHS`` columns runs on ``L`` and ``U`` (copied out once) in compiled code, all
-    columns at each entry of the factors."""
+    permutation of ``A`` itself) like ``scipy``'s ``SuperLU``."""
 
     def __init__(self, lu, q):
         self.lu, self.q = lu, q
         self.perm_r = lu.perm_r
         self.perm_c = np.empty_like(lu.perm_c)
         self.perm_c[q] = lu.perm_c
-        self._factors = None
 
     @property
     def U(self) -> sp.csc_matrix:
@@ -65,48 +55,10 @@ class LU:
     def solve(self, b, trans: str = "N") -> np.ndarray:
         if trans != "N":
             return self.lu.solve(b[self.q], trans=trans)
-        if np.ndim(b) == 2 and b.shape[1] >= MANY_RHS and np.isrealobj(b):
-            return self._solve_many(b)
         y = self.lu.solve(b)
         x = np.empty_like(y)
         x[self.q] = y
         return x
-
-    def _solve_many(self, b) -> np.ndarray:
-        """``A^-1 b`` from ``Pr A[:, q] Pc = L U``: ``L U w = Pr b``, ``x = w[perm_c]``."""
-        if self._factors is None:
-            L, U = self.lu.L, self.lu.U
-            self._factors = (L.indptr, L.indices, L.data, U.indptr, U.indices, U.data,
-                             U.diagonal())
-        w = np.empty(np.shape(b))
-        w[self.perm_r] = b
-        _solve_columns(*self._factors, w)
-        return w[self.perm_c]
-
-
-@jit
-def _solve_columns(Lp, Li, Lx, Up, Ui, Ux, Ud, B) -> None:
-    """``B <- U^-1 L^-1 B`` for CSC factors (``L`` unit lower triangular, ``U`` upper
-    with diagonal ``Ud``), each entry of a factor applied to all columns of ``B`` at
-    once (``B``: C-ordered ``(N, r)``)."""
-    N, r = B.shape
-    for j in range(N):
-        for p in range(Lp[j], Lp[j + 1]):
-            i = Li[p]
-            if i > j:
-                f = Lx[p]
-                for c in range(r):
-                    B[i, c] -= f * B[j, c]
-    for j in range(N - 1, -1, -1):
-        inv = 1.0 / Ud[j]
-        for c in range(r):
-            B[j, c] *= inv
-        for p in range(Up[j], Up[j + 1]):
-            i = Ui[p]
-            if i < j:
-                f = Ux[p]
-                for c in range(r):
-                    B[i, c] -= f * B[j, c]
 
 
 @dataclass(frozen=True)

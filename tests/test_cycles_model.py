@@ -219,7 +219,7 @@ def test_the_position_rows_leave_the_interval_lus():
     interval LU by block; the condensed solves equal LAPACK's on the sparse route's
     matrix, and a short branch equals SuperLU's (points, iterations, multipliers)."""
     import continuation as C
-    from continuation._lazyjit import KINEMATIC
+    from continuation._intervals import KinematicLU
     from continuation._newton import factorize
     from continuation._sparse import append_row
     from fsicas.linear.hopf import flutter_problem
@@ -237,7 +237,7 @@ def test_the_position_rows_leave_the_interval_lus():
     lu = factorize(A)
     assert A.J.kinematic.positions.tolist() == [6, 7, 8, 9, 10, 11]
     assert A.J.kinematic.velocities.tolist() == [0, 1, 2, 3, 4, 5]
-    assert A.J.factor_layout[1] == KINEMATIC
+    assert isinstance(A.J.intervals, KinematicLU)
     dense = append_row(C.CycleProblem.jacobian(prob, X), tau).toarray()
     b = rng.standard_normal((X.size, 2))
     assert np.max(np.abs(lu.solve(b) - np.linalg.solve(dense, b))) < \

@@ -9,7 +9,8 @@ import pytest
 
 import continuation as C
 from continuation import _floquet
-from continuation._condensed import BorderedCollocation, Chain, CondensedLU
+from continuation._chain import Chain
+from continuation._condensed import BorderedCollocation, CondensedLU
 from continuation._newton import factorize
 from continuation._sparse import append_row
 
@@ -91,9 +92,9 @@ def _chain(decades: float, N: int = 21, n: int = 4, k: int = 2):
     return A, G, Bv, By, dense, rng
 
 
-def _chain_backward_error(A, C_, G, Bv, By, dense, rng) -> float:
+def _chain_backward_error(A, C_, G, Bv, By, dense, rng, dense_rows=0) -> float:
     N, n, k = G.shape
-    chain = Chain.of(A, C_, G)
+    chain = Chain.of(A, C_, G, dense_rows)
     factors = chain.bordered(Bv, By)
     rhs = rng.standard_normal((N * n + k, 2))
     v, y = chain.solve(factors, rhs[:N * n].reshape(N, n, 2), rhs[N * n:])
@@ -102,14 +103,18 @@ def _chain_backward_error(A, C_, G, Bv, By, dense, rng) -> float:
 
 
 @pytest.mark.parametrize("unit", [False, True])
-def test_chain_reduction_is_stable_where_a_transfer_recursion_is_not(unit):
+@pytest.mark.parametrize("dense_rows", [0, 40])
+def test_chain_reduction_is_stable_where_a_transfer_recursion_is_not(unit, dense_rows):
     """A chain whose monodromy has multipliers 1e+-20 (a recursion over the transfer
     maps, single shooting, loses everything there): the pairwise QR reduction solves it
     with a backward error at round-off, also when told its ``C_i`` are identities
-    (``C = None``: its maps, ``|A_i| ~ 9``, are too large for the identity pivot)."""
+    (``C = None``: its maps, ``|A_i| ~ 9``, are too large for the identity pivot), down
+    to one equation or to the dense LU of the equations left (here 11 of them, 46 rows,
+    where another QR level would cost more)."""
     A, G, Bv, By, dense, rng = _chain(20.0)
     C_ = None if unit else np.broadcast_to(np.eye(A.shape[1]), A.shape)
-    assert _chain_backward_error(A, C_, G, Bv, By, dense, rng) < 1e-14
+    assert _chain_backward_error(A, C_, G, Bv, By, dense, rng, dense_rows) < 1e-14
+    assert len(Chain.of(A, C_, G, dense_rows).levels) == (5 if dense_rows == 0 else 1)
     mono = np.eye(A.shape[1])
     for Ai in A:
         mono = -Ai @ mono
@@ -118,23 +123,23 @@ def test_chain_reduction_is_stable_where_a_transfer_recursion_is_not(unit):
 
 @pytest.mark.parametrize("scale", [1.0, 1e3])
 def test_identity_pivots_solve_a_chain_of_bounded_maps_to_round_off(scale):
-    """Multipliers 1e+-0.5 over 21 maps: with ``C = None`` every pair whose maps stay
-    within ``UNIT_GROWTH`` is eliminated by its identity pivot (products of maps), the
-    rest by QR; the backward error stays at round-off, as with QR alone. With states of
+    """Multipliers 1e+-0.5 over 21 maps: with ``C = None`` every level whose pairs' maps
+    stay within ``UNIT_GROWTH`` is eliminated by its identity pivots (products of maps),
+    the rest by QR; the backward error stays at round-off, as with QR alone. With states of
     disparate scales (``D v``, ``D = diag(1, scale, 1, scale)``: maps ``D A D^-1`` of
     norm ~ ``scale``, as a beam's modal displacements and velocities give) the growth is
     judged in the natural units: the same pairs take the pivot, and the solution mapped
     back keeps its round-off backward error (QR's, not invariant under the scaling,
     grows with it: measured 2.6e-14 at 1e3)."""
-    from continuation import _jit
+    from continuation._chain import UNIT_GROWTH
     A, G, Bv, By, dense, rng = _chain(0.5)
     N, n, k = G.shape
-    assert np.abs(A).sum(axis=2).max() ** 2 < _jit.UNIT_GROWTH / 4    # two levels at least
+    assert np.abs(A).sum(axis=2).max() ** 2 < UNIT_GROWTH / 4    # two levels at least
     D = np.array([1.0, scale, 1.0, scale])
     As, Gs, Bvs = D[:, None] * A / D[None, :], D[:, None] * G, Bv / D[None, None, :]
     errors = []
     for C_ in (None, np.broadcast_to(np.eye(n), A.shape)):
-        chain = Chain.of(As, C_, Gs)
+        chain = Chain.of(As, C_, Gs, dense_rows=0)
         rhs = rng.standard_normal((N * n + k, 2))
         z = rhs[:N * n].reshape(N, n, 2) * D[None, :, None]        # the scaled equations
         v, y = chain.solve(chain.bordered(Bvs, By), z, rhs[N * n:])
@@ -142,9 +147,10 @@ def test_identity_pivots_solve_a_chain_of_bounded_maps_to_round_off(scale):
         errors.append(np.max(np.abs(dense @ x - rhs)) / (np.max(np.abs(dense))
                                                         * np.max(np.abs(x))))
     assert errors[0] < 1e-15 and errors[1] < 1e-15 * scale
-    by_pivot = [np.array_equal(H, np.eye(n, 2 * n)) for H in Chain.of(As, None, Gs).H]
+    by_pivot = [level.a0.shape[0] for level, _ in Chain.of(As, None, Gs, 0).levels
+                if hasattr(level, "a0")]
     assert sum(by_pivot) >= 10 + 5                  # the first two levels at least
-    assert scale == 1.0 or np.abs(As).sum(axis=2).max() > _jit.UNIT_GROWTH
+    assert scale == 1.0 or np.abs(As).sum(axis=2).max() > UNIT_GROWTH
 
 
 def test_multipliers_from_the_factorization_equal_the_sparse_floquet_condensation():
@@ -178,7 +184,7 @@ def test_a_singular_interval_falls_back_to_superlu_of_the_whole_matrix():
     prob = _problem(6, 3, "condensed")
     rng = np.random.default_rng(1)
     A = prob.bordered_jacobian(prob.X0, rng.standard_normal(prob.X0.size))
-    A.J.__dict__["_factorization"] = (None,) * 4    # as if an M_i were singular
+    A.J.__dict__["_factorization"] = (None, None)  # as if an M_i were singular
     assert A.J.maps is None
     lu = A.factorize()
     assert not isinstance(lu, CondensedLU)
@@ -210,57 +216,33 @@ def test_linear_solver_setting_and_its_automatic_choice():
         assert prob.condensed == condensed
 
 
-@pytest.mark.parametrize("m", [1, 5, 16, 32, 33, 40])
-def test_dense_lu_kernels_equal_numpy_solves(m):
-    """The compiled LU and its solve, by loops up to ``SMALL`` rows and by LAPACK above,
-    against NumPy's solve: one and several right-hand sides, a matrix that needs row
-    exchanges (zero diagonal), and an exactly singular one (reported, not solved)."""
-    from continuation import _dense
+@pytest.mark.parametrize("m", [1, 5, 16, 40])
+def test_stacked_lu_solves_equal_numpy(m):
+    """The LUs of a stack (LAPACK, each matrix transposed in place) against NumPy's solve
+    of each: one and several right-hand sides, matrices that need row exchanges (zero
+    diagonals), and an exactly singular one among regular ones (reported, not solved)."""
+    from continuation._stacks import StackLU
     rng = np.random.default_rng(m)
-    A = rng.standard_normal((m, m))
-    np.fill_diagonal(A, 0.0)
-    A[0, m - 1] = A[m - 1, 0] = 3.0
-    for r in (1, 3, 7):
-        b = rng.standard_normal((m, r))
-        lu, piv = A.copy(), np.zeros(m, np.int32)
-        assert _dense.lu_factor(lu, piv)
-        x = b.copy()
-        _dense.lu_solve(lu, piv, x)
-        assert _rel(x, np.linalg.solve(A, b)) < 1e-12 * np.linalg.cond(A)
-    singular = A.copy()
-    singular[:, -1] = 0.0
-    assert not _dense.lu_factor(singular, np.zeros(m, np.int32))
+    A = rng.standard_normal((6, m, m))
+    A[:, np.arange(m), np.arange(m)] = 0.0
+    A[:, 0, m - 1] = A[:, m - 1, 0] = 3.0
+    lu = StackLU.of(A)
+    for r in (1, 3):
+        b = rng.standard_normal((6, m, r))
+        x = lu.solve(b)
+        for i in range(6):
+            assert _rel(x[i], np.linalg.solve(A[i], b[i])) < 1e-12 * np.linalg.cond(A[i])
+    A[4, :, -1] = 0.0
+    assert StackLU.of(A) is None
 
 
-@pytest.mark.parametrize("shape", [(3, 5, 2), (7, 4, 9), (16, 16, 16), (20, 17, 42),
-                                   (80, 80, 80)])
-def test_products_by_loops_and_by_blas_equal_numpy(shape):
-    """``gemm`` (``C += alpha A B``) against NumPy on views with row strides of their own,
-    by loops (a dimension below ``GEMM_BLAS = 16``, or columns not contiguous) and by
-    BLAS (the last three shapes with contiguous rows)."""
-    from continuation._dense import gemm
-    m, q, r = shape
-    rng = np.random.default_rng(m)
-    A = rng.standard_normal((m, q + 3))[:, 1:q + 1]
-    B = rng.standard_normal((q, r + 2))[:, :r]
-    C = rng.standard_normal((m, r))
-    for a, b in ((A, B), (A, np.asfortranarray(B))):      # rows contiguous or not
-        out = np.zeros((m, r + 5))[:, 2:r + 2]             # a view of its own strides
-        out[:] = C
-        gemm(out, a, b, -0.7)
-        assert _rel(C - 0.7 * a @ b, out) < 1e-14 * q
-
-
-@pytest.mark.parametrize("n, ncol", [(1, 2), (2, 3), (4, 4), (8, 4)])
-def test_side_by_side_factors_and_solves_equal_numpy(n, ncol):
-    """Small interval matrices factorized side by side (every operation over the intervals
-    at once) against NumPy's solve of each: the maps ``Z_i`` and solves of one and
-    several right-hand sides, on matrices that need row exchanges (zero diagonals);
-    ``condensed_solve``'s layout for them (``SIDE``); an exactly singular ``M_i``
-    among regular ones is reported."""
-    from continuation import _jit
-    from continuation._condensed import SIDE, CollocationJacobian
-    from continuation._side import side_solve
+@pytest.mark.parametrize("n, ncol", [(1, 2), (4, 4), (12, 4)])
+def test_dense_interval_factors_and_solves_equal_numpy(n, ncol):
+    """Dense interval matrices (terms on patterns and dense) against NumPy's solve of
+    each: the maps ``Z_i`` and solves of one and several right-hand sides, on matrices
+    that need row exchanges (zero diagonals); an exactly singular ``M_i`` among regular
+    ones is reported."""
+    from continuation._condensed import CollocationJacobian
     from continuation._intervals import PointwiseTerm
     ntst, k, m = 9, 2, n * ncol
     rng = np.random.default_rng(m)
@@ -268,28 +250,22 @@ def test_side_by_side_factors_and_solves_equal_numpy(n, ncol):
                           rng.standard_normal((ntst * ncol, ncol + 1)))
     terms = _chain_terms(n, ntst, ncol, rng)[1] + (dense,)     # on patterns, and dense
     extra = rng.standard_normal((ntst, m, k))
-    J = CollocationJacobian(n, ntst, ncol, terms, extra, np.zeros(ntst * m))
-    assert J.factor_layout is SIDE
     blocks = _explicit_blocks(terms, n, ntst, ncol)
-    a = J.side_blocks()
-    assert np.array_equal(a[:, :m + n, :], np.concatenate(
-        [blocks[:, :, n:], blocks[:, :, :n]], axis=2).transpose(1, 2, 0))
-    for i in range(ntst):                    # zero diagonals: row exchanges are needed
-        blocks[i, :, n:][np.diag_indices(m)] = 0.0
-        a[:, :m, i][np.diag_indices(m)] = 0.0
-    lu, piv, Z, ok = _jit.side_interval_factors(a.copy(), extra, n)
-    assert ok and np.any(piv != np.arange(m)[:, None])
+    blocks[:, np.arange(m), n + np.arange(m)] = 0.0       # row exchanges are needed
+    J = CollocationJacobian(n, ntst, ncol, terms, extra, np.zeros(ntst * m))
+    J.__dict__["blocks"] = blocks
     b = rng.standard_normal((ntst, m, 4))
-    x1, x4 = b[:, :, :1].copy(), b.copy()
-    side_solve(lu, piv, x1)
-    side_solve(lu, piv, x4)
+    x1, x4 = J.intervals.solve(b[:, :, :1]), J.intervals.solve(b)
     for i in range(ntst):
         M, tol = blocks[i, :, n:], 1e-12 * np.linalg.cond(blocks[i, :, n:])
-        assert _rel(Z[i], np.linalg.solve(M, np.hstack([blocks[i, :, :n], extra[i]]))) < tol
+        assert _rel(J.maps[i], np.linalg.solve(M, np.hstack([blocks[i, :, :n], extra[i]]))) \
+            < tol
         assert _rel(x4[i], np.linalg.solve(M, b[i])) < tol
         assert _rel(x1[i], np.linalg.solve(M, b[i, :, :1])) < tol
-    a[:, 0, 4] = 0.0                         # interval 4's first column: singular
-    assert not _jit.side_interval_factors(a, extra, n)[3]
+    blocks[4, :, n] = 0.0                    # interval 4's first column: singular
+    J = CollocationJacobian(n, ntst, ncol, terms, extra, np.zeros(ntst * m))
+    J.__dict__["blocks"] = blocks
+    assert J.maps is None and J.intervals is None
 
 
 def _block_pattern(n, ncol, prow, pcol):
@@ -390,12 +366,10 @@ def test_interval_blocks_are_the_sum_of_their_pointwise_terms():
 
 
 def test_banded_interval_factors_and_solves_equal_dense_lapack():
-    """The band route (LAPACK's band LU, our row-wise band solve, the permutations, the
-    solves of every interval side by side) against NumPy on the same interval matrices:
-    the maps ``Z_i`` and solves of one and several right-hand sides, which need row
-    exchanges; singular blocks are reported."""
+    """The band route (LAPACK's band LU, the permutations) against NumPy on the same
+    interval matrices: the maps ``Z_i`` and solves of one and several right-hand sides,
+    which need row exchanges; singular blocks are reported."""
     from continuation._condensed import CollocationJacobian
-    from continuation._side import side_band_solve
     from continuation._intervals import PointwiseTerm, interval_band
     n, ncol, ntst, k = 12, 3, 5, 2
     m, rng = n * ncol, np.random.default_rng(0)
@@ -404,13 +378,11 @@ def test_banded_interval_factors_and_solves_equal_dense_lapack():
     assert band is not None
     extra = rng.standard_normal((ntst, m, k))
     J = CollocationJacobian(n, ntst, ncol, terms, extra, np.zeros(ntst * m), band)
-    lu, piv, Z = J.factors
-    assert np.any(piv != np.arange(1, m + 1)[:, None])              # rows were exchanged
+    Z = J.maps
+    assert np.any(J.intervals.piv != np.arange(ntst * m))           # rows were exchanged
     blocks = _explicit_blocks(terms, n, ntst, ncol)
     b = rng.standard_normal((ntst, m, 4))
-    x1, x4 = b[:, :, :1].copy(), b.copy()
-    side_band_solve(lu, piv, x1, *band.args)
-    side_band_solve(lu, piv, x4, *band.args)
+    x1, x4 = J.intervals.solve(b[:, :, :1]), J.intervals.solve(b)
     for i in range(ntst):
         M = blocks[i, :, n:]
         expected = np.linalg.solve(M, np.hstack([blocks[i, :, :n], extra[i]]))
@@ -423,7 +395,7 @@ def test_banded_interval_factors_and_solves_equal_dense_lapack():
     singular = (PointwiseTerm(values, first.weights * (np.arange(ncol + 1) > 0),
                               first.rows, first.cols),)
     J = CollocationJacobian(n, ntst, ncol, singular, extra, np.zeros(ntst * m), band)
-    assert J.factors is None
+    assert J.maps is None and J.intervals is None
 
 
 def _oscillator_chain(n=24):
@@ -470,8 +442,8 @@ def test_banded_condensation_equals_dense_lapack_and_the_sparse_branch():
 
 def test_a_band_is_taken_where_it_is_narrower_than_the_blocks_and_they_exceed_the_loops():
     """Two-state cells coupled to their neighbours (distance 2, 11 off-diagonals at NCOL
-    = 4, storage 34): no band at 32 rows (plain loops) or where the storage exceeds the
-    rows, a band at 40 rows."""
+    = 4, storage 34): no band at 32 rows or where the storage exceeds the rows, a band at
+    40 rows."""
     from continuation._intervals import BAND_MIN_ROWS, interval_band
 
     def chain(n):

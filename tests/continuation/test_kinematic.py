@@ -1,19 +1,17 @@
 """Kinematic rows of the interval matrices (``dq/dt = r`` of a mechanical system) taken
 out of their LU by block elimination (``_intervals.kinematic_rows``,
-``_dense.kinematic_factor``), against dense LAPACK solves of the same matrices and
-against whole branches continued without the elimination."""
+``_intervals.KinematicLU``), against NumPy's dense solves of the same matrices and
+against whole branches continued with SuperLU of the whole matrix."""
 
 import casadi as ca
 import numpy as np
 import pytest
 
 import continuation as C
-from continuation import _jit
 from continuation._collocation import collocation
-from continuation._condensed import DENSE, CollocationJacobian
-from continuation._dense import kinematic_solve
-from continuation._intervals import PointwiseTerm, kinematic_rows
-from continuation._lazyjit import KINEMATIC
+from continuation._condensed import CollocationJacobian
+from continuation._intervals import KinematicLU, PointwiseTerm, kinematic_rows
+from continuation._stacks import StackLU
 
 from .conftest import van_der_pol_ring
 
@@ -44,9 +42,7 @@ def test_kinematic_rows_are_found_exactly(ncol):
     assert found.positions.tolist() == positions
     assert found.velocities.tolist() == velocities
     assert found.others.tolist() == [0, 1, 2, 3, 4, 5]
-    order, kl, ku = found.args
-    assert kl == KINEMATIC and ku == 3
-    assert order.tolist() == positions + velocities + [0, 1, 2, 3, 4, 5] + [0, 2, 1]
+    assert found.places.tolist() == [0, 2, 1]
     blocks[2, 1 * n + 7, n + 2 * n + 4] = 1e-300        # row (1, 7): a third state
     blocks[1, 1 * n + 8, n + 8] *= 1 + 1e-13             # row (1, 8): not Dm to rounding
     found = kinematic_rows(blocks, collocation(ncol).Dm)
@@ -75,20 +71,15 @@ def test_the_block_elimination_solves_like_lapack(n, positions, velocities):
     for i in range(ntst):
         for t in others:
             blocks[i, t, n + t] = 0.0
-    extra = rng.standard_normal((ntst, n * ncol, k))
     rows = kinematic_rows(blocks, collocation(ncol).Dm)
-    order, _, nq = rows.args
-    lu, piv, Z, ok = _jit.interval_factors(blocks, extra, order, nq, rows.D)
-    assert ok
+    lu = rows.factorize(blocks)
+    assert isinstance(lu, KinematicLU)
     b = rng.standard_normal((ntst, n * ncol, 4))
-    for i in range(ntst):
-        M = blocks[i, :, n:]
-        tol = 1e-14 * np.linalg.cond(M)
-        assert _rel(Z[i], np.linalg.solve(M, np.hstack([blocks[i, :, :n], extra[i]]))) < tol
-        for r in (1, 4):
-            x = b[i, :, :r].copy()
-            kinematic_solve(lu[i], piv[i], x, order, nq)
-            assert _rel(x, np.linalg.solve(M, b[i, :, :r])) < tol
+    for r in (1, 4):
+        x = lu.solve(b[:, :, :r])
+        for i in range(ntst):
+            M = blocks[i, :, n:]
+            assert _rel(x[i], np.linalg.solve(M, b[i, :, :r])) < 1e-14 * np.linalg.cond(M)
 
 
 def test_an_interval_without_the_structure_falls_back_to_dense_factors():
@@ -98,16 +89,15 @@ def test_an_interval_without_the_structure_falls_back_to_dense_factors():
     rng = np.random.default_rng(7)
     blocks = _blocks(n, [0, 1], [5, 6], ncol, ntst, rng)
     rows = kinematic_rows(blocks, collocation(ncol).Dm)
+    assert rows.factorize(blocks) is not None
     blocks[3, 2 * n + 1, n + n + 9] = 0.25               # interval 3, row (2, 1), state 9
-    order, _, nq = rows.args
-    assert not _jit.interval_factors(blocks, rng.standard_normal((ntst, n * ncol, 1)),
-                                     order, nq, rows.D)[3]
+    assert rows.factorize(blocks) is None
     term = PointwiseTerm(np.zeros((ntst * ncol, n * n)), np.zeros((ntst * ncol, ncol + 1)))
     J = CollocationJacobian(n, ntst, ncol, (term,), rng.standard_normal((ntst, n * ncol, 1)),
                             np.zeros(ntst * n * ncol), kinematic=rows)
     J.__dict__["blocks"] = blocks                        # the matrices under test
-    lu, piv, Z = J.factors
-    assert J.factor_layout is DENSE
+    Z = J.maps
+    assert isinstance(J.intervals, StackLU)
     for i in range(ntst):
         M = blocks[i, :, n:]
         assert _rel(Z[i], np.linalg.solve(M, np.hstack([blocks[i, :, :n], J.extra[i]]))) \
@@ -151,7 +141,7 @@ def test_branches_with_kinematic_rows_eliminated_equal_the_sparse_solver(mass):
     lu = factorize(A)
     assert A.J.kinematic.positions.tolist() == [0, 2, 4, 6, 8, 10, 12]
     assert A.J.kinematic.velocities.tolist() == [1, 3, 5, 7, 9, 11, 13]
-    assert A.J.factor_layout[1] == KINEMATIC
+    assert isinstance(A.J.intervals, KinematicLU)
     dense = append_row(C.CycleProblem.jacobian(prob, X), tau).toarray()
     for b in (rng.standard_normal(X.size), rng.standard_normal((X.size, 3))):
         assert _rel(lu.solve(b), np.linalg.solve(dense, b)) < 1e-11
@@ -171,4 +161,4 @@ def test_small_interval_matrices_keep_the_plain_lu():
     prob = _problem("condensed", False, n=10)
     assert 10 * 4 <= KINEMATIC_MIN_ROWS
     A = prob.bordered_jacobian(prob.X0, np.ones(prob.X0.size))
-    assert A.J.kinematic is None and A.J.factor_layout is DENSE
+    assert A.J.kinematic is None and isinstance(A.J.intervals, StackLU)
