@@ -55,12 +55,9 @@ class BufferedFunction:
             self._open()
         for a, x in zip(self._args, args):
             a[:] = np.ravel(x)
-        if self.later is None:
-            self._eval()
-        else:
-            start = time.perf_counter()
-            self._eval()
-            self.spent += time.perf_counter() - start
+        start = time.perf_counter()
+        self._eval()
+        self.spent += time.perf_counter() - start
         return [r.copy() for r in self._res]
 
     def _open(self):
