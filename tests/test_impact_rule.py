@@ -116,13 +116,14 @@ def test_no_load_out_of_contact(setup):
     assert np.all(model_load(model, p, x) == 0.0)
 
 
-@pytest.mark.parametrize("case", ["concave", "convex", "linear", "touching"])
+@pytest.mark.parametrize("case", ["concave", "convex", "linear", "touching", "bulging"])
 def test_cell_weights_against_quad(case):
     """One cell's weights ``∫ max(0, p) ℓ_j`` against adaptive quadrature of the same
-    quadratic p, in the shapes the closed form separates; and its derivative against
-    central differences."""
+    quadratic p, in the shapes the closed form separates (also p > 0 between nodes that
+    are all below 0, which the symbolic rule must not skip), NumPy and symbolic; and its
+    derivative, by AD and by the rule's own Jacobian, against central differences."""
     g = {"concave": [-1.0, 0.5, -0.2], "convex": [0.3, -0.4, 0.1], "linear": [-0.3, 0.1, 0.5],
-         "touching": [-1.0, 0.0, -1.0]}[case]
+         "touching": [-1.0, 0.0, -1.0], "bulging": [-1.0, -0.1, -0.01]}[case]
     rule = ImpactRule(np.linspace(0.0, 1.0, 3))              # one cell, of width 1
     p = lambda t: g[1] + (g[2] - g[0]) / 2 * t + ((g[2] + g[0]) / 2 - g[1]) * t * t
     basis = [lambda t: (t * t - t) / 2, lambda t: 1 - t * t, lambda t: (t * t + t) / 2]
@@ -130,9 +131,13 @@ def test_cell_weights_against_quad(case):
     kinks = [r.real for r in roots if abs(r.imag) < 1e-14 and -1 < r.real < 1]
     expected = [quad(lambda t: max(0.0, p(t)) * l(t) / 2, -1, 1, epsabs=1e-15, limit=200,
                      points=kinks or None)[0] for l in basis]
+    assert max(expected) > 0 or case == "touching"
     assert rule.nodal(np.array(g), None) == pytest.approx(expected, abs=1e-13)
     sym = ca.MX.sym("g", 3)
+    symbolic = np.array(ca.Function("W", [sym], [rule.nodal(sym, None)])(g)).ravel()
+    assert symbolic == pytest.approx(expected, abs=1e-13)
     J = np.array(ca.Function("J", [sym], [ca.jacobian(rule.nodal(sym, None), sym)])(g))
+    assert np.array(ca.Function("J", [sym], [rule.nodal_jacobian(sym, None)])(g)) == pytest.approx(J, abs=1e-15)
     if case == "touching":        # a double root: the load grows like (g0)^1.5, slope 0
         assert np.all(J == 0.0)
         return

@@ -19,7 +19,7 @@ import casadi as ca
 import numpy as np
 
 __all__ = ["GAP_POINTS", "WALL_SIGNS", "ramp", "stiffness", "law", "gap", "wall_gaps", "gaps",
-           "wall_load", "nodal_impact_load", "modal_load", "reference_force"]
+           "wall_load", "nodal_impact_load", "nodal_impact_jacobian", "modal_load", "reference_force"]
 
 GAP_POINTS = np.linspace(0.0, 1.0, 101)
 """Points x/L where gaps are sampled by the gauges and the plots (the impact load and
@@ -76,9 +76,25 @@ def nodal_impact_load(rule, scene, y, k, eps):
     """``W`` at the nodes of the impact ``rule`` (:class:`fsicas.model.impact_rule.ImpactRule`)
     from the deflection ``y`` there, both walls, so that ``∫ Σ_c f_c phi_n = Σ_i W_i
     phi_n(x_i)``: ``Σ_c s_c k rule.nodal(eps - h_c)``. Symbolic or NumPy (states in rows)."""
+    ramp_ = _law_ramp(scene, eps)
+    return sum(sign * k * rule.nodal(g, ramp_) for sign, g in _penetrations(rule, scene, y, eps))
+
+
+def nodal_impact_jacobian(rule, scene, y, k, eps):
+    """``dW/dy`` of :func:`nodal_impact_load` (symbolic): ``-k Σ_c dW_c/dg_c``, as
+    ``g_c = eps - h_c`` falls by ``s_c`` per unit y and ``s_c² = 1``."""
+    ramp_ = _law_ramp(scene, eps)
+    return -k * sum(rule.nodal_jacobian(g, ramp_) for _, g in _penetrations(rule, scene, y, eps))
+
+
+def _law_ramp(scene, eps):
     width = scene.contact_smoothing * eps if scene.contact_smoothing else 0.0
-    return sum(sign * k * rule.nodal(eps - gap(wall(rule.x), y, sign), lambda g: ramp(g, width))
-               for wall, sign in zip(scene.walls, WALL_SIGNS))
+    return lambda g: ramp(g, width)
+
+
+def _penetrations(rule, scene, y, eps):
+    """``(s_c, g_c = eps - h_c)`` at the rule's nodes, for both walls."""
+    return [(sign, eps - gap(wall(rule.x), y, sign)) for wall, sign in zip(scene.walls, WALL_SIGNS)]
 
 
 def modal_load(model, x, p) -> np.ndarray:

@@ -106,14 +106,20 @@ class LiftedEquations:
                          [ca.DM.eye(n), ca.DM(n, n), ca.DM(n, 2)],
                          [ca.DM(2, n), ca.DM(2, n), ca.DM(2, 2)]])
         z = self.sym.sym("z", self.L.shape[0])
-        dg = ca.substitute(ca.jacobian(self._nodal_force(z), z), z, ca.mtimes(_dm(self.L), self.x))
+        if self.impact_rule is None:
+            dg = ca.jacobian(self._nodal_force(z), z)
+        else:   # the impact block by the rule's own derivative: AD through it is 10-50x dearer
+            head, y = 3 * self.K + 4, z[3 * self.K + 4:]
+            dg = ca.vertcat(ca.jacobian(self._nodal_force(z, impact=False), z),
+                            ca.horzcat(ca.DM(y.numel(), head), self._impact_jacobian(y)))
+        dg = ca.substitute(dg, z, ca.mtimes(_dm(self.L), self.x))
         return C.Lifted(ca.Function("dg", [self.x, self.p], [dg]), self.P, self.L,
                         ca.Function("A", [self.p], [A]))
 
     def _zeta(self):
         return ca.vertcat(*[self.par[f"zeta{k + 1}"] for k in range(self.n)])
 
-    def _nodal_force(self, z):
+    def _nodal_force(self, z, impact: bool = True):
         """``g = (a, b, gt_1, gt_2, c, s_1, s_2, f)``: the nodal loads ``a`` (on Psi) and
         ``b`` (on phi), the nodal ``gt_c`` (on the flow rows, ``-∫ gt_c``), the inlet load
         ``c`` (on Phi(1)), the flow rows' scalar terms ``s_c`` (paper Eqs. 11–16) and the
@@ -122,7 +128,7 @@ class LiftedEquations:
         mstar = par["mstar"]
         kin = dict(y=z[:K], ydot=z[K:2 * K], run=z[2 * K:3 * K], y_tip=z[3 * K + 2],
                    run_tip=z[3 * K + 3])
-        a, b, c, gts, rows, impact = 0, 0, 0, [], [], ca.DM.zeros(0)
+        a, b, c, gts, rows = 0, 0, 0, [], []
         for ch, s in enumerate(contact.WALL_SIGNS):
             u, gt, u_in, u_out = _channel(self.scene, self.basis, z[3 * K + ch], ch, s,
                                           par["friction"], kin)
@@ -132,16 +138,22 @@ class LiftedEquations:
             gts.append(gt)
             rows.append(par["pressure_drop"] / mstar
                         - (par["k0"] * u_in * ca.fabs(u_in) + par["kl"] * u_out * ca.fabs(u_out)) / 2)
-        if self.impact_rule is not None:
-            impact = self._impact_load(z[3 * K + 4:])
-        return ca.vertcat(a, b, *gts, c, *rows, impact)
+        loads = [self._impact_load(z[3 * K + 4:])] if impact and self.impact_rule else []
+        return ca.vertcat(a, b, *gts, c, *rows, *loads)
 
     def _impact_load(self, y):
         """``W`` with ``∫ Σ_c f_c phi_n = Σ_i W_i phi_n(x_i)`` at the impact rule's nodes
         (:mod:`.impact_rule`), from the deflection ``y`` there."""
+        return contact.nodal_impact_load(self.impact_rule, self.scene, y, *self._law())
+
+    def _impact_jacobian(self, y):
+        """``dW/dy`` (:meth:`_impact_load`)."""
+        return contact.nodal_impact_jacobian(self.impact_rule, self.scene, y, *self._law())
+
+    def _law(self):
+        """``(k, eps)`` of the contact law, symbolic in p."""
         k = contact.stiffness(self.par["contact_stiffness"], self.basis.omega[0])
-        eps = self.par["contact_eps"] * self.scene.hstar / 2
-        return contact.nodal_impact_load(self.impact_rule, self.scene, y, k, eps)
+        return k, self.par["contact_eps"] * self.scene.hstar / 2
 
     # -- M ------------------------------------------------------------------------------
     def _nodal_mass(self):
