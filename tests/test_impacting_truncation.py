@@ -7,10 +7,11 @@ from fsicas.timedomain.impacting_run import TRUNCATION_MEASURES, with_truncation
 
 def _run(modes, period, force, status="success"):
     """The fields of an impacting run's JSON that the estimate reads: period and peak
-    force as given, the other measures 1 (or None with the period)."""
+    force as given, the other measures 1 (or None with the period, the gap closed)."""
     other = None if period is None else 1.0
     return {**dict.fromkeys(TRUNCATION_MEASURES, other), "modes": modes, "period": period,
-            "max_impact_force": force, "status": status, "warnings": []}
+            "max_impact_force": force, "status": status, "warnings": [],
+            "outcome": "impacting_lco" if period else "contact"}
 
 
 def test_estimate_is_the_relative_change_from_the_coarser_run():
@@ -39,7 +40,10 @@ def test_missing_estimate_warns_unless_the_run_itself_failed():
     "unconverged"; a failed run keeps its status and gains no warning."""
     out = with_truncation(_run(20, 0.1, 5000.0), _run(10, None, None, "failed"))
     assert out["truncation_error"] == dict.fromkeys(TRUNCATION_MEASURES, None)
-    assert out["status"] == "unconverged" and "not estimated" in out["warnings"][0]
+    assert out["status"] == "unconverged"
+    (warning,) = out["warnings"]
+    assert "not estimated: the N = 10 run shows no cycle (contact)" in warning
+    assert "above the tolerance" not in warning
     failed = with_truncation(_run(20, None, None, "failed"), _run(10, 0.1, 4000.0))
     assert failed["status"] == "failed" and failed["warnings"] == []
 

@@ -71,12 +71,18 @@ def with_truncation(run: dict, coarser: dict, tol: float = TRUNCATION_RTOL) -> d
            "truncation_tol": tol}
     if run["period"] is None:
         return out
-    above = [f"{k} {'not estimated' if e is None else f'{e:.2g}'}" for k, e in error.items()
-             if e is None or e > tol]
+    above = [f"{k} {e:.2g}" for k, e in error.items() if e is not None and e > tol]
+    missing = [k for k, e in error.items() if e is None]
+    said = []
     if above:
-        out["warnings"] = [*run["warnings"], f"modal truncation: from N = {coarser['modes']} "
-                           f"to N = {run['modes']} modes the {', '.join(above)} (relative), "
-                           f"above the tolerance {tol:g}: raise modes"]
+        said.append(f"from N = {coarser['modes']} to N = {run['modes']} modes the "
+                    f"{', '.join(above)} (relative), above the tolerance {tol:g}")
+    if missing:
+        why = (f"the N = {coarser['modes']} run shows no cycle ({coarser['outcome']})"
+               if coarser["period"] is None else f"the N = {coarser['modes']} run lacks it")
+        said.append(f"the {', '.join(missing)} not estimated: {why}")
+    if said:
+        out["warnings"] = [*run["warnings"], f"modal truncation: {'; '.join(said)}: raise modes"]
         out["status"] = "unconverged" if run["status"] == "success" else run["status"]
     return out
 
