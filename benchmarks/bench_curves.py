@@ -8,7 +8,7 @@
 
     python3 benchmarks/bench_curves.py [--points 20]
 
-About 5 minutes on one core.
+A few minutes on one core.
 """
 from __future__ import annotations
 

@@ -10,7 +10,7 @@ evaluation). Medians of ``--repeats`` runs, the parts interleaved.
 
     python3 benchmarks/bench_design.py [--modes 6 10 20] [--repeats 3]
 
-About a minute on one core.
+A few minutes on one core.
 """
 from __future__ import annotations
 

@@ -6,7 +6,7 @@ default 2N + 20 nodes. Per row: the time of a continuation point (corrector, tan
 multipliers, gauge: the wall time of a ``cycle_branch`` of ``--points`` points on a
 fixed mesh, divided by its points) after a warm-up branch that builds (and compiles)
 everything, and the fitted exponent ``d log t / d log (variable)`` between neighbouring
-rows. One BLAS thread. About 3 minutes on one core.
+rows. One BLAS thread. About a minute.
 
     python3 benchmarks/bench_scaling.py [--modes 4 10 20 40] [--ntst 10 20 40 80]
         [--nodes 40 80 160] [--points 6]
