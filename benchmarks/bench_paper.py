@@ -6,8 +6,8 @@ writes on stderr (the stage lines: the boundary of Figs. 2-3, its variants, the 
 map and curves, each impacting cycle of Figs. 6-9). Prints a Markdown table: each
 stage line and the minutes from it to the next, then the total, with the machine's core
 count and load average before and after. The job itself uses 2 worker processes for
-the map, the curves and the cycles: run it on 2 otherwise idle cores. About 20-25
-minutes (``--quick``: 2-3 minutes).
+the map, the curves and the cycles: run it on 2 otherwise idle cores. About 15
+minutes.
 
     python3 benchmarks/bench_paper.py [--quick] [--out results]
 """
