@@ -1,20 +1,19 @@
 """Cost and convergence of the curves of special cycles in (M*, U*) (Fig. 4's scene).
 
 1. Cost per point of a grazing curve (seed M* = 1) and of a fold-of-cycles curve (seed
-   M* = 0.6) at N = 10: wall time per curve point, and the shares of the time in model
-   kernels (CasADi calls) and in linear algebra (SuperLU, LAPACK, NumPy), by cProfile.
+   M* = 0.6) at N = 10: wall time per curve point.
 2. Convergence of the grazing point at M* = 1 (U* of the first contact of the branch,
    which the grazing curve passes through): N = 10 against 20 and NTST = 20 against 40,
    each on quadrature tolerance 1e-8.
 
-    python benchmarks/bench_curves.py [--points 20]
+    python3 benchmarks/bench_curves.py [--points 20]
+
+A few minutes on one core.
 """
 from __future__ import annotations
 
 import argparse
-import cProfile
 import os
-import pstats
 import time
 
 for _var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS"):
@@ -27,19 +26,6 @@ from fsicas.cycles.curves import CurveSettings, fold_curves, grazing_curve  # no
 SCENE = Scene(mstar=1.0, modes=10, zeta=0.01)
 
 
-def shares(stats) -> tuple:
-    """``(kernel, linear algebra)`` shares of the profiled time (own times)."""
-    total = sum(v[2] for v in stats.values())
-    kernel = sum(v[2] for (f, _, name), v in stats.items()
-                 if "casadi" in f or f.endswith(("_symbolic.py", "_lifted.py"))
-                 or "Function_call" in name)
-    algebra = sum(v[2] for (f, _, name), v in stats.items()
-                  if f.endswith(("_newton.py", "_floquet.py")) or "linalg" in f
-                  or "gstrf" in name or "SuperLU" in name or "matmul" in name
-                  or "einsum" in name or "csc_matvec" in name)
-    return kernel / total, algebra / total
-
-
 def curve_cost(kind: str, mstar: float, points: int) -> dict:
     scene = SCENE.replace(mstar=mstar)
     run = continue_cycles(scene, settings=CycleSettings(quadrature_tol=1e-6))
@@ -49,13 +35,7 @@ def curve_cost(kind: str, mstar: float, points: int) -> dict:
     t0 = time.perf_counter()
     curve = trace()
     wall = time.perf_counter() - t0
-    prof = cProfile.Profile()
-    prof.enable()
-    trace()
-    prof.disable()
-    kernel, algebra = shares(pstats.Stats(prof).stats)
-    return {"kind": kind, "points": len(curve.points), "s_per_point": wall / len(curve.points),
-            "kernel": kernel, "algebra": algebra}
+    return {"kind": kind, "points": len(curve.points), "s_per_point": wall / len(curve.points)}
 
 
 def contact_ustar(modes: int, ntst: int) -> tuple[float, float]:
@@ -69,11 +49,11 @@ def main(argv=None) -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--points", type=int, default=20, help="curve points per direction")
     args = ap.parse_args(argv)
-    print(f"{'curve':8} {'points':>6} {'s/point':>8} {'kernels':>8} {'lin.alg.':>8}")
+    print(f"{os.cpu_count()} cores, load average {os.getloadavg()[0]:.2f}")
+    print(f"{'curve':8} {'points':>6} {'s/point':>8}")
     for kind, mstar in (("grazing", 1.0), ("fold", 0.6)):
         r = curve_cost(kind, mstar, args.points)
-        print(f"{kind:8} {r['points']:6d} {r['s_per_point']:8.3f} {r['kernel']:8.0%} "
-              f"{r['algebra']:8.0%}")
+        print(f"{kind:8} {r['points']:6d} {r['s_per_point']:8.3f}")
     print("\ngrazing point at M* = 1 (first contact of the branch):")
     ref, t = contact_ustar(10, 20)
     print(f"N = 10, NTST = 20: U* = {ref:.10f}  ({t:.1f} s)")

@@ -28,9 +28,11 @@ import os
 import re
 import shutil
 import subprocess
+import sys
 import tempfile
 import time
 from dataclasses import replace
+from pathlib import Path
 
 # Single-threaded BLAS, like AUTO (OMP_NUM_THREADS=1): on a shared, loaded 2-core
 # machine the multithreaded OpenBLAS made the many small solves of the Floquet
@@ -38,35 +40,12 @@ from dataclasses import replace
 for _var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS"):
     os.environ.setdefault(_var, "1")
 
-import casadi as ca  # noqa: E402
 import numpy as np  # noqa: E402
 
 import continuation as C  # noqa: E402
 
-A, D1, D2 = 2.0, 1.0, 1.0
-
-
-def brusselator_chain(n: int) -> ca.Function:
-    """F(x, p), x = (u_1, v_1, ..., u_N, v_N), p = (A, B, d1, d2)."""
-    x, p = ca.SX.sym("x", n), ca.SX.sym("p", 4)
-    a, b, d1, d2 = p[0], p[1], p[2], p[3]
-    u, v = x[0::2], x[1::2]
-    N = n // 2
-    ul = ca.vertcat(a, u[:-1]) if N > 1 else a
-    ur = ca.vertcat(u[1:], a) if N > 1 else a
-    vl = ca.vertcat(b / a, v[:-1]) if N > 1 else b / a
-    vr = ca.vertcat(v[1:], b / a) if N > 1 else b / a
-    fu = a - (b + 1) * u + u ** 2 * v + d1 * (ul - 2 * u + ur)
-    fv = b * u - u ** 2 * v + d2 * (vl - 2 * v + vr)
-    return ca.Function("F", [x, p], [ca.vec(ca.horzcat(fu, fv).T)])
-
-
-def params(B):
-    return {"A": A, "B": float(B), "d1": D1, "d2": D2}
-
-
-def hopf_b(n: int) -> float:
-    return 1 + A ** 2 + (D1 + D2) * 2 * (1 - np.cos(np.pi / (n // 2 + 1)))
+sys.path.insert(0, str(Path(__file__).resolve().parent))     # the tests load it by path
+from common import A, brusselator_chain, hopf_b, params  # noqa: E402,F401
 
 
 def hopf_start(n: int):

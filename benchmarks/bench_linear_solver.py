@@ -5,14 +5,11 @@ point (interleaved, so the machine's drift hits both alike). Printed per case: t
 median time of a continuation point (corrector, tangent, Floquet multipliers) of each,
 the median of the pointwise ratios sparse / condensed, the largest relative difference
 between the two branches (parameter, period and multipliers: both solve the same
-equations to the same tolerance, so this is the error between the routes), and, from a
-separate profiled repeat of the condensed route, the shares of a point spent in the
-model kernels (CasADi calls and the lifted products), in linear algebra (LAPACK,
-SuperLU, the condensation's NumPy products) and in the rest (assembly, driver).
+equations to the same tolerance, so this is the error between the routes).
 
 Cases: the flutter model (``fsicas``, M* = 1, N modes, n = 2N + 2 states with dense
 blocks, NTST = 20, NCOL = 4, the steps of ``fsicas.cycles.cycle_branch``) and the
-Brusselator chain of ``bench_cycles.py`` (n = 2 cells, banded blocks, NTST = 50).
+Brusselator chain of ``bench_cycles.py`` (``common.py``) (n = 2 cells, banded blocks, NTST = 50).
 
     python benchmarks/bench_linear_solver.py [--modes 4 10 20 40] [--cells 2 5 10]
         [--points 12]
@@ -21,9 +18,7 @@ Brusselator chain of ``bench_cycles.py`` (n = 2 cells, banded blocks, NTST = 50)
 from __future__ import annotations
 
 import argparse
-import cProfile
 import os
-import pstats
 import time
 from dataclasses import replace
 
@@ -33,13 +28,13 @@ for _var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS"):
 import numpy as np  # noqa: E402
 
 import continuation as C  # noqa: E402
+from common import A, brusselator_chain, flutter_start, hopf_b, params  # noqa: E402
 
 SOLVERS = ("sparse", "condensed")
 
 
 def flutter(modes: int, solver: str):
     """The flutter cycle problem from its first Hopf point, and its step settings."""
-    from bench_kernels_model import flutter_start
     eq, hopf = flutter_start(modes)
     prob = C.cycle_from_hopf(eq, hopf.point, dp=1e-3, settings=C.CollocationSettings(
         ntst=20, ncol=4, floquet="product", linear_solver=solver))
@@ -49,7 +44,6 @@ def flutter(modes: int, solver: str):
 
 def brusselator(n: int, solver: str):
     """The Brusselator chain of ``bench_cycles`` (n states) from its Hopf point."""
-    from bench_cycles import A, brusselator_chain, hopf_b, params
     F = brusselator_chain(n)
     eq = C.EquilibriumProblem(F, np.tile([A, 4.5 / A], n // 2), params(4.5), "B")
     br = C.continuation(eq, settings=C.ContinuationSettings(
@@ -95,29 +89,7 @@ def compare(make, size: int, points: int) -> dict:
                _rel(mua, mub))
     ratio = np.median(np.array(times["sparse"]) / np.array(times["condensed"]))
     return {"sparse": np.median(times["sparse"]), "condensed": np.median(times["condensed"]),
-            "ratio": ratio, "diff": diff, "shares": shares(make, size, points)}
-
-
-def shares(make, size: int, points: int) -> tuple:
-    """``(kernel, linear algebra)`` shares of the condensed route's points, by cProfile
-    (own times; the profiler's overhead inflates the Python parts a little)."""
-    _, step = walkers(make, size, points)["condensed"]
-    prof = cProfile.Profile()
-    prof.enable()
-    for _ in range(points):
-        step()
-    prof.disable()
-    stats = pstats.Stats(prof).stats
-    total = sum(v[2] for v in stats.values())
-    kernel = sum(v[2] for (f, _, name), v in stats.items()
-                 if "casadi" in f or f.endswith("_symbolic.py") or f.endswith("_lifted.py")
-                 or "Function_call" in name)
-    algebra = sum(v[2] for (f, _, name), v in stats.items()
-                  if f.endswith(("_condensed.py", "_chain.py", "_stacks.py", "_intervals.py",
-                                "_floquet.py", "_newton.py"))
-                  or "linalg" in f or "lapack" in name or "getr" in name or "gstrf" in name
-                  or "SuperLU" in name or "matmul" in name or "einsum" in name)
-    return kernel / total, algebra / total
+            "ratio": ratio, "diff": diff}
 
 
 def _rel(a, b) -> float:
@@ -133,15 +105,14 @@ def main(argv=None) -> None:
     args = ap.parse_args(argv)
     print(f"load average {os.getloadavg()[0]:.1f} ({os.cpu_count()} cores)")
     print("| model | n | sparse [ms/point] | condensed [ms/point] | speed-up | "
-          "max rel. difference | kernel / linear algebra / rest (condensed) |")
-    print("| --- | --- | --- | --- | --- | --- | --- |")
+          "max rel. difference |")
+    print("| --- | --- | --- | --- | --- | --- |")
     cases = [("flutter N = %d" % m, flutter, m, 2 * m + 2) for m in args.modes] + \
         [("Brusselator", brusselator, 2 * c, 2 * c) for c in args.cells]
     for name, make, size, n in cases:
         r = compare(make, size, args.points)
-        k, a = r["shares"]
         print(f"| {name} | {n} | {1e3 * r['sparse']:.1f} | {1e3 * r['condensed']:.1f} | "
-              f"{r['ratio']:.2f}x | {r['diff']:.1e} | {k:.0%} / {a:.0%} / {1 - k - a:.0%} |",
+              f"{r['ratio']:.2f}x | {r['diff']:.1e} |",
               flush=True)
 
 

@@ -2,13 +2,13 @@
 
 The flutter model at M* = 1 (``fsicas.cycles.cycle_branch`` from the first Hopf point,
 NCOL = 4, default backend), one variable at a time around N = 10, NTST = 20 and the
-default 2N + 20 nodes. Per row: the median time of a continuation point (corrector,
-tangent, multipliers, gauge) over ``--points`` points after a warm-up branch that builds
-(and compiles) everything, its split into the pointwise kernel (CasADi calls and the
-lifted dense products), SuperLU and the rest, and the fitted exponent
-``d log t / d log (variable)`` between neighbouring rows.
+default 2N + 20 nodes. Per row: the time of a continuation point (corrector, tangent,
+multipliers, gauge: the wall time of a ``cycle_branch`` of ``--points`` points on a
+fixed mesh, divided by its points) after a warm-up branch that builds (and compiles)
+everything, and the fitted exponent ``d log t / d log (variable)`` between neighbouring
+rows. One BLAS thread. About a minute.
 
-    python benchmarks/bench_scaling.py [--modes 4 10 20 40] [--ntst 10 20 40 80]
+    python3 benchmarks/bench_scaling.py [--modes 4 10 20 40] [--ntst 10 20 40 80]
         [--nodes 40 80 160] [--points 6]
 """
 from __future__ import annotations
@@ -22,53 +22,31 @@ for _var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS"):
 
 import numpy as np  # noqa: E402
 
-from bench_kernels import TimedKernel  # noqa: E402
-from bench_kernels_model import TimedLU  # noqa: E402
 
 
-def point_cost(modes: int, ntst: int, nodes: int | None, points: int) -> dict:
-    """Median time per point and its kernel / LU shares (see the module docstring)."""
+def point_cost(modes: int, ntst: int, nodes: int | None, points: int) -> float:
+    """Wall time per point of a ``cycle_branch`` (see the module docstring)."""
     import fsicas
     from fsicas.cycles import CycleSettings, cycle_branch
-    from fsicas.linear.adapter import flutter_field
     scene = fsicas.Scene(mstar=1.0, modes=modes, quad_nodes=nodes)
     model = fsicas.build_model(scene)
     hopf = fsicas.critical_velocity(scene, model)
     cycle_branch(scene, model, settings=CycleSettings(max_points=2, ntst=ntst), hopf=hopf)
-    kernels = _timed_kernels(flutter_field(model))
-    with TimedLU() as lu:
-        t0 = time.perf_counter()
-        br = cycle_branch(scene, model, hopf=hopf,
-                          settings=CycleSettings(max_points=points, ntst=ntst, adapt_every=0))
-        total = time.perf_counter() - t0
-    per_point = total / len(br.points)
-    kernel = sum(k.total for k in kernels) / total
-    return {"point": per_point, "kernel": kernel, "lu": lu.total / total}
-
-
-def _timed_kernels(vf) -> list:
-    """The pointwise kernels of the collocation systems cached on ``vf``, wrapped in
-    timers (as ``bench_kernels.instrument`` does)."""
-    timers = []
-    for system in vf.__dict__.get("_systems", {}).values():
-        if hasattr(system, "kernel") and not isinstance(system.kernel, TimedKernel):
-            system.kernel = TimedKernel(system.kernel)
-            timers.append(system.kernel)
-    return timers
+    t0 = time.perf_counter()
+    br = cycle_branch(scene, model, hopf=hopf,
+                      settings=CycleSettings(max_points=points, ntst=ntst, adapt_every=0))
+    return (time.perf_counter() - t0) / len(br.points)
 
 
 def table(name: str, values, make, points: int) -> None:
-    print(f"\n| {name} | ms / point | kernel / LU / rest | exponent |")
-    print("| --- | --- | --- | --- |")
+    print(f"\n| {name} | ms / point | exponent |")
+    print("| --- | --- | --- |")
     last = None
     for v in values:
-        r = make(v, points)
-        slope = "" if last is None else \
-            f"{np.log(r['point'] / last[1]) / np.log(v / last[0]):.2f}"
-        rest = 1 - r["kernel"] - r["lu"]
-        print(f"| {v} | {1e3 * r['point']:.1f} | {r['kernel']:.0%} / {r['lu']:.0%} / "
-              f"{rest:.0%} | {slope} |", flush=True)
-        last = (v, r["point"])
+        t = make(v, points)
+        slope = "" if last is None else f"{np.log(t / last[1]) / np.log(v / last[0]):.2f}"
+        print(f"| {v} | {1e3 * t:.1f} | {slope} |", flush=True)
+        last = (v, t)
 
 
 def main() -> None:

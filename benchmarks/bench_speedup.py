@@ -26,7 +26,7 @@ pairwise ratios old/new and the largest difference between the two trees' result
   points after 2 untimed ones; no flutter model is built; value: the last point's B
   and period.
 
-    python benchmarks/bench_speedup.py [--baseline 1ba3c13] [--modes 10] [--tasks eig ucrit]
+    python3 benchmarks/bench_speedup.py [--baseline main] [--modes 10] [--tasks eig ucrit]
 """
 from __future__ import annotations
 
@@ -34,7 +34,10 @@ import argparse
 import os
 import platform
 
-from baseline import Baseline, compare
+import inspect
+
+import common
+from common import Baseline, compare
 
 PRELUDE = """
 import json, sys, time
@@ -49,6 +52,12 @@ FLUTTER = """
 scene = fsicas.Scene(mstar=1.0, ustar=5.0, modes=n)
 model = fsicas.build_model(scene)
 """
+
+#: the Brusselator chain of bench_cycles.py, written into the child (an older tree's
+#: benchmarks may not have it)
+CHAIN = (f"import casadi as ca\nA, D1, D2 = {common.A}, {common.D1}, {common.D2}\n"
+         + "".join(inspect.getsource(f) for f in (common.brusselator_chain, common.params,
+                                                   common.hopf_b)))
 
 TASKS = {
     "eig": """
@@ -111,10 +120,7 @@ t = (time.perf_counter() - t0) / len(br.points)
 done(t, [br.points[-1].ustar, br.points[-1].period])
 """,
     "brusselator": """
-# written out (not bench_cycles' stepper): the older trees compared have none
-sys.path.insert(0, "benchmarks")
 import continuation as C
-from bench_cycles import A, brusselator_chain, hopf_b, params
 eq = C.EquilibriumProblem(brusselator_chain(n), np.tile([A, 4.5 / A], n // 2), params(4.5), "B")
 hopf = C.continuation(eq, settings=C.ContinuationSettings(
     ds=0.05, ds_max=0.1, bounds={"B": (4.0, hopf_b(n) + 0.3)})).special("hopf")[0]
@@ -136,7 +142,7 @@ done((time.perf_counter() - t0) / 20, [cyc.params(step.X)[1], cyc.period(step.X)
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--baseline", default="1ba3c13", help="git revision to compare with")
+    parser.add_argument("--baseline", default="main", help="git revision to compare with")
     parser.add_argument("--modes", type=int, nargs="+", default=[10])
     parser.add_argument("--tasks", nargs="+", choices=sorted(TASKS), default=sorted(TASKS))
     parser.add_argument("--points", type=int, default=41, help="M* values of 'boundary'")
@@ -151,7 +157,7 @@ def main() -> None:
     with Baseline(args.baseline) as base:
         for task in args.tasks:
             for n in args.modes:
-                prelude = PRELUDE + ("" if task == "brusselator" else FLUTTER)
+                prelude = PRELUDE + (CHAIN if task == "brusselator" else FLUTTER)
                 c = compare(base.path, prelude + TASKS[task], [n, args.points, args.cycle_points],
                             args.repeats)
                 print(f"| {task} | {n} | {c.old:.4g} | {c.new:.4g} | {c.speedup:.1f}x | "

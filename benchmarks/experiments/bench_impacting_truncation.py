@@ -10,8 +10,8 @@ reduction, convergence (how closely the last 4 cycles agree), the run's quadratu
 estimate and nodes, t reached and wall time. Then, per U*, the relative differences of
 period, peak force and flow reduction between successive N (relative to the larger N).
 
-    python3 benchmarks/bench_impacting_truncation.py [--ustar 7 8.5 10] [--modes 10 20 40] [--jsonl rows.jsonl]
-    python3 benchmarks/bench_impacting_truncation.py --table rows.jsonl   # the saved rows
+    python3 benchmarks/experiments/bench_impacting_truncation.py [--ustar 7 8.5 10] [--modes 10 20 40] [--jsonl rows.jsonl]
+    python3 benchmarks/experiments/bench_impacting_truncation.py --table rows.jsonl   # the saved rows
 
 One run per (U*, N), in this process, one after another (N = 40 takes minutes).
 """

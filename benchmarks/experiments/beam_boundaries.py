@@ -10,7 +10,7 @@ one colour per theory, lines broken at the switches). omega is in rad per unit T
 same T for every theory (``docs/beam.md``); omega_1 is each theory's own first in-vacuo
 frequency.
 
-    python benchmarks/beam_boundaries.py [--count 29] [--modes 10] [--out docs/figures/beam_boundaries.png]
+    python benchmarks/experiments/beam_boundaries.py [--count 29] [--modes 10] [--out docs/figures/beam_boundaries.png]
 
 (``--modes 16`` or ``24`` with another ``--out``: the truncation check of ``docs/beam.md``.)
 """

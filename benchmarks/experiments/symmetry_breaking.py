@@ -1,7 +1,7 @@
 """Symmetry breaking of the impacting cycles in the symmetric channel, and the period
 doublings it opens.
 
-    python benchmarks/symmetry_breaking.py [--modes 10] [--mstar 1] [--ustar-max 7.6]
+    python benchmarks/experiments/symmetry_breaking.py [--modes 10] [--mstar 1] [--ustar-max 7.6]
         [--points 60] [--checks 3] [--doubled] [--refine-ntst 0] [--out runs/symmetry]
 
 k* = 1e8, eps/H = 1e-2, smoothing 0.1, zeta = 0.01, NTST = 200. The period-1 impacting

@@ -1,6 +1,6 @@
 """Impacting branches at the paper's cases (1a-1c), checked against time integration.
 
-    python benchmarks/impacting_branches.py --modes 10 20 --ustar 7 8.5 10 \
+    python benchmarks/experiments/impacting_branches.py --modes 10 20 --ustar 7 8.5 10 \
         --ustar-max 10.5 --ntst 200 --out runs/impacting
 
 M* = 1, zeta = 0.01, H* = 1/10, f = 0.14, contact k* = 1e8, eps/H = 1e-2, smoothing 0.1

@@ -10,7 +10,7 @@ impacts per cycle and peak impact force of the runs at the held bracket end time
 and 100 show how the settled motion depends on k* above the threshold. The paper's
 own law (k* = 1e6, eps/H = 1e-3) is reported against it.
 
-    python benchmarks/contact_thresholds.py [--modes 10 20] [--steps 4] [--workers 2]
+    python benchmarks/experiments/contact_thresholds.py [--modes 10 20] [--steps 4] [--workers 2]
         [--out thresholds.jsonl]
 
 Each finished cell is appended to ``--out`` (one JSON line) as soon as it is done, and a

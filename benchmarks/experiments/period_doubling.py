@@ -1,6 +1,6 @@
 """Period doubling of impacting cycles: absent in the symmetric channel, present off centre.
 
-    python benchmarks/period_doubling.py [--modes 4] [--scan 0.1 0.3 1 3 10]
+    python benchmarks/experiments/period_doubling.py [--modes 4] [--scan 0.1 0.3 1 3 10]
         [--offset 0.02 --mstar 0.287 --ustar-max 9.25]
 
 k* = 1e8, eps/H = 1e-2, smoothing 0.1, zeta = 0.01, NTST = 200. Two parts:

@@ -1,6 +1,6 @@
 """Impacting limit cycles of the paper's points (1a–c), Figs. 6–9.
 
-    python benchmarks/impacting_cycles.py [--modes 40] [--out docs/figures]
+    python benchmarks/experiments/impacting_cycles.py [--modes 40] [--out docs/figures]
 
 M* = 1, U* in {7, 8.5, 10}, zeta = 0.01, H* = 1/10, f = 0.14. The paper's contact
 parameters (k* = 1e6, eps/H = 1e-3) do not hold the beam under this project's contact
