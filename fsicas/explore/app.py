@@ -14,7 +14,7 @@ from .compute import INPUTS, boundary_view, export, instant_view, onset_view, pr
 from .figures import BoundaryMap, ModeShape, RootLocus
 from .jobs import Jobs
 from .reproduce import command_line, python_lines
-from .widgets import NumberBox, readout
+from .widgets import NumberBox, held, markup, readout
 
 __all__ = ["Explorer", "RESULTS"]
 
@@ -57,11 +57,11 @@ class Explorer:
         self.boxes = {k: NumberBox(value=f"{getattr(self.base, k):.6g}", label=label, testid=k)
                       for k, (label, _) in INPUTS.items()}
         self.boxes["modes"].testid = "modes"
-        self.error = pn.pane.HTML(readout("error", ""), styles={"color": "#b00"})
-        self.readouts = pn.pane.HTML("")
-        self.onset = pn.pane.HTML(readout("onset-kind", "…", "onset"))
-        self.background = pn.pane.HTML(readout("boundary-status", "…", "boundary map"))
-        self.command = pn.pane.HTML("")
+        self.error = markup(readout("error", ""), color="#b00")
+        self.readouts = markup("")
+        self.onset = markup(readout("onset-kind", "…", "onset"))
+        self.background = markup(readout("boundary-status", "…", "boundary map"))
+        self.command = markup("")
         self.locus, self.shape, self.map = RootLocus(), ModeShape(), BoundaryMap()
         self.animate = pn.widgets.Toggle(name="animate the mode", value=False, width=160)
         self.phase = 0.0
@@ -96,7 +96,8 @@ class Explorer:
             pn.state.location.sync(self.beam, {"value": "beam"})
             pn.state.location.sync(self.slenderness, {"value": "slenderness"})
         pn.state.add_periodic_callback(self.poll, period=POLL_MS)
-        pn.state.add_periodic_callback(self._frame, period=FRAME_MS)
+        frames = pn.state.add_periodic_callback(self._frame, period=FRAME_MS, start=False)
+        self.animate.param.watch(lambda e: frames.start() if e.new else frames.stop(), "value")
         pn.state.on_session_destroyed(lambda _: self.jobs.close())
 
     def _changed(self, _event=None) -> None:
@@ -121,26 +122,43 @@ class Explorer:
             self.boxes["mstar"].value = f"{event.x:.4g}"
             self.boxes["ustar"].value = f"{event.y:.4g}"
 
+    @held
     def _cancel(self, kind: str) -> None:
         if self.jobs.cancel(kind):
-            self.background.object = readout("boundary-status", "cancelled", "boundary map")
+            self.background.text = readout("boundary-status", "cancelled", "boundary map")
 
     # -- the tiers ------------------------------------------------------------------
     def refresh(self) -> None:
-        """Read the inputs; draw the instant tier; ask for the onset and the map."""
+        """Read the inputs; show the readouts, alone in a first message (the browser shows
+        them before it redraws any figure); then the figures, the command line, the onset
+        and the map."""
+        if self._readouts():
+            self._draw()
+
+    @held
+    def _readouts(self) -> bool:
+        """The scene of the inputs and its instant view in the readouts (True), or the
+        library's message in the error line (False: the last valid view stays)."""
         try:
             texts = {k: b.value for k, b in self.boxes.items()}
             texts.update(beam=self.beam.value, slenderness=self.slenderness.value)
             scene = scene_of(self.base, texts)
             view = instant_view(scene)
         except ValueError as err:
-            self.error.object = readout("error", str(err))
-            return
-        self.error.object = readout("error", "")
+            self.error.text = readout("error", str(err))
+            return False
+        self.error.text = readout("error", "")
         self.scene, self.view = scene, view
-        self._draw_instant(scene, view)
-        self.command.object = (readout("command", command_line(scene)) + "<pre>"
-                               + python_lines(scene) + "</pre>")
+        self.readouts.text = self._instant_html(view)
+        return True
+
+    @held
+    def _draw(self) -> None:
+        scene, view = self.scene, self.view
+        self.locus.update(view["eigenvalues"])
+        self.shape.update(view["x"], view["y"], scene.hstar)
+        self.command.text = (readout("command", command_line(scene)) + "<pre>"
+                             + python_lines(scene) + "</pre>")
         self._ask("onset", _key(scene, "ustar"), onset_view, scene)
         self.map.crosshair(scene.mstar, scene.ustar)
         cached = RESULTS.get(("boundary", self._map_key()))
@@ -151,7 +169,8 @@ class Explorer:
         decade = math.floor(math.log10(self.scene.mstar))
         return _key(self.scene, "ustar", "mstar") + str(decade)
 
-    def _draw_instant(self, scene: Scene, view: dict) -> None:
+    @staticmethod
+    def _instant_html(view: dict) -> str:
         hz = "" if view["hz"] is None else f" ({_fmt(view['hz'], 4, ' Hz')})"
         flow = ("" if view["l_per_min"] is None else
                 "<br>" + readout("flow", _fmt(view["l_per_min"], 4, " L/min"), "airflow"))
@@ -162,9 +181,7 @@ class Explorer:
                  readout("pressure-drop", _fmt(view["pressure_drop"]), "pressure drop Δp"),
                  readout("tip", _fmt(view["tip"]), "static tip deflection") + flow]
         lines += [readout("warning", w) for w in view["warnings"]]
-        self.readouts.object = "<br>".join(lines)
-        self.locus.update(view["eigenvalues"])
-        self.shape.update(view["x"], view["y"], scene.hstar)
+        return "<br>".join(lines)
 
     def _ask(self, kind: str, key: str, target, scene: Scene) -> None:
         result = self.jobs.start((kind, key), target, scene)
@@ -174,6 +191,7 @@ class Explorer:
             self._show(kind, "running", 0.0)
 
     # -- results --------------------------------------------------------------------
+    @held
     def poll(self) -> None:
         for kind in ("onset", "boundary"):
             status, value = self.jobs.poll(kind)
@@ -186,18 +204,18 @@ class Explorer:
 
     def _show(self, kind: str, status: str, value) -> None:
         if kind == "onset":
-            self.onset.object = self._onset_html(status, value)
+            self.onset.text = self._onset_html(status, value)
         elif status == "done":
             self.map.update(value["points"])
-            self.background.object = readout("boundary-status", "done", "boundary map")
+            self.background.text = readout("boundary-status", "done", "boundary map")
         elif status == "running":
-            self.background.object = readout("boundary-status",
+            self.background.text = readout("boundary-status",
                                              f"computing… {value:.0f} s", "boundary map")
         elif status == "idle":
-            self.background.object = readout("boundary-status", "not computed (tens of seconds "
+            self.background.text = readout("boundary-status", "not computed (tens of seconds "
                                              "at N = 10, in the background)", "boundary map")
         else:
-            self.background.object = readout("boundary-status", f"failed: {value}")
+            self.background.text = readout("boundary-status", f"failed: {value}")
 
     def _onset_html(self, status: str, value) -> str:
         if status == "running":
@@ -224,10 +242,11 @@ class Explorer:
         onset = RESULTS.get(("onset", _key(self.scene, "ustar")))
         return io.StringIO(export(self.scene, self.view, onset, command_line(self.scene)))
 
+    @held
     def _frame(self) -> None:
-        if self.animate.value:
-            self.phase = (self.phase + 0.3) % (2 * math.pi)
-            self.shape.animate(self.phase)
+        """One step of the mode's animation (called only while "animate the mode" is on)."""
+        self.phase = (self.phase + 0.3) % (2 * math.pi)
+        self.shape.animate(self.phase)
 
     # -- the page -------------------------------------------------------------------
     def page(self) -> pn.viewable.Viewable:

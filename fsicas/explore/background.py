@@ -13,7 +13,7 @@ from ..timedomain.sound import AUDIO_RATE
 from .compute import run_view
 from .jobs import Jobs
 from .reproduce import command_line
-from .widgets import NumberBox, readout
+from .widgets import NumberBox, held, markup, readout
 
 __all__ = ["RunPanel"]
 
@@ -31,13 +31,14 @@ class RunPanel:
         self.start = pn.widgets.Button(name="time run", button_type="primary", width=120)
         self.stop = pn.widgets.Button(name="cancel run", width=110)
         self.stop.on_click(lambda _: self.jobs.cancel("run") and self.show("cancelled", None))
-        self.status = pn.pane.HTML(readout("run-status", "not run", "time run"))
+        self.status = markup(readout("run-status", "not run", "time run"))
         self.source = ColumnDataSource({"t": [], "tip": []})
         self.figure = figure(title="tip deflection y(1, t)", x_axis_label="t / T",
                              y_axis_label="y / L", height=220, sizing_mode="stretch_width")
         self.figure.line("t", "tip", source=self.source)
         self.audio = pn.pane.Audio(None, sample_rate=AUDIO_RATE, name="snore", visible=False)
 
+    @held
     def ask(self, scene, key: str) -> None:
         """Start (or show the cached) run of ``scene`` to the page's t_end."""
         try:
@@ -56,6 +57,7 @@ class RunPanel:
             if status != "idle":
                 self.show(status, value)
 
+    @held
     def show(self, status: str, value) -> None:
         if status == "running":
             text = f"running… {value:.0f} s"
@@ -63,7 +65,7 @@ class RunPanel:
             text = status if value is None else f"{status}: {value}"
         else:
             return self._done(value)
-        self.status.object = readout("run-status", text, "time run")
+        self.status.text = readout("run-status", text, "time run")
 
     def _done(self, run: dict) -> None:
         lines = [readout("run-status", run["status"], "time run"),
@@ -81,7 +83,7 @@ class RunPanel:
             peak = float(np.max(np.abs(sound["pressure"]))) or 1.0
             self.audio.object = (np.asarray(sound["pressure"]) / peak * 32767).astype(np.int16)
         self.audio.visible = sound is not None
-        self.status.object = "<br>".join(lines)
+        self.status.text = "<br>".join(lines)
 
     def page(self) -> pn.viewable.Viewable:
         return pn.Column("### Time run", self.t_end, pn.Row(self.start, self.stop), self.status,
