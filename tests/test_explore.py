@@ -20,7 +20,7 @@ import scipy.linalg
 from fsicas import Scene
 from fsicas.linear import critical_velocity, linear_stability
 from fsicas.model.assembly import build_model
-from fsicas.physical import load_physical
+from fsicas.physical import Physical, load_physical, parse_flow
 from fsicas.timedomain.run import run_case
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -249,3 +249,39 @@ def test_a_physical_preset_gives_hz_and_l_per_min_of_the_library(page, server):
     assert f"{scene.scales.l_per_min(onset.ustar):.4g} L/min" in hz
     assert f"{scene.scales.hz(onset.omega):.4g} Hz" in hz
     page.wait_for_function("() => location.search.includes('preset=soft_palate')")
+
+
+def _soft_palate_with(**values) -> Physical:
+    """The soft_palate preset with ``values`` (texts with units) in its [physical] table,
+    read by the library."""
+    preset = load_physical("soft_palate")
+    return Physical.from_table({**preset.raw, **values}, "soft_palate", preset.description,
+                               preset.scene_fields)
+
+
+def test_physical_inputs_with_units_are_converted_by_the_library(page, server):
+    _open(page, server)
+    page.get_by_label("physical preset").select_option("soft_palate")
+    page.locator("[data-testid=flow]").wait_for(timeout=30000)
+    assert page.locator("[data-testid=phys-E]").input_value() == "3 kPa"
+    assert page.locator("[data-testid=phys-flow]").input_value() == "20 L/min"
+    _set(page, "phys-E", "4 kPa")
+    _set(page, "phys-flow", "25 L/min")
+    scene = _soft_palate_with(E="4 kPa").scene(parse_flow("25 L/min"))
+    assert float(_text(page, "flow").split()[0]) == pytest.approx(25.0, rel=1e-4)
+    assert _number(page, "growth-rate") == pytest.approx(
+        linear_stability(scene).eigenvalues[0].real, rel=1e-5)
+    assert f"--mstar {scene.mstar:g} --ustar {scene.ustar:g} " in _text(page, "command")
+    page.wait_for_function("() => location.search.includes('E=4')")
+    with pytest.raises(ValueError) as refused:
+        _soft_palate_with(E="-3 kPa")
+    _set(page, "phys-E", "-3 kPa")
+    assert _text(page, "error") == str(refused.value)
+    _set(page, "phys-E", "4 kPa")
+    assert _text(page, "error") == ""
+    with pytest.raises(ValueError) as refused:
+        parse_flow("20 L", "airflow")
+    _set(page, "phys-flow", "20 L")
+    assert _text(page, "error") == str(refused.value)
+    assert _number(page, "growth-rate") == pytest.approx(                   # the view stays
+        linear_stability(scene).eigenvalues[0].real, rel=1e-5)

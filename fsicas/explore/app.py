@@ -10,7 +10,8 @@ import panel as pn
 from ..physical import preset_names
 from ..scene import Scene
 from .background import RunPanel
-from .compute import INPUTS, boundary_view, export, instant_view, onset_view, preset_scene, scene_of
+from .compute import (INPUTS, PHYSICAL_INPUTS, boundary_view, export, instant_view, onset_view,
+                      physical_scene, physical_texts, preset_scene, scene_of)
 from .figures import BoundaryMap, ModeShape, RootLocus
 from .jobs import Jobs
 from .reproduce import command_line, python_lines
@@ -57,6 +58,9 @@ class Explorer:
         self.boxes = {k: NumberBox(value=f"{getattr(self.base, k):.6g}", label=label, testid=k)
                       for k, (label, _) in INPUTS.items()}
         self.boxes["modes"].testid = "modes"
+        self.physical = {k: NumberBox(label=label, testid=f"phys-{k}", visible=False)
+                         for k, label in PHYSICAL_INPUTS.items()}
+        self._show_physical()
         self.error = markup(readout("error", ""), color="#b00")
         self.readouts = markup("")
         self.onset = markup(readout("onset-kind", "…", "onset"))
@@ -75,6 +79,8 @@ class Explorer:
         for box in self.boxes.values():
             box.param.watch(self._changed, "value")
         self.presets.param.watch(self._preset, "value")
+        for box in self.physical.values():
+            box.param.watch(self._physical_changed, "value")
         self.beam.param.watch(self._changed, "value")
         self.slenderness.param.watch(self._changed, "value")
         from bokeh.events import Tap
@@ -91,6 +97,8 @@ class Explorer:
         """Once the page is served: URL sync, polling of the jobs, the animation."""
         if pn.state.location is not None:
             pn.state.location.sync(self.presets, {"value": "preset"})     # before the boxes
+            for name, box in self.physical.items():
+                pn.state.location.sync(box, {"value": name})
             for name, box in self.boxes.items():
                 pn.state.location.sync(box, {"value": name})
             pn.state.location.sync(self.beam, {"value": "beam"})
@@ -105,10 +113,34 @@ class Explorer:
             self.refresh()
 
     def _preset(self, event) -> None:
-        """Start again from the preset's scene (or the default one): every box at once."""
+        """Start again from the preset's scene (or the default one): every box at once,
+        the preset's physical inputs shown as its file writes them."""
         self.preset = None if event.new == NO_PRESET else event.new
-        self.base = preset_scene(self.preset)
         self.holding = True
+        self._show_physical()
+        self._apply(preset_scene(self.preset))
+
+    def _show_physical(self) -> None:
+        """The preset's physical inputs as its file writes them (none without a preset)."""
+        texts = {} if self.preset is None else physical_texts(self.preset)
+        for name, box in self.physical.items():
+            box.value, box.visible = texts.get(name, ""), name in texts
+
+    def _physical_changed(self, _event=None) -> None:
+        """The preset's scene with the physical inputs, converted by the library; its
+        message if it refuses them (the last valid view stays)."""
+        if self.holding or self.preset is None:
+            return
+        texts = {k: box.value for k, box in self.physical.items() if box.visible}
+        try:
+            base = physical_scene(self.preset, texts)
+        except ValueError as err:
+            return self._refuse(err)
+        self._apply(base)
+
+    def _apply(self, base: Scene) -> None:
+        """``base`` as the page's scene: its values in the boxes (held: one refresh)."""
+        self.base, self.holding = base, True
         for name, box in self.boxes.items():
             box.value = f"{getattr(self.base, name):.6g}"
         self.beam.value = self.base.beam
@@ -116,6 +148,10 @@ class Explorer:
                                   else f"{self.base.slenderness:.6g}")
         self.holding = False
         self.refresh()
+
+    @held
+    def _refuse(self, err: ValueError) -> None:
+        self.error.text = readout("error", str(err))
 
     def _tapped(self, event) -> None:
         if event.x is not None and event.y is not None and event.x > 0:
@@ -145,7 +181,7 @@ class Explorer:
             scene = scene_of(self.base, texts)
             view = instant_view(scene)
         except ValueError as err:
-            self.error.text = readout("error", str(err))
+            self._refuse(err)
             return False
         self.error.text = readout("error", "")
         self.scene, self.view = scene, view
@@ -250,8 +286,9 @@ class Explorer:
 
     # -- the page -------------------------------------------------------------------
     def page(self) -> pn.viewable.Viewable:
-        inputs = pn.Column("### Inputs", self.presets, *self.boxes.values(), self.beam,
-                           self.slenderness, self.error, width=260)
+        inputs = pn.Column("### Inputs", self.presets, *self.physical.values(),
+                           *self.boxes.values(), self.beam, self.slenderness, self.error,
+                           width=260)
         instant = pn.Column("### Now", self.readouts, self.animate,
                             pn.pane.Bokeh(self.shape.figure), pn.pane.Bokeh(self.locus.figure))
         slower = pn.Column("### Onset", self.onset, "### Map", self.background,
