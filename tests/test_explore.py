@@ -18,6 +18,7 @@ import pytest
 import scipy.linalg
 
 from fsicas import Scene
+from fsicas.cycles.collocation import cycle_branch
 from fsicas.linear import critical_velocity, linear_stability
 from fsicas.model.assembly import build_model
 from fsicas.physical import Physical, load_physical, parse_flow
@@ -285,3 +286,19 @@ def test_physical_inputs_with_units_are_converted_by_the_library(page, server):
     assert _text(page, "error") == str(refused.value)
     assert _number(page, "growth-rate") == pytest.approx(                   # the view stays
         linear_stability(scene).eigenvalues[0].real, rel=1e-5)
+
+
+def test_the_limit_cycle_branch_in_the_background_is_the_library_one(page, server):
+    _open(page, server)
+    status = f"() => ({FIND})(document, 'lco-status').textContent"
+    page.get_by_role("button", name="limit cycles", exact=True).click()
+    page.wait_for_function(f"{status}.startsWith('computing')")
+    page.get_by_role("button", name="cancel cycles").click()
+    page.wait_for_function(f"{status} === 'cancelled'")
+    page.get_by_role("button", name="limit cycles", exact=True).click()
+    page.locator("[data-testid=lco-contact]").wait_for(timeout=180000)
+    branch = cycle_branch(Scene(), ustar_max=20.0)
+    assert _text(page, "lco-status") == branch.status == "contact"
+    assert int(_text(page, "lco-points")) == len(branch.points)
+    assert _number(page, "lco-contact") == pytest.approx(branch.contact.ustar, rel=1e-4)
+    assert "fsicas lco --mstar 1 --ustar 5 " in _text(page, "lco-command")

@@ -10,6 +10,7 @@ import panel as pn
 from ..physical import preset_names
 from ..scene import Scene
 from .background import RunPanel
+from .cycles import CyclePanel
 from .compute import (INPUTS, PHYSICAL_INPUTS, boundary_view, export, instant_view, onset_view,
                       physical_scene, physical_texts, preset_scene, scene_of)
 from .figures import BoundaryMap, ModeShape, RootLocus
@@ -70,6 +71,7 @@ class Explorer:
         self.animate = pn.widgets.Toggle(name="animate the mode", value=False, width=160)
         self.phase = 0.0
         self.run = RunPanel(self.jobs)
+        self.cycles = CyclePanel(self.jobs)
         self.download = pn.widgets.FileDownload(callback=self._export, filename="fsicas_explore.json",
                                                 label="export the view (JSON)", width=220)
         self._wire()
@@ -91,6 +93,8 @@ class Explorer:
         self.draw_map.on_click(lambda _: self._ask("boundary", self._map_key(), boundary_view,
                                                    self.scene))
         self.run.start.on_click(lambda _: self.run.ask(self.scene, _key(self.scene)))
+        self.cycles.start.on_click(lambda _: self.cycles.ask(self.scene,
+                                                             _key(self.scene, "ustar")))
         self.refresh()
 
     def start(self) -> None:
@@ -197,6 +201,7 @@ class Explorer:
                              + python_lines(scene) + "</pre>")
         self._ask("onset", _key(scene, "ustar"), onset_view, scene)
         self.map.crosshair(scene.mstar, scene.ustar)
+        self.cycles.here.location = scene.ustar
         cached = RESULTS.get(("boundary", self._map_key()))
         self._show("boundary", "done" if cached else "idle", cached)
 
@@ -237,6 +242,7 @@ class Explorer:
             if status != "idle":
                 self._show(kind, status, value)
         self.run.poll()
+        self.cycles.poll()
 
     def _show(self, kind: str, status: str, value) -> None:
         if kind == "onset":
@@ -293,7 +299,8 @@ class Explorer:
                             pn.pane.Bokeh(self.shape.figure), pn.pane.Bokeh(self.locus.figure))
         slower = pn.Column("### Onset", self.onset, "### Map", self.background,
                            pn.Row(self.draw_map, self.cancel),
-                           pn.pane.Bokeh(self.map.figure), self.run.page())
+                           pn.pane.Bokeh(self.map.figure), self.cycles.page(),
+                           self.run.page())
         title = "fsicas explore"
         return pn.Column(f"## {title}", pn.Row(inputs, instant, slower, sizing_mode="stretch_width"),
                          "### Reproduce", self.command, self.download,

@@ -8,6 +8,7 @@ import warnings
 
 import numpy as np
 
+from ..cycles.collocation import cycle_branch
 from ..linear import critical_velocity, linear_stability, stability_boundary
 from .. import strict_json
 from ..physical import KEYS, Physical, load_physical, parse_flow
@@ -17,7 +18,8 @@ from ..timedomain.sound import AUDIO_RATE, cycle_sound
 
 __all__ = ["INPUTS", "PHYSICAL_INPUTS", "scene_of", "preset_scene", "physical_texts",
            "physical_scene", "instant_view", "onset_view",
-           "boundary_view", "boundary_grid", "BOUNDARY_PER_DECADE", "run_view",
+           "boundary_view", "boundary_grid", "cycles_view", "CYCLE_USTAR_MAX",
+           "BOUNDARY_PER_DECADE", "run_view",
            "SOUND_DISTANCE", "SOUND_DURATION", "export"]
 
 #: The page's inputs: Scene field -> (label, type); their order on the page.
@@ -155,6 +157,26 @@ def boundary_view(scene: Scene) -> dict:
     out = result.to_json()
     out["warnings"] += [str(w.message) for w in caught]
     return out
+
+
+#: The U* up to which the limit-cycle branch is followed (``fsicas lco``'s default).
+CYCLE_USTAR_MAX = 20.0
+#: What the page shows of each limit cycle.
+CYCLE_KEYS = ("ustar", "tip_amplitude", "period", "stable")
+
+
+def cycles_view(scene: Scene) -> dict:
+    """The limit-cycle branch of ``scene`` from its first Hopf point up to the first wall
+    contact (``cycle_branch`` with its default settings, as ``fsicas lco``) as plain data:
+    per cycle U*, tip amplitude, period and stability; the contact, status and message."""
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        branch = cycle_branch(scene, ustar_max=CYCLE_USTAR_MAX)
+    point = lambda p: {k: getattr(p, k) for k in CYCLE_KEYS}
+    return {"status": branch.status, "message": branch.message, "hopf": branch.hopf,
+            "points": [point(p) for p in branch.points],
+            "contact": None if branch.contact is None else point(branch.contact),
+            "warnings": [str(w.message) for w in caught]}
 
 
 #: The listener's distance (m) and the length (s) of the sound of a settled cycle.
