@@ -116,6 +116,13 @@ def _set(page, testid: str, value: str) -> None:
     page.wait_for_function(f"old => ({state})() !== old", arg=old)
 
 
+def _export(page) -> dict:
+    """The JSON that "export the view (JSON)" downloads."""
+    with page.expect_download() as download:
+        page.get_by_role("button", name="export the view (JSON)").click()
+    return json.loads(Path(download.value.path()).read_text())
+
+
 def _number(page, testid: str) -> float:
     return float(_text(page, testid))
 
@@ -214,10 +221,9 @@ def test_the_map_runs_in_the_background_and_cancels_and_the_view_exports(page, s
     page.get_by_role("button", name="cancel", exact=True).click()
     page.wait_for_function(f"() => ({FIND})(document, 'boundary-status').textContent"
                            " === 'cancelled'")
-    with page.expect_download() as download:
-        page.get_by_role("button", name="export the view (JSON)").click()
-    exported = json.loads(Path(download.value.path()).read_text())
+    exported = _export(page)
     assert exported["scene"]["ustar"] == 4.6
+    assert exported["boundary"] is None                           # cancelled: not computed
     assert exported["instant"]["growth_rate"] == pytest.approx(_number(page, "growth-rate"),
                                                                rel=1e-5)
     assert exported["command"] == _text(page, "command")
@@ -234,6 +240,9 @@ def test_a_time_run_in_the_background_shows_the_library_outcome(page, server):
     assert _text(page, "run-outcome") == run.outcome.outcome
     assert _text(page, "run-status") == run.status
     assert "fsicas simulate --mstar 1 --ustar 4 " in _text(page, "run-command")
+    exported = _export(page)
+    assert exported["run"]["outcome"] == run.outcome.outcome
+    assert len(exported["run"]["tip"]) == len(exported["run"]["t"]) > 10
 
 
 def test_a_physical_preset_gives_hz_and_l_per_min_of_the_library(page, server):
@@ -302,3 +311,6 @@ def test_the_limit_cycle_branch_in_the_background_is_the_library_one(page, serve
     assert int(_text(page, "lco-points")) == len(branch.points)
     assert _number(page, "lco-contact") == pytest.approx(branch.contact.ustar, rel=1e-4)
     assert "fsicas lco --mstar 1 --ustar 5 " in _text(page, "lco-command")
+    exported = _export(page)["cycles"]
+    assert exported["contact"]["ustar"] == pytest.approx(branch.contact.ustar, rel=1e-9)
+    assert [p["stable"] for p in exported["points"]] == [p.stable for p in branch.points]

@@ -279,10 +279,16 @@ class Explorer:
         return "<br>".join(lines)
 
     def _export(self):
-        """The JSON of the current view (:func:`export`) for the download button."""
+        """The JSON of the current view (:func:`export`) for the download button, with the
+        map, the limit-cycle branch and the time run of this scene where computed."""
         import io
         onset = RESULTS.get(("onset", _key(self.scene, "ustar")))
-        return io.StringIO(export(self.scene, self.view, onset, command_line(self.scene)))
+        run = self.run.key                                   # the last run asked for
+        run = RESULTS.get(run) if run and run[1].startswith(_key(self.scene) + "|") else None
+        return io.StringIO(export(self.scene, self.view, onset, command_line(self.scene),
+                                  boundary=RESULTS.get(("boundary", self._map_key())),
+                                  cycles=RESULTS.get(("lco", _key(self.scene, "ustar"))),
+                                  run=run))
 
     @held
     def _frame(self) -> None:

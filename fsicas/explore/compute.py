@@ -161,8 +161,6 @@ def boundary_view(scene: Scene) -> dict:
 
 #: The U* up to which the limit-cycle branch is followed (``fsicas lco``'s default).
 CYCLE_USTAR_MAX = 20.0
-#: What the page shows of each limit cycle.
-CYCLE_KEYS = ("ustar", "tip_amplitude", "period", "stable")
 
 
 def cycles_view(scene: Scene) -> dict:
@@ -172,7 +170,8 @@ def cycles_view(scene: Scene) -> dict:
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
         branch = cycle_branch(scene, ustar_max=CYCLE_USTAR_MAX)
-    point = lambda p: {k: getattr(p, k) for k in CYCLE_KEYS}
+    point = lambda p: {"ustar": float(p.ustar), "tip_amplitude": float(p.tip_amplitude),
+                       "period": float(p.period), "stable": bool(p.stable)}
     return {"status": branch.status, "message": branch.message, "hopf": branch.hopf,
             "points": [point(p) for p in branch.points],
             "contact": None if branch.contact is None else point(branch.contact),
@@ -206,10 +205,20 @@ def run_view(scene: Scene, t_end: float) -> dict:
     return out
 
 
-def export(scene: Scene, view: dict, onset: dict | None, command: str) -> str:
+def export(scene: Scene, view: dict, onset: dict | None, command: str, *,
+           boundary: dict | None = None, cycles: dict | None = None,
+           run: dict | None = None) -> str:
     """The current view as JSON: the scene, the instant view (eigenvalues as [Re, Im]
-    pairs, the mode shape dropped), the onset if known, the reproducing command."""
+    pairs, the mode shape dropped), the onset if known, the reproducing command; the map,
+    the limit-cycle branch and the time run of the scene where computed (the run's tip
+    history as lists, its sound without the samples)."""
     instant = {k: v for k, v in view.items() if k not in ("eigenvalues", "x", "y")}
     instant["eigenvalues"] = [[float(l.real), float(l.imag)] for l in view["eigenvalues"]]
+    if run is not None:
+        sound = run["sound"]
+        run = {**run, "t": np.asarray(run["t"]).tolist(), "tip": np.asarray(run["tip"]).tolist(),
+               "sound": None if sound is None else {k: v for k, v in sound.items()
+                                                    if k != "pressure"}}
     return strict_json.dumps({"scene": scene.to_dict(), "instant": instant, "onset": onset,
-                              "command": command}, indent=1)
+                              "command": command, "boundary": boundary, "cycles": cycles,
+                              "run": run}, indent=1)
