@@ -11,9 +11,10 @@ from bokeh.plotting import figure
 
 from .compute import cycles_view
 from .figures import STABLE_COLOR, UNSTABLE_COLOR
+from .background import BackgroundPanel
 from .jobs import Jobs
 from .reproduce import command_line
-from .widgets import held, markup, readout
+from .widgets import held, readout
 
 __all__ = ["CyclePanel"]
 
@@ -22,16 +23,18 @@ def _fmt(value) -> str:
     return "—" if value is None else f"{value:.5g}"
 
 
-class CyclePanel:
+class CyclePanel(BackgroundPanel):
     """The limit-cycle branch's controls and results for one page."""
 
+    kind, testid, label, busy = "lco", "lco-status", "limit cycles", "computing"
+
     def __init__(self, jobs: Jobs):
-        self.jobs, self.command = jobs, ""
+        super().__init__(jobs, "not computed (seconds to a minute at N = 10, in the "
+                         "background)")
+        self.command = ""
         self.start = pn.widgets.Button(name="limit cycles", button_type="primary", width=120)
         self.stop = pn.widgets.Button(name="cancel cycles", width=120)
         self.stop.on_click(lambda _: self.jobs.cancel("lco") and self.show("cancelled", None))
-        self.status = markup(readout("lco-status", "not computed (seconds to a minute at "
-                                     "N = 10, in the background)", "limit cycles"))
         self.source = ColumnDataSource({"ustar": [], "amplitude": [], "color": []})
         f = figure(title="limit cycles: tip amplitude (blue stable, red unstable)",
                    x_axis_label="U*", y_axis_label="tip amplitude / L", height=220,
@@ -48,22 +51,6 @@ class CyclePanel:
         self.command = command_line(scene, "lco")
         cached = self.jobs.start(("lco", key), cycles_view, scene)
         self.show("done", cached) if cached is not None else self.show("running", 0.0)
-
-    def poll(self) -> None:
-        if self.jobs.running.get("lco") is not None:
-            status, value = self.jobs.poll("lco")
-            if status != "idle":
-                self.show(status, value)
-
-    @held
-    def show(self, status: str, value) -> None:
-        if status == "running":
-            text = f"computing… {value:.0f} s"
-        elif status in ("error", "cancelled"):
-            text = status if value is None else f"{status}: {value}"
-        else:
-            return self._done(value)
-        self.status.text = readout("lco-status", text, "limit cycles")
 
     def _done(self, branch: dict) -> None:
         points = branch["points"]
