@@ -18,9 +18,10 @@ import pytest
 import scipy.linalg
 
 from fsicas import Scene
+from fsicas.cycles.collocation import cycle_branch
 from fsicas.linear import critical_velocity, linear_stability
 from fsicas.model.assembly import build_model
-from fsicas.physical import load_physical
+from fsicas.physical import Physical, load_physical, parse_flow
 from fsicas.timedomain.run import run_case
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -113,6 +114,13 @@ def _set(page, testid: str, value: str) -> None:
     box.fill(value)
     box.press("Enter")
     page.wait_for_function(f"old => ({state})() !== old", arg=old)
+
+
+def _export(page) -> dict:
+    """The JSON that "export the view (JSON)" downloads."""
+    with page.expect_download() as download:
+        page.get_by_role("button", name="export the view (JSON)").click()
+    return json.loads(Path(download.value.path()).read_text())
 
 
 def _number(page, testid: str) -> float:
@@ -213,10 +221,9 @@ def test_the_map_runs_in_the_background_and_cancels_and_the_view_exports(page, s
     page.get_by_role("button", name="cancel", exact=True).click()
     page.wait_for_function(f"() => ({FIND})(document, 'boundary-status').textContent"
                            " === 'cancelled'")
-    with page.expect_download() as download:
-        page.get_by_role("button", name="export the view (JSON)").click()
-    exported = json.loads(Path(download.value.path()).read_text())
+    exported = _export(page)
     assert exported["scene"]["ustar"] == 4.6
+    assert exported["boundary"] is None                           # cancelled: not computed
     assert exported["instant"]["growth_rate"] == pytest.approx(_number(page, "growth-rate"),
                                                                rel=1e-5)
     assert exported["command"] == _text(page, "command")
@@ -233,6 +240,9 @@ def test_a_time_run_in_the_background_shows_the_library_outcome(page, server):
     assert _text(page, "run-outcome") == run.outcome.outcome
     assert _text(page, "run-status") == run.status
     assert "fsicas simulate --mstar 1 --ustar 4 " in _text(page, "run-command")
+    exported = _export(page)
+    assert exported["run"]["outcome"] == run.outcome.outcome
+    assert len(exported["run"]["tip"]) == len(exported["run"]["t"]) > 10
 
 
 def test_a_physical_preset_gives_hz_and_l_per_min_of_the_library(page, server):
@@ -249,3 +259,58 @@ def test_a_physical_preset_gives_hz_and_l_per_min_of_the_library(page, server):
     assert f"{scene.scales.l_per_min(onset.ustar):.4g} L/min" in hz
     assert f"{scene.scales.hz(onset.omega):.4g} Hz" in hz
     page.wait_for_function("() => location.search.includes('preset=soft_palate')")
+
+
+def _soft_palate_with(**values) -> Physical:
+    """The soft_palate preset with ``values`` (texts with units) in its [physical] table,
+    read by the library."""
+    preset = load_physical("soft_palate")
+    return Physical.from_table({**preset.raw, **values}, "soft_palate", preset.description,
+                               preset.scene_fields)
+
+
+def test_physical_inputs_with_units_are_converted_by_the_library(page, server):
+    _open(page, server)
+    page.get_by_label("physical preset").select_option("soft_palate")
+    page.locator("[data-testid=flow]").wait_for(timeout=30000)
+    assert page.locator("[data-testid=phys-E]").input_value() == "3 kPa"
+    assert page.locator("[data-testid=phys-flow]").input_value() == "20 L/min"
+    _set(page, "phys-E", "4 kPa")
+    _set(page, "phys-flow", "25 L/min")
+    scene = _soft_palate_with(E="4 kPa").scene(parse_flow("25 L/min"))
+    assert float(_text(page, "flow").split()[0]) == pytest.approx(25.0, rel=1e-4)
+    assert _number(page, "growth-rate") == pytest.approx(
+        linear_stability(scene).eigenvalues[0].real, rel=1e-5)
+    assert f"--mstar {scene.mstar:g} --ustar {scene.ustar:g} " in _text(page, "command")
+    page.wait_for_function("() => location.search.includes('E=4')")
+    with pytest.raises(ValueError) as refused:
+        _soft_palate_with(E="-3 kPa")
+    _set(page, "phys-E", "-3 kPa")
+    assert _text(page, "error") == str(refused.value)
+    _set(page, "phys-E", "4 kPa")
+    assert _text(page, "error") == ""
+    with pytest.raises(ValueError) as refused:
+        parse_flow("20 L", "airflow")
+    _set(page, "phys-flow", "20 L")
+    assert _text(page, "error") == str(refused.value)
+    assert _number(page, "growth-rate") == pytest.approx(                   # the view stays
+        linear_stability(scene).eigenvalues[0].real, rel=1e-5)
+
+
+def test_the_limit_cycle_branch_in_the_background_is_the_library_one(page, server):
+    _open(page, server)
+    status = f"() => ({FIND})(document, 'lco-status').textContent"
+    page.get_by_role("button", name="limit cycles", exact=True).click()
+    page.wait_for_function(f"{status}.startsWith('computing')")
+    page.get_by_role("button", name="cancel cycles").click()
+    page.wait_for_function(f"{status} === 'cancelled'")
+    page.get_by_role("button", name="limit cycles", exact=True).click()
+    page.locator("[data-testid=lco-contact]").wait_for(timeout=180000)
+    branch = cycle_branch(Scene(), ustar_max=20.0)
+    assert _text(page, "lco-status") == branch.status == "contact"
+    assert int(_text(page, "lco-points")) == len(branch.points)
+    assert _number(page, "lco-contact") == pytest.approx(branch.contact.ustar, rel=1e-4)
+    assert "fsicas lco --mstar 1 --ustar 5 " in _text(page, "lco-command")
+    exported = _export(page)["cycles"]
+    assert exported["contact"]["ustar"] == pytest.approx(branch.contact.ustar, rel=1e-9)
+    assert [p["stable"] for p in exported["points"]] == [p.stable for p in branch.points]

@@ -10,11 +10,13 @@ import panel as pn
 from ..physical import preset_names
 from ..scene import Scene
 from .background import RunPanel
-from .compute import INPUTS, boundary_view, export, instant_view, onset_view, preset_scene, scene_of
+from .cycles import CyclePanel
+from .compute import (INPUTS, PHYSICAL_INPUTS, boundary_view, export, instant_view, onset_view,
+                      physical_scene, physical_texts, preset_scene, scene_of)
 from .figures import BoundaryMap, ModeShape, RootLocus
 from .jobs import Jobs
 from .reproduce import command_line, python_lines
-from .widgets import NumberBox, readout
+from .widgets import NumberBox, held, markup, readout
 
 __all__ = ["Explorer", "RESULTS"]
 
@@ -57,15 +59,19 @@ class Explorer:
         self.boxes = {k: NumberBox(value=f"{getattr(self.base, k):.6g}", label=label, testid=k)
                       for k, (label, _) in INPUTS.items()}
         self.boxes["modes"].testid = "modes"
-        self.error = pn.pane.HTML(readout("error", ""), styles={"color": "#b00"})
-        self.readouts = pn.pane.HTML("")
-        self.onset = pn.pane.HTML(readout("onset-kind", "…", "onset"))
-        self.background = pn.pane.HTML(readout("boundary-status", "…", "boundary map"))
-        self.command = pn.pane.HTML("")
+        self.physical = {k: NumberBox(label=label, testid=f"phys-{k}", visible=False)
+                         for k, label in PHYSICAL_INPUTS.items()}
+        self._show_physical()
+        self.error = markup(readout("error", ""), color="#b00")
+        self.readouts = markup("")
+        self.onset = markup(readout("onset-kind", "…", "onset"))
+        self.background = markup(readout("boundary-status", "…", "boundary map"))
+        self.command = markup("")
         self.locus, self.shape, self.map = RootLocus(), ModeShape(), BoundaryMap()
         self.animate = pn.widgets.Toggle(name="animate the mode", value=False, width=160)
         self.phase = 0.0
         self.run = RunPanel(self.jobs)
+        self.cycles = CyclePanel(self.jobs)
         self.download = pn.widgets.FileDownload(callback=self._export, filename="fsicas_explore.json",
                                                 label="export the view (JSON)", width=220)
         self._wire()
@@ -75,6 +81,8 @@ class Explorer:
         for box in self.boxes.values():
             box.param.watch(self._changed, "value")
         self.presets.param.watch(self._preset, "value")
+        for box in self.physical.values():
+            box.param.watch(self._physical_changed, "value")
         self.beam.param.watch(self._changed, "value")
         self.slenderness.param.watch(self._changed, "value")
         from bokeh.events import Tap
@@ -85,18 +93,23 @@ class Explorer:
         self.draw_map.on_click(lambda _: self._ask("boundary", self._map_key(), boundary_view,
                                                    self.scene))
         self.run.start.on_click(lambda _: self.run.ask(self.scene, _key(self.scene)))
+        self.cycles.start.on_click(lambda _: self.cycles.ask(self.scene,
+                                                             _key(self.scene, "ustar")))
         self.refresh()
 
     def start(self) -> None:
         """Once the page is served: URL sync, polling of the jobs, the animation."""
         if pn.state.location is not None:
             pn.state.location.sync(self.presets, {"value": "preset"})     # before the boxes
+            for name, box in self.physical.items():
+                pn.state.location.sync(box, {"value": name})
             for name, box in self.boxes.items():
                 pn.state.location.sync(box, {"value": name})
             pn.state.location.sync(self.beam, {"value": "beam"})
             pn.state.location.sync(self.slenderness, {"value": "slenderness"})
         pn.state.add_periodic_callback(self.poll, period=POLL_MS)
-        pn.state.add_periodic_callback(self._frame, period=FRAME_MS)
+        frames = pn.state.add_periodic_callback(self._frame, period=FRAME_MS, start=False)
+        self.animate.param.watch(lambda e: frames.start() if e.new else frames.stop(), "value")
         pn.state.on_session_destroyed(lambda _: self.jobs.close())
 
     def _changed(self, _event=None) -> None:
@@ -104,10 +117,34 @@ class Explorer:
             self.refresh()
 
     def _preset(self, event) -> None:
-        """Start again from the preset's scene (or the default one): every box at once."""
+        """Start again from the preset's scene (or the default one): every box at once,
+        the preset's physical inputs shown as its file writes them."""
         self.preset = None if event.new == NO_PRESET else event.new
-        self.base = preset_scene(self.preset)
         self.holding = True
+        self._show_physical()
+        self._apply(preset_scene(self.preset))
+
+    def _show_physical(self) -> None:
+        """The preset's physical inputs as its file writes them (none without a preset)."""
+        texts = {} if self.preset is None else physical_texts(self.preset)
+        for name, box in self.physical.items():
+            box.value, box.visible = texts.get(name, ""), name in texts
+
+    def _physical_changed(self, _event=None) -> None:
+        """The preset's scene with the physical inputs, converted by the library; its
+        message if it refuses them (the last valid view stays)."""
+        if self.holding or self.preset is None:
+            return
+        texts = {k: box.value for k, box in self.physical.items() if box.visible}
+        try:
+            base = physical_scene(self.preset, texts)
+        except ValueError as err:
+            return self._refuse(err)
+        self._apply(base)
+
+    def _apply(self, base: Scene) -> None:
+        """``base`` as the page's scene: its values in the boxes (held: one refresh)."""
+        self.base, self.holding = base, True
         for name, box in self.boxes.items():
             box.value = f"{getattr(self.base, name):.6g}"
         self.beam.value = self.base.beam
@@ -116,33 +153,55 @@ class Explorer:
         self.holding = False
         self.refresh()
 
+    @held
+    def _refuse(self, err: ValueError) -> None:
+        self.error.text = readout("error", str(err))
+
     def _tapped(self, event) -> None:
         if event.x is not None and event.y is not None and event.x > 0:
             self.boxes["mstar"].value = f"{event.x:.4g}"
             self.boxes["ustar"].value = f"{event.y:.4g}"
 
+    @held
     def _cancel(self, kind: str) -> None:
         if self.jobs.cancel(kind):
-            self.background.object = readout("boundary-status", "cancelled", "boundary map")
+            self.background.text = readout("boundary-status", "cancelled", "boundary map")
 
     # -- the tiers ------------------------------------------------------------------
     def refresh(self) -> None:
-        """Read the inputs; draw the instant tier; ask for the onset and the map."""
+        """Read the inputs; show the readouts, alone in a first message (the browser shows
+        them before it redraws any figure); then the figures, the command line, the onset
+        and the map."""
+        if self._readouts():
+            self._draw()
+
+    @held
+    def _readouts(self) -> bool:
+        """The scene of the inputs and its instant view in the readouts (True), or the
+        library's message in the error line (False: the last valid view stays)."""
         try:
             texts = {k: b.value for k, b in self.boxes.items()}
             texts.update(beam=self.beam.value, slenderness=self.slenderness.value)
             scene = scene_of(self.base, texts)
             view = instant_view(scene)
         except ValueError as err:
-            self.error.object = readout("error", str(err))
-            return
-        self.error.object = readout("error", "")
+            self._refuse(err)
+            return False
+        self.error.text = readout("error", "")
         self.scene, self.view = scene, view
-        self._draw_instant(scene, view)
-        self.command.object = (readout("command", command_line(scene)) + "<pre>"
-                               + python_lines(scene) + "</pre>")
+        self.readouts.text = self._instant_html(view)
+        return True
+
+    @held
+    def _draw(self) -> None:
+        scene, view = self.scene, self.view
+        self.locus.update(view["eigenvalues"])
+        self.shape.update(view["x"], view["y"], scene.hstar)
+        self.command.text = (readout("command", command_line(scene)) + "<pre>"
+                             + python_lines(scene) + "</pre>")
         self._ask("onset", _key(scene, "ustar"), onset_view, scene)
         self.map.crosshair(scene.mstar, scene.ustar)
+        self.cycles.here.location = scene.ustar
         cached = RESULTS.get(("boundary", self._map_key()))
         self._show("boundary", "done" if cached else "idle", cached)
 
@@ -151,7 +210,8 @@ class Explorer:
         decade = math.floor(math.log10(self.scene.mstar))
         return _key(self.scene, "ustar", "mstar") + str(decade)
 
-    def _draw_instant(self, scene: Scene, view: dict) -> None:
+    @staticmethod
+    def _instant_html(view: dict) -> str:
         hz = "" if view["hz"] is None else f" ({_fmt(view['hz'], 4, ' Hz')})"
         flow = ("" if view["l_per_min"] is None else
                 "<br>" + readout("flow", _fmt(view["l_per_min"], 4, " L/min"), "airflow"))
@@ -162,9 +222,7 @@ class Explorer:
                  readout("pressure-drop", _fmt(view["pressure_drop"]), "pressure drop Δp"),
                  readout("tip", _fmt(view["tip"]), "static tip deflection") + flow]
         lines += [readout("warning", w) for w in view["warnings"]]
-        self.readouts.object = "<br>".join(lines)
-        self.locus.update(view["eigenvalues"])
-        self.shape.update(view["x"], view["y"], scene.hstar)
+        return "<br>".join(lines)
 
     def _ask(self, kind: str, key: str, target, scene: Scene) -> None:
         result = self.jobs.start((kind, key), target, scene)
@@ -174,6 +232,7 @@ class Explorer:
             self._show(kind, "running", 0.0)
 
     # -- results --------------------------------------------------------------------
+    @held
     def poll(self) -> None:
         for kind in ("onset", "boundary"):
             status, value = self.jobs.poll(kind)
@@ -183,21 +242,22 @@ class Explorer:
             if status != "idle":
                 self._show(kind, status, value)
         self.run.poll()
+        self.cycles.poll()
 
     def _show(self, kind: str, status: str, value) -> None:
         if kind == "onset":
-            self.onset.object = self._onset_html(status, value)
+            self.onset.text = self._onset_html(status, value)
         elif status == "done":
             self.map.update(value["points"])
-            self.background.object = readout("boundary-status", "done", "boundary map")
+            self.background.text = readout("boundary-status", "done", "boundary map")
         elif status == "running":
-            self.background.object = readout("boundary-status",
+            self.background.text = readout("boundary-status",
                                              f"computing… {value:.0f} s", "boundary map")
         elif status == "idle":
-            self.background.object = readout("boundary-status", "not computed (tens of seconds "
+            self.background.text = readout("boundary-status", "not computed (tens of seconds "
                                              "at N = 10, in the background)", "boundary map")
         else:
-            self.background.object = readout("boundary-status", f"failed: {value}")
+            self.background.text = readout("boundary-status", f"failed: {value}")
 
     def _onset_html(self, status: str, value) -> str:
         if status == "running":
@@ -219,25 +279,34 @@ class Explorer:
         return "<br>".join(lines)
 
     def _export(self):
-        """The JSON of the current view (:func:`export`) for the download button."""
+        """The JSON of the current view (:func:`export`) for the download button, with the
+        map, the limit-cycle branch and the time run of this scene where computed."""
         import io
         onset = RESULTS.get(("onset", _key(self.scene, "ustar")))
-        return io.StringIO(export(self.scene, self.view, onset, command_line(self.scene)))
+        run = self.run.key                                   # the last run asked for
+        run = RESULTS.get(run) if run and run[1].startswith(_key(self.scene) + "|") else None
+        return io.StringIO(export(self.scene, self.view, onset, command_line(self.scene),
+                                  boundary=RESULTS.get(("boundary", self._map_key())),
+                                  cycles=RESULTS.get(("lco", _key(self.scene, "ustar"))),
+                                  run=run))
 
+    @held
     def _frame(self) -> None:
-        if self.animate.value:
-            self.phase = (self.phase + 0.3) % (2 * math.pi)
-            self.shape.animate(self.phase)
+        """One step of the mode's animation (called only while "animate the mode" is on)."""
+        self.phase = (self.phase + 0.3) % (2 * math.pi)
+        self.shape.animate(self.phase)
 
     # -- the page -------------------------------------------------------------------
     def page(self) -> pn.viewable.Viewable:
-        inputs = pn.Column("### Inputs", self.presets, *self.boxes.values(), self.beam,
-                           self.slenderness, self.error, width=260)
+        inputs = pn.Column("### Inputs", self.presets, *self.physical.values(),
+                           *self.boxes.values(), self.beam, self.slenderness, self.error,
+                           width=260)
         instant = pn.Column("### Now", self.readouts, self.animate,
                             pn.pane.Bokeh(self.shape.figure), pn.pane.Bokeh(self.locus.figure))
         slower = pn.Column("### Onset", self.onset, "### Map", self.background,
                            pn.Row(self.draw_map, self.cancel),
-                           pn.pane.Bokeh(self.map.figure), self.run.page())
+                           pn.pane.Bokeh(self.map.figure), self.cycles.page(),
+                           self.run.page())
         title = "fsicas explore"
         return pn.Column(f"## {title}", pn.Row(inputs, instant, slower, sizing_mode="stretch_width"),
                          "### Reproduce", self.command, self.download,

@@ -13,31 +13,64 @@ from ..timedomain.sound import AUDIO_RATE
 from .compute import run_view
 from .jobs import Jobs
 from .reproduce import command_line
-from .widgets import NumberBox, readout
+from .widgets import NumberBox, held, markup, readout
 
-__all__ = ["RunPanel"]
+__all__ = ["BackgroundPanel", "RunPanel"]
 
 
 def _fmt(value, unit: str = "") -> str:
     return "—" if value is None else f"{value:.4g}{unit}"
 
 
-class RunPanel:
+class BackgroundPanel:
+    """A background job's panel: its status readout (``testid``, ``label``), updated
+    from the job of ``kind`` in ``jobs``; a subclass shows the result in ``_done``."""
+
+    kind, testid, label, busy = "", "", "", "running"
+
+    def __init__(self, jobs: Jobs, idle: str):
+        self.jobs = jobs
+        self.status = markup(readout(self.testid, idle, self.label))
+
+    def poll(self) -> None:
+        if self.jobs.running.get(self.kind) is not None:
+            status, value = self.jobs.poll(self.kind)
+            if status != "idle":
+                self.show(status, value)
+
+    @held
+    def show(self, status: str, value) -> None:
+        if status == "running":
+            text = f"{self.busy}… {value:.0f} s"
+        elif status in ("error", "cancelled"):
+            text = status if value is None else f"{status}: {value}"
+        else:
+            return self._done(value)
+        self.status.text = readout(self.testid, text, self.label)
+
+    def _done(self, result: dict) -> None:
+        raise NotImplementedError
+
+
+class RunPanel(BackgroundPanel):
     """The time run's controls and results for one page."""
 
+    kind, testid, label = "run", "run-status", "time run"
+
     def __init__(self, jobs: Jobs):
-        self.jobs, self.key, self.command = jobs, None, ""
+        super().__init__(jobs, "not run")
+        self.key, self.command = None, ""
         self.t_end = NumberBox(value="20", label="t_end (T)", testid="t-end")
         self.start = pn.widgets.Button(name="time run", button_type="primary", width=120)
         self.stop = pn.widgets.Button(name="cancel run", width=110)
         self.stop.on_click(lambda _: self.jobs.cancel("run") and self.show("cancelled", None))
-        self.status = pn.pane.HTML(readout("run-status", "not run", "time run"))
         self.source = ColumnDataSource({"t": [], "tip": []})
         self.figure = figure(title="tip deflection y(1, t)", x_axis_label="t / T",
                              y_axis_label="y / L", height=220, sizing_mode="stretch_width")
         self.figure.line("t", "tip", source=self.source)
         self.audio = pn.pane.Audio(None, sample_rate=AUDIO_RATE, name="snore", visible=False)
 
+    @held
     def ask(self, scene, key: str) -> None:
         """Start (or show the cached) run of ``scene`` to the page's t_end."""
         try:
@@ -48,22 +81,6 @@ class RunPanel:
         self.command = command_line(scene, "simulate").replace(" --json", f" --t-end {t_end:g} --json")
         cached = self.jobs.start(self.key, run_view, scene, t_end)
         self.show("done", cached) if cached is not None else self.show("running", 0.0)
-
-    def poll(self) -> None:
-        running = self.jobs.running.get("run")
-        if running is not None:
-            status, value = self.jobs.poll("run")
-            if status != "idle":
-                self.show(status, value)
-
-    def show(self, status: str, value) -> None:
-        if status == "running":
-            text = f"running… {value:.0f} s"
-        elif status in ("error", "cancelled"):
-            text = status if value is None else f"{status}: {value}"
-        else:
-            return self._done(value)
-        self.status.object = readout("run-status", text, "time run")
 
     def _done(self, run: dict) -> None:
         lines = [readout("run-status", run["status"], "time run"),
@@ -81,7 +98,7 @@ class RunPanel:
             peak = float(np.max(np.abs(sound["pressure"]))) or 1.0
             self.audio.object = (np.asarray(sound["pressure"]) / peak * 32767).astype(np.int16)
         self.audio.visible = sound is not None
-        self.status.object = "<br>".join(lines)
+        self.status.text = "<br>".join(lines)
 
     def page(self) -> pn.viewable.Viewable:
         return pn.Column("### Time run", self.t_end, pn.Row(self.start, self.stop), self.status,

@@ -8,21 +8,28 @@ import warnings
 
 import numpy as np
 
+from ..cycles.collocation import cycle_branch
 from ..linear import critical_velocity, linear_stability, stability_boundary
 from .. import strict_json
-from ..physical import load_physical
+from ..physical import KEYS, Physical, load_physical, parse_flow
 from ..scene import Scene
 from ..timedomain.run import run_case, sweep_model
 from ..timedomain.sound import AUDIO_RATE, cycle_sound
 
-__all__ = ["INPUTS", "scene_of", "preset_scene", "instant_view", "onset_view",
-           "boundary_view", "boundary_grid", "BOUNDARY_PER_DECADE", "run_view",
+__all__ = ["INPUTS", "PHYSICAL_INPUTS", "scene_of", "preset_scene", "physical_texts",
+           "physical_scene", "instant_view", "onset_view",
+           "boundary_view", "boundary_grid", "cycles_view", "CYCLE_USTAR_MAX",
+           "BOUNDARY_PER_DECADE", "run_view",
            "SOUND_DISTANCE", "SOUND_DURATION", "export"]
 
 #: The page's inputs: Scene field -> (label, type); their order on the page.
 INPUTS = {"mstar": ("M*", float), "ustar": ("U*", float), "hstar": ("H*", float),
           "friction": ("f", float), "kl": ("KL", float), "zeta": ("ζ", float),
           "modes": ("N", int)}
+#: The physical inputs offered with a preset (those of its [physical] table): key -> label.
+PHYSICAL_INPUTS = {"flow": "airflow (L/min or m/s)", "E": "Young's modulus E",
+                   "e": "thickness e", "L": "length L", "b": "width b",
+                   "gap": "gap of each channel", "H1": "gap H1 (above)", "H2": "gap H2 (below)"}
 #: Points of the boundary map per decade of M*; it spans the two decades around M*.
 BOUNDARY_PER_DECADE = 6
 
@@ -48,17 +55,40 @@ def scene_of(base: Scene, texts: dict) -> Scene:
     return base.replace(**values)
 
 
+def _default_walls(scene: Scene) -> Scene:
+    """Straight symmetric channels as the default walls of the scene's H* (H* stays an
+    input of the page)."""
+    if scene.straight and scene.symmetric:
+        return scene.replace(channel1=None, channel2=None)
+    return scene
+
+
 def preset_scene(name: str | None) -> Scene:
     """The Scene of a physical preset at its default airflow (scales kept for Hz and
-    L/min; straight symmetric channels as the default walls of its H*), or the default
-    Scene."""
+    L/min), or the default Scene."""
     if name is None:
         return Scene()
     physical = load_physical(name)
-    scene = physical.scene(physical.flow)
-    if scene.straight and scene.symmetric:          # the default walls: H* stays an input
-        scene = scene.replace(channel1=None, channel2=None)
-    return scene
+    return _default_walls(physical.scene(physical.flow))
+
+
+def physical_texts(name: str) -> dict:
+    """The physical inputs of preset ``name`` as its file writes them (a number, SI,
+    with its unit added): key -> text, for the keys of :data:`PHYSICAL_INPUTS` it has."""
+    raw = load_physical(name).raw
+    return {k: raw[k] if isinstance(raw[k], str) else f"{raw[k]:g} {KEYS[k]}".rstrip()
+            for k in PHYSICAL_INPUTS if k in raw}
+
+
+def physical_scene(name: str, texts: dict) -> Scene:
+    """The Scene of preset ``name`` with the page's physical inputs (key -> text with its
+    unit, :data:`PHYSICAL_INPUTS`) in place of its own: read and converted by the library
+    (``Physical.from_table``, ``parse_flow``, ``Physical.scene``), its ValueError for what
+    it refuses."""
+    physical = load_physical(name)
+    table = {**physical.raw, **{k: v for k, v in texts.items() if k != "flow"}}
+    changed = Physical.from_table(table, name, physical.description, physical.scene_fields)
+    return _default_walls(changed.scene(parse_flow(texts.get("flow", ""), "airflow")))
 
 
 def _hz(scene: Scene, omega: float) -> float | None:
@@ -129,6 +159,25 @@ def boundary_view(scene: Scene) -> dict:
     return out
 
 
+#: The U* up to which the limit-cycle branch is followed (``fsicas lco``'s default).
+CYCLE_USTAR_MAX = 20.0
+
+
+def cycles_view(scene: Scene) -> dict:
+    """The limit-cycle branch of ``scene`` from its first Hopf point up to the first wall
+    contact (``cycle_branch`` with its default settings, as ``fsicas lco``) as plain data:
+    per cycle U*, tip amplitude, period and stability; the contact, status and message."""
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        branch = cycle_branch(scene, ustar_max=CYCLE_USTAR_MAX)
+    point = lambda p: {"ustar": float(p.ustar), "tip_amplitude": float(p.tip_amplitude),
+                       "period": float(p.period), "stable": bool(p.stable)}
+    return {"status": branch.status, "message": branch.message, "hopf": branch.hopf,
+            "points": [point(p) for p in branch.points],
+            "contact": None if branch.contact is None else point(branch.contact),
+            "warnings": [str(w.message) for w in caught]}
+
+
 #: The listener's distance (m) and the length (s) of the sound of a settled cycle.
 SOUND_DISTANCE, SOUND_DURATION = 0.3, 2.0
 #: Most samples of the tip's history sent to the page.
@@ -156,10 +205,20 @@ def run_view(scene: Scene, t_end: float) -> dict:
     return out
 
 
-def export(scene: Scene, view: dict, onset: dict | None, command: str) -> str:
+def export(scene: Scene, view: dict, onset: dict | None, command: str, *,
+           boundary: dict | None = None, cycles: dict | None = None,
+           run: dict | None = None) -> str:
     """The current view as JSON: the scene, the instant view (eigenvalues as [Re, Im]
-    pairs, the mode shape dropped), the onset if known, the reproducing command."""
+    pairs, the mode shape dropped), the onset if known, the reproducing command; the map,
+    the limit-cycle branch and the time run of the scene where computed (the run's tip
+    history as lists, its sound without the samples)."""
     instant = {k: v for k, v in view.items() if k not in ("eigenvalues", "x", "y")}
     instant["eigenvalues"] = [[float(l.real), float(l.imag)] for l in view["eigenvalues"]]
+    if run is not None:
+        sound = run["sound"]
+        run = {**run, "t": np.asarray(run["t"]).tolist(), "tip": np.asarray(run["tip"]).tolist(),
+               "sound": None if sound is None else {k: v for k, v in sound.items()
+                                                    if k != "pressure"}}
     return strict_json.dumps({"scene": scene.to_dict(), "instant": instant, "onset": onset,
-                              "command": command}, indent=1)
+                              "command": command, "boundary": boundary, "cycles": cycles,
+                              "run": run}, indent=1)

@@ -13,21 +13,35 @@ STABLE_COLOR, UNSTABLE_COLOR = "#1f77b4", "#d62728"
 _SIZE = dict(height=300, sizing_mode="stretch_width", toolbar_location="right")
 
 
+def _fit(axis: Range1d, values: np.ndarray) -> None:
+    """Fit ``axis`` to ``values`` (5 % margins) where they leave it or fill less than
+    half of it: a small move of the eigenvalues moves no axis (nothing more to send)."""
+    low, high = float(values.min()), float(values.max())
+    pad = 0.05 * (high - low) or 1.0
+    if not axis.start <= low <= high <= axis.end or high - low < 0.5 * (axis.end - axis.start):
+        axis.update(start=low - pad, end=high + pad)
+
+
 class RootLocus:
-    """Eigenvalues lambda = sigma + i omega in the complex plane; Re > 0 in red."""
+    """Eigenvalues lambda = sigma + i omega in the complex plane; Re > 0 in red. Its
+    ranges are set here, not by the browser (whose own fitting would send them back to
+    the server after each change)."""
 
     def __init__(self):
         self.source = ColumnDataSource({"re": [], "im": [], "color": []})
         self.figure = figure(title="eigenvalues λ = σ + iω", x_axis_label="growth rate σ",
-                             y_axis_label="ω", **_SIZE)
+                             y_axis_label="ω", x_range=Range1d(-1.0, 1.0),
+                             y_range=Range1d(-1.0, 1.0), **_SIZE)
         self.figure.scatter("re", "im", color="color", size=7, source=self.source)
         self.figure.add_layout(Span(location=0.0, dimension="height", line_dash="dashed",
                                     line_color="gray"))
 
     def update(self, eigenvalues: np.ndarray) -> None:
         lam = np.asarray(eigenvalues)
-        colors = np.where(lam.real > 0, UNSTABLE_COLOR, STABLE_COLOR).tolist()
-        self.source.data = {"re": lam.real.tolist(), "im": lam.imag.tolist(), "color": colors}
+        colors = np.where(lam.real > 0, UNSTABLE_COLOR, STABLE_COLOR)
+        self.source.data = {"re": lam.real, "im": lam.imag, "color": colors}
+        _fit(self.figure.x_range, np.append(lam.real, 0.0))
+        _fit(self.figure.y_range, lam.imag)
 
 
 class ModeShape:
@@ -40,7 +54,8 @@ class ModeShape:
         self.walls = ColumnDataSource({"x": [0.0, 1.0], "top": [0.05, 0.05],
                                        "bottom": [-0.05, -0.05]})
         f = figure(title="least stable mode in the channel", x_axis_label="x / L",
-                   y_axis_label="y / L", **_SIZE)
+                   y_axis_label="y / L", x_range=Range1d(-0.02, 1.02),
+                   y_range=Range1d(-0.06, 0.06), **_SIZE)
         f.line("x", "top", source=self.walls, color="black", line_width=2)
         f.line("x", "bottom", source=self.walls, color="black", line_width=2)
         f.varea("x", "lower", "upper", source=self.source, fill_alpha=0.15)
@@ -48,18 +63,22 @@ class ModeShape:
         self.figure, self.shape, self.half = f, None, 0.05
 
     def update(self, x, y, hstar: float) -> None:
-        self.half = hstar / 2
-        self.walls.data = {"x": [0.0, 1.0], "top": [self.half] * 2, "bottom": [-self.half] * 2}
+        """The mode ``y(x)``; the walls and the ranges only where H* changed."""
+        if hstar / 2 != self.half:
+            self.half = hstar / 2
+            self.walls.data = {"x": [0.0, 1.0], "top": [self.half] * 2,
+                               "bottom": [-self.half] * 2}
+            self.figure.y_range.update(start=-1.2 * self.half, end=1.2 * self.half)
         self.shape = (np.asarray(x), 0.8 * self.half * np.asarray(y))
         env = np.abs(self.shape[1])
-        self.source.data = {"x": self.shape[0].tolist(), "beam": self.shape[1].real.tolist(),
-                            "upper": env.tolist(), "lower": (-env).tolist()}
+        self.source.data = {"x": self.shape[0], "beam": self.shape[1].real, "upper": env,
+                            "lower": -env}
 
     def animate(self, phase: float) -> None:
         """The beam at ``phase`` (radians) of the oscillation."""
         if self.shape is not None:
             beam = (self.shape[1] * np.exp(1j * phase)).real
-            self.source.patch({"beam": [(slice(0, beam.size), beam.tolist())]})
+            self.source.patch({"beam": [(slice(0, beam.size), beam)]})
 
 
 class BoundaryMap:

@@ -1,19 +1,22 @@
-"""The page's own elements: a number box and a readout, each carrying a stable
-``data-testid`` attribute (for the browser tests and users' scripts)."""
+"""The page's own elements: a number box, a block of readouts and a readout, each
+carrying a stable ``data-testid`` attribute (for the browser tests and users' scripts)."""
 from __future__ import annotations
 
+import functools
 import html
 
-import panel as pn
 import param
+from bokeh.models import Div
+from panel.io import hold
 from panel.reactive import ReactiveHTML
 
-__all__ = ["NumberBox", "readout"]
+__all__ = ["NumberBox", "held", "markup", "readout"]
 
 
 class NumberBox(ReactiveHTML):
     """A labelled text input whose ``value`` (a string, parsed by the app) is sent on
-    change (Enter or leaving the box)."""
+    change (Enter or leaving the box): one message, the DOM event carrying the text (the
+    attribute sync is off: it would send the value a second time)."""
 
     value = param.Parameter(default="")
     label = param.String(default="")
@@ -21,11 +24,33 @@ class NumberBox(ReactiveHTML):
 
     _template = ('<label class="box">{{ label }} <input id="box" data-testid="{{ testid }}" '
                  'value="${value}" size="9"></input></label>')
-    _dom_events = {"box": ["change"]}
+    _dom_events = {"box": {"change": False}}
     _stylesheets = [":host { margin: 2px 6px; } input { font: inherit; }"]
+
+    def _box_change(self, event) -> None:
+        self.value = str(event.data["target"]["value"])
+
 
 
 def readout(testid: str, text: str, label: str = "") -> str:
     """The HTML of one readout: ``label`` and ``text`` in a span with ``data-testid``."""
     head = f"{html.escape(label)}: " if label else ""
     return f'{head}<span data-testid="{testid}">{html.escape(text)}</span>'
+
+
+def markup(text: str = "", **styles: str) -> Div:
+    """A block of HTML whose ``text`` the app sets: a Bokeh ``Div``, which changes by one
+    property (a Panel HTML pane re-derives its styles on each change: 50 times the work on
+    the server, measured)."""
+    return Div(text=text, disable_math=True, sizing_mode="stretch_width", styles=styles)
+
+
+def held(method):
+    """``method`` with the document held (``panel.io.hold``): the Bokeh models it changes
+    directly are changed under the document's lock, whichever callback calls it (a DOM
+    event's runs outside it), and sent once it returns."""
+    @functools.wraps(method)
+    def run(*args, **kwargs):
+        with hold():
+            return method(*args, **kwargs)
+    return run

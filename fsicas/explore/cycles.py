@@ -1,0 +1,73 @@
+"""The background tier's limit-cycle branch: started on request in its own process
+(``cycles_view``: from the first Hopf point to the first wall contact, as ``fsicas
+lco``), with its elapsed time and a cancel button; the tip amplitude against U*, stable
+and unstable cycles apart, and the command that reproduces it. Cached by scene (the
+branch does not depend on U*)."""
+from __future__ import annotations
+
+import panel as pn
+from bokeh.models import ColumnDataSource, Span
+from bokeh.plotting import figure
+
+from .compute import cycles_view
+from .figures import STABLE_COLOR, UNSTABLE_COLOR
+from .background import BackgroundPanel
+from .jobs import Jobs
+from .reproduce import command_line
+from .widgets import held, readout
+
+__all__ = ["CyclePanel"]
+
+
+def _fmt(value) -> str:
+    return "—" if value is None else f"{value:.5g}"
+
+
+class CyclePanel(BackgroundPanel):
+    """The limit-cycle branch's controls and results for one page."""
+
+    kind, testid, label, busy = "lco", "lco-status", "limit cycles", "computing"
+
+    def __init__(self, jobs: Jobs):
+        super().__init__(jobs, "not computed (seconds to a minute at N = 10, in the "
+                         "background)")
+        self.command = ""
+        self.start = pn.widgets.Button(name="limit cycles", button_type="primary", width=120)
+        self.stop = pn.widgets.Button(name="cancel cycles", width=120)
+        self.stop.on_click(lambda _: self.jobs.cancel("lco") and self.show("cancelled", None))
+        self.source = ColumnDataSource({"ustar": [], "amplitude": [], "color": []})
+        f = figure(title="limit cycles: tip amplitude (blue stable, red unstable)",
+                   x_axis_label="U*", y_axis_label="tip amplitude / L", height=220,
+                   sizing_mode="stretch_width")
+        f.line("ustar", "amplitude", source=self.source, color="gray")
+        f.scatter("ustar", "amplitude", source=self.source, color="color", size=5)
+        self.here = Span(location=0.0, dimension="height", line_color="gray", line_dash="dashed")
+        f.add_layout(self.here)
+        self.figure = f
+
+    @held
+    def ask(self, scene, key: str) -> None:
+        """Start (or show the cached) branch of ``scene``."""
+        self.command = command_line(scene, "lco")
+        cached = self.jobs.start(("lco", key), cycles_view, scene)
+        self.show("done", cached) if cached is not None else self.show("running", 0.0)
+
+    def _done(self, branch: dict) -> None:
+        points = branch["points"]
+        contact = branch["contact"]
+        lines = [readout("lco-status", branch["status"], "limit cycles")
+                 + f" ({branch['message']})",
+                 readout("lco-points", str(len(points)), "cycles"),
+                 readout("lco-contact", _fmt(None if contact is None else contact["ustar"]),
+                         "first wall contact at U*")]
+        lines += [readout("warning", w) for w in branch["warnings"]]
+        lines.append(readout("lco-command", self.command))
+        self.source.data = {"ustar": [p["ustar"] for p in points],
+                            "amplitude": [p["tip_amplitude"] for p in points],
+                            "color": [STABLE_COLOR if p["stable"] else UNSTABLE_COLOR
+                                      for p in points]}
+        self.status.text = "<br>".join(lines)
+
+    def page(self) -> pn.viewable.Viewable:
+        return pn.Column("### Limit cycles", pn.Row(self.start, self.stop), self.status,
+                         pn.pane.Bokeh(self.figure))
