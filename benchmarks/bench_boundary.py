@@ -31,7 +31,8 @@ import json, sys, time, collections
 import numpy as np
 import scipy.linalg, scipy.sparse.linalg
 import fsicas
-from continuation import _symbolic, _newton
+from continuation._casadi import symbolic as _symbolic
+from continuation._driver import newton as _newton
 spent = collections.Counter()
 
 def timed(owner, name, key):

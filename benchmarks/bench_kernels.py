@@ -12,7 +12,7 @@ backends alternate inside each repetition, so machine noise hits both alike):
 
 * ``jac`` one sparse Jacobian ``[G_U, G_T, G_p]``, ``res`` one residual;
 * ``step`` one corrector iteration: residual, Jacobian, bordering ``[G_X; tau^T]``,
-  sparse LU (``_newton.factorize``, SuperLU) and one solve;
+  sparse LU (``_driver.newton.factorize``, SuperLU) and one solve;
 * ``kernel``, ``LU``, ``rest``: fractions of ``step`` inside the CasADi calls, inside
   SuperLU (factorization and solve), and in the remaining Python/NumPy work.
 
@@ -47,8 +47,8 @@ import casadi as ca  # noqa: E402
 import numpy as np  # noqa: E402
 
 import continuation as C  # noqa: E402
-from continuation._newton import factorize  # noqa: E402
-from continuation._sparse import append_row  # noqa: E402
+from continuation._driver.newton import factorize  # noqa: E402
+from continuation._linalg.sparse import append_row  # noqa: E402
 
 BACKENDS = ("graph", "blocks")
 
@@ -137,7 +137,7 @@ class Timed:
 
 
 class TimedKernel:
-    """A :class:`continuation._blocks.PointKernel` whose ``evaluate`` is timed."""
+    """A :class:`continuation._cycles.blocks.PointKernel` whose ``evaluate`` is timed."""
 
     def __init__(self, kernel):
         self.kernel, self.total = kernel, 0.0

@@ -33,7 +33,7 @@ class TimedLU:
         import importlib
 
         import scipy.sparse.linalg as spla
-        from continuation._condensed import CollocationJacobian
+        from continuation._cycles.condensed import CollocationJacobian
         timer = self
 
         class Factor:

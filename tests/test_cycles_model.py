@@ -219,9 +219,9 @@ def test_the_position_rows_leave_the_interval_lus():
     interval LU by block; the condensed solves equal LAPACK's on the sparse route's
     matrix, and a short branch equals SuperLU's (points, iterations, multipliers)."""
     import continuation as C
-    from continuation._intervals import KinematicLU
-    from continuation._newton import factorize
-    from continuation._sparse import append_row
+    from continuation._cycles.intervals import KinematicLU
+    from continuation._driver.newton import factorize
+    from continuation._linalg.sparse import append_row
     from fsicas.linear.hopf import flutter_problem
     scene = fsicas.Scene(mstar=1.0, modes=6)             # 14 states: 56-row intervals
     model = build_model(scene)

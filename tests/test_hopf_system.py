@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 
 import fsicas
-from continuation._equilibrium import hopf_system
+from continuation._equilibria.systems import hopf_system
 from fsicas.linear.adapter import flutter_field
 
 

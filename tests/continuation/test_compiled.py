@@ -152,7 +152,7 @@ def test_missing_compiler_falls_back_to_mx(models, cache, monkeypatch):
 def test_backend_setting_and_environment_are_validated(monkeypatch):
     with pytest.raises(ValueError, match="CollocationSettings.backend"):
         C.CollocationSettings(backend="jit")
-    from continuation._settings import kernel_backend
+    from continuation._driver.settings import kernel_backend
     monkeypatch.delenv("CONTINUATION_BACKEND", raising=False)
     assert kernel_backend(None) == "auto"
     monkeypatch.setenv("CONTINUATION_BACKEND", "compiled")
@@ -174,7 +174,7 @@ def test_auto_backend_compiles_mx_and_small_sx_fields(cache):
     """'auto' (the default) compiles the kernel of an MX field and of a small SX field,
     and keeps an SX field of more than ``SX_COMPILE_MAX`` instructions in the virtual
     machine."""
-    from continuation._blocks import SX_COMPILE_MAX, point_kernel
+    from continuation._cycles.blocks import SX_COMPILE_MAX, point_kernel
     x, p = ca.MX.sym("x", 2), ca.MX.sym("p", 1)
     F = ca.Function("F", [x, p], [ca.vertcat(x[1], p * (1 - x[0] ** 2) * x[1] - x[0])])
     kinds = {expand: point_kernel(C.VectorField(F, None, ("mu",), expand=expand), 6, "auto")
@@ -208,7 +208,7 @@ def test_background_compilation_switches_mid_run_to_equal_results(models, cache,
     """'auto' evaluates in the virtual machine while the compiler runs beside it and
     switches to the library once it is built: every evaluation on the way equals the
     virtual machine's."""
-    from continuation import _blocks
+    from continuation._cycles import blocks as _blocks
     monkeypatch.setattr(_blocks, "COMPILE_AFTER", 0.0)        # worth a build at once
     case = _cases(models)[name]
     mx, auto = _problem(case, "mx"), _problem(case, "auto")
@@ -250,7 +250,7 @@ def test_auto_compiles_only_what_pays_and_loads_what_is_cached(models, cache):
 @needs_compiler
 def test_failing_compiler_in_the_background_falls_back_with_a_warning(models, cache,
                                                                        monkeypatch, tmp_path):
-    from continuation import _blocks
+    from continuation._cycles import blocks as _blocks
     monkeypatch.setattr(_blocks, "COMPILE_AFTER", 0.0)
     failing = tmp_path / "failing-cc"
     failing.write_text("#!/bin/sh\necho 'cc: internal error' >&2\nexit 1\n")

@@ -1,4 +1,4 @@
-"""The condensed Newton solver of collocated cycles (``continuation._condensed``) against
+"""The condensed Newton solver of collocated cycles (``continuation._cycles.condensed``) against
 independent routes: dense LAPACK solves of the explicitly assembled matrix, SuperLU of
 the sparse route's Jacobian, the Floquet condensation of the sparse Jacobian, and whole
 branches continued with the sparse solver."""
@@ -8,11 +8,11 @@ import numpy as np
 import pytest
 
 import continuation as C
-from continuation import _floquet
-from continuation._chain import Chain
-from continuation._condensed import BorderedCollocation, CondensedLU
-from continuation._newton import factorize
-from continuation._sparse import append_row
+from continuation._cycles import floquet as _floquet
+from continuation._cycles.chain import Chain
+from continuation._cycles.condensed import BorderedCollocation, CondensedLU
+from continuation._driver.newton import factorize
+from continuation._linalg.sparse import append_row
 
 from .conftest import van_der_pol_ring as _ring
 
@@ -131,7 +131,7 @@ def test_identity_pivots_solve_a_chain_of_bounded_maps_to_round_off(scale):
     judged in the natural units: the same pairs take the pivot, and the solution mapped
     back keeps its round-off backward error (QR's, not invariant under the scaling,
     grows with it: measured 2.6e-14 at 1e3)."""
-    from continuation._chain import UNIT_GROWTH
+    from continuation._cycles.chain import UNIT_GROWTH
     A, G, Bv, By, dense, rng = _chain(0.5)
     N, n, k = G.shape
     assert np.abs(A).sum(axis=2).max() ** 2 < UNIT_GROWTH / 4    # two levels at least
@@ -221,7 +221,7 @@ def test_stacked_lu_solves_equal_numpy(m):
     """The LUs of a stack (LAPACK, each matrix transposed in place) against NumPy's solve
     of each: one and several right-hand sides, matrices that need row exchanges (zero
     diagonals), and an exactly singular one among regular ones (reported, not solved)."""
-    from continuation._stacks import StackLU
+    from continuation._linalg.stacks import StackLU
     rng = np.random.default_rng(m)
     A = rng.standard_normal((6, m, m))
     A[:, np.arange(m), np.arange(m)] = 0.0
@@ -242,8 +242,8 @@ def test_dense_interval_factors_and_solves_equal_numpy(n, ncol):
     each: the maps ``Z_i`` and solves of one and several right-hand sides, on matrices
     that need row exchanges (zero diagonals); an exactly singular ``M_i`` among regular
     ones is reported."""
-    from continuation._condensed import CollocationJacobian
-    from continuation._intervals import PointwiseTerm
+    from continuation._cycles.condensed import CollocationJacobian
+    from continuation._cycles.intervals import PointwiseTerm
     ntst, k, m = 9, 2, n * ncol
     rng = np.random.default_rng(m)
     dense = PointwiseTerm(rng.standard_normal((ntst * ncol, n * n)),
@@ -282,7 +282,7 @@ def test_interval_band_holds_every_entry_of_the_interval_matrices(coupling):
     no entry outside ``lower`` / ``upper`` off-diagonals (checked on the explicit
     pattern); a chain's band is its distance of coupling times NCOL, plus NCOL - 1; a
     dense pattern has no band."""
-    from continuation._intervals import interval_band
+    from continuation._cycles.intervals import interval_band
     n, ncol = 30, 4
     near = {"chain": (-2, -1, 0, 1, 2), "ring": (-1, 0, 1), "shuffled chain": (-1, 0, 1),
             "dense": tuple(range(-n + 1, n))}[coupling]
@@ -327,7 +327,7 @@ def _explicit_blocks(terms, n, ntst, ncol):
 def _chain_terms(n, ntst, ncol, rng):
     """A matrix on a nearest-neighbour pattern and one on its diagonal (a mass), with
     random values and weights, as pointwise terms."""
-    from continuation._intervals import PointwiseTerm
+    from continuation._cycles.intervals import PointwiseTerm
     pairs = [(i, i + d) for i in range(n) for d in (-1, 0, 1) if 0 <= i + d < n]
     prow, pcol = np.array([a for a, _ in pairs]), np.array([b for _, b in pairs])
     K, diag = ntst * ncol, np.arange(n)
@@ -340,8 +340,8 @@ def test_interval_blocks_are_the_sum_of_their_pointwise_terms():
     """Dense blocks (terms on a pattern, and dense row by row) and the band layout
     (``M_i`` reordered in LAPACK's band storage, node 0's columns) against the blocks
     assembled from every point's dense matrix."""
-    from continuation._condensed import CollocationJacobian
-    from continuation._intervals import PointwiseTerm, interval_band
+    from continuation._cycles.condensed import CollocationJacobian
+    from continuation._cycles.intervals import PointwiseTerm, interval_band
     n, ncol, ntst = 12, 3, 4
     m, rng = n * ncol, np.random.default_rng(1)
     (prow, pcol), terms = _chain_terms(n, ntst, ncol, rng)
@@ -369,8 +369,8 @@ def test_banded_interval_factors_and_solves_equal_dense_lapack():
     """The band route (LAPACK's band LU, the permutations) against NumPy on the same
     interval matrices: the maps ``Z_i`` and solves of one and several right-hand sides,
     which need row exchanges; singular blocks are reported."""
-    from continuation._condensed import CollocationJacobian
-    from continuation._intervals import PointwiseTerm, interval_band
+    from continuation._cycles.condensed import CollocationJacobian
+    from continuation._cycles.intervals import PointwiseTerm, interval_band
     n, ncol, ntst, k = 12, 3, 5, 2
     m, rng = n * ncol, np.random.default_rng(0)
     (prow, pcol), terms = _chain_terms(n, ntst, ncol, rng)
@@ -444,7 +444,7 @@ def test_a_band_is_taken_where_it_is_narrower_than_the_blocks_and_they_exceed_th
     """Two-state cells coupled to their neighbours (distance 2, 11 off-diagonals at NCOL
     = 4, storage 34): no band at 32 rows or where the storage exceeds the rows, a band at
     40 rows."""
-    from continuation._intervals import BAND_MIN_ROWS, interval_band
+    from continuation._cycles.intervals import BAND_MIN_ROWS, interval_band
 
     def chain(n):
         pairs = [(i, i + d) for i in range(n) for d in (-2, -1, 0, 1, 2) if 0 <= i + d < n]

@@ -138,7 +138,7 @@ def test_hopf_curve_with_state_dependent_mass(models):
 def test_sparse_and_dense_eigenvalues_agree():
     """Shift-invert Arnoldi and dense QZ on a 1-D reaction-diffusion Jacobian."""
     import scipy.sparse as sp
-    from continuation._eigen import eigenvalues
+    from continuation._equilibria.eigen import eigenvalues
     n = 120
     rng = np.random.default_rng(5)
     lap = sp.diags([1.0, -2.0, 1.0], [-1, 0, 1], shape=(n, n)) * 50.0

@@ -118,7 +118,7 @@ def test_crossing_changes_sign_with_the_multiplier_that_crosses():
     """Seen on an impacting branch: in one step a real multiplier went from 0.92 to 1.89
     while 0.79 stayed; the real multiplier nearest +1 (0.92, then 0.79) stays below 1,
     the crossing function changes sign; a complex pair never changes its sign."""
-    from continuation._floquet import crossing, nearest_real
+    from continuation._cycles.floquet import crossing, nearest_real
     before = np.array([0.92, 0.79, 0.3 + 0.5j, 0.3 - 0.5j])
     after = np.array([1.89, 0.79, 0.3 + 0.5j, 0.3 - 0.5j])
     assert nearest_real(before, 1.0) < 1 and nearest_real(after, 1.0) < 1
@@ -132,7 +132,7 @@ def test_events_of_multipliers_that_meet_on_the_real_axis(symmetric_branch):
     """Seen past a branch point at N = 4: a complex pair outside the circle met on the
     real axis below -1 (no Neimark-Sacker point: as many multipliers outside as before);
     a real multiplier through +1 is a branch point unless the branch turns (a fold)."""
-    from continuation._problem import PointInfo
+    from continuation._driver.problem import PointInfo
     problem, _ = symmetric_branch
     info = lambda fold, pd, ns, bp: PointInfo(np.zeros(0), {"fold": fold},  # noqa: E731
                                               {"pd": pd, "ns": ns, "bp": bp})
@@ -148,7 +148,7 @@ def test_location_bisects_where_the_corrector_fails():
     there (a stiff branch did so): the location bisects instead and still converges."""
     from types import SimpleNamespace
 
-    from continuation._locate import _illinois
+    from continuation._driver.locate import _illinois
     failed = []
 
     def evaluate(s):

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 import continuation as C
-from continuation._floquet import section_multipliers
+from continuation._cycles.floquet import section_multipliers
 
 SETTINGS = C.CollocationSettings(ntst=20, ncol=4)
 

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 import continuation as C
-from continuation._collocation import builder
+from continuation._cycles.collocation import builder
 
 
 def _ring(theta_gain=0.0, radial=1.0):
@@ -234,7 +234,7 @@ def test_dense_and_sparse_condensation_agree(monkeypatch):
     """Both condensation paths of the sparse Jacobian (batched dense for small or
     well-filled blocks, SuperLU on the block diagonal of the others) give the same transfer
     matrices, and so do the maps of the condensed Newton solver."""
-    from continuation import _floquet
+    from continuation._cycles import floquet as _floquet
     F, e = _ring(), 0.5
     prob, X = _solve(F, e, 12, 3, 2 * np.pi / np.sqrt(1 - e ** 2))
     J = C.CycleProblem.jacobian(prob, X)
@@ -258,7 +258,7 @@ def test_extrema_of_the_collocation_polynomial_match_dense_sampling():
     """``extrema`` (Newton on each interval's polynomial) equals the extremes of the same
     piecewise polynomial sampled at 400 001 times, to the sampling's resolution, also
     where the extremum sits on a mesh point (cos at t = 0) or inside an interval."""
-    from continuation._collocation import evaluate, extrema
+    from continuation._cycles.collocation import evaluate, extrema
     ntst, ncol, n = 20, 4, 3
     t = np.linspace(0, 1, ntst * ncol, endpoint=False)
     U = np.column_stack([np.cos(2 * np.pi * t), np.cos(4 * np.pi * t + 0.2) ** 3,
@@ -278,7 +278,7 @@ def test_minimizer_over_many_rows_matches_dense_sampling():
     """``minimizer`` (only the intervals that can beat a row's best sample are polished)
     finds ``min_{t, j} (A u(t))_j`` of 200 rows of a cycle to the resolution of 400 001
     samples, where it is taken, and the least of ``extrema``'s row minima."""
-    from continuation._collocation import evaluate, extrema, minimizer
+    from continuation._cycles.collocation import evaluate, extrema, minimizer
     ntst, ncol, n = 20, 4, 3
     t = np.linspace(0, 1, ntst * ncol, endpoint=False)
     U = np.column_stack([np.cos(2 * np.pi * t), np.sin(6 * np.pi * t + 0.3),
@@ -301,7 +301,7 @@ def test_transfer_matrices_on_a_kept_layout_and_with_duplicate_entries(monkeypat
     route's on it), and a non-canonical Jacobian (entries split into duplicates) gives
     the same maps as the canonical one, by both routes."""
     import scipy.sparse as sp
-    from continuation import _floquet
+    from continuation._cycles import floquet as _floquet
     F, e = _ring(), 0.5
     prob, X = _solve(F, e, 12, 3, 2 * np.pi / np.sqrt(1 - e ** 2))
     J = sp.csc_matrix(C.CycleProblem.jacobian(prob, X))

@@ -107,7 +107,7 @@ def test_van_der_pol_large_mu_matches_dorodnitsyn_asymptotics(models):
 def test_lagrange_basis_reproduces_polynomials_and_their_derivatives():
     """Σ_l p(x_l) L_l(s) = p(s) and Σ_l p(x_l) L_l'(s) = p'(s) for every polynomial of
     degree <= NCOL on the NCOL + 1 equispaced nodes (NCOL = 1..7), to rounding."""
-    from continuation._collocation import lagrange
+    from continuation._cycles.collocation import lagrange
     rng = np.random.default_rng(3)
     s = rng.random(40)
     for ncol in range(1, 8):
@@ -165,7 +165,7 @@ def test_phase_coefficients_integrate_the_phase_condition_exactly(ncol):
     interpolating polynomials in the local time (Chebyshev series through the
     ``NCOL + 1`` equispaced nodes) and their product integrated exactly, where the
     code uses Gauss quadrature (exact for this degree)."""
-    from continuation._collocation import phase_coefficients
+    from continuation._cycles.collocation import phase_coefficients
     rng = np.random.default_rng(ncol)
     n, ntst = 3, 7
     mesh = np.concatenate([[0.0], np.sort(rng.random(ntst - 1)), [1.0]])

@@ -15,7 +15,7 @@ from scipy.integrate import solve_ivp
 from scipy.optimize import brentq
 
 import continuation as C
-from continuation._floquet import nearest_real
+from continuation._cycles.floquet import nearest_real
 
 A = B = 0.2
 C_START = 2.5

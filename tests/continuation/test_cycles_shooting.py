@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 
 import continuation as C
-from continuation._collocation import collocation, interval_nodes
+from continuation._cycles.collocation import collocation, interval_nodes
 
 VDP_T1 = 6.663286859323130   # Van der Pol period at mu = 1 (published benchmark value)
 

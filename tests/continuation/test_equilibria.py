@@ -271,7 +271,7 @@ def test_brusselator_lyapunov_against_guckenheimer_holmes(models, A):
     normal coordinates y (x = x* + T y, T = [Re q, -Im q], |q| = 1) and apply the
     Guckenheimer-Holmes formula. There q_y = (1, -i)/sqrt(2) maps to q/sqrt(2), so the
     library's |q| = 1 value is l1 = 2 * (2 a / omega) = 4 a / omega."""
-    from continuation._lyapunov import hopf_eigenvectors
+    from continuation._equilibria.lyapunov import hopf_eigenvectors
     F = models.brusselator()
     br = C.continuation(C.EquilibriumProblem(F, [A, 1 / A], {"A": A, "B": 1.0}, "B"),
                         settings=settings(bounds={"B": (0, 1 + A**2 + 1)}))
@@ -346,9 +346,9 @@ def test_eigen_step_setting_is_validated():
 
 def test_eigenvalue_step_limit_leaves_cycle_branches_alone(monkeypatch):
     """A cycle problem's monitor reports Floquet multipliers, not eigenvalues: the limit
-    is never consulted for it (Problem.steps_by_eigenvalues), while an equilibrium
+    is never consulted for it (Problem.step_limit), while an equilibrium
     branch consults it at every point after the first."""
-    from continuation import _eigen
+    from continuation._equilibria import eigen as _eigen
     calls = []
     real = _eigen.step_limit
     monkeypatch.setattr(_eigen, "step_limit", lambda *a: calls.append(1) or real(*a))

@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 import scipy.sparse as sp
 
-from continuation._symbolic import BufferedFunction
+from continuation._casadi.symbolic import BufferedFunction
 
 
 def test_buffered_function_equals_plain_call_and_returns_copies():
@@ -32,8 +32,8 @@ def test_factorization_with_reused_ordering_matches_a_fresh_splu():
     import scipy.sparse as sp
     import scipy.sparse.linalg as spla
 
-    from continuation._newton import factorize
-    from continuation._problem import _det_sign
+    from continuation._driver.newton import factorize
+    from continuation._driver.problem import _det_sign
 
     rng = np.random.default_rng(0)
     A = (sp.random(300, 300, density=0.02, random_state=1) + 0.5 * sp.identity(300)).tocsc()
@@ -75,8 +75,8 @@ def test_chord_steps_reach_the_root_as_accurately_as_newton(start):
     then chord steps. Either way the root the system was built from is met to
     round-off, as by Newton's method (contraction 0), with no more Jacobians; for step
     control the run of chord steps counts as one Newton iteration (``effort``)."""
-    from continuation._newton import newton
-    from continuation._settings import NewtonSettings
+    from continuation._driver.newton import newton
+    from continuation._driver.settings import NewtonSettings
 
     H, J, x_star = _cubic_system()
     x0 = x_star + start * np.random.default_rng(7).standard_normal(x_star.size)
@@ -94,7 +94,7 @@ def test_chord_steps_reach_the_root_as_accurately_as_newton(start):
 
 
 def test_contraction_setting_is_validated():
-    from continuation._settings import NewtonSettings
+    from continuation._driver.settings import NewtonSettings
     for bad in (-0.1, 1.0, float("nan")):
         with pytest.raises(ValueError, match="NewtonSettings.contraction"):
             NewtonSettings(contraction=bad)
@@ -119,9 +119,9 @@ def test_cycle_step_factorizes_at_the_predictor_and_for_the_tangent(monkeypatch)
     predictor (the next Newton iterations are chord steps on it) and the tangent's at
     the new point, whose factors are those of ``[G_X(X); tau_k^T]`` there (checked by
     solving with the matrix assembled independently, sparse) and give ``G_X tau = 0``."""
-    import continuation._newton as newton_module
-    import continuation._palc as palc_module
-    from continuation._problem import Problem
+    import continuation._driver.newton as newton_module
+    import continuation._driver.palc as palc_module
+    from continuation._driver.problem import Problem
 
     cyc, it = _brusselator_cycles()
     step = it.start()
@@ -172,7 +172,7 @@ def test_supplied_jacobians_are_what_the_collocation_kernel_and_jac_x_use():
     """A VectorField given ``jacobian`` and ``mass_action_jacobian`` evaluates them (here a
     deliberately wrong pair changes the result) and, when they are right, give the same
     dF/dx and collocation Jacobian as AD of F and M v."""
-    from continuation._blocks import BlockCollocationSystem, point_kernel
+    from continuation._cycles.blocks import BlockCollocationSystem, point_kernel
     plain, given, wrong = _mass_spring_field(False), _mass_spring_field(True), \
         _mass_spring_field(True, scale=2.0)
     rng = np.random.default_rng(2)
@@ -223,7 +223,7 @@ def test_nested_single_threaded_contexts_limit_once_and_restore_once():
     limit in place on exit; the outer one restores the caller's pools."""
     from threadpoolctl import threadpool_info, threadpool_limits
 
-    from continuation._threads import single_threaded
+    from continuation._linalg.threads import single_threaded
 
     def counts():
         return [pool["num_threads"] for pool in threadpool_info()]
@@ -242,7 +242,7 @@ def test_single_threaded_sets_no_limit_where_every_pool_has_one_thread(monkeypat
     the limit is set."""
     from threadpoolctl import threadpool_limits
 
-    from continuation import _threads
+    from continuation._linalg import threads as _threads
     calls = []
     real = type(_threads._controller()).limit
     monkeypatch.setattr(type(_threads._controller()), "limit",

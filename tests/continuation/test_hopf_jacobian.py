@@ -4,9 +4,9 @@ import casadi as ca
 import numpy as np
 import pytest
 
-from continuation._equilibrium import hopf_system
-from continuation._systems import _hopf
-from continuation._vectorfield import VectorField
+from continuation._equilibria.systems import hopf_system
+from continuation._equilibria.systems import ad_hopf_system
+from continuation._casadi.vectorfield import VectorField
 
 from .conftest import mass_model
 
@@ -22,7 +22,7 @@ def test_structured_hopf_jacobian_equals_ad_of_the_residual(symbolic):
     if symbolic == "MX":
         F, M = _mx(F), _mx(M)
     vf = VectorField(F, M, ("p", "q"), expand=False)
-    fast, ad = hopf_system(vf), _hopf(vf)
+    fast, ad = hopf_system(vf), ad_hopf_system(vf)
     rng = np.random.default_rng(3)
     for _ in range(5):
         Y, P, D = rng.standard_normal(7), rng.standard_normal(2), rng.standard_normal(2)

@@ -8,10 +8,10 @@ import numpy as np
 import pytest
 
 import continuation as C
-from continuation._collocation import collocation
-from continuation._condensed import CollocationJacobian
-from continuation._intervals import KinematicLU, PointwiseTerm, kinematic_rows
-from continuation._stacks import StackLU
+from continuation._cycles.collocation import collocation
+from continuation._cycles.condensed import CollocationJacobian
+from continuation._cycles.intervals import KinematicLU, PointwiseTerm, kinematic_rows
+from continuation._linalg.stacks import StackLU
 
 from .conftest import van_der_pol_ring
 
@@ -131,8 +131,8 @@ def test_branches_with_kinematic_rows_eliminated_equal_the_sparse_solver(mass):
     kinematic), with a state-dependent mass on the velocities: the condensed solves
     against LAPACK on the sparse route's matrix, and a branch against SuperLU's (points,
     Newton iterations, multipliers)."""
-    from continuation._newton import factorize
-    from continuation._sparse import append_row
+    from continuation._driver.newton import factorize
+    from continuation._linalg.sparse import append_row
     prob = _problem("condensed", mass)
     rng = np.random.default_rng(3)
     X = prob.X0 * (1 + 0.01 * rng.standard_normal(prob.X0.size))
@@ -157,7 +157,7 @@ def test_branches_with_kinematic_rows_eliminated_equal_the_sparse_solver(mass):
 def test_small_interval_matrices_keep_the_plain_lu():
     """At most ``KINEMATIC_MIN_ROWS`` rows (five oscillators, 40 rows) the elimination
     does not pay: the plain LU."""
-    from continuation._intervals import KINEMATIC_MIN_ROWS
+    from continuation._cycles.intervals import KINEMATIC_MIN_ROWS
     prob = _problem("condensed", False, n=10)
     assert 10 * 4 <= KINEMATIC_MIN_ROWS
     A = prob.bordered_jacobian(prob.X0, np.ones(prob.X0.size))

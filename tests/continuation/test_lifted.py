@@ -5,8 +5,8 @@ import numpy as np
 import pytest
 
 import continuation as C
-from continuation._blocks import BlockCollocationSystem, point_kernel
-from continuation._lifted import LiftedBatch
+from continuation._cycles.blocks import BlockCollocationSystem, point_kernel
+from continuation._casadi.lifted import LiftedBatch
 
 
 def galerkin(n=6, K=9, seed=0):

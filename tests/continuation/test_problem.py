@@ -5,7 +5,8 @@ import numpy as np
 import pytest
 
 import continuation as C
-from continuation._systems import bound
+from continuation._casadi.symbolic import bound
+from continuation._equilibria.systems import ad_hopf_system
 
 
 def fd_jacobian(fun, X, h=1e-6):
@@ -32,7 +33,7 @@ def test_mass_and_hopf_system_jacobians(models):
     x, p = rng.standard_normal(2), np.array([0.3])
     assert np.max(np.abs(vf.jac_x(x, p).toarray() -
                          fd_jacobian(lambda y: vf.rhs(y, p), x))) < 1e-8
-    hopf = bound(vf, "hopf", p, rng.standard_normal(2), ("p",))
+    hopf = bound(vf, "hopf", p, rng.standard_normal(2), ("p",), ad_hopf_system)
     X = rng.standard_normal(hopf.n_unknowns)
     assert hopf.n_unknowns == 3 * 2 + 2
     exact = hopf.jacobian(X).toarray()
@@ -138,7 +139,7 @@ def test_non_expandable_mx_function():
 
 def test_permutation_parity_matches_determinant():
     from itertools import permutations
-    from continuation._problem import _parity
+    from continuation._driver.problem import _parity
     for n in range(1, 6):
         for perm in permutations(range(n)):
             assert _parity(perm) == round(np.linalg.det(np.eye(n)[list(perm)]))
@@ -149,7 +150,7 @@ def test_round_off_floor_handled_by_step_criterion():
     updates reach round-off level, which the xtol criterion accepts (and reports
     the true residual); with xtol = 0 the solve fails with its residual."""
     import scipy.sparse as sp
-    from continuation._newton import newton
+    from continuation._driver.newton import newton
 
     def residual(X):
         return 1e12 * (X - 0.3) + 1e-6 * np.cos(1e20 * X)
@@ -171,7 +172,7 @@ def test_system_that_cannot_be_evaluated_is_a_failed_newton():
     continuation into that region shortens its steps up to the edge p = 1 and stops
     there with a status instead of raising."""
     import scipy.sparse as sp
-    from continuation._newton import newton
+    from continuation._driver.newton import newton
 
     def residual(X):
         if X[0] > 2.0:
@@ -193,7 +194,7 @@ def test_system_that_cannot_be_evaluated_is_a_failed_newton():
 
 def test_sparse_bordering_helpers_match_dense():
     import scipy.sparse as sp
-    from continuation._sparse import append_columns, append_row
+    from continuation._linalg.sparse import append_columns, append_row
     rng = np.random.default_rng(0)
     for seed in range(20):
         m, n = rng.integers(1, 30), rng.integers(1, 30)
@@ -210,7 +211,7 @@ def test_pattern_cache_matches_patterns_and_keys_and_keeps_the_newest():
     pattern of equal nonzero count but other places, or another key, is a miss; the
     oldest entry goes when more than ``kept`` are stored."""
     import scipy.sparse as sp
-    from continuation._sparse import PatternCache
+    from continuation._linalg.sparse import PatternCache
     cache = PatternCache(kept=2)
     A = sp.csc_matrix(np.array([[1.0, 0.0], [2.0, 3.0]]))
     moved = sp.csc_matrix(np.array([[1.0, 4.0], [0.0, 3.0]]))
@@ -229,7 +230,7 @@ def test_solves_of_many_columns_equal_dense_lapack():
     zero diagonal), at the first factorization of a pattern and on its kept ordering,
     equals LAPACK's dense solve and the column-by-column solve."""
     import scipy.sparse as sp
-    from continuation._newton import factorize
+    from continuation._driver.newton import factorize
     rng = np.random.default_rng(3)
     for seed in range(6):
         m = int(rng.integers(5, 120))

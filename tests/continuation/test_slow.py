@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 import continuation as C
-from continuation._eigen import eigenvalues
+from continuation._equilibria.eigen import eigenvalues
 
 pytestmark = pytest.mark.slow
 
