@@ -1,14 +1,15 @@
-"""The condensed Newton solver of collocated cycles (``continuation._cycles.condensed``) against
-independent routes: dense LAPACK solves of the explicitly assembled matrix, SuperLU of
-the sparse route's Jacobian, the Floquet condensation of the sparse Jacobian, and whole
-branches continued with the sparse solver."""
+"""White-box on purpose: the condensed Newton solver of collocated cycles
+(``continuation._cycles.condensed``, its chain and interval stacks) against independent
+routes: dense LAPACK solves of the explicitly assembled matrix, SuperLU of the sparse
+route's Jacobian, the Floquet condensation of the sparse Jacobian, and whole branches
+continued with the sparse solver."""
 
 import casadi as ca
 import numpy as np
 import pytest
 
 import continuation as C
-from continuation._cycles import floquet as _floquet
+from continuation._cycles import floquet
 from continuation._cycles.chain import Chain
 from continuation._cycles.condensed import BorderedCollocation, CondensedLU
 from continuation._driver.newton import factorize
@@ -158,11 +159,11 @@ def test_multipliers_from_the_factorization_equal_the_sparse_floquet_condensatio
     X = C.ContinuationIterator(prob, C.PALC(), C.ContinuationSettings()).start().X
     mu = prob.multipliers(X)                        # from the tangent's factorization
     J = C.CycleProblem.jacobian(prob, X)
-    ref = _floquet.multipliers(_floquet.transfer_matrices(J, prob.vf.n, prob.ntst,
+    ref = floquet.multipliers(floquet.transfer_matrices(J, prob.vf.n, prob.ntst,
                                                           prob.ncol), "pencil")
     assert _rel(ref, mu) < 1e-11
     full = prob.transfer_matrices(X, full=True)
-    assert _rel(_floquet.transfer_matrices(J, prob.vf.n, prob.ntst, prob.ncol, full=True),
+    assert _rel(floquet.transfer_matrices(J, prob.vf.n, prob.ntst, prob.ncol, full=True),
                 full) < 1e-12
 
 

@@ -1,7 +1,8 @@
-"""Kinematic rows of the interval matrices (``dq/dt = r`` of a mechanical system) taken
-out of their LU by block elimination (``_intervals.kinematic_rows``,
-``_intervals.KinematicLU``), against NumPy's dense solves of the same matrices and
-against whole branches continued with SuperLU of the whole matrix."""
+"""White-box on purpose: kinematic rows of the interval matrices (``dq/dt = r`` of a
+mechanical system) taken out of their LU by block elimination
+(``continuation._cycles.intervals``: ``kinematic_rows``, ``KinematicLU``), against
+NumPy's dense solves of the same matrices and against whole branches continued with
+SuperLU of the whole matrix."""
 
 import casadi as ca
 import numpy as np

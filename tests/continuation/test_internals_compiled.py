@@ -1,7 +1,8 @@
-"""Compiled collocation kernels (``CollocationSettings(backend='compiled')``) against the
-CasADi virtual machine ('mx'): residuals, Jacobians and Floquet multipliers agree to
-1e-12 relative; the on-disk cache, the environment switch and the fallback without a
-compiler."""
+"""White-box on purpose (the kernel of ``continuation._cycles.blocks`` and what it calls):
+its batched lifted matrices against AD of the field; compiled collocation kernels
+(``CollocationSettings(backend='compiled')``) against the CasADi virtual machine ('mx'):
+residuals, Jacobians and Floquet multipliers agree to 1e-12 relative; the on-disk cache,
+the environment switch and the fallback without a compiler."""
 
 import os
 import pathlib
@@ -15,6 +16,9 @@ import pytest
 
 import continuation as C
 from continuation import compilation
+from continuation._casadi.lifted import LiftedBatch
+
+from .conftest import galerkin
 
 RTOL = 1e-12
 
@@ -208,8 +212,8 @@ def test_background_compilation_switches_mid_run_to_equal_results(models, cache,
     """'auto' evaluates in the virtual machine while the compiler runs beside it and
     switches to the library once it is built: every evaluation on the way equals the
     virtual machine's."""
-    from continuation._cycles import blocks as _blocks
-    monkeypatch.setattr(_blocks, "COMPILE_AFTER", 0.0)        # worth a build at once
+    from continuation._cycles import blocks
+    monkeypatch.setattr(blocks, "COMPILE_AFTER", 0.0)        # worth a build at once
     case = _cases(models)[name]
     mx, auto = _problem(case, "mx"), _problem(case, "auto")
     auto.system.D = mx.system.D.copy()
@@ -250,8 +254,8 @@ def test_auto_compiles_only_what_pays_and_loads_what_is_cached(models, cache):
 @needs_compiler
 def test_failing_compiler_in_the_background_falls_back_with_a_warning(models, cache,
                                                                        monkeypatch, tmp_path):
-    from continuation._cycles import blocks as _blocks
-    monkeypatch.setattr(_blocks, "COMPILE_AFTER", 0.0)
+    from continuation._cycles import blocks
+    monkeypatch.setattr(blocks, "COMPILE_AFTER", 0.0)
     failing = tmp_path / "failing-cc"
     failing.write_text("#!/bin/sh\necho 'cc: internal error' >&2\nexit 1\n")
     failing.chmod(0o755)
@@ -291,3 +295,16 @@ def test_a_build_left_running_at_exit_is_killed_and_leaves_nothing(tmp_path):
     assert out.returncode == 0, out.stderr
     assert not pathlib.Path(f"/proc/{int(out.stdout)}").exists()
     assert not list(cache.iterdir())
+
+
+def test_lifted_batch_equals_ad_of_the_field_at_every_point():
+    """The kernel's batched lifted matrices (``continuation._casadi.lifted.LiftedBatch``)
+    equal AD of the field at every point."""
+    s = galerkin()                            # the lifted field of test_lifted
+    K = 7
+    X, p = np.random.default_rng(1).normal(size=(K, s["n"])), np.array([0.7, 0.4])
+    for lifted, ref in s["by_ad"]:
+        batch = LiftedBatch(lifted, K)(X, p)
+        for k in range(K):
+            exact = np.array(ref(X[k], p))
+            assert np.max(np.abs(batch[k] - exact)) < 1e-13 * np.max(np.abs(exact))
