@@ -31,25 +31,25 @@ Public API (everything else is private)::
 Plotting lives in ``continuation.plotting`` (Matplotlib is imported there only).
 """
 
-from ._branch import Branch, SpecialPoint, Status
-from ._curves import FoldCurveProblem, HopfCurveProblem
-from ._cycles import CycleProblem
-from ._cycle_curves import (Condition, CycleCurveProblem, CycleFold, Extremum, NeimarkSacker,
-                            PeriodDoubling, locate_cycle)
-from ._driver import continuation, observing
-from ._hooks import Event
-from ._lifted import Lifted
-from ._equilibrium import EquilibriumProblem, hopf_point
-from ._lyapunov import first_lyapunov
-from ._palc import ContinuationIterator, Step, correct
-from ._problem import Problem
-from ._settings import (MAX_NTST, CollocationSettings, ContinuationSettings, EigenSettings,
-                        NewtonSettings, PALC, ShootingSettings)
-from ._shooting import ShootingProblem
-from ._symbolic import BufferedFunction
-from ._switching import cycle_from_bp, cycle_from_hopf, cycle_from_pd, equilibrium_from_bp
-from ._symmetric import keeps_symmetry, locate_symmetry_breaking, symmetric_multipliers
-from ._vectorfield import VectorField
+from ._casadi.lifted import Lifted
+from ._casadi.symbolic import BufferedFunction
+from ._casadi.vectorfield import VectorField
+from ._cycles.cycle_curves import (Condition, CycleCurveProblem, CycleFold, Extremum,
+                                   NeimarkSacker, PeriodDoubling, locate_cycle)
+from ._cycles.cycles import CycleProblem
+from ._cycles.shooting import ShootingProblem
+from ._cycles.switching import cycle_from_bp, cycle_from_hopf, cycle_from_pd, equilibrium_from_bp
+from ._cycles.symmetric import keeps_symmetry, locate_symmetry_breaking, symmetric_multipliers
+from ._driver.branch import Branch, SpecialPoint, Status
+from ._driver.driver import continuation, observing
+from ._driver.hooks import Event
+from ._driver.palc import ContinuationIterator, Step, correct
+from ._driver.problem import Problem
+from ._driver.settings import (MAX_NTST, CollocationSettings, ContinuationSettings,
+                               EigenSettings, NewtonSettings, PALC, ShootingSettings)
+from ._equilibria.curves import FoldCurveProblem, HopfCurveProblem
+from ._equilibria.equilibrium import EquilibriumProblem, hopf_point
+from ._equilibria.lyapunov import first_lyapunov
 
 __all__ = [
     "MAX_NTST", "Branch", "BufferedFunction", "Event", "Status", "CollocationSettings", "Condition", "CycleCurveProblem",

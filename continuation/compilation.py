@@ -10,7 +10,7 @@ also in a new process, only loads it (and a second call in the same process retu
 loaded function).
 
 Each library has a record beside it and is loaded only if it matches it, from a private
-cache (``continuation._library_cache``, where the rules are stated); a cache directory
+cache (``continuation._casadi.library_cache``, where the rules are stated); a cache directory
 that cannot be used is replaced, with one ``RuntimeWarning``, by a temporary directory of
 the process (removed at exit). Files are written in a private temporary directory and
 moved into place with ``os.replace``, the record before the library, so concurrent
@@ -49,7 +49,7 @@ from pathlib import Path
 
 import casadi as ca
 
-from ._library_cache import (FORMAT, cache_key, check_private, compiler_identity,
+from ._casadi.library_cache import (FORMAT, cache_key, check_private, compiler_identity,
                              default_cache_dir, digest, holds, record_path)
 
 __all__ = ["compile_function", "compile_later", "compiled_or_none", "Deferred",

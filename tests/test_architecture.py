@@ -1,9 +1,10 @@
 """The house rules of docs/architecture.md, read from the source (nothing is imported).
 
 Imports at any depth (function-level included) between fsicas modules follow the wing
-order; they form no cycle; no module imports another's private name; ``continuation``
-imports nothing of fsicas; every module declares ``__all__``; modules and functions stay
-small.
+order, and between continuation's modules the order of its rooms; they form no cycle; no
+module imports another's private name; ``continuation`` imports nothing of fsicas, fsicas
+only its public modules; every fsicas module declares ``__all__``; modules and functions
+stay small.
 """
 import ast
 import statistics
@@ -30,6 +31,13 @@ ALLOWED = {
     "console": {"cli"},
     "__main__": {"console"},
 }
+
+
+#: continuation's rooms, bottom first: a room may import itself and the rooms below it
+#: (``top``: the package's ``__init__`` with the public API, and ``plotting``)
+ROOMS = ("_linalg", "_casadi", "_driver", "_equilibria", "_cycles", "top")
+#: public modules that belong to a room but keep their path at the top of the package
+PUBLIC_IN_ROOM = {"continuation.compilation": "_casadi"}
 
 
 def _modules(package: str) -> dict[str, Path]:
@@ -65,16 +73,16 @@ def _imports(module: str, path: Path):
             yield _resolve(module, node, path), [a.name for a in node.names]
 
 
-def _edges(module: str, path: Path) -> set[str]:
-    """fsicas modules that ``module`` imports (a name that is a submodule counts as it)."""
+def _edges(module: str, path: Path, modules: dict = FSICAS) -> set[str]:
+    """The ``modules`` that ``module`` imports (a name that is a submodule counts as it)."""
     out = set()
     for target, names in _imports(module, path):
         for name in names:
-            if f"{target}.{name}" in FSICAS:
+            if f"{target}.{name}" in modules:
                 out.add(f"{target}.{name}")
-            elif target in FSICAS:
+            elif target in modules:
                 out.add(target)
-        if not names and target in FSICAS:
+        if not names and target in modules:
             out.add(target)
     out.discard(module)
     return out
@@ -94,8 +102,29 @@ def test_imports_follow_the_wing_order():
     assert not wrong, wrong
 
 
-def test_no_import_cycle_among_fsicas_modules():
-    graph = {m: _edges(m, p) for m, p in FSICAS.items()}
+def _room(module: str) -> str:
+    """The continuation room of ``module``: its subpackage, else ``top``."""
+    parts = module.split(".")
+    return PUBLIC_IN_ROOM.get(module) or (parts[1] if len(parts) > 1 and parts[1] in ROOMS
+                                          else "top")
+
+
+def test_continuation_imports_follow_the_room_order():
+    wrong = [f"{m} -> {t}" for m, p in LIBRARY.items() for t in _edges(m, p, LIBRARY)
+             if ROOMS.index(_room(t)) > ROOMS.index(_room(m))]
+    assert not wrong, wrong
+
+
+def test_every_continuation_module_lives_in_a_room():
+    """Besides the package itself, only the public modules stand at the top."""
+    loose = [m for m in LIBRARY if _room(m) == "top"
+             and m not in ("continuation", "continuation.plotting")]
+    assert not loose, loose
+
+
+@pytest.mark.parametrize("modules", [FSICAS, LIBRARY], ids=["fsicas", "continuation"])
+def test_no_import_cycle_among_modules(modules):
+    graph = {m: _edges(m, p, modules) for m, p in modules.items()}
     state, cycles = {}, []
 
     def visit(m, stack):
@@ -119,9 +148,19 @@ def test_continuation_imports_nothing_of_fsicas():
     assert not bad, bad
 
 
+def test_fsicas_uses_only_the_public_continuation():
+    """fsicas imports ``continuation``, ``continuation.compilation`` and
+    ``continuation.plotting``, and no private name of theirs."""
+    public = {"continuation", "continuation.compilation", "continuation.plotting"}
+    bad = [f"{m}: {t} {names}" for m, p in FSICAS.items() for t, names in _imports(m, p)
+           if t.split(".")[0] == "continuation"
+           and (t not in public or any(n.startswith("_") for n in names))]
+    assert not bad, bad
+
+
 def _private_import(module: str, target: str, name: str) -> bool:
     """A private name of another module; a package's own private submodules (its
-    implementation, e.g. ``continuation._eigen`` inside ``continuation``) are not."""
+    implementation, e.g. ``continuation._equilibria.eigen`` inside ``continuation``) are not."""
     if not name.startswith("_") or name.startswith("__") or target == module:
         return False
     same_package = target.split(".")[0] == module.split(".")[0]

@@ -214,43 +214,6 @@ def test_branch_reports_its_quadrature_error(supercritical):
     assert quadrature_error(model, branch.points[0].state, st.p) < 1e-12
 
 
-def test_the_position_rows_leave_the_interval_lus():
-    """``dq_n/dt = r_n``: the N position rows of the 2N + 2 are taken out of every
-    interval LU by block; the condensed solves equal LAPACK's on the sparse route's
-    matrix, and a short branch equals SuperLU's (points, iterations, multipliers)."""
-    import continuation as C
-    from continuation._intervals import KinematicLU
-    from continuation._newton import factorize
-    from continuation._sparse import append_row
-    from fsicas.linear.hopf import flutter_problem
-    scene = fsicas.Scene(mstar=1.0, modes=6)             # 14 states: 56-row intervals
-    model = build_model(scene)
-    hopf = critical_velocity(scene, model)
-    eq = flutter_problem(scene, model, hopf.ustar / 2)
-    make = lambda solver: C.cycle_from_hopf(eq, hopf.point, dp=1e-3, settings=(
-        C.CollocationSettings(ntst=8, ncol=4, linear_solver=solver)))
-    prob = make("condensed")
-    rng = np.random.default_rng(4)
-    X = prob.X0 * (1 + 1e-3 * rng.standard_normal(prob.X0.size))
-    tau = rng.standard_normal(X.size)
-    A = prob.bordered_jacobian(X, tau)
-    lu = factorize(A)
-    assert A.J.kinematic.positions.tolist() == [6, 7, 8, 9, 10, 11]
-    assert A.J.kinematic.velocities.tolist() == [0, 1, 2, 3, 4, 5]
-    assert isinstance(A.J.intervals, KinematicLU)
-    dense = append_row(C.CycleProblem.jacobian(prob, X), tau).toarray()
-    b = rng.standard_normal((X.size, 2))
-    assert np.max(np.abs(lu.solve(b) - np.linalg.solve(dense, b))) < \
-        1e-10 * np.max(np.abs(np.linalg.solve(dense, b)))
-    settings = C.ContinuationSettings(ds=0.05, ds_max=0.1, max_steps=4)
-    a, c = (C.continuation(make(s), settings=settings) for s in ("sparse", "condensed"))
-    assert len(a) == len(c) == 5 and np.array_equal(a.iterations, c.iterations)
-    assert np.max(np.abs(a.x - c.x)) < 1e-10 * np.max(np.abs(a.x))
-    for mu_a, mu_c in zip(a.eigenvalues, c.eigenvalues):   # conjugates in either order
-        distance = np.abs(mu_a[:, None] - mu_c[None, :])
-        assert max(distance.min(axis=0).max(), distance.min(axis=1).max()) < 1e-9
-
-
 @pytest.mark.parametrize("mstar", [0.7, 0.75])
 def test_branch_starts_where_l1_is_near_zero(mstar):
     """N = 10, zeta = 0.01: l1 = 0.023 at M* = 0.7, where the normal form's start guess

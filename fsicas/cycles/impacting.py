@@ -15,7 +15,7 @@ all segments integrated in one mapped call with CVODES forward sensitivities in 
 n + 2 directions (x_i, T, Π) only, over ``ImpactSettings.threads`` threads, and kept
 for the last point, so the Floquet multipliers reuse the tangent's Jacobian. By default
 (``sensitivities="fast"``) the sensitivity equations are formed from the model's own
-Jacobians (``continuation._shooting.rate_function``); ``"exact"`` lets CasADi
+Jacobians (``continuation._cycles.shooting.rate_function``); ``"exact"`` lets CasADi
 differentiate ``M^{-1} F`` in all n + 2 directions and in its Newton matrix, 15x slower
 at N = 10. Both routes integrate the same residual; their Jacobians and multipliers
 differ by integration error only: against a reference at tolerance 1e-13, at N = 10

@@ -127,6 +127,83 @@ def models():
         benchmark=benchmark, half_twisted=half_twisted)
 
 
+def brusselator_cycles():
+    """A cycle problem of the Brusselator from its Hopf point (NTST = 20, NCOL = 4) and a
+    PALC iterator on it (4 steps)."""
+    eq = C.EquilibriumProblem(brusselator(), [1, 2.5], {"A": 1.0, "B": 2.5}, "B")
+    (hopf,) = C.continuation(eq, settings=C.ContinuationSettings(
+        ds=0.05, bounds={"B": (1.5, 2.5)}, direction=-1)).special("hopf")
+    cyc = C.cycle_from_hopf(eq, hopf, dp=1e-2, settings=C.CollocationSettings(ntst=20, ncol=4))
+    it = C.ContinuationIterator(cyc, C.PALC(), C.ContinuationSettings(
+        ds=0.1, max_steps=4, direction=cyc.hopf_direction))
+    return cyc, it
+
+
+def ring(theta_gain=0.0, radial=1.0):
+    """r' = radial r (1 - r^2), theta' = 1 + e cos(theta) (e = p[0]).
+
+    Cycle r = 1 with period 2 pi / sqrt(1 - e^2), non-trivial multiplier
+    exp(-2 radial T); the speed along the cycle is non-uniform for e != 0.
+    """
+    x, p = ca.SX.sym("x", 2), ca.SX.sym("p", 1)
+    r2 = x[0] ** 2 + x[1] ** 2
+    th = 1 + p[0] * x[0] / ca.sqrt(r2)
+    g = radial * (1 - r2)
+    return ca.Function("F", [x, p], [ca.vertcat(g * x[0] - x[1] * th, g * x[1] + x[0] * th)])
+
+
+def circle(t):
+    """The unit circle at phases ``t`` in [0, 1)."""
+    return np.c_[np.cos(2 * np.pi * t), np.sin(2 * np.pi * t)]
+
+
+def cycle_from_circle(F, e, ntst, ncol, period, M=None, floquet="auto"):
+    """The corrected cycle of ``F`` (parameter ``e``) from the unit circle: ``(problem, X)``."""
+    prob = C.CycleProblem(F, circle, period, {"e": e}, "e", M=M,
+                          settings=C.CollocationSettings(ntst=ntst, ncol=ncol, floquet=floquet))
+    step = C.ContinuationIterator(prob, C.PALC(), C.ContinuationSettings()).start()
+    assert step is not None
+    return prob, step.X
+
+
+def window_oscillator(eps: float):
+    """u' = a u - v - u r^2, v' = u + a v - v r^2 with a = eps - (mu - 1)^2: the origin is
+    unstable only for |mu - 1| < sqrt(eps) (Hopf points at 1 -+ sqrt(eps), omega = 1)."""
+    x, p = ca.SX.sym("x", 2), ca.SX.sym("p", 1)
+    a = eps - (p[0] - 1) ** 2
+    r2 = x[0] ** 2 + x[1] ** 2
+    return ca.Function("F", [x, p], [ca.vertcat(a * x[0] - x[1] - x[0] * r2,
+                                                x[0] + a * x[1] - x[1] * r2)])
+
+
+def galerkin(n=6, K=9, seed=0):
+    """``F = A(p) x + P g(z)``, ``z = (L1 x, L2 x)``, ``g`` nodal in two variables, and a
+    state-dependent mass ``M = I + P_m diag(1 + 0.1 z1^2) L1``; returns the pieces, and
+    ``by_ad``: the lifted ``dF/dx`` and ``M`` each beside AD of the field."""
+    rng = np.random.default_rng(seed)
+    L = rng.normal(size=(2 * K, n)) * (rng.random((2 * K, n)) < 0.7)   # some exact zeros
+    P = rng.normal(size=(n, 2 * K)) / K
+    Pm = rng.normal(size=(n, K)) / K
+    x, p, v = ca.MX.sym("x", n), ca.MX.sym("p", 2), ca.MX.sym("v", n)
+    z = ca.MX.sym("z", 2 * K)
+    z1, z2 = z[:K], z[K:]
+    g = ca.vertcat(p[0] * ca.sin(z1) * z2, z1 ** 2 - p[1] * ca.tanh(z2))
+    lift = lambda e: ca.substitute(e, z, ca.mtimes(ca.DM(L), x))
+    A = ca.diag(-1 - p[1] * ca.DM(np.arange(n)))
+    F = ca.mtimes(A, x) + ca.mtimes(ca.DM(P), lift(g))
+    m = 1 + 0.1 * z1 ** 2
+    M = ca.DM.eye(n) + ca.mtimes(ca.DM(Pm), ca.mtimes(ca.diag(lift(m)), ca.DM(L[:K])))
+    jac = C.Lifted(ca.Function("D", [x, p], [lift(ca.jacobian(g, z))]), P, L,
+                   ca.Function("A", [p], [A]))
+    mass = C.Lifted(ca.Function("Dm", [x, p], [lift(ca.diag(m))]), Pm, L[:K],
+                    ca.Function("I", [p], [ca.DM.eye(n)]))
+    Mv = ca.mtimes(M, v)
+    mvx = ca.jacobian(Mv, x)
+    by_ad = ((jac, ca.Function("J", [x, p], [ca.jacobian(F, x)])),
+             (mass, ca.Function("M", [x, p], [M])))
+    return dict(x=x, p=p, v=v, F=F, M=M, Mv=Mv, jac=jac, mass=mass, mvx=mvx, n=n, by_ad=by_ad)
+
+
 def van_der_pol_ring(n=6):
     """``n / 2`` Van der Pol oscillators ``u' = v``, ``v' = mu (1 - u^2) v - u + k (mean -
     u)`` coupled all-to-all (dense interval blocks, no band), ``p = (mu, k)``."""

@@ -136,18 +136,29 @@ def test_hopf_curve_with_state_dependent_mass(models):
 
 
 def test_sparse_and_dense_eigenvalues_agree():
-    """Shift-invert Arnoldi and dense QZ on a 1-D reaction-diffusion Jacobian."""
+    """Shift-invert Arnoldi and dense QZ on a 1-D reaction-diffusion Jacobian (the
+    linear field ``M x' = J x``) against SciPy's dense QZ."""
+    import scipy.linalg
     import scipy.sparse as sp
-    from continuation._eigen import eigenvalues
     n = 120
     rng = np.random.default_rng(5)
     lap = sp.diags([1.0, -2.0, 1.0], [-1, 0, 1], shape=(n, n)) * 50.0
     J = sp.csc_matrix(lap + sp.diags(rng.uniform(-1, 1, n)) + sp.diags([0.7], [1], (n, n))
                       - sp.diags([0.7], [-1], (n, n)))
     M = sp.csc_matrix(sp.diags(1 + rng.uniform(0, 1, n)))
-    dense = eigenvalues(J, M, C.EigenSettings(dense_max=1000))
-    sparse = eigenvalues(J, M, C.EigenSettings(dense_max=10, nev=6, sigma=0.0))
-    nearest = dense[np.argsort(np.abs(dense))[:6]]
+    x, p = ca.SX.sym("x", n), ca.SX.sym("p")
+    prob = C.EquilibriumProblem(ca.Function("F", [x, p], [ca.mtimes(ca.DM(J.toarray()), x)]),
+                                np.zeros(n), {"p": 0.0}, "p",
+                                M=ca.Function("M", [x, p], [ca.DM(M.toarray())]))
+
+    def eigenvalues(eigen):
+        return prob.eigenvalues(prob.X0, C.ContinuationSettings(eigen=eigen))
+
+    dense = eigenvalues(C.EigenSettings(dense_max=1000))
+    sparse = eigenvalues(C.EigenSettings(dense_max=10, nev=6, sigma=0.0))
+    reference = scipy.linalg.eigvals(J.toarray(), M.toarray())
+    assert np.allclose(np.sort_complex(dense), np.sort_complex(reference), atol=1e-10)
+    nearest = reference[np.argsort(np.abs(reference))[:6]]
     assert np.allclose(np.sort_complex(nearest), np.sort_complex(sparse), atol=1e-10)
 
 

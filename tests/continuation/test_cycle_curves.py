@@ -6,7 +6,6 @@ import numpy as np
 import pytest
 
 import continuation as C
-from continuation._floquet import section_multipliers
 
 SETTINGS = C.CollocationSettings(ntst=20, ncol=4)
 
@@ -151,8 +150,6 @@ def test_section_multiplier_of_a_fold_is_not_split_from_the_trivial_one():
     for problem, Z in ((fine, X), (shooting, Y)):
         (nu,) = problem.section_multipliers(Z)
         assert abs(nu / exact - 1) < 1e-7
-    with pytest.raises(ValueError, match="flow direction"):
-        section_multipliers(np.eye(2), np.zeros(2))           # at an equilibrium
 
 
 def test_period_doubling_located_and_continued_on_mu_equal_nu_squared(models):

@@ -104,21 +104,6 @@ def test_van_der_pol_large_mu_matches_dorodnitsyn_asymptotics(models):
     assert np.all((c > -1.75) & (c < -1.40)) and np.all(np.diff(c) > 0)
 
 
-def test_lagrange_basis_reproduces_polynomials_and_their_derivatives():
-    """Σ_l p(x_l) L_l(s) = p(s) and Σ_l p(x_l) L_l'(s) = p'(s) for every polynomial of
-    degree <= NCOL on the NCOL + 1 equispaced nodes (NCOL = 1..7), to rounding."""
-    from continuation._collocation import lagrange
-    rng = np.random.default_rng(3)
-    s = rng.random(40)
-    for ncol in range(1, 8):
-        nodes = np.linspace(0.0, 1.0, ncol + 1)
-        p = np.polynomial.Polynomial(rng.standard_normal(ncol + 1))
-        V, dV = lagrange(nodes, s)
-        assert np.max(np.abs(V @ p(nodes) - p(s))) < 1e-13 * np.max(np.abs(p(s)))
-        assert np.max(np.abs(dV @ p(nodes) - p.deriv()(s))) < 1e-12 * np.max(np.abs(p.deriv()(s)))
-        assert np.allclose(lagrange(nodes, nodes)[0], np.eye(ncol + 1), atol=1e-15)
-
-
 class _CorrectedRestarts(C.CycleProblem):
     """The same problem, restarted the other way: each re-meshed cycle corrected on its
     new mesh with a fresh tangent before the branch goes on (no carried tangent)."""
@@ -156,31 +141,3 @@ def test_continuous_remesh_restarts_stay_on_the_cycles_and_save_corrections(mode
     corrected = runs[_CorrectedRestarts]
     per_step = lambda b: b.stats["newton_iterations"] / b.stats["steps"]
     assert per_step(branch) < per_step(corrected)
-
-
-@pytest.mark.parametrize("ncol", [2, 4, 7])
-def test_phase_coefficients_integrate_the_phase_condition_exactly(ncol):
-    """``c . U = int_0^1 <u, v'> dt`` for the piecewise polynomials through the node values
-    ``U`` and ``V`` on a non-uniform mesh; independent route: on each interval the
-    interpolating polynomials in the local time (Chebyshev series through the
-    ``NCOL + 1`` equispaced nodes) and their product integrated exactly, where the
-    code uses Gauss quadrature (exact for this degree)."""
-    from continuation._collocation import phase_coefficients
-    rng = np.random.default_rng(ncol)
-    n, ntst = 3, 7
-    mesh = np.concatenate([[0.0], np.sort(rng.random(ntst - 1)), [1.0]])
-    U, V = rng.standard_normal((2, ntst * ncol * n))
-    nodes = np.linspace(0.0, 1.0, ncol + 1)
-
-    def pieces(W):
-        w = np.vstack([W.reshape(-1, n), W[:n]])        # node NCOL of the last: node 0
-        return [[np.polynomial.Chebyshev.fit(nodes, w[i * ncol:(i + 1) * ncol + 1, j], ncol,
-                                             domain=[0, 1])
-                 for j in range(n)] for i in range(ntst)]
-    exact = 0.0
-    for pu, pv in zip(pieces(U), pieces(V)):            # dt = h ds, v'(t) = p_v'(s) / h
-        for a, b in zip(pu, pv):
-            integral = (a * b.deriv()).integ()
-            exact += integral(1.0) - integral(0.0)
-    c = phase_coefficients(V, n, ntst, ncol)
-    assert abs(c @ U - exact) < 1e-12 * max(1.0, abs(exact))

@@ -15,7 +15,6 @@ from scipy.integrate import solve_ivp
 from scipy.optimize import brentq
 
 import continuation as C
-from continuation._floquet import nearest_real
 
 A = B = 0.2
 C_START = 2.5
@@ -52,7 +51,9 @@ def _shooting_pd_test(F, guess, period, c):
                            settings=C.ShootingSettings(segments=4))
     step = C.ContinuationIterator(sh, C.PALC(), C.ContinuationSettings()).start()
     assert step is not None
-    return nearest_real(sh.multipliers(step.X), -1.0) + 1.0
+    mu = sh.multipliers(step.X)
+    real = mu[mu.imag == 0].real
+    return real[np.argmin(np.abs(real + 1.0))] + 1.0
 
 
 def test_rossler_first_period_doubling_by_collocation_and_by_shooting():

@@ -8,6 +8,8 @@ import pytest
 
 import continuation as C
 
+from .conftest import window_oscillator
+
 
 
 def settings(**kw):
@@ -271,35 +273,26 @@ def test_brusselator_lyapunov_against_guckenheimer_holmes(models, A):
     normal coordinates y (x = x* + T y, T = [Re q, -Im q], |q| = 1) and apply the
     Guckenheimer-Holmes formula. There q_y = (1, -i)/sqrt(2) maps to q/sqrt(2), so the
     library's |q| = 1 value is l1 = 2 * (2 a / omega) = 4 a / omega."""
-    from continuation._lyapunov import hopf_eigenvectors
+    import scipy.linalg
     F = models.brusselator()
     br = C.continuation(C.EquilibriumProblem(F, [A, 1 / A], {"A": A, "B": 1.0}, "B"),
                         settings=settings(bounds={"B": (0, 1 + A**2 + 1)}))
     (h,) = br.special("hopf")
     ps = np.array([A, h.params["B"]])
     vf = C.VectorField(F, None, ("A", "B"))
-    q, _ = hopf_eigenvectors(vf.jac_x(h.x, ps).astype(complex),
-                             vf.mass(h.x, ps).astype(complex), h.data["omega"])
+    lam, V = scipy.linalg.eig(vf.jac_x(h.x, ps).toarray(), vf.mass(h.x, ps).toarray())
+    q = V[:, np.argmin(np.abs(lam - 1j * h.data["omega"]))]
+    q = q / np.linalg.norm(q)
     a = _gh_coefficient_in_normal_coordinates(F, h.x, ps, h.data["omega"], q)
     assert h.data["l1"] == pytest.approx(4 * a / h.data["omega"], rel=1e-9)
     assert h.data["l1"] < 0  # the Brusselator Hopf bifurcation is supercritical
-
-
-def _window_oscillator(eps: float):
-    """u' = a u - v - u r^2, v' = u + a v - v r^2 with a = eps - (mu - 1)^2: the origin is
-    unstable only for |mu - 1| < sqrt(eps) (Hopf points at 1 -+ sqrt(eps), omega = 1)."""
-    x, p = ca.SX.sym("x", 2), ca.SX.sym("p", 1)
-    a = eps - (p[0] - 1) ** 2
-    r2 = x[0] ** 2 + x[1] ** 2
-    return ca.Function("F", [x, p], [ca.vertcat(a * x[0] - x[1] - x[0] * r2,
-                                                x[0] + a * x[1] - x[1] * r2)])
 
 
 def test_narrow_unstable_window_is_resolved_by_the_eigenvalue_step_limit():
     """A window of width 0.02 inside steps of 0.3: without the limit both ends of the
     step are stable and the window is missed; with it (the default) both Hopf points
     are found at their known values."""
-    F = _window_oscillator(1e-4)
+    F = window_oscillator(1e-4)
     run = lambda **kw: C.continuation(C.EquilibriumProblem(F, [0.0, 0.0], {"mu": 0.0}, "mu"),
                                       settings=settings(ds=0.3, ds_max=0.3, max_steps=40,
                                                         bounds={"mu": (0.0, 2.0)}, **kw))
@@ -342,31 +335,6 @@ def test_eigenvalue_step_limit_costs_few_steps_on_a_plain_crossing():
 def test_eigen_step_setting_is_validated():
     with pytest.raises(ValueError, match="eigen_step"):
         C.ContinuationSettings(eigen_step=1.5)
-
-
-def test_eigenvalue_step_limit_leaves_cycle_branches_alone(monkeypatch):
-    """A cycle problem's monitor reports Floquet multipliers, not eigenvalues: the limit
-    is never consulted for it (Problem.steps_by_eigenvalues), while an equilibrium
-    branch consults it at every point after the first."""
-    from continuation import _eigen
-    calls = []
-    real = _eigen.step_limit
-    monkeypatch.setattr(_eigen, "step_limit", lambda *a: calls.append(1) or real(*a))
-    x, p = ca.SX.sym("x", 4), ca.SX.sym("p", 1)
-    a = 0.5 * p[0]            # a damped oscillator beside Van der Pol: complex multipliers
-    F = ca.Function("F", [x, p], [ca.vertcat(x[1], p[0] * (1 - x[0] ** 2) * x[1] - x[0],
-                                             -a * x[2] - 1.3 * x[3], 1.3 * x[2] - a * x[3])])
-    orbit = lambda t: np.c_[2 * np.cos(2 * np.pi * np.atleast_1d(t)),
-                            -2 * np.sin(2 * np.pi * np.atleast_1d(t)),
-                            np.zeros((np.size(t), 2))]
-    cycles = C.continuation(
-        C.CycleProblem(F, orbit, 6.6, {"mu": 1.0}, "mu", settings=C.CollocationSettings(ntst=20)),
-        settings=settings(ds=0.2, ds_max=0.5, max_steps=6))
-    assert len(cycles.s) == 7 and calls == []
-    equilibria = C.continuation(C.EquilibriumProblem(_window_oscillator(1e-4), [0.0, 0.0],
-                                                     {"mu": 0.0}, "mu"),
-                                settings=settings(ds=0.3, ds_max=0.3, max_steps=5))
-    assert len(calls) == len(equilibria.s) - 1
 
 
 def test_max_turn_bounds_the_angle_between_successive_tangents():

@@ -1,51 +1,23 @@
-"""Lifted matrices ``A(p) + P D(x, p) L``: batched evaluation against AD of the field."""
+"""Lifted matrices ``A(p) + P D(x, p) L``: their functions and the collocation Jacobians of
+a field that has them against AD of the plain field (their batched evaluation:
+``test_internals_compiled``)."""
 
 import casadi as ca
 import numpy as np
 import pytest
 
 import continuation as C
-from continuation._blocks import BlockCollocationSystem, point_kernel
-from continuation._lifted import LiftedBatch
+
+from .conftest import galerkin
 
 
-def galerkin(n=6, K=9, seed=0):
-    """``F = A(p) x + P g(z)``, ``z = (L1 x, L2 x)``, ``g`` nodal in two variables, and a
-    state-dependent mass ``M = I + P_m diag(1 + 0.1 z1^2) L1``; returns the pieces."""
-    rng = np.random.default_rng(seed)
-    L = rng.normal(size=(2 * K, n)) * (rng.random((2 * K, n)) < 0.7)   # some exact zeros
-    P = rng.normal(size=(n, 2 * K)) / K
-    Pm = rng.normal(size=(n, K)) / K
-    x, p, v = ca.MX.sym("x", n), ca.MX.sym("p", 2), ca.MX.sym("v", n)
-    z = ca.MX.sym("z", 2 * K)
-    z1, z2 = z[:K], z[K:]
-    g = ca.vertcat(p[0] * ca.sin(z1) * z2, z1 ** 2 - p[1] * ca.tanh(z2))
-    lift = lambda e: ca.substitute(e, z, ca.mtimes(ca.DM(L), x))
-    A = ca.diag(-1 - p[1] * ca.DM(np.arange(n)))
-    F = ca.mtimes(A, x) + ca.mtimes(ca.DM(P), lift(g))
-    m = 1 + 0.1 * z1 ** 2
-    M = ca.DM.eye(n) + ca.mtimes(ca.DM(Pm), ca.mtimes(ca.diag(lift(m)), ca.DM(L[:K])))
-    jac = C.Lifted(ca.Function("D", [x, p], [lift(ca.jacobian(g, z))]), P, L,
-                   ca.Function("A", [p], [A]))
-    mass = C.Lifted(ca.Function("Dm", [x, p], [lift(ca.diag(m))]), Pm, L[:K],
-                    ca.Function("I", [p], [ca.DM.eye(n)]))
-    Mv = ca.mtimes(M, v)
-    mvx = ca.jacobian(Mv, x)
-    return dict(x=x, p=p, v=v, F=F, M=M, Mv=Mv, jac=jac, mass=mass, mvx=mvx, n=n)
-
-
-def test_batch_equals_ad_of_the_field_at_every_point():
+def test_lifted_function_equals_ad_of_the_field():
     s = galerkin()
-    K, n = 7, s["n"]
-    rng = np.random.default_rng(1)
-    X, p = rng.normal(size=(K, n)), np.array([0.7, 0.4])
-    J_ad = ca.Function("J", [s["x"], s["p"]], [ca.jacobian(s["F"], s["x"])])
-    M_ad = ca.Function("M", [s["x"], s["p"]], [s["M"]])
-    for lifted, ref in ((s["jac"], J_ad), (s["mass"], M_ad)):
-        batch = LiftedBatch(lifted, K)(X, p)
+    K = 7
+    X, p = np.random.default_rng(1).normal(size=(K, s["n"])), np.array([0.7, 0.4])
+    for lifted, ref in s["by_ad"]:
         for k in range(K):
             exact = np.array(ref(X[k], p))
-            assert np.max(np.abs(batch[k] - exact)) < 1e-13 * np.max(np.abs(exact))
             assert np.max(np.abs(np.array(lifted.function()(X[k], p)) - exact)) \
                 < 1e-13 * np.max(np.abs(exact))
 
@@ -65,16 +37,16 @@ def test_a_vector_field_with_lifted_matrices_gives_the_plain_collocation_jacobia
     assert set(lifted.lifted) == {"M", "Fx", "Mvx"}
     ntst, ncol = 4, 3
     rng = np.random.default_rng(3)
-    Y = rng.normal(size=s["n"] * ntst * ncol + 1)
-    D = np.concatenate([np.full(ntst, 1 / ntst), rng.normal(size=s["n"] * ntst * ncol)])
-    P = np.array([0.7, 0.4])
-    systems = [BlockCollocationSystem(point_kernel(vf, ntst * ncol), ntst, ncol)
-               for vf in (plain, lifted)]
-    J = [system.jacobian(Y, P, D, [1]) for system in systems]
+    X = np.concatenate([rng.normal(size=s["n"] * ntst * ncol + 1), [0.4]])
+    orbit = rng.normal(size=(8, s["n"]))
+    problems = [C.CycleProblem(vf, orbit, 6.0, {"a": 0.7, "b": 0.4}, "b",
+                               settings=C.CollocationSettings(ntst=ntst, ncol=ncol, backend="mx"))
+                for vf in (plain, lifted)]
+    J = [problem.jacobian(X) for problem in problems]
     assert abs(J[0] - J[1]).max() < 1e-13 * abs(J[0]).max()
     # the dense interval blocks of the condensed solver (lifted matrices taken dense)
-    for system in systems:
-        blocks = system.interval_jacobian(Y, P, D, [1]).toarray()
+    for problem in problems:
+        blocks = problem.interval_jacobian(X).toarray()
         assert np.max(np.abs(blocks - J[0].toarray())) < 1e-13 * abs(J[0]).max()
 
 

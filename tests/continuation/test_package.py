@@ -36,7 +36,7 @@ def test_new_problem_kind_plugs_into_palc():
     here the circle x^2 + p^2 = r^2 as 'G(Y, p) = 0' with a custom residual."""
     import casadi as ca
     import numpy as np
-    from continuation._symbolic import CompiledSystem
+    from continuation._casadi.symbolic import CompiledSystem   # not public: a new kind's builder
 
     class Circle(C.Problem):
         kind = "circle-test"

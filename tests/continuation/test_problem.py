@@ -5,7 +5,6 @@ import numpy as np
 import pytest
 
 import continuation as C
-from continuation._systems import bound
 
 
 def fd_jacobian(fun, X, h=1e-6):
@@ -32,12 +31,14 @@ def test_mass_and_hopf_system_jacobians(models):
     x, p = rng.standard_normal(2), np.array([0.3])
     assert np.max(np.abs(vf.jac_x(x, p).toarray() -
                          fd_jacobian(lambda y: vf.rhs(y, p), x))) < 1e-8
-    hopf = bound(vf, "hopf", p, rng.standard_normal(2), ("p",))
-    X = rng.standard_normal(hopf.n_unknowns)
-    assert hopf.n_unknowns == 3 * 2 + 2
-    exact = hopf.jacobian(X).toarray()
-    assert exact.shape == (8, 8)
-    assert np.max(np.abs(exact - fd_jacobian(hopf.residual, X))) < 1e-7
+    # the Hopf system, as a Hopf curve in (p, q) from its point p = 1/2, omega = 1/2 at q = 1
+    curve = C.HopfCurveProblem(C.VectorField(*models.mass_model(with_q=True), ("p", "q")),
+                               [1.0, 1.0], {"p": 0.5, "q": 1.0}, 0.5, ("p", "q"))
+    X = curve.X0 + 0.1 * rng.standard_normal(curve.X0.size)
+    assert X.size == 3 * 2 + 1 + 2
+    exact = curve.jacobian(X).toarray()
+    assert exact.shape == (8, 9)
+    assert np.max(np.abs(exact - fd_jacobian(curve.residual, X))) < 1e-7
     # mass matrix evaluated exactly
     assert np.allclose(vf.mass(x, p).toarray(),
                        [[1 + x[0] ** 2, x[1]], [0, 1 + x[1] ** 2]], atol=1e-15)
@@ -136,51 +137,17 @@ def test_non_expandable_mx_function():
     assert np.allclose(br.x, np.column_stack([a, a]), atol=1e-12)
 
 
-def test_permutation_parity_matches_determinant():
-    from itertools import permutations
-    from continuation._problem import _parity
-    for n in range(1, 6):
-        for perm in permutations(range(n)):
-            assert _parity(perm) == round(np.linalg.det(np.eye(n)[list(perm)]))
-
-
-def test_round_off_floor_handled_by_step_criterion():
-    """A residual with a noise floor 1e-6 >> tol and a stiff Jacobian 1e12: the
-    updates reach round-off level, which the xtol criterion accepts (and reports
-    the true residual); with xtol = 0 the solve fails with its residual."""
-    import scipy.sparse as sp
-    from continuation._newton import newton
-
-    def residual(X):
-        return 1e12 * (X - 0.3) + 1e-6 * np.cos(1e20 * X)
-
-    def jacobian(X):
-        return sp.csc_matrix([[1e12]])
-
-    ok = newton(residual, jacobian, np.array([1.0]), C.NewtonSettings())
-    assert ok.converged and ok.residual > 1e-10 and "round-off" in ok.message
-    assert abs(ok.X[0] - 0.3) < 1e-15
-    bad = newton(residual, jacobian, np.array([1.0]), C.NewtonSettings(xtol=0.0))
-    assert not bad.converged and bad.residual > 1e-10
-    assert f"{bad.residual:.3e}" in bad.message
-
-
-def test_system_that_cannot_be_evaluated_is_a_failed_newton():
+def test_system_that_cannot_be_evaluated_stops_the_branch_with_a_status():
     """A residual that raises LinAlgError beyond X = 2 (as an extended system's inner
-    solve does away from its point): Newton reports a failure naming it, and a
-    continuation into that region shortens its steps up to the edge p = 1 and stops
-    there with a status instead of raising."""
-    import scipy.sparse as sp
-    from continuation._newton import newton
+    solve does away from its point): a continuation into that region shortens its steps
+    up to the edge p = 1 and stops there with a status instead of raising (Newton's own
+    report: ``test_internals_newton``)."""
 
     def residual(X):
         if X[0] > 2.0:
             raise np.linalg.LinAlgError("no root here")
         return np.array([X[0] ** 2 - 9.0])
 
-    bad = newton(residual, lambda X: sp.csc_matrix([[2 * X[0]]]), np.array([1.0]),
-                 C.NewtonSettings())
-    assert not bad.converged and "could not be evaluated: no root here" in bad.message
     F = ca.Function("F", [x := ca.SX.sym("x"), p := ca.SX.sym("p")], [x - p])
     prob = C.EquilibriumProblem(F, [0.0], {"p": 0.0}, "p")
     plain = prob.residual
@@ -189,60 +156,3 @@ def test_system_that_cannot_be_evaluated_is_a_failed_newton():
                                                                  max_steps=50))
     assert branch.status == "failed" and 0.999 < branch.par("p").max() <= 1.0
     assert "could not be evaluated" in branch.message
-
-
-def test_sparse_bordering_helpers_match_dense():
-    import scipy.sparse as sp
-    from continuation._sparse import append_columns, append_row
-    rng = np.random.default_rng(0)
-    for seed in range(20):
-        m, n = rng.integers(1, 30), rng.integers(1, 30)
-        A = sp.random(m, n, density=rng.uniform(0, 0.5), format="csc", random_state=seed)
-        row = rng.standard_normal(n)
-        cols = rng.standard_normal((m, 3))
-        cols[rng.random((m, 3)) < 0.3] = 0.0
-        assert np.array_equal(append_row(A, row).toarray(), np.vstack([A.toarray(), row]))
-        assert np.array_equal(append_columns(A, cols).toarray(), np.hstack([A.toarray(), cols]))
-
-
-def test_pattern_cache_matches_patterns_and_keys_and_keeps_the_newest():
-    """A value is found again for the same pattern (any values) and key only; a
-    pattern of equal nonzero count but other places, or another key, is a miss; the
-    oldest entry goes when more than ``kept`` are stored."""
-    import scipy.sparse as sp
-    from continuation._sparse import PatternCache
-    cache = PatternCache(kept=2)
-    A = sp.csc_matrix(np.array([[1.0, 0.0], [2.0, 3.0]]))
-    moved = sp.csc_matrix(np.array([[1.0, 4.0], [0.0, 3.0]]))
-    assert A.nnz == moved.nnz
-    assert cache.put(A, "a") == "a"
-    assert cache.get(sp.csc_matrix(A * 7.0)) == "a"
-    assert cache.get(moved) is None and cache.get(A, key=(1,)) is None
-    cache.put(A, "a1", key=(1,))
-    cache.put(moved, "m")
-    assert cache.get(moved) == "m" and cache.get(A, key=(1,)) == "a1"
-    assert cache.get(A) is None                          # the oldest of three, dropped
-
-
-def test_solves_of_many_columns_equal_dense_lapack():
-    """``LU.solve`` of many columns, on unsymmetric matrices that need row pivoting (a
-    zero diagonal), at the first factorization of a pattern and on its kept ordering,
-    equals LAPACK's dense solve and the column-by-column solve."""
-    import scipy.sparse as sp
-    from continuation._newton import factorize
-    rng = np.random.default_rng(3)
-    for seed in range(6):
-        m = int(rng.integers(5, 120))
-        A = sp.random(m, m, density=0.1, random_state=seed) + sp.eye(m, k=1) + \
-            sp.diags(rng.choice([0.0, 2.0], m))
-        A = sp.csc_matrix(A)
-        dense = A.toarray()
-        if np.linalg.cond(dense) > 1e8:
-            continue
-        B = rng.standard_normal((m, 8 + seed))
-        for lu in (factorize(A), factorize(A)):          # new pattern, kept ordering
-            x = lu.solve(B)
-            by_columns = np.column_stack([lu.solve(B[:, j]) for j in range(B.shape[1])])
-            scale = np.abs(x).max()
-            assert np.abs(x - np.linalg.solve(dense, B)).max() < 1e-11 * scale
-            assert np.abs(x - by_columns).max() < 1e-12 * scale

@@ -1,0 +1,196 @@
+"""Two-parameter continuation of Hopf and fold curves (codimension-1 curves).
+
+Both are the augmented systems of ``systems`` with two free parameters
+``free = (p_a, p_b)``; ``p_b`` is the continuation parameter of the curve.
+
+Codimension-two points are reported by sign changes:
+
+* Hopf curve ``X = (x, v, w, kappa, p_a, p_b)``:
+  Bogdanov-Takens ``'bt'``: ``kappa = omega^2`` changes sign (the curve
+  continues as a neutral-saddle curve); generalized Hopf ``'gh'``: the first
+  Lyapunov coefficient ``l1`` changes sign; double Hopf ``'hh'`` / zero-Hopf
+  ``'zh'``: the number of *other* eigenvalues (the tracked pair
+  ``+- i omega`` removed) with ``Re > 0`` and ``Im != 0`` / ``Im = 0`` changes.
+* Fold curve ``X = (x, v, p_a, p_b)``: Bogdanov-Takens ``'bt'``:
+  ``psi^T M v = 0`` with ``J v = 0``, ``J^T psi = 0`` (the zero eigenvalue of
+  ``J v = lambda M v`` becomes double); zero-Hopf ``'zh'``: the number of
+  complex eigenvalues with ``Re > 0`` changes.
+"""
+
+from __future__ import annotations
+
+from typing import Mapping
+
+import numpy as np
+import scipy.sparse as sp
+
+from . import eigen
+from .equilibrium import StationaryProblem, hopf_start, hopf_vectors, real_null_vector
+from .lyapunov import first_lyapunov
+from .systems import fold_system, hopf_system
+from .._casadi.vectorfield import VectorField, param_vector, state_vector
+from .._driver.newton import factorize
+from .._driver.problem import Description, PointInfo
+
+
+def _free_pair(vf, free):
+    free = tuple(free)
+    if len(free) != 2 or free[0] == free[1]:
+        raise ValueError(f"free must name two different parameters, got {free}")
+    for name in free:
+        vf.par_index(name)
+    return free
+
+
+class HopfCurveProblem(StationaryProblem):
+    """Curve of Hopf points in the parameters ``free = (p_a, p_b)``.
+
+    Parameters
+    ----------
+    vf : the VectorField; x, params : a Hopf point (state, ``{name: value}``);
+    omega : its frequency (``J q = i omega M q``); free : two parameter names.
+    """
+
+    kind = "hopf"
+    builder = staticmethod(hopf_system)
+
+    def __init__(self, vf: VectorField, x, params: Mapping[str, float], omega: float,
+                 free: tuple, *, q=None):
+        free = _free_pair(vf, free)
+        p, x = param_vector(vf, params), state_vector(vf, x, "x")
+        if not (np.isfinite(omega) and omega > 0):
+            raise ValueError(f"omega must be positive, got {omega!r}")
+        if q is None:
+            v, w, kappa, c = hopf_start(vf.jac_x(x, p), vf.mass(x, p), float(omega))
+        else:
+            v, w, kappa, c = hopf_vectors(np.asarray(q, dtype=complex), float(omega))
+        pf = [p[vf.par_index(f)] for f in free]
+        super().__init__(vf, free, np.concatenate([x, v, w, [kappa], pf]), p, c)
+
+    @classmethod
+    def from_point(cls, problem, point, second: str) -> "HopfCurveProblem":
+        """Hopf curve through ``point`` (a 'hopf' SpecialPoint of ``problem``)."""
+        if point.kind != "hopf" or "omega" not in point.data:
+            raise ValueError(f"point must be a located Hopf point, got kind {point.kind!r}")
+        return cls(problem.vf, point.x, point.params, point.data["omega"],
+                   (problem.free[-1], second))
+
+    def kappa(self, X) -> float:
+        return float(X[3 * self.vf.n])
+
+    def restart(self, X):
+        """Rebuild ``c`` from the current ``v, w`` when ``c`` and ``v`` are more
+        than 60 degrees apart (``|c| |v| > 2``, since ``c.v = 1``); Hopf part only."""
+        n, k = self.vf.n, self.kappa(X)
+        v, w, c = X[n: 2 * n], X[2 * n: 3 * n], self.system.D
+        if k <= 0 or np.linalg.norm(c) * np.linalg.norm(v) <= 2.0:
+            return None
+        omega = float(np.sqrt(k))
+        new = HopfCurveProblem(self.vf, self.state(X), self.par_dict(X), omega, self.free,
+                               q=v - 1j * w / omega)
+        return new, new.X0
+
+    def columns(self, X) -> dict:
+        k = self.kappa(X)
+        return {"kappa": k, "omega": float(np.sqrt(k)) if k > 0 else 0.0}
+
+    def l1(self, X) -> float:
+        """First Lyapunov coefficient at ``X`` (0.0 where undefined)."""
+        k = self.kappa(X)
+        if k <= 0:
+            return 0.0
+        try:
+            return first_lyapunov(self.vf, self.state(X), self.params(X), float(np.sqrt(k)))
+        except RuntimeError:
+            return 0.0
+
+    def monitor(self, X, tau, lu, settings) -> PointInfo:
+        base = super().monitor(X, tau, lu, settings)
+        # l1 costs more than a corrector step: only when special points are detected
+        l1 = self.l1(X) if settings.detect else 0.0
+        tests = {"bt": self.kappa(X), "gh": l1, **base.tests}
+        counts = {}
+        if settings.compute_eigenvalues:
+            others = _remove_tracked(base.eigenvalues, self.kappa(X))
+            tol = settings.eigen.imag_tol
+            counts["hh"] = int(np.sum((others.real > 0) & (np.abs(others.imag) > tol)))
+            counts["zh"] = int(np.sum((others.real > 0) & (np.abs(others.imag) <= tol)))
+        return PointInfo(base.eigenvalues, tests, counts)
+
+    def test_function(self, kind, X_a, info_a, X_b, info_b, settings):
+        if kind == "bt":
+            return lambda X, tau, lu: self.kappa(X)
+        if kind == "gh":
+            return lambda X, tau, lu: self.l1(X)
+        return super().test_function(kind, X_a, info_a, X_b, info_b, settings)
+
+    def describe(self, kind, X, tau, settings) -> Description:
+        return Description(X, "converged", 0.0, {**self.columns(X), "l1": self.l1(X)})
+
+
+def _remove_tracked(ev: np.ndarray, kappa: float) -> np.ndarray:
+    """Eigenvalues without the two nearest to ``+- sqrt(-kappa)``."""
+    root = np.sqrt(complex(-kappa))
+    keep = np.ones(ev.size, dtype=bool)
+    for target in (root, -root):
+        idx = np.where(keep)[0]
+        if idx.size:
+            keep[idx[np.argmin(np.abs(ev[idx] - target))]] = False
+    return ev[keep]
+
+
+class FoldCurveProblem(StationaryProblem):
+    """Curve of fold (limit) points in the parameters ``free = (p_a, p_b)``."""
+
+    kind = "fold"
+    builder = staticmethod(fold_system)
+
+    def __init__(self, vf: VectorField, x, params: Mapping[str, float], free: tuple,
+                 *, v=None):
+        free = _free_pair(vf, free)
+        p, x = param_vector(vf, params), state_vector(vf, x, "x")
+        v = real_null_vector(vf.jac_x(x, p)) if v is None else np.asarray(v) / np.linalg.norm(v)
+        pf = [p[vf.par_index(f)] for f in free]
+        super().__init__(vf, free, np.concatenate([x, v, pf]), p, v)
+        self._d = np.random.default_rng(7).standard_normal(vf.n)
+
+    @classmethod
+    def from_point(cls, problem, point, second: str) -> "FoldCurveProblem":
+        """Fold curve through ``point`` (a 'fold' SpecialPoint of ``problem``)."""
+        if point.kind != "fold":
+            raise ValueError(f"point must be a fold point, got kind {point.kind!r}")
+        return cls(problem.vf, point.x, point.params, (problem.free[-1], second))
+
+    def restart(self, X):
+        """Rebuild ``c = v/|v|`` when ``|c| |v| > 2`` (c and v > 60 degrees apart)."""
+        n = self.vf.n
+        v, c = X[n: 2 * n], self.system.D
+        if np.linalg.norm(c) * np.linalg.norm(v) <= 2.0:
+            return None
+        new = FoldCurveProblem(self.vf, self.state(X), self.par_dict(X), self.free, v=v)
+        return new, new.X0
+
+    def bt_test(self, X) -> float:
+        """``psi^T M v / (|psi| |v|)`` from ``[[J^T, v], [d^T, 0]] (psi, g) = e``."""
+        n = self.vf.n
+        J, M = self.matrices(X)
+        v = X[n: 2 * n]
+        A = sp.bmat([[J.T, v[:, None]], [self._d[None, :], None]], format="csc")
+        lu = factorize(A)
+        if lu is None:
+            return 0.0
+        psi = lu.solve(np.append(np.zeros(n), 1.0))[:n]
+        return float(psi @ (M @ v) / (np.linalg.norm(psi) * np.linalg.norm(v)))
+
+    def monitor(self, X, tau, lu, settings) -> PointInfo:
+        base = super().monitor(X, tau, lu, settings)
+        counts = {}
+        if settings.compute_eigenvalues:
+            counts["zh"] = eigen.count_complex_unstable(base.eigenvalues,
+                                                         settings.eigen.imag_tol)
+        return PointInfo(base.eigenvalues, {"bt": self.bt_test(X), **base.tests}, counts)
+
+    def test_function(self, kind, X_a, info_a, X_b, info_b, settings):
+        if kind == "bt":
+            return lambda X, tau, lu: self.bt_test(X)
+        return super().test_function(kind, X_a, info_a, X_b, info_b, settings)
