@@ -164,7 +164,7 @@ def test_a_closed_pipe_and_ctrl_c_end_the_command_quietly(tmp_path):
     run.send_signal(signal.SIGINT)
     out, rest = run.communicate(timeout=300)        # 1.3 s on an idle machine
     err = first + rest
-    assert run.returncode == 130 and "Traceback" not in err
+    assert run.returncode == 130 and "Traceback" not in err, (out, err)
     assert err.strip().splitlines()[-1].startswith("fsicas: interrupted")
 
 

@@ -120,8 +120,8 @@ def test_cli_writes_the_wav_and_json(capsys, tmp_path):
         assert key in out
     assert out["distance_m"] == 0.3 and len(out["harmonics_pa"]) == 10
     # the breath's quadrature is controlled to a contact run's bound: 28 nodes are 3.7e-3
-    # off, the breath is run again on 56
-    assert out["quadrature_tol"] == IMPACT_QUADRATURE_TOL and out["quadrature_nodes"] == 56
+    # off, the breath is run again on more (56 or 112: the estimate at 56 is near the bound)
+    assert out["quadrature_tol"] == IMPACT_QUADRATURE_TOL and out["quadrature_nodes"] in (56, 112)
     assert out["quadrature_error"] <= IMPACT_QUADRATURE_TOL and out["status"] == "success"
     assert not out.get("warnings")
     assert out["meta"]["units"]["spl_db"].startswith("dB SPL")
