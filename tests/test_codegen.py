@@ -48,8 +48,9 @@ def assert_same(plain, compiled, x, p):
 
 
 @pytest.mark.parametrize("symbolic", ["SX", "MX"])
-@pytest.mark.parametrize("make_scene", [lambda: Scene(modes=4), rough_scene],
-                         ids=["straight", "asymmetric-contact"])
+@pytest.mark.parametrize("make_scene", [lambda: Scene(modes=4), lambda: rough_scene(quad_nodes=12)],
+                         ids=["straight", "asymmetric-contact"])   # 12 nodes: 36 cells of the
+                                                                   # impact rule, not 84 (gcc's time)
 def test_compiled_model_agrees_with_casadi(tmp_path, make_scene, symbolic):
     scene = make_scene()
     model = build_model(scene, symbolic)

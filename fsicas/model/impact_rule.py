@@ -64,10 +64,14 @@ class ImpactRule:
 
     def nodal_jacobian(self, g, ramp):
         """``dW/dg`` of :meth:`nodal` for symbolic ``g``: by AD for the pointwise rule
-        (diagonal) and on SX; for the cell rule on MX the rule's own derivative
-        (:func:`_cell_rule`)."""
+        (diagonal); for the cell rule its closed form (:func:`_cell_rule`; on MX that
+        call's own Jacobian, with its skip)."""
         if self.weights is None and isinstance(g, ca.MX):
             return _cell_rule(self.cells).jacobian()(g, 0)
+        if self.weights is None:
+            ends, mids, _ = _scatter(self.cells)
+            return _cell_jacobian(*(ca.mtimes(ca.DM(m), g) for m in (ends[0], mids, ends[1])),
+                                  self.cells)
         s = type(g).sym("g", g.shape)
         return ca.substitute(ca.jacobian(self.nodal(s, ramp), s), s, g)
 
@@ -123,20 +127,29 @@ def _cell_rule(cells: int) -> ca.Function:
     ends, mids, scatter = _scatter(cells)
     picks = [ca.DM(m) for m in (ends[0], mids, ends[1])]
     gl, g0, gr = (ca.mtimes(pick, g) for pick in picks)
-    load = sum(ca.mtimes(ca.DM(s), w)
-               for s, w in zip(scatter, _cell_weights(gl, g0, gr, ca, ca.if_else)))
-    mass = _cell_mass(gl, g0, gr, ca, ca.if_else)
-    jac = sum(ca.mtimes(ca.DM(scatter[j]), ca.mtimes(ca.diag(mass[min(j, k), max(j, k)]),
-                                                     picks[k]))
-              for j in range(3) for k in range(3))
+    load = sum(ca.mtimes(ca.DM(s), w) for s, w in zip(
+        scatter, _cell_weights(gl, g0, gr, ca, ca.if_else))) / (2 * cells)
+    jac = _cell_jacobian(gl, g0, gr, cells)
     # p exceeds its largest node by at most |c2|/4: where no cell reaches 0, W is 0 and so
     # is its Jacobian, and the switch skips the cells (most calls of a run)
     touch = ca.mmax(ca.fmax(ca.fmax(gl, g0), gr) + ca.fabs((gl + gr) / 2 - g0) / 4) > 0
-    skip = lambda e: ca.if_else(touch, e / (2 * cells), ca.DM.zeros(e.sparsity()), True)
+    skip = lambda e: ca.if_else(touch, e, ca.DM.zeros(e.sparsity()), True)
     out = ca.MX.sym("out", 2 * cells + 1)
     custom = ca.Function("jac_cell_rule", [g, out], [skip(jac)], ["g", "out_W"], ["jac_W_g"])
     return ca.Function("cell_rule", [g], [skip(load)], ["g"], ["W"],
                        {"custom_jacobian": custom, "jac_penalty": 0, "never_inline": True})
+
+
+def _cell_jacobian(gl, g0, gr, cells: int):
+    """``dW/dg`` (:func:`_cell_rule`) from the cells' end and midpoint values, symbolic:
+    ``Σ_jk S_j diag(Δ/2 ∫_{p>0} ℓ_j ℓ_k) P_k``, P_k picking node k of each cell and S_j
+    scattering the weight j back to the nodes."""
+    ends, mids, scatter = _scatter(cells)
+    picks = [ca.DM(m) for m in (ends[0], mids, ends[1])]
+    mass = _cell_mass(gl, g0, gr, ca, ca.if_else)
+    return sum(ca.mtimes(ca.DM(scatter[j]), ca.mtimes(ca.diag(mass[min(j, k), max(j, k)]),
+                                                      picks[k]))
+               for j in range(3) for k in range(3)) / (2 * cells)
 
 
 def _positive_set(gl, g0, gr, lib, where):
