@@ -35,9 +35,10 @@ def plot_sound(sound, path=None, title: str | None = None):
     ax[0].plot(np.arange(shown) / sound.rate, sound.pressure[:shown] * 1e3, lw=0.7)
     ax[0].set_xlabel("time from the start of the sound (s)")
     ax[0].set_ylabel(f"pressure $p$ at $r$ = {sound.distance_m:g} m (mPa)")
-    f0 = sound.fundamental_hz
-    ax[0].set_title(title or (f"{sound.spl_db:.1f} dB SPL" +
-                              ("" if f0 is None else f", fundamental {f0:.4g} Hz")))
+    f0, ci = sound.fundamental_hz, sound.fundamental_ci_hz
+    pitch = "" if f0 is None else f", fundamental {f0:.4g} Hz" + (
+        "" if ci is None or ci[0] == ci[1] else f" ({ci[0]:.3g}-{ci[1]:.3g} Hz, 95 %)")
+    ax[0].set_title(title or f"{sound.spl_db:.1f} dB SPL{pitch}")
     t, f, level = _spectrogram(sound)
     top = min(sound.rate / 2, _SHOWN_HARMONICS * f0 if f0 else 2000.0)
     keep = f <= top

@@ -40,6 +40,7 @@ from .run import Run, controlled_run, guarded_model, quadrature_tolerance
 
 __all__ = ["Sound", "AUDIO_RATE", "P_REF", "SOUND_SPEED", "HARMONICS", "HARMONIC_FLOOR",
            "flow_derivative", "monopole_pressure", "spl_db", "harmonic_amplitudes", "pitch",
+           "median_rate", "CONFIDENCE", "PITCH_RTOL",
            "strongest_line", "looped_sound", "cycle_sound", "trajectory_sound",
            "breath_run", "write_wav"]
 
@@ -52,6 +53,9 @@ _PERIOD_POINTS = 4096
 #: Harmonics weaker than this fraction of the strongest (-40 dB) are absent from the
 #: spectrum: the fundamental is the largest common divisor of the present ones.
 HARMONIC_FLOOR = 1e-2
+#: Confidence level of a trajectory's fundamental (the median return rate), and the
+#: relative width of its interval above which the pitch is called uncertain.
+CONFIDENCE, PITCH_RTOL = 0.95, 0.05
 
 
 @dataclass(frozen=True)
@@ -65,7 +69,10 @@ class Sound:
     ``period_s`` and, for a trajectory, ``onset_s`` and ``offset_s`` (first and last time
     the level over :data:`HEARD_WINDOW` exceeds :data:`HEARD_FRACTION` of its largest);
     a trajectory's fundamental is that of the median period between the tip's Poincaré
-    returns while heard, its harmonics those of the cycle of that period nearest it."""
+    returns while heard, its harmonics those of the cycle of that period nearest it, and
+    ``fundamental_ci_hz`` the :data:`CONFIDENCE` interval of that median (a bootstrap of
+    the returns, :func:`median_rate`): an irregular snore's pitch is a statistic, and
+    ``warnings`` says so when the interval is wider than :data:`PITCH_RTOL` of it."""
 
     rate: int
     pressure: np.ndarray
@@ -78,6 +85,8 @@ class Sound:
     period_s: float | None
     onset_s: float | None = None
     offset_s: float | None = None
+    fundamental_ci_hz: tuple | None = None
+    warnings: tuple = ()
 
     @property
     def duration_s(self) -> float:
@@ -90,7 +99,10 @@ class Sound:
                 "sample_rate_hz": self.rate, "duration_s": self.duration_s,
                 "source": self.source, "period_s": self.period_s,
                 "peak_pa": float(np.max(np.abs(self.pressure))) if self.pressure.size else 0.0,
-                "rms_pa": _rms(self.pressure), "onset_s": self.onset_s, "offset_s": self.offset_s}
+                "rms_pa": _rms(self.pressure), "onset_s": self.onset_s, "offset_s": self.offset_s,
+                "fundamental_ci_hz": (None if self.fundamental_ci_hz is None
+                                      else list(self.fundamental_ci_hz)),
+                "warnings": list(self.warnings)}
 
 
 def flow_derivative(traj, idx=None) -> np.ndarray:
@@ -140,6 +152,37 @@ def pitch(one_period, period_s: float) -> tuple[float, float]:
     lines = np.abs(np.fft.rfft(np.asarray(one_period, dtype=float))[1:])
     present = np.flatnonzero(lines >= HARMONIC_FLOOR * lines.max()) + 1
     return int(np.gcd.reduce(present)) / period_s, (int(np.argmax(lines)) + 1) / period_s
+
+
+def median_rate(intervals, confidence: float = CONFIDENCE) -> tuple[float, tuple[float, float]]:
+    """``(1 / median, (lo, hi))``: the rate of the median of the intervals between returns
+    and its ``confidence`` interval, by the percentile bootstrap of the median
+    (``scipy.stats.bootstrap``, a fixed seed: the same returns give the same interval).
+    The returns of an irregular motion are taken as a sample of its intervals; with
+    fewer than three the interval is unbounded."""
+    from scipy.stats import bootstrap
+    x = np.asarray(intervals, dtype=float)
+    rate = 1.0 / float(np.median(x))
+    if x.size < 3 or np.ptp(x) == 0:
+        return rate, ((0.0, np.inf) if x.size < 3 else (rate, rate))
+    ci = bootstrap((x,), np.median, confidence_level=confidence, method="percentile",
+                   n_resamples=4999, rng=np.random.default_rng(0)).confidence_interval
+    return rate, (1.0 / float(ci.high), 1.0 / float(ci.low))
+
+
+def _pitch_warning(fundamental: float, ci: tuple, intervals, dominant) -> tuple:
+    """The warning of a trajectory's fundamental whose interval is wider than
+    :data:`PITCH_RTOL` of it (none otherwise)."""
+    lo, hi = ci
+    if hi - lo <= PITCH_RTOL * fundamental:
+        return ()
+    ms = 1e3 * np.asarray(intervals)
+    line = "" if dominant is None else (f"; the strongest line ({dominant:.4g} Hz) of such a "
+                                        "broadband spectrum is no steadier")
+    return (f"the snore is irregular (the tip's returns {ms.min():.3g} to {ms.max():.3g} ms "
+            f"apart, {ms.size} while heard): its fundamental {fundamental:.4g} Hz is their "
+            f"median rate, {lo:.4g}-{hi:.4g} Hz at {CONFIDENCE:.0%} confidence; another run "
+            f"of it (another mesh, tolerance or start) lands elsewhere in that range{line}",)
 
 
 def strongest_line(pressure, rate: int) -> float | None:
@@ -249,8 +292,14 @@ def trajectory_sound(traj, scales: Scales, distance: float = 0.3, rate: int = AU
     j = int(np.argmin(np.abs(periods - np.median(periods))))
     one = scale * spline(returns[j] + np.arange(_PERIOD_POINTS) * periods[j] / _PERIOD_POINTS)
     period_s = float(np.median(periods)) * scales.time
-    return Sound(rate, p, pitch(one, period_s)[0], dominant, spl_db(p), harmonic_amplitudes(one),
-                 distance, "trajectory", period_s, onset, offset)
+    fundamental = pitch(one, period_s)[0]
+    # the fundamental is g / median period (g: the divisor of the present harmonics)
+    g = fundamental * period_s
+    _, (lo, hi) = median_rate(periods * scales.time)
+    ci = (g * lo, g * hi)
+    return Sound(rate, p, fundamental, dominant, spl_db(p), harmonic_amplitudes(one),
+                 distance, "trajectory", period_s, onset, offset, ci,
+                 _pitch_warning(fundamental, ci, periods * scales.time, dominant))
 
 
 #: Window (s) of the level that tells when a snore is heard, and the fraction of the
