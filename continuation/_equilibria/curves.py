@@ -27,6 +27,7 @@ import scipy.sparse as sp
 from . import eigen
 from .equilibrium import StationaryProblem, hopf_start, hopf_vectors, real_null_vector
 from .lyapunov import first_lyapunov
+from .normal_forms import double_hopf_coefficients, lyapunov_coefficients
 from .systems import fold_system, hopf_system
 from .._casadi.vectorfield import VectorField, param_vector, state_vector
 from .._driver.newton import factorize
@@ -125,7 +126,30 @@ class HopfCurveProblem(StationaryProblem):
         return super().test_function(kind, X_a, info_a, X_b, info_b, settings)
 
     def describe(self, kind, X, tau, settings) -> Description:
-        return Description(X, "converged", 0.0, {**self.columns(X), "l1": self.l1(X)})
+        """The located point with ``omega, kappa`` and its normal-form coefficients:
+        ``l1, l2`` at a generalized Hopf point, those of
+        :func:`normal_forms.double_hopf_coefficients` at a double Hopf point."""
+        data = self.columns(X)
+        try:
+            if kind == "gh" and data["omega"] > 0:
+                data.update(lyapunov_coefficients(self.vf, self.state(X), self.params(X),
+                                                  data["omega"]))
+            elif kind == "hh":
+                data.update(self._double_hopf(X, settings))
+            elif kind != "bt":
+                data["l1"] = self.l1(X)
+        except (RuntimeError, ZeroDivisionError) as err:   # singular solve: no normal form
+            return Description(X, "converged", 0.0, data, f"{kind} coefficients: {err}")
+        return Description(X, "converged", 0.0, data)
+
+    def _double_hopf(self, X, settings) -> dict:
+        """Coefficients of the double Hopf point at ``X``: the second frequency is the
+        other pair nearest to the imaginary axis."""
+        ev = _remove_tracked(eigen.eigenvalues(*self.matrices(X), settings.eigen), self.kappa(X))
+        ev = ev[ev.imag > settings.eigen.imag_tol]
+        omega2 = float(ev[np.argmin(np.abs(ev.real))].imag)
+        return double_hopf_coefficients(self.vf, self.state(X), self.params(X),
+                                        float(np.sqrt(self.kappa(X))), omega2)
 
 
 def _remove_tracked(ev: np.ndarray, kappa: float) -> np.ndarray:

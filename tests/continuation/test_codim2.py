@@ -1,0 +1,83 @@
+"""Codimension-two points of Hopf curves and their normal-form coefficients, against
+normal forms with known coefficients, closed forms and an independent route."""
+
+import casadi as ca
+import numpy as np
+import pytest
+from scipy.integrate import solve_ivp
+
+import continuation as C
+
+
+def run(problem, **kw):
+    base = dict(ds=0.02, ds_max=0.1, max_steps=100)
+    base.update(kw)
+    return C.continuation(problem, settings=C.ContinuationSettings(**base))
+
+
+def hopf_curve(F, x0, params, first, second, bounds, M=None, **kw):
+    """The Hopf curve in ``(first, second)`` through the Hopf point met along ``first``."""
+    prob = C.EquilibriumProblem(F, x0, params, first, M=M)
+    (h,) = run(prob, bounds={first: bounds[0]}).special("hopf")
+    return run(C.HopfCurveProblem.from_point(prob, h, second), bounds={second: bounds[1]}, **kw)
+
+
+def sheared_bautin(omega, b, c=0.7, d=-0.4, mass=None):
+    """The Bautin normal form ``w' = (mu + i omega) w + a w|w|^2 + b w|w|^4`` (``w = y1 +
+    i y2``) in the coordinates ``x = (y1, y2 + c y1^2 + d y1^3)``: a near-identity change,
+    so ``l1 = 2 a / omega`` and at ``a = 0`` ``l2 = 4 b / omega`` (module docstring of the
+    normal forms); ``mass`` (a scalar ``m(x)``) multiplies both sides."""
+    x, p = ca.SX.sym("x", 2), ca.SX.sym("p", 2)
+    y = ca.vertcat(x[0], x[1] - c * x[0] ** 2 - d * x[0] ** 3)
+    r2 = y[0] ** 2 + y[1] ** 2
+    g = ca.vertcat(p[0] * y[0] - omega * y[1], omega * y[0] + p[0] * y[1]) \
+        + (p[1] * r2 + b * r2 ** 2) * y
+    f = ca.vertcat(g[0], g[1] + (2 * c * y[0] + 3 * d * y[0] ** 2) * g[0])
+    if mass is None:
+        return ca.Function("F", [x, p], [f]), None
+    m = mass(x)
+    return ca.Function("F", [x, p], [m * f]), ca.Function("M", [x, p], [m * ca.SX.eye(2)])
+
+
+@pytest.mark.parametrize("omega, b, mass", [
+    (1.7, -0.8, None), (0.6, 0.5, None), (1.3, -0.3, lambda x: 1.5 + 0.5 * x[0] + x[1] ** 2)])
+def test_generalized_hopf_second_lyapunov_on_the_bautin_normal_form(omega, b, mass):
+    F, M = sheared_bautin(omega, b, mass=mass)
+    curve = hopf_curve(F, [0.0, 0.0], {"mu": -0.2, "a": -0.5}, "mu", "a",
+                       [(-1, 0.2), (-1, 1)], M=M)
+    (gh,) = curve.special("gh")
+    assert gh.status == "converged" and abs(gh.params["a"]) < 1e-10
+    assert gh.data["omega"] == pytest.approx(omega, rel=1e-12)
+    assert abs(gh.data["l1"]) < 1e-9
+    assert gh.data["l2"] == pytest.approx(4 * b / omega, rel=1e-9)
+
+
+def test_second_lyapunov_against_the_return_map():
+    """Independent route: at the located generalized Hopf point of a planar field with
+    quadratic to quartic terms, the return map of the section ``y = 0, x = s > 0``
+    (integrated) is ``s -> s + 2 pi l2 s^5 / k^4 + O(s^6)``: ``|z|' = l2 omega |z|^5`` in
+    the normal form, ``s = k |z|`` with ``k = 2 |q_1| = sqrt 2`` for ``q = (1, -i)/sqrt 2``."""
+    def field(x, y, mu, nu):
+        r2 = x ** 2 + y ** 2
+        return (mu * x - y + x ** 2 - 0.5 * x * y + nu * x * r2 + 0.3 * y ** 3
+                - 0.2 * x ** 2 * y ** 2,
+                x + mu * y + 0.7 * x * y + y ** 2 + 0.2 * x * r2 + 0.1 * x ** 4)
+    x, p = ca.SX.sym("x", 2), ca.SX.sym("p", 2)
+    F = ca.Function("F", [x, p], [ca.vertcat(*field(x[0], x[1], p[0], p[1]))])
+    curve = hopf_curve(F, [0.0, 0.0], {"mu": -0.2, "nu": -3.0}, "mu", "nu",
+                       [(-1, 0.2), (-3, 3)], max_steps=200)
+    (gh,) = curve.special("gh")
+    mu, nu = gh.params["mu"], gh.params["nu"]
+    crossing = lambda t, z: z[1]
+    crossing.direction = 1
+
+    def gain(s):
+        sol = solve_ivp(lambda t, z: field(z[0], z[1], mu, nu), (0, 20), [s, 0.0],
+                        method="DOP853", rtol=1e-13, atol=1e-16, events=crossing)
+        later = sol.t_events[0] > 1.0
+        return sol.y_events[0][later][0][0] - s
+
+    s = np.linspace(0.01, 0.05, 9)
+    fit = np.polyfit(s, np.array([gain(v) for v in s]) / s ** 5, 3)
+    assert fit[-1] * 4 / (2 * np.pi) == pytest.approx(gh.data["l2"], rel=1e-4)
+    assert abs(gh.data["l2"]) > 0.1
