@@ -123,7 +123,33 @@ class HopfCurveProblem(StationaryProblem):
             return lambda X, tau, lu: self.kappa(X)
         if kind == "gh":
             return lambda X, tau, lu: self.l1(X)
+        if kind in ("hh", "zh"):
+            return self._other_crossing(kind, X_a, info_a, X_b, info_b, settings)
         return super().test_function(kind, X_a, info_a, X_b, info_b, settings)
+
+    def _other_crossing(self, kind, X_a, info_a, X_b, info_b, settings):
+        """``Re`` of the other eigenvalue that crosses the axis, as a function of ``X``:
+        a complex one (``'hh'``, the pair whose real parts change sign from a to b) or a
+        real one (``'zh'``, the one nearest to zero at a or b), followed by nearness."""
+        tol = settings.eigen.imag_tol
+        others = lambda ev, X: _remove_tracked(ev, self.kappa(X))
+        a, b = others(info_a.eigenvalues, X_a), others(info_b.eigenvalues, X_b)
+        if kind == "hh":
+            ref, keep = eigen.crossing_eigenvalue(a, b, tol), lambda ev: ev.imag > tol
+        else:
+            real = np.concatenate([a, b])
+            real = real[np.abs(real.imag) <= tol]
+            ref = real[np.argmin(np.abs(real))] if real.size else None
+            keep = lambda ev: np.abs(ev.imag) <= tol
+        if ref is None:
+            return None
+
+        def f(X, tau, lu):
+            ev = others(self.eigenvalues(X, settings), X)
+            ev = ev[keep(ev)]
+            return float(eigen.nearest(ev, ref).real) if ev.size else 1.0
+
+        return f
 
     def describe(self, kind, X, tau, settings) -> Description:
         """The located point with ``omega, kappa`` and its normal-form coefficients:

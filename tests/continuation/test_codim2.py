@@ -81,3 +81,69 @@ def test_second_lyapunov_against_the_return_map():
     fit = np.polyfit(s, np.array([gain(v) for v in s]) / s ** 5, 3)
     assert fit[-1] * 4 / (2 * np.pi) == pytest.approx(gh.data["l2"], rel=1e-4)
     assert abs(gh.data["l2"]) > 0.1
+
+
+def double_hopf(a, c=0.6, omega=(1.0, 1.7)):
+    """The truncated double-Hopf normal form ``w1' = (mu1 + i omega1) w1 + (a11 |w1|^2 +
+    a12 |w2|^2) w1``, ``w2' = (mu2 + i omega2) w2 + (a21 |w1|^2 + a22 |w2|^2) w2`` (``w1 =
+    y1 + i y2, w2 = y3 + i y4``), sheared (``u4 = y4 + c y1^2``) and rotated (``x = Q^T
+    u``, Q orthogonal): near-identity and orthogonal changes keep the coefficients, and
+    ``|q| = 1`` (``w = sqrt 2 z``) gives ``p_jk = 2 Re a_jk``."""
+    x, p = ca.SX.sym("x", 4), ca.SX.sym("p", 2)
+    Q = np.linalg.qr(np.random.default_rng(3).standard_normal((4, 4)))[0]
+    u = ca.mtimes(ca.DM(Q), x)
+    y = ca.vertcat(u[0], u[1], u[2], u[3] - c * u[0] ** 2)
+    w1, w2 = (y[0], y[1]), (y[2], y[3])
+    s1, s2 = y[0] ** 2 + y[1] ** 2, y[2] ** 2 + y[3] ** 2
+
+    def mode(w, mu, om, k1, k2):   # (mu + i om + k1 s1 + k2 s2) w, k complex
+        re, im = mu + k1.real * s1 + k2.real * s2, om + k1.imag * s1 + k2.imag * s2
+        return [re * w[0] - im * w[1], im * w[0] + re * w[1]]
+
+    g = mode(w1, p[0], omega[0], a[0][0], a[0][1]) + mode(w2, p[1], omega[1], a[1][0], a[1][1])
+    g[3] = g[3] + 2 * c * y[0] * g[0]
+    return ca.Function("F", [x, p], [ca.mtimes(ca.DM(Q.T), ca.vertcat(*g))])
+
+
+@pytest.mark.parametrize("a, simple, torus", [
+    ([[-1 + 0.3j, 0.5 - 0.2j], [-1.5 + 0.1j, -2 + 0.4j]], True, True),
+    ([[-1 + 0.3j, 1 - 0.2j], [-1.5 + 0.1j, 1 + 0.4j]], False, True),
+    ([[-1 + 0.3j, 0.5 - 0.2j], [-1.5 + 0.1j, 1 + 0.4j]], False, False)])
+def test_double_hopf_coefficients_on_the_normal_form(a, simple, torus):
+    """Stable torus of the amplitude equations: ``p11 p22 - p12 p21 > 0`` and ``p11 < 0``
+    or ``p22 < 0`` (the 2x2 Jacobian at ``r1, r2 > 0`` is ``2 diag(r^2) [p]``)."""
+    curve = hopf_curve(double_hopf(a), np.zeros(4), {"mu1": -0.3, "mu2": -0.4}, "mu1", "mu2",
+                       [(-1, 0.3), (-1, 0.5)])
+    (hh,) = curve.special("hh")
+    assert hh.status == "converged" and abs(hh.params["mu2"]) < 1e-10
+    d = hh.data
+    assert (d["omega1"], d["omega2"]) == pytest.approx((1.0, 1.7), rel=1e-10)
+    p = {k: 2 * a[i][j].real for k, (i, j) in
+         {"p11": (0, 0), "p12": (0, 1), "p21": (1, 0), "p22": (1, 1)}.items()}
+    assert {k: d[k] for k in p} == pytest.approx(p, rel=1e-9)
+    assert d["theta"] == pytest.approx(p["p12"] / p["p22"], rel=1e-9)
+    assert d["delta"] == pytest.approx(p["p21"] / p["p11"], rel=1e-9)
+    assert (d["simple"], d["stable_torus"]) == (simple, torus)
+
+
+@pytest.mark.parametrize("theta", [0.8, -1.2])
+def test_zero_hopf_on_the_normal_form(theta):
+    """``xi' = b1 + xi^2 - |w|^2``, ``w' = (b2 + i omega + (theta + 0.4 i) xi) w``:
+    equilibria ``w = 0, xi = +-sqrt(-b1)`` with eigenvalues ``2 xi`` and ``b2 + theta xi
+    +- i omega``; the Hopf curve ``b2 = -theta xi``, ``b1 = -b2^2 / theta^2`` passes the
+    zero-Hopf point ``b1 = b2 = 0`` where the real eigenvalue ``2 xi`` crosses zero."""
+    x, p = ca.SX.sym("x", 3), ca.SX.sym("p", 2)
+    xi, s2, omega = x[0], x[1] ** 2 + x[2] ** 2, 1.3
+    re, im = p[1] + theta * xi, omega + 0.4 * xi
+    F = ca.Function("F", [x, p], [ca.vertcat(p[0] + xi ** 2 - s2, re * x[1] - im * x[2],
+                                             im * x[1] + re * x[2])])
+    b1 = -0.25
+    curve = hopf_curve(F, [-0.5, 0.0, 0.0], {"b1": b1, "b2": 0.5 * theta - 0.2}, "b2", "b1",
+                       [(-2, 2), (-1, 0.01)], max_steps=200)
+    (zh,) = curve.special("zh")
+    assert zh.status == "converged"
+    assert abs(zh.params["b1"]) < 1e-10 and abs(zh.params["b2"]) < 1e-8
+    assert abs(zh.x[0]) < 1e-8 and zh.data["omega"] == pytest.approx(omega, rel=1e-8)
+    b1, b2 = curve.par("b1"), curve.par("b2")
+    assert np.max(np.abs(b1 + b2 ** 2 / theta ** 2)) < 1e-10
+    assert b2.min() < -0.1 and b2.max() > 0.1       # through the point, on both sides
