@@ -38,7 +38,7 @@ from ._cycles.cycle_curves import (Condition, CycleCurveProblem, CycleFold, Extr
                                    NeimarkSacker, PeriodDoubling, locate_cycle)
 from ._cycles.cycles import CycleProblem
 from ._cycles.shooting import ShootingProblem
-from ._cycles.switching import cycle_from_bp, cycle_from_hopf, cycle_from_pd, equilibrium_from_bp
+from ._cycles.switching import cycle_from_bp, cycle_from_hopf, cycle_from_pd
 from ._cycles.symmetric import keeps_symmetry, locate_symmetry_breaking, symmetric_multipliers
 from ._driver.branch import Branch, SpecialPoint, Status
 from ._driver.driver import continuation, observing
@@ -47,6 +47,7 @@ from ._driver.palc import ContinuationIterator, Step, correct
 from ._driver.problem import Problem
 from ._driver.settings import (MAX_NTST, CollocationSettings, ContinuationSettings,
                                EigenSettings, NewtonSettings, PALC, ShootingSettings)
+from ._equilibria.branching import equilibrium_from_bp
 from ._equilibria.curves import FoldCurveProblem, HopfCurveProblem
 from ._equilibria.equilibrium import EquilibriumProblem, hopf_point
 from ._equilibria.lyapunov import first_lyapunov

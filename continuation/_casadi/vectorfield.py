@@ -247,6 +247,16 @@ class VectorField:
                                              [ca.substitute(out, y, x)])
         return forms
 
+    def second_derivative(self, x, p, u, w) -> np.ndarray:
+        """``d^2/de^2 F(x + e u, p + e w)`` at ``e = 0`` (CasADi AD; compiled once)."""
+        if "_second" not in self.__dict__:
+            x_, p_ = self._x, self._p
+            u_, w_ = self.sym.sym("u", self.n), self.sym.sym("w", len(self.par_names))
+            along = lambda g: ca.jtimes(g, x_, u_) + ca.jtimes(g, p_, w_)
+            self._second = BufferedFunction(ca.Function(
+                "F_XX", [x_, p_, u_, w_], [ca.densify(along(along(self.F(x_, p_))))]))
+        return self._second(x, p, u, w)[0]
+
     def form(self, name: str, x, p, *vectors) -> np.ndarray:
         """Evaluate a real multilinear form ``F2, F3, M1, M2`` (or ``H2 .. H5`` of
         :attr:`_reduced_forms`) on complex vectors.

@@ -1,6 +1,8 @@
 """Codimension-two points of Hopf curves and their normal-form coefficients, against
 normal forms with known coefficients, closed forms and an independent route."""
 
+import dataclasses
+
 import casadi as ca
 import numpy as np
 import pytest
@@ -147,3 +149,53 @@ def test_zero_hopf_on_the_normal_form(theta):
     b1, b2 = curve.par("b1"), curve.par("b2")
     assert np.max(np.abs(b1 + b2 ** 2 / theta ** 2)) < 1e-10
     assert b2.min() < -0.1 and b2.max() > 0.1       # through the point, on both sides
+
+
+def branch_point(F, x0, mu0, bounds=(-1.0, 1.0)):
+    problem = C.EquilibriumProblem(F, x0, {"mu": mu0}, "mu")
+    branch = run(problem, ds=0.1, ds_max=0.1, max_steps=60, bounds={"mu": bounds})
+    (bp,) = [b for b in branch.special("bp") if b.status == "converged"]
+    return problem, bp
+
+
+def switched(problem, bp, amplitude):
+    new = C.equilibrium_from_bp(problem, bp, amplitude=amplitude)
+    return run(new, ds=0.05, ds_max=0.1, max_steps=60, bounds={"mu": (-1.0, 1.0)})
+
+
+@pytest.mark.parametrize("amplitude", [0.02, -0.02])
+def test_switching_at_a_transcritical_point_both_ways(amplitude):
+    """``x' = mu x - x^2 + x y``, ``y' = -y + x^2``: the branches ``x = y = 0`` and
+    ``mu = x - x^2, y = x^2`` cross at ``mu = 0``; from either one the switch lands on
+    the other, on the side of the amplitude's sign."""
+    x, p = ca.SX.sym("x", 2), ca.SX.sym("p", 1)
+    F = ca.Function("F", [x, p], [ca.vertcat(p[0] * x[0] - x[0] ** 2 + x[0] * x[1],
+                                             -x[1] + x[0] ** 2)])
+    problem, bp = branch_point(F, [0.0, 0.0], -0.5)          # from the trivial branch
+    assert abs(bp.params["mu"]) < 1e-10
+    other = switched(problem, bp, amplitude)
+    u, mu = other.x[:, 0], other.par("mu")
+    assert other.status == "bound" and np.all(np.sign(u[1:]) == np.sign(amplitude))
+    assert np.max(np.abs(mu - u + u ** 2)) < 1e-9 and np.allclose(other.x[:, 1], u ** 2)
+    x0 = (1 - np.sqrt(3)) / 2                                 # mu = -0.5 on x - x^2
+    problem, bp = branch_point(F, [x0, x0 ** 2], -0.5, (-1.0, 0.2))
+    back = switched(problem, bp, amplitude)
+    assert back.status == "bound" and np.max(np.abs(back.x)) < 1e-9
+    assert np.all(np.sign(np.diff(back.par("mu"))) == np.sign(amplitude))
+
+
+@pytest.mark.parametrize("amplitude", [0.02, -0.02])
+def test_switching_at_a_pitchfork_onto_both_halves(amplitude):
+    """``x' = mu x - x^3 + x y``, ``y' = -2 y + x^2``: the new branch ``mu = x^2 / 2``,
+    ``y = x^2 / 2`` (``x = +-sqrt(2 mu)``), on the side of the amplitude's sign."""
+    x, p = ca.SX.sym("x", 2), ca.SX.sym("p", 1)
+    F = ca.Function("F", [x, p], [ca.vertcat(p[0] * x[0] - x[0] ** 3 + x[0] * x[1],
+                                             -2 * x[1] + x[0] ** 2)])
+    problem, bp = branch_point(F, [0.0, 0.0], -0.5)
+    other = switched(problem, bp, amplitude)
+    u, mu = other.x[:, 0], other.par("mu")
+    assert other.status == "bound" and mu[-1] > 0.9
+    assert np.all(np.sign(u) == np.sign(amplitude))
+    assert np.max(np.abs(mu - u ** 2 / 2)) < 1e-9 and np.allclose(other.x[:, 1], u ** 2 / 2)
+    reloaded = dataclasses.replace(bp, tangent=np.zeros(0))   # as from Branch.load
+    assert np.allclose(switched(problem, reloaded, amplitude).x, other.x)
