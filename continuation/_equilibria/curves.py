@@ -27,7 +27,8 @@ import scipy.sparse as sp
 from . import eigen
 from .equilibrium import StationaryProblem, hopf_start, hopf_vectors, real_null_vector
 from .lyapunov import first_lyapunov
-from .normal_forms import double_hopf_coefficients, lyapunov_coefficients
+from .normal_forms import (bogdanov_takens_coefficients, double_hopf_coefficients,
+                           lyapunov_coefficients)
 from .systems import fold_system, hopf_system
 from .._casadi.vectorfield import VectorField, param_vector, state_vector
 from .._driver.newton import factorize
@@ -154,7 +155,8 @@ class HopfCurveProblem(StationaryProblem):
     def describe(self, kind, X, tau, settings) -> Description:
         """The located point with ``omega, kappa`` and its normal-form coefficients:
         ``l1, l2`` at a generalized Hopf point, those of
-        :func:`normal_forms.double_hopf_coefficients` at a double Hopf point."""
+        :func:`normal_forms.double_hopf_coefficients` at a double Hopf point, ``a, b``
+        at a Bogdanov-Takens point."""
         data = self.columns(X)
         try:
             if kind == "gh" and data["omega"] > 0:
@@ -162,6 +164,8 @@ class HopfCurveProblem(StationaryProblem):
                                                   data["omega"]))
             elif kind == "hh":
                 data.update(self._double_hopf(X, settings))
+            elif kind == "bt":
+                data.update(bogdanov_takens_coefficients(self.vf, self.state(X), self.params(X)))
             elif kind != "bt":
                 data["l1"] = self.l1(X)
         except (RuntimeError, ZeroDivisionError) as err:   # singular solve: no normal form
@@ -244,3 +248,14 @@ class FoldCurveProblem(StationaryProblem):
         if kind == "bt":
             return lambda X, tau, lu: self.bt_test(X)
         return super().test_function(kind, X_a, info_a, X_b, info_b, settings)
+
+    def describe(self, kind, X, tau, settings) -> Description:
+        """The located point; ``a, b`` (:func:`normal_forms.bogdanov_takens_coefficients`)
+        at a Bogdanov-Takens point."""
+        if kind != "bt":
+            return super().describe(kind, X, tau, settings)
+        try:
+            data = bogdanov_takens_coefficients(self.vf, self.state(X), self.params(X))
+        except RuntimeError as err:           # singular bordered solve: no normal form
+            return Description(X, "converged", 0.0, {}, f"bt coefficients: {err}")
+        return Description(X, "converged", 0.0, data)

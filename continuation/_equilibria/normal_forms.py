@@ -131,3 +131,32 @@ def double_hopf_coefficients(vf, x, p, omega1: float, omega2: float) -> dict:
             "p21": p21, "p22": p22, "theta": p12 / p22, "delta": p21 / p11,
             "simple": bool(p11 * p22 > 0),
             "stable_torus": bool(p11 * p22 - p12 * p21 > 0 and min(p11, p22) < 0)}
+
+
+def bogdanov_takens_coefficients(vf, x, p) -> dict:
+    """``a, b`` of ``w0' = w1, w1' = a w0^2 + b w0 w1`` at a Bogdanov-Takens point
+    (ELBT §8.4, eq. (8.52)): with the Jordan chains ``J q0 = 0, J q1 = M q0`` and
+    ``phi1^T J = 0, phi0^T J = phi1^T M``, normalized ``|q0| = 1`` (largest entry
+    positive), ``q0^T q1 = 0``, ``phi1^T M q1 = 1``, ``phi0^T M q1 = 0``,
+
+        a = phi1^T B(q0, q0) / 2,   b = phi0^T B(q0, q0) + phi1^T B(q0, q1).
+
+    (``q0 -> -q0`` flips both signs; ``sign(a b)`` is invariant.)"""
+    c = Centre(vf, x, p)
+    J, M = c.J.real.tocsc(), c.M.real.tocsc()
+    U, _, Vt = np.linalg.svd(J.toarray())              # null vectors (dense SVD)
+    q0, phi1 = Vt[-1] * np.sign(Vt[-1][np.argmax(np.abs(Vt[-1]))]), U[:, -1]
+    q1 = _bordered_real(J, phi1, q0, M @ q0)
+    phi0 = _bordered_real(J.T, q0, phi1, M.T @ phi1)
+    scale = phi1 @ (M @ q1)
+    phi1, phi0 = phi1 / scale, phi0 / scale
+    phi0 = phi0 - (phi0 @ (M @ q1)) * phi1
+    B00 = c.form(q0, q0).real
+    return {"a": float(phi1 @ B00 / 2),
+            "b": float(phi0 @ B00 + phi1 @ c.form(q0, q1).real)}
+
+
+def _bordered_real(A, column, row, rhs) -> np.ndarray:
+    """``y`` with ``A y + s column = rhs``, ``row^T y = 0`` (``A`` singular of rank n-1)."""
+    K = sp.bmat([[A, column[:, None]], [row[None, :], None]], format="csc")
+    return spla.splu(K).solve(np.append(rhs, 0.0))[:-1]

@@ -199,3 +199,43 @@ def test_switching_at_a_pitchfork_onto_both_halves(amplitude):
     assert np.max(np.abs(mu - u ** 2 / 2)) < 1e-9 and np.allclose(other.x[:, 1], u ** 2 / 2)
     reloaded = dataclasses.replace(bp, tangent=np.zeros(0))   # as from Branch.load
     assert np.allclose(switched(problem, reloaded, amplitude).x, other.x)
+
+
+@pytest.mark.parametrize("s", [1.0, -1.0])
+def test_bogdanov_takens_coefficients_on_hopf_and_fold_curves(s):
+    """``x' = y``, ``y' = b1 + b2 x + x^2 + s x y`` is the normal form itself (``q0 = e1``,
+    ``q1 = e2``): ``a = 1``, ``b = s``; the Hopf curve ``b1 = 0, b2 < 0`` and the fold
+    curve ``b1 = b2^2 / 4`` end at ``b1 = b2 = 0``."""
+    x, p = ca.SX.sym("x", 2), ca.SX.sym("p", 2)
+    F = ca.Function("F", [x, p], [ca.vertcat(x[1], p[0] + p[1] * x[0] + x[0] ** 2
+                                             + s * x[0] * x[1])])
+    x0 = (1 - np.sqrt(3)) / 2  # root of x^2 - x - 1/2 (b1 = -1/2, b2 = -1)
+    prob = C.EquilibriumProblem(F, [x0, 0.0], {"b1": -0.5, "b2": -1.0}, "b1")
+    branch = run(prob, bounds={"b1": (-1, 0.3)})
+    for kind, cls in (("hopf", C.HopfCurveProblem), ("fold", C.FoldCurveProblem)):
+        (point,) = branch.special(kind)
+        curve = run(cls.from_point(prob, point, "b2"), bounds={"b2": (-1.5, 0.5)})
+        (bt,) = curve.special("bt")
+        assert abs(bt.params["b1"]) < 1e-8 and abs(bt.params["b2"]) < 1e-8
+        assert (bt.data["a"], bt.data["b"]) == pytest.approx((1.0, s), abs=1e-7)
+
+
+def test_bogdanov_takens_coefficients_after_a_change_of_coordinates():
+    """The normal form ``y1' = y2, y2' = b1 + b2 y1 + y1^2 - y1 y2 + 0.7 y1 y3`` with a
+    stable ``y3' = -2 y3 + y1^2`` (cubic on the centre manifold: ``a, b`` unchanged),
+    sheared (``u2 = y2 + y1^2 / 2``) and rotated (``x = Q^T u``): ``(a, b) = sigma (1, -1)``
+    with ``q0 = sigma Q^T e1`` (its largest entry positive)."""
+    Q = np.linalg.qr(np.random.default_rng(0).standard_normal((3, 3)))[0]
+    x, p = ca.SX.sym("x", 3), ca.SX.sym("p", 2)
+    u = ca.mtimes(ca.DM(Q), x)
+    y = ca.vertcat(u[0], u[1] - 0.5 * u[0] ** 2, u[2])
+    g = ca.vertcat(y[1], p[0] + p[1] * y[0] + y[0] ** 2 - y[0] * y[1] + 0.7 * y[2] * y[0],
+                   -2 * y[2] + y[0] ** 2)
+    F = ca.Function("F", [x, p], [ca.mtimes(ca.DM(Q.T), ca.vertcat(g[0], g[1] + y[0] * g[0],
+                                                                    g[2]))])
+    prob = C.EquilibriumProblem(F, np.zeros(3), {"b1": 0.0, "b2": -1.0}, "b1")
+    (fold,) = run(prob, bounds={"b1": (-1, 0.3)}).special("fold")
+    curve = run(C.FoldCurveProblem.from_point(prob, fold, "b2"), bounds={"b2": (-1.5, 0.5)})
+    (bt,) = curve.special("bt")
+    sigma = np.sign(Q[0][np.argmax(np.abs(Q[0]))])
+    assert (bt.data["a"], bt.data["b"]) == pytest.approx((sigma, -sigma), abs=1e-7)
