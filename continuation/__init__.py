@@ -9,6 +9,8 @@ Public API (everything else is private)::
     EquilibriumProblem(F, x0, params, active, *, M=None)
     HopfCurveProblem(vf, x, params, omega, free) / .from_point(problem, point, second)
     FoldCurveProblem(vf, x, params, free) / .from_point(problem, point, second)
+        # special points on them, coefficients in point.data: 'gh' (l1, l2), 'hh' (omega1,
+        # omega2, p11..p22, theta, delta, simple, stable_torus), 'zh', 'bt' (a, b)
     VectorField(F, M, par_names, *, mass_action, jacobian, mass_action_jacobian)
     Lifted(D, P, L, A)                        # a matrix A(p) + P D(x, p) L (Galerkin structure)
     first_lyapunov(vf, x, p, omega)
@@ -16,7 +18,8 @@ Public API (everything else is private)::
     cycle_from_hopf(problem, hopf_point, *, dp=1e-3, settings=None) -> CycleProblem
     cycle_from_pd(cycle_problem, pd_point, *, amplitude=1e-2, settings=None) -> CycleProblem
     cycle_from_bp(cycle_problem, bp_point, *, amplitude=1e-2) -> CycleProblem   # pitchfork
-    equilibrium_from_bp(problem, bp_point, *, amplitude=1e-2) -> EquilibriumProblem   # pitchfork
+    equilibrium_from_bp(problem, bp_point, *, amplitude=1e-2) -> EquilibriumProblem
+        # the other branch at a transcritical or pitchfork point, by the branching equation
     CycleCurveProblem(cycle_problem, X, free, condition)   # a cycle with one more equation:
     locate_cycle(cycle_problem, X, condition) -> (problem, NewtonResult)   # curve / located
     Extremum(rows, offset, level), CycleFold(), PeriodDoubling(), NeimarkSacker()   # conditions

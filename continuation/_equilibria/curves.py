@@ -178,6 +178,9 @@ class HopfCurveProblem(StationaryProblem):
         ev = _remove_tracked(eigen.eigenvalues(*self.matrices(X), settings.eigen), self.kappa(X))
         ev = ev[ev.imag > settings.eigen.imag_tol]
         omega2 = float(ev[np.argmin(np.abs(ev.real))].imag)
+        ratio = max(omega2, self.kappa(X) ** 0.5) / min(omega2, self.kappa(X) ** 0.5)
+        if min(abs(ratio - k) for k in (1, 2, 3)) < 1e-2:
+            raise RuntimeError(f"strong resonance omega1 : omega2 near 1:{round(ratio)}")
         return double_hopf_coefficients(self.vf, self.state(X), self.params(X),
                                         float(np.sqrt(self.kappa(X))), omega2)
 
