@@ -166,9 +166,9 @@ class HopfCurveProblem(StationaryProblem):
                 data.update(self._double_hopf(X, settings))
             elif kind == "bt":
                 data.update(bogdanov_takens_coefficients(self.vf, self.state(X), self.params(X)))
-            elif kind != "bt":
+            else:
                 data["l1"] = self.l1(X)
-        except (RuntimeError, ZeroDivisionError) as err:   # singular solve: no normal form
+        except (RuntimeError, ValueError, ZeroDivisionError) as err:   # no normal form
             return Description(X, "converged", 0.0, data, f"{kind} coefficients: {err}")
         return Description(X, "converged", 0.0, data)
 
