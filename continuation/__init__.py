@@ -10,7 +10,8 @@ Public API (everything else is private)::
     HopfCurveProblem(vf, x, params, omega, free) / .from_point(problem, point, second)
     FoldCurveProblem(vf, x, params, free) / .from_point(problem, point, second)
         # special points on them, coefficients in point.data: 'gh' (l1, l2), 'hh' (omega1,
-        # omega2, p11..p22, theta, delta, simple, stable_torus), 'zh', 'bt' (a, b)
+        # omega2, p11..p22, theta, delta, simple, stable_torus), 'zh' (B, C, D_re, D_im,
+        # s, theta), 'bt' (a, b)
     VectorField(F, M, par_names, *, mass_action, jacobian, mass_action_jacobian)
     Lifted(D, P, L, A)                        # a matrix A(p) + P D(x, p) L (Galerkin structure)
     first_lyapunov(vf, x, p, omega)

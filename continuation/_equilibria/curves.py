@@ -28,7 +28,7 @@ from . import eigen
 from .equilibrium import StationaryProblem, hopf_start, hopf_vectors, real_null_vector
 from .lyapunov import first_lyapunov
 from .normal_forms import (bogdanov_takens_coefficients, double_hopf_coefficients,
-                           lyapunov_coefficients)
+                           lyapunov_coefficients, zero_hopf_coefficients)
 from .systems import fold_system, hopf_system
 from .._casadi.vectorfield import VectorField, param_vector, state_vector
 from .._driver.newton import factorize
@@ -166,6 +166,9 @@ class HopfCurveProblem(StationaryProblem):
                 data.update(self._double_hopf(X, settings))
             elif kind == "bt":
                 data.update(bogdanov_takens_coefficients(self.vf, self.state(X), self.params(X)))
+            elif kind == "zh":
+                data.update(zero_hopf_coefficients(self.vf, self.state(X), self.params(X),
+                                                   data["omega"]))
             else:
                 data["l1"] = self.l1(X)
         except (RuntimeError, ValueError, ZeroDivisionError) as err:   # no normal form
@@ -254,11 +257,18 @@ class FoldCurveProblem(StationaryProblem):
 
     def describe(self, kind, X, tau, settings) -> Description:
         """The located point; ``a, b`` (:func:`normal_forms.bogdanov_takens_coefficients`)
-        at a Bogdanov-Takens point."""
-        if kind != "bt":
-            return super().describe(kind, X, tau, settings)
+        at a Bogdanov-Takens point, ``omega`` and those of
+        :func:`normal_forms.zero_hopf_coefficients` at a zero-Hopf point."""
+        x, p = self.state(X), self.params(X)
         try:
-            data = bogdanov_takens_coefficients(self.vf, self.state(X), self.params(X))
-        except RuntimeError as err:           # singular bordered solve: no normal form
-            return Description(X, "converged", 0.0, {}, f"bt coefficients: {err}")
-        return Description(X, "converged", 0.0, data)
+            if kind == "bt":
+                return Description(X, "converged", 0.0, bogdanov_takens_coefficients(self.vf, x, p))
+            if kind == "zh":
+                ev = self.eigenvalues(X, settings)
+                ev = ev[ev.imag > settings.eigen.imag_tol]
+                omega = float(ev[np.argmin(np.abs(ev.real))].imag)
+                data = {"omega": omega, **zero_hopf_coefficients(self.vf, x, p, omega)}
+                return Description(X, "converged", 0.0, data)
+        except (RuntimeError, ValueError, ZeroDivisionError) as err:   # no normal form
+            return Description(X, "converged", 0.0, {}, f"{kind} coefficients: {err}")
+        return super().describe(kind, X, tau, settings)

@@ -34,6 +34,7 @@ import numpy as np
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
+from .eigen import eigenvector, left_eigenvector
 from .lyapunov import hopf_eigenvectors
 
 
@@ -160,3 +161,35 @@ def _bordered_real(A, column, row, rhs) -> np.ndarray:
     """``y`` with ``A y + s column = rhs``, ``row^T y = 0`` (``A`` singular of rank n-1)."""
     K = sp.bmat([[A, column[:, None]], [row[None, :], None]], format="csc")
     return spla.splu(K).solve(np.append(rhs, 0.0))[:-1]
+
+
+def zero_hopf_coefficients(vf, x, p, omega: float) -> dict:
+    """``B, C, D`` of the truncated zero-Hopf normal form (ELBT §8.5, eq. (8.79))
+    ``u' = B u^2 + C |z|^2``, ``z' = i omega z + D u z``, and Kuznetsov's ``s = sign(B C)``,
+    ``theta = Re D / B``: with ``J q0 = 0`` (``|q0| = 1``, largest entry positive),
+    ``phi0^T J = 0``, ``phi0^T M q0 = 1`` and ``q, phi`` of ``i omega``,
+
+        B = phi0^T B(q0, q0) / 2,   C = phi0^T B(q, qbar),   D = phi^T B(q0, q).
+
+    ``s = -1``: cycles and tori can be born near the point; ``s = +1``: not."""
+    c = Centre(vf, x, p)
+    q0 = _real(eigenvector_at_zero(c.J, c.M, left=False))
+    phi0 = _real(eigenvector_at_zero(c.J, c.M, left=True))
+    phi0 = phi0 / (phi0 @ (c.M.real @ q0))
+    q, phi = c.pair(omega)
+    b = float(phi0 @ c.form(q0, q0).real / 2)
+    cc = float((phi0 @ c.form(q, q.conj())).real)
+    d = complex(phi @ c.form(q0, q))
+    return {"B": b, "C": cc, "D_re": d.real, "D_im": d.imag,
+            "s": float(np.sign(b * cc)), "theta": d.real / b}
+
+
+def eigenvector_at_zero(J, M, left: bool) -> np.ndarray:
+    """Right (or left, ``phi^T J = 0``) null vector of ``J`` by inverse iteration."""
+    return (left_eigenvector if left else eigenvector)(J, M, 0.0)
+
+
+def _real(v) -> np.ndarray:
+    """``v`` rotated to its largest entry real positive, real part, ``|v| = 1``."""
+    v = v * np.exp(-1j * np.angle(v[np.argmax(np.abs(v))]))
+    return v.real / np.linalg.norm(v.real)

@@ -133,7 +133,8 @@ def test_zero_hopf_on_the_normal_form(theta):
     """``xi' = b1 + xi^2 - |w|^2``, ``w' = (b2 + i omega + (theta + 0.4 i) xi) w``:
     equilibria ``w = 0, xi = +-sqrt(-b1)`` with eigenvalues ``2 xi`` and ``b2 + theta xi
     +- i omega``; the Hopf curve ``b2 = -theta xi``, ``b1 = -b2^2 / theta^2`` passes the
-    zero-Hopf point ``b1 = b2 = 0`` where the real eigenvalue ``2 xi`` crosses zero."""
+    zero-Hopf point ``b1 = b2 = 0`` where the real eigenvalue ``2 xi`` crosses zero. Its
+    normal form is the system itself: ``B = 1``, ``C = -2``, ``D = theta + 0.4 i``."""
     x, p = ca.SX.sym("x", 3), ca.SX.sym("p", 2)
     xi, s2, omega = x[0], x[1] ** 2 + x[2] ** 2, 1.3
     re, im = p[1] + theta * xi, omega + 0.4 * xi
@@ -149,6 +150,18 @@ def test_zero_hopf_on_the_normal_form(theta):
     b1, b2 = curve.par("b1"), curve.par("b2")
     assert np.max(np.abs(b1 + b2 ** 2 / theta ** 2)) < 1e-10
     assert b2.min() < -0.1 and b2.max() > 0.1       # through the point, on both sides
+    # the fold curve b1 = 0 (xi = 0) meets the same point where Re = b2 crosses zero
+    prob = C.EquilibriumProblem(F, [-0.5, 0.0, 0.0], {"b1": -0.25, "b2": -0.3}, "b1")
+    (fold,) = run(prob, bounds={"b1": (-1, 0.5)}).special("fold")
+    folds = run(C.FoldCurveProblem.from_point(prob, fold, "b2"), bounds={"b2": (-1, 1)})
+    (zh2,) = folds.special("zh")
+    assert zh2.status == "converged" and abs(zh2.params["b2"]) < 1e-8
+    assert zh2.data["omega"] == pytest.approx(omega, rel=1e-8)
+    for point in (zh, zh2):    # u = xi, |w|^2 = 2 |z|^2 (|q| = 1), D = d lambda / d xi
+        d = point.data
+        assert (d["B"], d["C"], d["D_re"], d["D_im"]) == pytest.approx((1, -2, theta, 0.4),
+                                                                       abs=1e-7)
+        assert d["s"] == -1 and d["theta"] == pytest.approx(theta, abs=1e-7)
 
 
 def branch_point(F, x0, mu0, bounds=(-1.0, 1.0)):
