@@ -171,7 +171,9 @@ def zero_hopf_coefficients(vf, x, p, omega: float) -> dict:
 
         B = phi0^T B(q0, q0) / 2,   C = phi0^T B(q, qbar),   D = phi^T B(q0, q).
 
-    ``s = -1``: cycles and tori can be born near the point; ``s = +1``: not."""
+    In the amplitude equations ``u' = b1 + u^2 + s r^2``, ``r' = r (b2 + theta u)`` the
+    cycle's equilibrium has ``det = -2 s theta r^2``: a torus (a Neimark-Sacker curve of
+    the cycles) can be born near the point only when ``s theta < 0``."""
     c = Centre(vf, x, p)
     q0 = _real(eigenvector_at_zero(c.J, c.M, left=False))
     phi0 = _real(eigenvector_at_zero(c.J, c.M, left=True))
