@@ -9,6 +9,9 @@ Public API (everything else is private)::
     EquilibriumProblem(F, x0, params, active, *, M=None)
     HopfCurveProblem(vf, x, params, omega, free) / .from_point(problem, point, second)
     FoldCurveProblem(vf, x, params, free) / .from_point(problem, point, second)
+        # special points on them, coefficients in point.data: 'gh' (l1, l2), 'hh' (omega1,
+        # omega2, p11..p22, theta, delta, simple, stable_torus), 'zh' (B, C, D_re, D_im,
+        # s, theta), 'bt' (a, b)
     VectorField(F, M, par_names, *, mass_action, jacobian, mass_action_jacobian)
     Lifted(D, P, L, A)                        # a matrix A(p) + P D(x, p) L (Galerkin structure)
     first_lyapunov(vf, x, p, omega)
@@ -16,7 +19,8 @@ Public API (everything else is private)::
     cycle_from_hopf(problem, hopf_point, *, dp=1e-3, settings=None) -> CycleProblem
     cycle_from_pd(cycle_problem, pd_point, *, amplitude=1e-2, settings=None) -> CycleProblem
     cycle_from_bp(cycle_problem, bp_point, *, amplitude=1e-2) -> CycleProblem   # pitchfork
-    equilibrium_from_bp(problem, bp_point, *, amplitude=1e-2) -> EquilibriumProblem   # pitchfork
+    equilibrium_from_bp(problem, bp_point, *, amplitude=1e-2) -> EquilibriumProblem
+        # the other branch at a transcritical or pitchfork point, by the branching equation
     CycleCurveProblem(cycle_problem, X, free, condition)   # a cycle with one more equation:
     locate_cycle(cycle_problem, X, condition) -> (problem, NewtonResult)   # curve / located
     Extremum(rows, offset, level), CycleFold(), PeriodDoubling(), NeimarkSacker()   # conditions
@@ -38,7 +42,7 @@ from ._cycles.cycle_curves import (Condition, CycleCurveProblem, CycleFold, Extr
                                    NeimarkSacker, PeriodDoubling, locate_cycle)
 from ._cycles.cycles import CycleProblem
 from ._cycles.shooting import ShootingProblem
-from ._cycles.switching import cycle_from_bp, cycle_from_hopf, cycle_from_pd, equilibrium_from_bp
+from ._cycles.switching import cycle_from_bp, cycle_from_hopf, cycle_from_pd
 from ._cycles.symmetric import keeps_symmetry, locate_symmetry_breaking, symmetric_multipliers
 from ._driver.branch import Branch, SpecialPoint, Status
 from ._driver.driver import continuation, observing
@@ -47,6 +51,7 @@ from ._driver.palc import ContinuationIterator, Step, correct
 from ._driver.problem import Problem
 from ._driver.settings import (MAX_NTST, CollocationSettings, ContinuationSettings,
                                EigenSettings, NewtonSettings, PALC, ShootingSettings)
+from ._equilibria.branching import equilibrium_from_bp
 from ._equilibria.curves import FoldCurveProblem, HopfCurveProblem
 from ._equilibria.equilibrium import EquilibriumProblem, hopf_point
 from ._equilibria.lyapunov import first_lyapunov

@@ -226,8 +226,40 @@ class VectorField:
             "M2": ca.Function("M2", [x, p, u, v, y], [m2]),
         }
 
+    @cached_property
+    def _reduced_forms(self):
+        """``H2 .. H5``: the derivatives at ``x`` of ``h(y) = M(x) M(y)^{-1} F(y)`` (so
+        that ``M(x) ydot = h(y)`` has the constant mass of the point and the same flow);
+        ``h = F`` when ``M`` does not depend on the state, else ``M(y)^{-1}`` is a
+        symbolic solve (small systems)."""
+        S, n = self.sym, self.n
+        x, p, y = self._x, self._p, S.sym("y", n)
+        if self.mass_depends_on_state:
+            h = ca.mtimes(self.M_expr(x, p), ca.solve(self.M_expr(y, p), self.F(y, p)))
+        else:
+            h = self.F(y, p)
+        args, out, forms = [], h, {}
+        for k in range(1, 6):
+            args.append(S.sym(f"v{k}", n))
+            out = ca.jtimes(out, y, args[-1])
+            if k >= 2:
+                forms[f"H{k}"] = ca.Function(f"H{k}", [x, p, *args],
+                                             [ca.substitute(out, y, x)])
+        return forms
+
+    def second_derivative(self, x, p, u, w) -> np.ndarray:
+        """``d^2/de^2 F(x + e u, p + e w)`` at ``e = 0`` (CasADi AD; compiled once)."""
+        if "_second" not in self.__dict__:
+            x_, p_ = self._x, self._p
+            u_, w_ = self.sym.sym("u", self.n), self.sym.sym("w", len(self.par_names))
+            along = lambda g: ca.jtimes(g, x_, u_) + ca.jtimes(g, p_, w_)
+            self._second = BufferedFunction(ca.Function(
+                "F_XX", [x_, p_, u_, w_], [ca.densify(along(along(self.F(x_, p_))))]))
+        return self._second(x, p, u, w)[0]
+
     def form(self, name: str, x, p, *vectors) -> np.ndarray:
-        """Evaluate a real multilinear form ``F2, F3, M1, M2`` on complex vectors.
+        """Evaluate a real multilinear form ``F2, F3, M1, M2`` (or ``H2 .. H5`` of
+        :attr:`_reduced_forms`) on complex vectors.
 
         Complex arguments are expanded by multilinearity into real evaluations
         (``f(u_r + i u_i, ...) = Σ i^k f(real or imaginary parts)``), all of them in
@@ -243,7 +275,8 @@ class VectorField:
         key = (name, count)
         cache = self.__dict__.setdefault("_mapped_forms", {})
         if key not in cache:
-            form = self._forms[name]
+            form = self._forms[name] if name in ("F2", "F3", "M1", "M2") \
+                else self._reduced_forms[name]
             x, p = ca.MX.sym("x", self.n), ca.MX.sym("p", len(self.par_names))
             columns = [ca.MX.sym(f"v{i}", self.n, count) for i in range(form.n_in() - 2)]
             out = ca.densify(form.map(count)(x, p, *columns))      # x, p broadcast

@@ -28,7 +28,6 @@ from .._driver.branch import SpecialPoint
 from .._driver.newton import factorize, newton
 from .._driver.settings import CollocationSettings, EigenSettings, NewtonSettings
 from .._equilibria import eigen
-from .._equilibria.equilibrium import EquilibriumProblem
 from .._equilibria.lyapunov import hopf_eigenvectors
 
 
@@ -176,36 +175,6 @@ def cycle_from_bp(problem: CycleProblem, point: SpecialPoint, *,
                        mesh=problem.mesh)
     new.start_direction = np.concatenate([phi[:rows] / np.linalg.norm(phi[:rows]),
                                           np.zeros(len(X) - rows)])
-    return new
-
-
-def equilibrium_from_bp(problem, point: SpecialPoint, *, amplitude: float = 1e-2):
-    """The branch of equilibria born at the branch point ``point`` of an equilibrium
-    branch (a pitchfork: in a system with a symmetry, the equilibria that break it).
-
-    At a simple branch point ``G_X = [F_x, F_p]`` has two null vectors (the two last
-    right singular vectors: an equilibrium system is small enough for a dense SVD); the
-    new branch leaves along their combination ``phi`` with no parameter part (a
-    pitchfork's does).
-    The guess is ``X + a phi / max |phi_x|``, and the start corrector fixes the amplitude
-    along ``phi`` instead of the parameter (``direction=+1`` continues towards larger
-    ``a``; a negative ``amplitude`` starts on the mirror branch)."""
-    if not isinstance(problem, EquilibriumProblem):
-        raise ValueError("problem must be the EquilibriumProblem whose branch holds the point")
-    if not isinstance(point, SpecialPoint) or point.kind != "bp" or not point.unknowns.size:
-        raise ValueError("point must be a located 'bp' SpecialPoint of an equilibrium branch")
-    if not (np.isfinite(amplitude) and amplitude != 0):
-        raise ValueError(f"amplitude must be a nonzero finite number, got {amplitude!r}")
-    X = np.asarray(point.unknowns, dtype=float)
-    J = problem.jacobian(X)
-    w1, w2 = np.linalg.svd(J.toarray() if sp.issparse(J) else np.asarray(J))[2][-2:]
-    phi = w1 * w2[-1] - w2 * w1[-1]                # no part in the active parameter
-    n = problem.vf.n
-    phi /= np.max(np.abs(phi[:n]))
-    Y = X + amplitude * phi
-    params = dict(point.params, **{problem.active: float(Y[-1])})
-    new = EquilibriumProblem(problem.vf, Y[:n], params, problem.active)
-    new.start_direction = np.append(np.sign(amplitude) * phi[:n] / np.linalg.norm(phi[:n]), 0.0)
     return new
 
 

@@ -42,6 +42,9 @@ class SpecialPoint:
     record : everything the ``record`` callback returned at the point, arrays
         included (not saved by ``to_json``/``Branch.save``: its scalars are in ``data``).
     unknowns : the problem's unknowns ``X`` at the point (empty when not known).
+    tangent : the branch's unit tangent in those unknowns at the branch point before it
+        (not at the point: at a branch point it is undefined; empty when not known;
+        branch switching tells the branch it came along from the one it leaves on).
     """
 
     kind: str
@@ -54,6 +57,7 @@ class SpecialPoint:
     message: str = ""
     record: dict = field(default_factory=dict, repr=False, compare=False)
     unknowns: np.ndarray = field(default_factory=lambda: np.zeros(0), repr=False, compare=False)
+    tangent: np.ndarray = field(default_factory=lambda: np.zeros(0), repr=False, compare=False)
 
     def to_json(self) -> dict:
         return {"kind": self.kind, "index": self.index, "params": self.params,

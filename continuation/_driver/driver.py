@@ -241,7 +241,8 @@ class _Run:
         data = {"bracket": float(loc.bracket), "s": loc.s, "value": loc.value}
         point = SpecialPoint(event.name, len(self.rec.X), problem.state(loc.X),
                              problem.par_dict(loc.X), status, float(loc.bracket), data,
-                             loc.message, unknowns=np.array(loc.X))
+                             loc.message, unknowns=np.array(loc.X),
+                             tangent=np.array(self.prev[0].tau))
         return _Found(loc.s, point, np.array(loc.X), event, loc)
 
     def located_step(self, problem, hit: _Found):
@@ -334,5 +335,6 @@ def _special(problem, kind, a, b, settings, index, stats) -> _Found | None:
     message = "; ".join(m for m in (loc.message, desc.message) if m)
     precision = desc.precision if desc.precision > 0 else loc.bracket
     point = SpecialPoint(kind, index, problem.state(desc.X), problem.par_dict(desc.X),
-                         status, float(precision), data, message, unknowns=np.array(desc.X))
+                         status, float(precision), data, message, unknowns=np.array(desc.X),
+                         tangent=np.array(a[0].tau))
     return _Found(loc.s, point, np.array(desc.X))

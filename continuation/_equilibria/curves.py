@@ -27,6 +27,8 @@ import scipy.sparse as sp
 from . import eigen
 from .equilibrium import StationaryProblem, hopf_start, hopf_vectors, real_null_vector
 from .lyapunov import first_lyapunov
+from .normal_forms import (bogdanov_takens_coefficients, double_hopf_coefficients,
+                           lyapunov_coefficients, zero_hopf_coefficients)
 from .systems import fold_system, hopf_system
 from .._casadi.vectorfield import VectorField, param_vector, state_vector
 from .._driver.newton import factorize
@@ -122,10 +124,68 @@ class HopfCurveProblem(StationaryProblem):
             return lambda X, tau, lu: self.kappa(X)
         if kind == "gh":
             return lambda X, tau, lu: self.l1(X)
+        if kind in ("hh", "zh"):
+            return self._other_crossing(kind, X_a, info_a, X_b, info_b, settings)
         return super().test_function(kind, X_a, info_a, X_b, info_b, settings)
 
+    def _other_crossing(self, kind, X_a, info_a, X_b, info_b, settings):
+        """``Re`` of the other eigenvalue that crosses the axis, as a function of ``X``:
+        a complex one (``'hh'``, the pair whose real parts change sign from a to b) or a
+        real one (``'zh'``, the one nearest to zero at a or b), followed by nearness."""
+        tol = settings.eigen.imag_tol
+        others = lambda ev, X: _remove_tracked(ev, self.kappa(X))
+        a, b = others(info_a.eigenvalues, X_a), others(info_b.eigenvalues, X_b)
+        if kind == "hh":
+            ref, keep = eigen.crossing_eigenvalue(a, b, tol), lambda ev: ev.imag > tol
+        else:
+            real = np.concatenate([a, b])
+            real = real[np.abs(real.imag) <= tol]
+            ref = real[np.argmin(np.abs(real))] if real.size else None
+            keep = lambda ev: np.abs(ev.imag) <= tol
+        if ref is None:
+            return None
+
+        def f(X, tau, lu):
+            ev = others(self.eigenvalues(X, settings), X)
+            ev = ev[keep(ev)]
+            return float(eigen.nearest(ev, ref).real) if ev.size else 1.0
+
+        return f
+
     def describe(self, kind, X, tau, settings) -> Description:
-        return Description(X, "converged", 0.0, {**self.columns(X), "l1": self.l1(X)})
+        """The located point with ``omega, kappa`` and its normal-form coefficients:
+        ``l1, l2`` at a generalized Hopf point, those of
+        :func:`normal_forms.double_hopf_coefficients` at a double Hopf point, ``a, b``
+        at a Bogdanov-Takens point."""
+        data = self.columns(X)
+        try:
+            if kind == "gh" and data["omega"] > 0:
+                data.update(lyapunov_coefficients(self.vf, self.state(X), self.params(X),
+                                                  data["omega"]))
+            elif kind == "hh":
+                data.update(self._double_hopf(X, settings))
+            elif kind == "bt":
+                data.update(bogdanov_takens_coefficients(self.vf, self.state(X), self.params(X)))
+            elif kind == "zh":
+                data.update(zero_hopf_coefficients(self.vf, self.state(X), self.params(X),
+                                                   data["omega"]))
+            else:
+                data["l1"] = self.l1(X)
+        except (RuntimeError, ValueError, ZeroDivisionError) as err:   # no normal form
+            return Description(X, "converged", 0.0, data, f"{kind} coefficients: {err}")
+        return Description(X, "converged", 0.0, data)
+
+    def _double_hopf(self, X, settings) -> dict:
+        """Coefficients of the double Hopf point at ``X``: the second frequency is the
+        other pair nearest to the imaginary axis."""
+        ev = _remove_tracked(eigen.eigenvalues(*self.matrices(X), settings.eigen), self.kappa(X))
+        ev = ev[ev.imag > settings.eigen.imag_tol]
+        omega2 = float(ev[np.argmin(np.abs(ev.real))].imag)
+        ratio = max(omega2, self.kappa(X) ** 0.5) / min(omega2, self.kappa(X) ** 0.5)
+        if min(abs(ratio - k) for k in (1, 2, 3)) < 1e-2:
+            raise RuntimeError(f"strong resonance omega1 : omega2 near 1:{round(ratio)}")
+        return double_hopf_coefficients(self.vf, self.state(X), self.params(X),
+                                        float(np.sqrt(self.kappa(X))), omega2)
 
 
 def _remove_tracked(ev: np.ndarray, kappa: float) -> np.ndarray:
@@ -194,3 +254,21 @@ class FoldCurveProblem(StationaryProblem):
         if kind == "bt":
             return lambda X, tau, lu: self.bt_test(X)
         return super().test_function(kind, X_a, info_a, X_b, info_b, settings)
+
+    def describe(self, kind, X, tau, settings) -> Description:
+        """The located point; ``a, b`` (:func:`normal_forms.bogdanov_takens_coefficients`)
+        at a Bogdanov-Takens point, ``omega`` and those of
+        :func:`normal_forms.zero_hopf_coefficients` at a zero-Hopf point."""
+        x, p = self.state(X), self.params(X)
+        try:
+            if kind == "bt":
+                return Description(X, "converged", 0.0, bogdanov_takens_coefficients(self.vf, x, p))
+            if kind == "zh":
+                ev = self.eigenvalues(X, settings)
+                ev = ev[ev.imag > settings.eigen.imag_tol]
+                omega = float(ev[np.argmin(np.abs(ev.real))].imag)
+                data = {"omega": omega, **zero_hopf_coefficients(self.vf, x, p, omega)}
+                return Description(X, "converged", 0.0, data)
+        except (RuntimeError, ValueError, ZeroDivisionError) as err:   # no normal form
+            return Description(X, "converged", 0.0, {}, f"{kind} coefficients: {err}")
+        return super().describe(kind, X, tau, settings)
