@@ -69,9 +69,7 @@ class ImpactRule:
         if self.weights is None and isinstance(g, ca.MX):
             return _cell_rule(self.cells).jacobian()(g, 0)
         if self.weights is None:
-            ends, mids, _ = _scatter(self.cells)
-            return _cell_jacobian(*(ca.mtimes(ca.DM(m), g) for m in (ends[0], mids, ends[1])),
-                                  self.cells)
+            return _cell_jacobian(*_cell_values(g, self.cells), self.cells)
         s = type(g).sym("g", g.shape)
         return ca.substitute(ca.jacobian(self.nodal(s, ramp), s), s, g)
 
@@ -83,12 +81,10 @@ class ImpactRule:
             return self.weights * ramp(g)
         if isinstance(g, ca.MX):
             return _cell_rule(self.cells)(g)
-        symbolic = isinstance(g, (ca.SX, ca.DM))
-        ends, mids, scatter = _scatter(self.cells)
-        if symbolic:
-            left, mid, right = (ca.mtimes(ca.DM(m), g) for m in (ends[0], mids, ends[1]))
-            weights = _cell_weights(left, mid, right, ca, ca.if_else)
-            return sum(ca.mtimes(ca.DM(s), w) for s, w in zip(scatter, weights)) / (2 * self.cells)
+        if isinstance(g, (ca.SX, ca.DM)):
+            return _scattered(_cell_weights(*_cell_values(g, self.cells), ca, ca.if_else),
+                              self.cells)
+        _, scatter = _scatter(self.cells)
         g = np.asarray(g, dtype=float)
         weights = _cell_weights(g[..., 0:-1:2], g[..., 1::2], g[..., 2::2], np, np.where)
         return sum(w @ s.T for s, w in zip(scatter, weights)) / (2 * self.cells)
@@ -104,12 +100,23 @@ def impact_rule(n_quad: int, smoothing: float) -> ImpactRule:
 
 @functools.lru_cache(maxsize=16)
 def _scatter(cells: int):
-    """Constant sparse matrices: the cells' left and right end values and midpoint values
-    from the nodes, and the map of the three per-cell weights back onto the nodes."""
+    """``(picks, scatter)``: constant sparse matrices taking the cells' left end, midpoint
+    and right end values from the nodes, and their transposes, which map the three
+    per-cell weights back onto the nodes."""
     rows = np.arange(cells)
     pick = lambda cols: sp.csc_matrix((np.ones(cells), (rows, cols)), shape=(cells, 2 * cells + 1))
-    left, mid, right = pick(2 * rows), pick(2 * rows + 1), pick(2 * rows + 2)
-    return (left, right), mid, (left.T.tocsc(), mid.T.tocsc(), right.T.tocsc())
+    picks = pick(2 * rows), pick(2 * rows + 1), pick(2 * rows + 2)
+    return picks, tuple(m.T.tocsc() for m in picks)
+
+
+def _cell_values(g, cells: int) -> tuple:
+    """``(g_left, g_mid, g_right)`` of every cell from the symbolic node values ``g``."""
+    return tuple(ca.mtimes(ca.DM(m), g) for m in _scatter(cells)[0])
+
+
+def _scattered(weights, cells: int):
+    """``W`` at the nodes from the three symbolic per-cell weights (``Δ/2 = 1/(2 cells)``)."""
+    return sum(ca.mtimes(ca.DM(s), w) for s, w in zip(_scatter(cells)[1], weights)) / (2 * cells)
 
 
 @functools.lru_cache(maxsize=16)
@@ -124,11 +131,8 @@ def _cell_rule(cells: int) -> ca.Function:
     per Jacobian at 120 cells, this 0.05-0.2 ms (CasADi's ``jacobian`` of an expression
     that calls this still seeds it direction by direction: call ``.jacobian()``)."""
     g = ca.MX.sym("g", 2 * cells + 1)
-    ends, mids, scatter = _scatter(cells)
-    picks = [ca.DM(m) for m in (ends[0], mids, ends[1])]
-    gl, g0, gr = (ca.mtimes(pick, g) for pick in picks)
-    load = sum(ca.mtimes(ca.DM(s), w) for s, w in zip(
-        scatter, _cell_weights(gl, g0, gr, ca, ca.if_else))) / (2 * cells)
+    gl, g0, gr = _cell_values(g, cells)
+    load = _scattered(_cell_weights(gl, g0, gr, ca, ca.if_else), cells)
     jac = _cell_jacobian(gl, g0, gr, cells)
     # p exceeds its largest node by at most |c2|/4: where no cell reaches 0, W is 0 and so
     # is its Jacobian, and the switch skips the cells (most calls of a run)
@@ -144,8 +148,8 @@ def _cell_jacobian(gl, g0, gr, cells: int):
     """``dW/dg`` (:func:`_cell_rule`) from the cells' end and midpoint values, symbolic:
     ``Σ_jk S_j diag(Δ/2 ∫_{p>0} ℓ_j ℓ_k) P_k``, P_k picking node k of each cell and S_j
     scattering the weight j back to the nodes."""
-    ends, mids, scatter = _scatter(cells)
-    picks = [ca.DM(m) for m in (ends[0], mids, ends[1])]
+    picks, scatter = _scatter(cells)
+    picks = [ca.DM(m) for m in picks]
     mass = _cell_mass(gl, g0, gr, ca, ca.if_else)
     return sum(ca.mtimes(ca.DM(scatter[j]), ca.mtimes(ca.diag(mass[min(j, k), max(j, k)]),
                                                       picks[k]))
