@@ -134,6 +134,9 @@ def test_sound_rows_equal_the_sound_of_the_same_run(tmp_path):
     sound = trajectory_sound(traj, scene.scales, 0.3, t_start=traj.t[-1] * 2 / 3)
     assert row["spl_db"] == pytest.approx(sound.spl_db, rel=1e-9)
     assert row["fundamental_hz"] == pytest.approx(sound.fundamental_hz, rel=1e-9)
+    assert (row["fundamental_lo_hz"], row["fundamental_hi_hz"]) == pytest.approx(
+        sound.fundamental_ci_hz, rel=1e-9)
+    assert all(w in row["warnings"] for w in sound.warnings)
 
 
 def test_a_point_that_fails_is_a_row_with_its_error(tmp_path):

@@ -106,7 +106,8 @@ def _sound(study: Study, point: dict) -> dict:
     scene, physical, run = _run(study, point)
     row = _outcome_row(scene, physical, run)
     traj, o, r = run.trajectory, run.outcome, study.settings["distance"]
-    row.update(spl_db=None, fundamental_hz=None, dominant_hz=None)
+    row.update(spl_db=None, fundamental_hz=None, fundamental_lo_hz=None, fundamental_hi_hz=None,
+               dominant_hz=None)
     if o.periodic:
         sound = cycle_sound(traj, scene.scales, r, duration=1.0)
     elif o.outcome in ("unsettled", "impacting_nonperiodic") or (o.outcome == "contact" and
@@ -114,8 +115,11 @@ def _sound(study: Study, point: dict) -> dict:
         sound = trajectory_sound(traj, scene.scales, r, t_start=traj.t[-1] * 2 / 3)
     else:
         return row
-    row.update(spl_db=sound.spl_db, fundamental_hz=sound.fundamental_hz,
-               dominant_hz=sound.dominant_hz)
+    lo, hi = sound.fundamental_ci_hz or (None, None)
+    row.update(spl_db=sound.spl_db, fundamental_hz=sound.fundamental_hz, fundamental_lo_hz=lo,
+               fundamental_hi_hz=hi, dominant_hz=sound.dominant_hz)
+    for message in sound.warnings:          # an irregular snore's pitch: the row's warnings
+        warnings.warn(message)
     return row
 
 
