@@ -31,12 +31,14 @@ Public API (everything else is private)::
     Branch, SpecialPoint, ContinuationIterator, PALC, ContinuationSettings,
     NewtonSettings, EigenSettings, CollocationSettings, ShootingSettings
     BufferedFunction(fun)                     # a CasADi Function called zero-copy on NumPy
+    Problem, CompiledSystem(Y, P, D, G, name) # a new kind of problem: a Problem subclass
+                                              # whose builder(vf) returns its CompiledSystem
 
 Plotting lives in ``continuation.plotting`` (Matplotlib is imported there only).
 """
 
 from ._casadi.lifted import Lifted
-from ._casadi.symbolic import BufferedFunction
+from ._casadi.symbolic import BufferedFunction, CompiledSystem
 from ._casadi.vectorfield import VectorField
 from ._cycles.cycle_curves import (Condition, CycleCurveProblem, CycleFold, Extremum,
                                    NeimarkSacker, PeriodDoubling, locate_cycle)
@@ -57,7 +59,7 @@ from ._equilibria.equilibrium import EquilibriumProblem, hopf_point
 from ._equilibria.lyapunov import first_lyapunov
 
 __all__ = [
-    "MAX_NTST", "Branch", "BufferedFunction", "Event", "Status", "CollocationSettings", "Condition", "CycleCurveProblem",
+    "MAX_NTST", "Branch", "BufferedFunction", "CompiledSystem", "Event", "Status", "CollocationSettings", "Condition", "CycleCurveProblem",
     "CycleFold", "Extremum", "NeimarkSacker", "PeriodDoubling", "locate_cycle", "ContinuationIterator", "ContinuationSettings",
     "CycleProblem", "EigenSettings", "ShootingProblem", "ShootingSettings", "cycle_from_hopf",
     "cycle_from_bp", "cycle_from_pd", "equilibrium_from_bp",
