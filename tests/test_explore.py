@@ -22,6 +22,7 @@ from fsicas.cycles.collocation import cycle_branch
 from fsicas.linear import critical_velocity, linear_stability
 from fsicas.model.assembly import build_model
 from fsicas.physical import Physical, load_physical, parse_flow
+from fsicas.scene import load_scene
 from fsicas.timedomain.run import run_case
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -261,11 +262,11 @@ def test_a_physical_preset_gives_hz_and_l_per_min_of_the_library(page, server):
     page.wait_for_function("() => location.search.includes('preset=soft_palate')")
 
 
-def _soft_palate_with(**values) -> Physical:
-    """The soft_palate preset with ``values`` (texts with units) in its [physical] table,
+def _preset_with(name: str = "soft_palate", **values) -> Physical:
+    """The preset ``name`` with ``values`` (texts with units) in its [physical] table,
     read by the library."""
-    preset = load_physical("soft_palate")
-    return Physical.from_table({**preset.raw, **values}, "soft_palate", preset.description,
+    preset = load_physical(name)
+    return Physical.from_table({**preset.raw, **values}, name, preset.description,
                                preset.scene_fields)
 
 
@@ -277,14 +278,14 @@ def test_physical_inputs_with_units_are_converted_by_the_library(page, server):
     assert page.locator("[data-testid=phys-flow]").input_value() == "20 L/min"
     _set(page, "phys-E", "4 kPa")
     _set(page, "phys-flow", "25 L/min")
-    scene = _soft_palate_with(E="4 kPa").scene(parse_flow("25 L/min"))
+    scene = _preset_with(E="4 kPa").scene(parse_flow("25 L/min"))
     assert float(_text(page, "flow").split()[0]) == pytest.approx(25.0, rel=1e-4)
     assert _number(page, "growth-rate") == pytest.approx(
         linear_stability(scene).eigenvalues[0].real, rel=1e-5)
     assert f"--mstar {scene.mstar:g} --ustar {scene.ustar:g} " in _text(page, "command")
     page.wait_for_function("() => location.search.includes('E=4')")
     with pytest.raises(ValueError) as refused:
-        _soft_palate_with(E="-3 kPa")
+        _preset_with(E="-3 kPa")
     _set(page, "phys-E", "-3 kPa")
     assert _text(page, "error") == str(refused.value)
     _set(page, "phys-E", "4 kPa")
@@ -314,3 +315,47 @@ def test_the_limit_cycle_branch_in_the_background_is_the_library_one(page, serve
     exported = _export(page)["cycles"]
     assert exported["contact"]["ustar"] == pytest.approx(branch.contact.ustar, rel=1e-9)
     assert [p["stable"] for p in exported["points"]] == [p.stable for p in branch.points]
+
+
+def _load(page, path: Path) -> None:
+    """Load the scene file ``path`` in the page and wait until it has answered (its
+    command line or its error changed)."""
+    state = f"() => ['command', 'error'].map(i => ({FIND})(document, i).textContent).join('|')"
+    old = page.evaluate(state)
+    page.locator("input[type=file]").set_input_files(str(path))
+    page.wait_for_function(f"old => ({state})() !== old", arg=old, timeout=30000)
+
+
+def test_a_scene_file_loads_as_the_cli_reads_it_and_a_bad_one_is_refused(page, server, tmp_path):
+    _open(page, server)
+    mine = tmp_path / "mine.toml"
+    mine.write_text("mstar = 2.0\nustar = 3.0\nk0 = 0.5\nmodes = 8\nzeta = 0.01\n")
+    _load(page, mine)
+    scene = load_scene(mine)
+    page.wait_for_function(f"() => ({FIND})(document, 'scene-file').textContent.length > 0")
+    assert _text(page, "scene-file") == "mine.toml (scene file)"
+    assert _number(page, "growth-rate") == pytest.approx(
+        linear_stability(scene).eigenvalues[0].real, rel=1e-5)
+    assert _text(page, "command") == "fsicas eig --scene mine.toml --json"
+    _set(page, "ustar", "3.5")                                   # the page's values win
+    assert _text(page, "command") == "fsicas eig --scene mine.toml --ustar 3.5 --json"
+    for name, text in (("bad.toml", "mstar = [\n"), ("odd.toml", "mstar = 2.0\nspeed = 3\n"),
+                       ("neg.toml", "mstar = -1.0\n")):
+        (tmp_path / name).write_text(text)
+        with pytest.raises(ValueError) as refused:
+            load_scene(tmp_path / name)
+        _load(page, tmp_path / name)
+        assert _text(page, "error") == str(refused.value).replace(f"{tmp_path}/", "")
+        assert "Traceback" not in _text(page, "error")
+    assert _number(page, "growth-rate") == pytest.approx(                    # the view stays
+        linear_stability(scene.replace(ustar=3.5)).eigenvalues[0].real, rel=1e-5)
+    physical = tmp_path / "palate.toml"                          # as fsicas onset --physical
+    physical.write_text('preset = "soft_palate"\n[physical]\nE = "4 kPa"\nflow = "25 L/min"\n')
+    _load(page, physical)
+    read = load_physical(str(physical))
+    assert _text(page, "scene-file") == "palate.toml (physical file)"
+    assert page.locator("[data-testid=phys-E]").input_value() == "4 kPa"
+    assert float(_text(page, "flow").split()[0]) == pytest.approx(25.0, rel=1e-4)
+    assert _number(page, "growth-rate") == pytest.approx(
+        linear_stability(read.scene(read.flow)).eigenvalues[0].real, rel=1e-5)
+

@@ -12,7 +12,6 @@ from bokeh.plotting import figure
 from ..timedomain.sound import AUDIO_RATE
 from .compute import run_view
 from .jobs import Jobs
-from .reproduce import command_line
 from .widgets import NumberBox, held, markup, readout
 
 __all__ = ["BackgroundPanel", "RunPanel"]
@@ -71,14 +70,15 @@ class RunPanel(BackgroundPanel):
         self.audio = pn.pane.Audio(None, sample_rate=AUDIO_RATE, name="snore", visible=False)
 
     @held
-    def ask(self, scene, key: str) -> None:
-        """Start (or show the cached) run of ``scene`` to the page's t_end."""
+    def ask(self, scene, key: str, command: str) -> None:
+        """Start (or show the cached) run of ``scene`` to the page's t_end; ``command``
+        is the ``fsicas simulate`` line of the scene."""
         try:
             t_end = float(str(self.t_end.value))
         except ValueError:
             return self.show("error", f"t_end must be a number, got {self.t_end.value!r}")
         self.key = ("run", f"{key}|{t_end!r}")
-        self.command = command_line(scene, "simulate").replace(" --json", f" --t-end {t_end:g} --json")
+        self.command = command.replace(" --json", f" --t-end {t_end:g} --json")
         cached = self.jobs.start(self.key, run_view, scene, t_end)
         self.show("done", cached) if cached is not None else self.show("running", 0.0)
 

@@ -4,7 +4,9 @@ mode shape), the onset and the boundary, each as plain data for the page."""
 from __future__ import annotations
 
 import math
+import tempfile
 import warnings
+from pathlib import Path
 
 import numpy as np
 
@@ -12,12 +14,13 @@ from ..cycles.collocation import cycle_branch
 from ..linear import critical_velocity, linear_stability, stability_boundary
 from .. import strict_json
 from ..physical import KEYS, Physical, load_physical, parse_flow
+from ..checks import read_toml
 from ..scene import Scene
 from ..timedomain.run import run_case, sweep_model
 from ..timedomain.sound import AUDIO_RATE, cycle_sound
 
 __all__ = ["INPUTS", "PHYSICAL_INPUTS", "scene_of", "preset_scene", "physical_texts",
-           "physical_scene", "instant_view", "onset_view",
+           "physical_scene", "read_scene_file", "input_text", "instant_view", "onset_view",
            "boundary_view", "boundary_grid", "cycles_view", "CYCLE_USTAR_MAX",
            "BOUNDARY_PER_DECADE", "run_view",
            "SOUND_DISTANCE", "SOUND_DURATION", "export"]
@@ -26,7 +29,8 @@ __all__ = ["INPUTS", "PHYSICAL_INPUTS", "scene_of", "preset_scene", "physical_te
 INPUTS = {"mstar": ("M*", float), "ustar": ("U*", float), "hstar": ("H*", float),
           "friction": ("f", float), "kl": ("KL", float), "zeta": ("ζ", float),
           "modes": ("N", int)}
-#: The physical inputs offered with a preset (those of its [physical] table): key -> label.
+#: The physical inputs offered with a preset or a physical file (those of its [physical]
+#: table): key -> label.
 PHYSICAL_INPUTS = {"flow": "airflow (L/min or m/s)", "E": "Young's modulus E",
                    "e": "thickness e", "L": "length L", "b": "width b",
                    "gap": "gap of each channel", "H1": "gap H1 (above)", "H2": "gap H2 (below)"}
@@ -44,10 +48,26 @@ def _number(name: str, text, kind) -> float | int:
     return value
 
 
+def _value(name: str, text) -> float | int | tuple:
+    """The page's input ``name`` read from ``text``; ζ also one value per mode, separated
+    by commas (as a scene file may give it)."""
+    kind = INPUTS[name][1]
+    if name == "zeta" and "," in str(text):
+        return tuple(_number(name, part, kind) for part in str(text).split(","))
+    return _number(name, text, kind)
+
+
+def input_text(value) -> str:
+    """The text of a Scene field's value in the page's box (a tuple comma-separated)."""
+    if isinstance(value, tuple):
+        return ", ".join(f"{v:.6g}" for v in value)
+    return "" if value is None else f"{value:.6g}"
+
+
 def scene_of(base: Scene, texts: dict) -> Scene:
     """``base`` with the page's inputs (field -> text; ``beam`` and ``slenderness``, empty
     for none, together) applied; the library's ValueError for values it refuses."""
-    values = {k: _number(k, texts[k], INPUTS[k][1]) for k in INPUTS if k in texts}
+    values = {k: _value(k, texts[k]) for k in INPUTS if k in texts}
     if "beam" in texts:
         text = str(texts.get("slenderness", "")).strip()
         values["beam"] = texts["beam"]
@@ -68,27 +88,49 @@ def preset_scene(name: str | None) -> Scene:
     L/min), or the default Scene."""
     if name is None:
         return Scene()
-    physical = load_physical(name)
-    return _default_walls(physical.scene(physical.flow))
+    return physical_scene(load_physical(name))
 
 
-def physical_texts(name: str) -> dict:
-    """The physical inputs of preset ``name`` as its file writes them (a number, SI,
-    with its unit added): key -> text, for the keys of :data:`PHYSICAL_INPUTS` it has."""
-    raw = load_physical(name).raw
+def physical_texts(physical: Physical) -> dict:
+    """The physical inputs of ``physical`` (a preset or a file) as its file writes them
+    (a number, SI, with its unit added): key -> text, for the keys of
+    :data:`PHYSICAL_INPUTS` it has."""
+    raw = physical.raw
     return {k: raw[k] if isinstance(raw[k], str) else f"{raw[k]:g} {KEYS[k]}".rstrip()
             for k in PHYSICAL_INPUTS if k in raw}
 
 
-def physical_scene(name: str, texts: dict) -> Scene:
-    """The Scene of preset ``name`` with the page's physical inputs (key -> text with its
-    unit, :data:`PHYSICAL_INPUTS`) in place of its own: read and converted by the library
-    (``Physical.from_table``, ``parse_flow``, ``Physical.scene``), its ValueError for what
-    it refuses."""
-    physical = load_physical(name)
+def physical_scene(physical: Physical, texts: dict | None = None) -> Scene:
+    """The Scene of ``physical`` with the page's physical inputs (key -> text with its
+    unit, :data:`PHYSICAL_INPUTS`; none: its own, at its default airflow) in place of its
+    own: read and converted by the library (``Physical.from_table``, ``parse_flow``,
+    ``Physical.scene``), its ValueError for what it refuses."""
+    if texts is None:
+        return _default_walls(physical.scene(physical.flow))
     table = {**physical.raw, **{k: v for k, v in texts.items() if k != "flow"}}
-    changed = Physical.from_table(table, name, physical.description, physical.scene_fields)
-    return _default_walls(changed.scene(parse_flow(texts.get("flow", ""), "airflow")))
+    changed = Physical.from_table(table, physical.source, physical.description,
+                                  physical.scene_fields)
+    flow = parse_flow(texts["flow"], "airflow") if "flow" in texts else physical.flow
+    return _default_walls(changed.scene(flow))
+
+
+def read_scene_file(name: str, data: bytes) -> Scene | Physical:
+    """The scene file ``name`` with the content ``data``, read by the library as the CLI
+    reads it: a file with a ``[physical]`` table (or ``preset = NAME``) as ``--physical
+    FILE.toml`` (``load_physical``), any other as ``--scene FILE.toml``
+    (``Scene.from_dict`` of ``read_toml``, as ``load_scene``); their ValueError, naming
+    the file by its name."""
+    name = Path(str(name)).name or "scene.toml"
+    with tempfile.TemporaryDirectory() as folder:
+        path = Path(folder) / name
+        path.write_bytes(data)
+        try:
+            doc = read_toml(path, "scene file")
+            if "physical" in doc or "preset" in doc:
+                return load_physical(str(path))
+            return Scene.from_dict(doc)
+        except ValueError as err:
+            raise ValueError(str(err).replace(folder + "/", "")) from None
 
 
 def _hz(scene: Scene, omega: float) -> float | None:

@@ -13,7 +13,6 @@ from .compute import cycles_view
 from .figures import STABLE_COLOR, UNSTABLE_COLOR
 from .background import BackgroundPanel
 from .jobs import Jobs
-from .reproduce import command_line
 from .widgets import held, readout
 
 __all__ = ["CyclePanel"]
@@ -46,9 +45,10 @@ class CyclePanel(BackgroundPanel):
         self.figure = f
 
     @held
-    def ask(self, scene, key: str) -> None:
-        """Start (or show the cached) branch of ``scene``."""
-        self.command = command_line(scene, "lco")
+    def ask(self, scene, key: str, command: str) -> None:
+        """Start (or show the cached) branch of ``scene``; ``command`` is the ``fsicas
+        lco`` line of the scene."""
+        self.command = command
         cached = self.jobs.start(("lco", key), cycles_view, scene)
         self.show("done", cached) if cached is not None else self.show("running", 0.0)
 
