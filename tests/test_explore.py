@@ -359,3 +359,30 @@ def test_a_scene_file_loads_as_the_cli_reads_it_and_a_bad_one_is_refused(page, s
     assert _number(page, "growth-rate") == pytest.approx(
         linear_stability(read.scene(read.flow)).eigenvalues[0].real, rel=1e-5)
 
+
+def test_the_densities_poisson_ratio_and_viscosity_are_physical_inputs_too(page, server):
+    _open(page, server)
+    page.get_by_label("physical preset").select_option("harvester")
+    page.locator("[data-testid=flow]").wait_for(timeout=30000)
+    shown = {k: page.locator(f"[data-testid=phys-{k}]").input_value()
+             for k in ("nu", "rho_s", "rho_f", "viscosity")}
+    assert shown == {"nu": "0.38", "rho_s": "1390 kg/m^3", "rho_f": "1.2 kg/m^3",
+                     "viscosity": "1.8e-5 Pa*s"}
+    values = {"nu": "0.3", "rho_s": "1.2 g/cm^3", "rho_f": "1 kg/m^3", "viscosity": "3.6e-5 Pa*s"}
+    for key, text in values.items():
+        _set(page, f"phys-{key}", text)
+    physical = _preset_with("harvester", **values)
+    scene = physical.scene(physical.flow)
+    assert _number(page, "growth-rate") == pytest.approx(
+        linear_stability(scene).eigenvalues[0].real, rel=1e-5)
+    assert float(page.locator("[data-testid=friction]").input_value()) == pytest.approx(
+        physical.friction(physical.flow)[0], rel=1e-5)        # f from the viscosity's Re
+    assert f"--mstar {scene.mstar:g} " in _text(page, "command")
+    page.wait_for_function("() => location.search.includes('rho_s=1.2')")
+    for key, text in (("rho_f", "-1 kg/m^3"), ("viscosity", "2 m")):
+        with pytest.raises(ValueError) as refused:
+            _preset_with("harvester", **{**values, key: text})
+        _set(page, f"phys-{key}", text)
+        assert _text(page, "error") == str(refused.value)
+        _set(page, f"phys-{key}", values[key])
+        assert _text(page, "error") == ""

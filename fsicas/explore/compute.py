@@ -30,10 +30,12 @@ INPUTS = {"mstar": ("M*", float), "ustar": ("U*", float), "hstar": ("H*", float)
           "friction": ("f", float), "kl": ("KL", float), "zeta": ("ζ", float),
           "modes": ("N", int)}
 #: The physical inputs offered with a preset or a physical file (those of its [physical]
-#: table): key -> label.
+#: table but the nondimensional friction and zeta, which have their own boxes): key -> label.
 PHYSICAL_INPUTS = {"flow": "airflow (L/min or m/s)", "E": "Young's modulus E",
+                   "nu": "Poisson ratio ν", "rho_s": "beam density ρ_s",
                    "e": "thickness e", "L": "length L", "b": "width b",
-                   "gap": "gap of each channel", "H1": "gap H1 (above)", "H2": "gap H2 (below)"}
+                   "gap": "gap of each channel", "H1": "gap H1 (above)", "H2": "gap H2 (below)",
+                   "rho_f": "fluid density ρ_f", "viscosity": "fluid viscosity μ"}
 #: Points of the boundary map per decade of M*; it spans the two decades around M*.
 BOUNDARY_PER_DECADE = 6
 
