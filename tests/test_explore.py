@@ -386,3 +386,53 @@ def test_the_densities_poisson_ratio_and_viscosity_are_physical_inputs_too(page,
         assert _text(page, "error") == str(refused.value)
         _set(page, f"phys-{key}", values[key])
         assert _text(page, "error") == ""
+
+
+def _wav(page) -> np.ndarray:
+    """The samples of the page's ``<audio>`` element (its WAV, served as a data: URL),
+    as floats in [-1, 1]."""
+    import base64
+    import io
+    import wave
+    src = page.locator("audio").get_attribute("src")
+    assert src.startswith("data:audio/wav;base64,"), src[:40]
+    with wave.open(io.BytesIO(base64.b64decode(src.split(",", 1)[1]))) as w:
+        return np.frombuffer(w.readframes(w.getnframes()), dtype="<i2") / 32767
+
+
+def test_the_snore_plays_with_its_spectrum_of_the_library(page, server):
+    """The harvester just past its supercritical onset settles on a cycle: the page plays
+    its sound and shows the spectrum of it, which is that of the WAV it plays, computed
+    by the library (line_spectrum) and by a plain FFT."""
+    import scipy.signal
+    from fsicas.timedomain.sound import P_REF, line_spectrum
+    _open(page, server)
+    page.get_by_label("physical preset").select_option("harvester")
+    page.locator("[data-testid=flow]").wait_for(timeout=30000)
+    _set(page, "ustar", "3.5")
+    t_end = page.locator("[data-testid=t-end]")
+    t_end.fill("-1")
+    t_end.press("Enter")
+    page.get_by_role("button", name="time run").click()
+    page.wait_for_function(f"() => ({FIND})(document, 'run-status').textContent"
+                           ".startsWith('error')")
+    assert "t_end must be in (0, 1000], got -1.0" in _text(page, "run-status")
+    assert page.locator("audio").count() == 0 or not page.locator("audio").is_visible()
+    t_end.fill("25")
+    t_end.press("Enter")
+    page.get_by_role("button", name="time run").click()
+    page.locator("[data-testid=sound-pitch]").wait_for(timeout=180000)
+    assert _text(page, "run-outcome") == "lco"
+    sound = _export(page)["run"]["sound"]
+    shown = np.array(sound["spectrum"]["spl_db"])
+    pressure = _wav(page) * sound["peak_pa"]                      # back to Pa
+    hz, db = line_spectrum(pressure, sound["sample_rate_hz"], 5000.0)
+    assert np.array(sound["spectrum"]["hz"]) == pytest.approx(hz)
+    strong = db > db.max() - 60                                    # above the WAV's rounding
+    assert shown[strong] == pytest.approx(db[strong], abs=0.05)
+    window = scipy.signal.get_window("hann", pressure.size)        # periodic, as periodogram
+    lines = np.abs(np.fft.rfft((pressure - pressure.mean()) * window)) ** 2
+    plain = 10 * np.log10(2 * lines / window.sum() ** 2 / P_REF ** 2)
+    j = int(np.argmax(shown))
+    assert shown[j] == pytest.approx(plain[j], abs=0.05)
+    assert hz[j] == pytest.approx(float(_text(page, "sound-pitch").split()[0]), abs=1.0)

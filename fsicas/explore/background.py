@@ -68,6 +68,11 @@ class RunPanel(BackgroundPanel):
                              y_axis_label="y / L", height=220, sizing_mode="stretch_width")
         self.figure.line("t", "tip", source=self.source)
         self.audio = pn.pane.Audio(None, sample_rate=AUDIO_RATE, name="snore", visible=False)
+        self.spectrum = ColumnDataSource({"hz": [], "spl_db": []})
+        self.spectrum_figure = figure(title="the snore's spectrum at the listener",
+                                      x_axis_label="frequency (Hz)", y_axis_label="dB SPL",
+                                      height=220, sizing_mode="stretch_width", visible=False)
+        self.spectrum_figure.line("hz", "spl_db", source=self.spectrum)
 
     @held
     def ask(self, scene, key: str, command: str) -> None:
@@ -97,9 +102,10 @@ class RunPanel(BackgroundPanel):
                          + f" at {sound['distance_m']:g} m")
             peak = float(np.max(np.abs(sound["pressure"]))) or 1.0
             self.audio.object = (np.asarray(sound["pressure"]) / peak * 32767).astype(np.int16)
-        self.audio.visible = sound is not None
+            self.spectrum.data = dict(sound["spectrum"])
+        self.audio.visible = self.spectrum_figure.visible = sound is not None
         self.status.text = "<br>".join(lines)
 
     def page(self) -> pn.viewable.Viewable:
         return pn.Column("### Time run", self.t_end, pn.Row(self.start, self.stop), self.status,
-                         self.audio, pn.pane.Bokeh(self.figure))
+                         self.audio, pn.pane.Bokeh(self.spectrum_figure), pn.pane.Bokeh(self.figure))

@@ -17,7 +17,7 @@ from ..physical import KEYS, Physical, load_physical, parse_flow
 from ..checks import read_toml
 from ..scene import Scene
 from ..timedomain.run import run_case, sweep_model
-from ..timedomain.sound import AUDIO_RATE, cycle_sound
+from ..timedomain.sound import AUDIO_RATE, cycle_sound, line_spectrum
 
 __all__ = ["INPUTS", "PHYSICAL_INPUTS", "scene_of", "preset_scene", "physical_texts",
            "physical_scene", "read_scene_file", "input_text", "instant_view", "onset_view",
@@ -224,15 +224,16 @@ def cycles_view(scene: Scene) -> dict:
 
 #: The listener's distance (m) and the length (s) of the sound of a settled cycle.
 SOUND_DISTANCE, SOUND_DURATION = 0.3, 2.0
-#: Most samples of the tip's history sent to the page.
-HISTORY_POINTS = 2000
+#: Most samples of the tip's history sent to the page; the sound's spectrum up to (Hz).
+HISTORY_POINTS, SPECTRUM_MAX_HZ = 2000, 5000.0
 
 
 def run_view(scene: Scene, t_end: float) -> dict:
     """A time run of ``scene`` to ``t_end`` (``run_case``: the perturbed steady state
     integrated and classified) as ``fsicas simulate --json``, the tip deflection
     y(1, t) (at most :data:`HISTORY_POINTS` samples) and, for a physical scene whose run
-    settled on a cycle, its sound (``cycle_sound``: Pa at :data:`SOUND_DISTANCE`)."""
+    settled on a cycle, its sound (``cycle_sound``: Pa at :data:`SOUND_DISTANCE`) and the
+    sound's spectrum (``line_spectrum``: Hz and dB SPL up to :data:`SPECTRUM_MAX_HZ`)."""
     if not (math.isfinite(t_end) and 0 < t_end <= 1000):
         raise ValueError(f"t_end must be in (0, 1000], got {t_end}")
     with warnings.catch_warnings(record=True) as caught:
@@ -245,7 +246,9 @@ def run_view(scene: Scene, t_end: float) -> dict:
     out["warnings"] = list(dict.fromkeys(out["warnings"] + [str(w.message) for w in caught]))
     if scene.scales is not None and run.outcome.periodic:
         sound = cycle_sound(traj, scene.scales, SOUND_DISTANCE, SOUND_DURATION, AUDIO_RATE)
-        out["sound"] = {**sound.to_json(), "pressure": sound.pressure.astype(np.float32)}
+        hz, db = line_spectrum(sound.pressure, sound.rate, SPECTRUM_MAX_HZ)
+        out["sound"] = {**sound.to_json(), "pressure": sound.pressure.astype(np.float32),
+                        "spectrum": {"hz": hz, "spl_db": db}}
     return out
 
 
@@ -255,14 +258,15 @@ def export(scene: Scene, view: dict, onset: dict | None, command: str, *,
     """The current view as JSON: the scene, the instant view (eigenvalues as [Re, Im]
     pairs, the mode shape dropped), the onset if known, the reproducing command; the map,
     the limit-cycle branch and the time run of the scene where computed (the run's tip
-    history as lists, its sound without the samples)."""
+    history and its sound's spectrum as lists, its sound without the samples)."""
     instant = {k: v for k, v in view.items() if k not in ("eigenvalues", "x", "y")}
     instant["eigenvalues"] = [[float(l.real), float(l.imag)] for l in view["eigenvalues"]]
     if run is not None:
         sound = run["sound"]
         run = {**run, "t": np.asarray(run["t"]).tolist(), "tip": np.asarray(run["tip"]).tolist(),
-               "sound": None if sound is None else {k: v for k, v in sound.items()
-                                                    if k != "pressure"}}
+               "sound": None if sound is None else {
+                   **{k: v for k, v in sound.items() if k not in ("pressure", "spectrum")},
+                   "spectrum": {k: np.asarray(v).tolist() for k, v in sound["spectrum"].items()}}}
     return strict_json.dumps({"scene": scene.to_dict(), "instant": instant, "onset": onset,
                               "command": command, "boundary": boundary, "cycles": cycles,
                               "run": run}, indent=1)
