@@ -436,3 +436,35 @@ def test_the_snore_plays_with_its_spectrum_of_the_library(page, server):
     j = int(np.argmax(shown))
     assert shown[j] == pytest.approx(plain[j], abs=0.05)
     assert hz[j] == pytest.approx(float(_text(page, "sound-pitch").split()[0]), abs=1.0)
+
+
+def _saved(page, title: str, index: int) -> tuple[str, bytes]:
+    """The name and content of what the toolbar button ``title`` of figure ``index``
+    downloads."""
+    with page.expect_download() as download:
+        page.locator(f"[title='{title}']").nth(index).click()
+    return download.value.suggested_filename, Path(download.value.path()).read_bytes()
+
+
+def test_each_figure_saves_as_svg_and_png(page, server):
+    """The root locus saved as SVG draws one marker per eigenvalue of the library, the
+    unstable ones red; the same figure saves as PNG; an empty figure (the map before it
+    is computed) as an SVG without markers."""
+    import xml.etree.ElementTree as ET
+    from fsicas.explore.figures import STABLE_COLOR, SVG_TOOL, UNSTABLE_COLOR
+    _open(page, server, ustar=6)
+    lam = linear_stability(Scene(ustar=6.0)).eigenvalues
+    name, svg = _saved(page, SVG_TOOL, 1)                         # figures: mode, locus, map
+    assert name == "eigenvalues.svg"
+    paths = [e.attrib for e in ET.fromstring(svg).iter("{http://www.w3.org/2000/svg}path")]
+    rgb = lambda color: "rgb({},{},{})".format(*bytes.fromhex(color[1:]))
+    markers = [p["fill"] for p in paths if " A 3.5 3.5 " in p.get("d", "")]
+    assert markers.count(rgb(UNSTABLE_COLOR)) == np.sum(lam.real > 0) == 2
+    assert markers.count(rgb(STABLE_COLOR)) == np.sum(lam.real <= 0)
+    assert b"growth rate" in svg                                   # the axis label, as text
+    name, png = _saved(page, "Save", 1)
+    assert name == "eigenvalues.png" and png.startswith(b"\x89PNG")
+    name, svg = _saved(page, SVG_TOOL, 2)
+    assert name == "boundary.svg"
+    assert not [p for p in ET.fromstring(svg).iter("{http://www.w3.org/2000/svg}path")
+                if " A 3" in p.get("d", "")]

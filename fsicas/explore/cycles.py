@@ -7,10 +7,9 @@ from __future__ import annotations
 
 import panel as pn
 from bokeh.models import ColumnDataSource, Span
-from bokeh.plotting import figure
 
 from .compute import cycles_view
-from .figures import STABLE_COLOR, UNSTABLE_COLOR
+from .figures import STABLE_COLOR, UNSTABLE_COLOR, figure
 from .background import BackgroundPanel
 from .jobs import Jobs
 from .widgets import held, readout
@@ -35,7 +34,7 @@ class CyclePanel(BackgroundPanel):
         self.stop = pn.widgets.Button(name="cancel cycles", width=120)
         self.stop.on_click(lambda _: self.jobs.cancel("lco") and self.show("cancelled", None))
         self.source = ColumnDataSource({"ustar": [], "amplitude": [], "color": []})
-        f = figure(title="limit cycles: tip amplitude (blue stable, red unstable)",
+        f = figure("limit_cycles", title="limit cycles: tip amplitude (blue stable, red unstable)",
                    x_axis_label="U*", y_axis_label="tip amplitude / L", height=220,
                    sizing_mode="stretch_width")
         f.line("ustar", "amplitude", source=self.source, color="gray")

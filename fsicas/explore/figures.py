@@ -4,13 +4,38 @@ with a crosshair at the current point."""
 from __future__ import annotations
 
 import numpy as np
-from bokeh.models import ColumnDataSource, Range1d, Span
-from bokeh.plotting import figure
+from bokeh.models import ColumnDataSource, CustomAction, CustomJS, Range1d, SaveTool, Span
+from bokeh.plotting import figure as bokeh_figure
 
-__all__ = ["RootLocus", "ModeShape", "BoundaryMap", "STABLE_COLOR", "UNSTABLE_COLOR"]
+__all__ = ["figure", "RootLocus", "ModeShape", "BoundaryMap", "STABLE_COLOR", "UNSTABLE_COLOR",
+           "SVG_TOOL"]
 
 STABLE_COLOR, UNSTABLE_COLOR = "#1f77b4", "#d62728"
 _SIZE = dict(height=300, sizing_mode="stretch_width", toolbar_location="right")
+#: The description (tooltip) of the toolbar's SVG button.
+SVG_TOOL = "save as SVG"
+#: The figure drawn again by Bokeh's own SVG backend (``export("svg")`` of the figure's
+#: view, as its PNG save tool does on the canvas) and downloaded as ``name``.svg.
+_SAVE_SVG = """Promise.resolve(Bokeh.index.find_one(plot).export("svg").to_blob()).then((blob) => {
+  const link = document.createElement("a");
+  link.href = URL.createObjectURL(blob);
+  link.download = name;
+  link.dispatchEvent(new MouseEvent("click")); });"""
+_SVG_ICON = ("data:image/svg+xml;utf8,<svg xmlns='http://www.w3.org/2000/svg' width='20' "
+             "height='20'><text x='0' y='14' font-size='9' font-family='sans-serif' "
+             "font-weight='bold'>SVG</text></svg>")
+
+
+def figure(name: str, **kwargs):
+    """A Bokeh figure whose toolbar saves it as PNG (Bokeh's save tool) and as SVG
+    (:data:`SVG_TOOL`), both as ``name`` (Bokeh's default tools but its help, so that
+    every button fits beside a figure 220 px high)."""
+    f = bokeh_figure(tools="pan,box_zoom,wheel_zoom,save,reset", **kwargs)
+    f.add_tools(CustomAction(description=SVG_TOOL, icon=_SVG_ICON,
+                             callback=CustomJS(args={"plot": f, "name": f"{name}.svg"},
+                                               code=_SAVE_SVG)))
+    f.select_one({"type": SaveTool}).filename = name
+    return f
 
 
 def _fit(axis: Range1d, values: np.ndarray) -> None:
@@ -29,7 +54,7 @@ class RootLocus:
 
     def __init__(self):
         self.source = ColumnDataSource({"re": [], "im": [], "color": []})
-        self.figure = figure(title="eigenvalues λ = σ + iω", x_axis_label="growth rate σ",
+        self.figure = figure("eigenvalues", title="eigenvalues λ = σ + iω", x_axis_label="growth rate σ",
                              y_axis_label="ω", x_range=Range1d(-1.0, 1.0),
                              y_range=Range1d(-1.0, 1.0), **_SIZE)
         self.figure.scatter("re", "im", color="color", size=7, source=self.source)
@@ -53,7 +78,7 @@ class ModeShape:
         self.source = ColumnDataSource({"x": [], "beam": [], "upper": [], "lower": []})
         self.walls = ColumnDataSource({"x": [0.0, 1.0], "top": [0.05, 0.05],
                                        "bottom": [-0.05, -0.05]})
-        f = figure(title="least stable mode in the channel", x_axis_label="x / L",
+        f = figure("mode_shape", title="least stable mode in the channel", x_axis_label="x / L",
                    y_axis_label="y / L", x_range=Range1d(-0.02, 1.02),
                    y_range=Range1d(-0.06, 0.06), **_SIZE)
         f.line("x", "top", source=self.walls, color="black", line_width=2)
@@ -86,7 +111,7 @@ class BoundaryMap:
 
     def __init__(self):
         self.source = ColumnDataSource({"mstar": [], "ustar": [], "color": []})
-        f = figure(title="stability boundary U*_c(M*) (click to move the point)",
+        f = figure("boundary", title="stability boundary U*_c(M*) (click to move the point)",
                    x_axis_type="log", x_axis_label="M*", y_axis_label="U*",
                    x_range=Range1d(0.1, 10.0), y_range=Range1d(0.0, 10.0), **_SIZE)
         f.line("mstar", "ustar", source=self.source, color="gray")
