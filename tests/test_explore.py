@@ -468,3 +468,47 @@ def test_each_figure_saves_as_svg_and_png(page, server):
     assert name == "boundary.svg"
     assert not [p for p in ET.fromstring(svg).iter("{http://www.w3.org/2000/svg}path")
                 if " A 3" in p.get("d", "")]
+
+
+def _through_contact(page, points: str) -> None:
+    """Ask for the limit cycles on through contact, at most ``points`` impacting ones."""
+    page.locator("input[type=checkbox]").check()                # "on through contact"
+    box = page.locator("[data-testid=impact-points]")
+    box.fill(points)
+    box.press("Enter")                                           # sent before the click
+    page.get_by_role("button", name="limit cycles", exact=True).click()
+
+
+def test_the_branch_through_contact_refuses_a_bad_count(page, server):
+    _open(page, server, modes=4)
+    status = f"() => ({FIND})(document, 'lco-status').textContent"
+    _through_contact(page, "many")
+    page.wait_for_function(f"{status}.startsWith('error')")
+    assert _text(page, "lco-status") == "error: the impacting cycles must be an integer, got 'many'"
+    _through_contact(page, "0")
+    page.wait_for_function(f"{status}.includes('[1,')")
+    assert _text(page, "lco-status") == ("error: ValueError: the impacting cycles must be an "
+                                         "integer in [1, 1000], got 0")
+
+
+@pytest.mark.slow
+def test_the_branch_through_contact_is_that_of_its_command(page, server, tmp_path):
+    """M* = 1, ζ = 0.01, N = 4 (docs/cycles.md): five impacting cycles past the first
+    contact; the page's command line, run, gives the same branch (about 2 minutes)."""
+    _open(page, server, zeta=0.01, modes=4)
+    _through_contact(page, "5")
+    page.locator("[data-testid=impact-status]").wait_for(timeout=900000)
+    command = _text(page, "lco-command")
+    assert command.endswith("--through-contact --impact-points 5 --json")
+    done = subprocess.run([sys.executable, "-m", "fsicas.cli", *command.split()[1:]],
+                          capture_output=True, text=True, cwd=tmp_path, timeout=900,
+                          env={**os.environ, "PYTHONPATH": str(ROOT)})
+    assert done.returncode == 0, done.stderr
+    cli = json.loads(done.stdout)["impacting"]
+    shown = _export(page)["cycles"]["impacting"]
+    assert _text(page, "impact-status") == shown["status"] == cli["status"]
+    assert int(_text(page, "impact-count")) == len(cli["points"]) == 5
+    for mine, theirs in zip(shown["points"], cli["points"]):
+        assert mine["ustar"] == pytest.approx(theirs["ustar"], rel=1e-6)
+        assert mine["tip_amplitude"] == pytest.approx(theirs["tip_amplitude"], rel=1e-5)
+        assert (mine["impacts"], mine["stable"]) == (theirs["impacts"], theirs["stable"])

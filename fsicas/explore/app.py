@@ -317,13 +317,13 @@ class Explorer:
         map, the limit-cycle branch and the time run of this scene where computed."""
         import io
         onset = RESULTS.get(("onset", _key(self.scene, "ustar")))
-        run = self.run.key                                   # the last run asked for
-        run = RESULTS.get(run) if run and run[1].startswith(_key(self.scene) + "|") else None
+        of_scene = lambda key, scene: (RESULTS.get(key) if key and key[1].startswith(scene + "|")
+                                       else None)       # the last job asked for, if of this scene
         return io.StringIO(export(self.scene, self.view, onset,
                                   command_line(self.scene, "eig", self.file),
                                   boundary=RESULTS.get(("boundary", self._map_key())),
-                                  cycles=RESULTS.get(("lco", _key(self.scene, "ustar"))),
-                                  run=run))
+                                  cycles=of_scene(self.cycles.key, _key(self.scene, "ustar")),
+                                  run=of_scene(self.run.key, _key(self.scene))))
 
     @held
     def _frame(self) -> None:

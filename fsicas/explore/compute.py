@@ -11,6 +11,8 @@ from pathlib import Path
 import numpy as np
 
 from ..cycles.collocation import cycle_branch
+from ..cycles.impacting_collocation import CollocationImpactSettings
+from ..cycles.impacting_routes import impacting_cycles, through_contact_law
 from ..linear import critical_velocity, linear_stability, stability_boundary
 from .. import strict_json
 from ..physical import KEYS, Physical, load_physical, parse_flow
@@ -21,7 +23,7 @@ from ..timedomain.sound import AUDIO_RATE, cycle_sound, line_spectrum
 
 __all__ = ["INPUTS", "PHYSICAL_INPUTS", "scene_of", "preset_scene", "physical_texts",
            "physical_scene", "read_scene_file", "input_text", "instant_view", "onset_view",
-           "boundary_view", "boundary_grid", "cycles_view", "CYCLE_USTAR_MAX",
+           "boundary_view", "boundary_grid", "cycles_view", "impacting_view", "CYCLE_USTAR_MAX",
            "BOUNDARY_PER_DECADE", "run_view",
            "SOUND_DISTANCE", "SOUND_DURATION", "export"]
 
@@ -203,23 +205,58 @@ def boundary_view(scene: Scene) -> dict:
     return out
 
 
-#: The U* up to which the limit-cycle branch is followed (``fsicas lco``'s default).
-CYCLE_USTAR_MAX = 20.0
+#: The U* up to which the limit-cycle branch is followed (``fsicas lco``'s default); the
+#: most impacting cycles asked for.
+CYCLE_USTAR_MAX, MAX_IMPACT_POINTS = 20.0, 1000
 
 
-def cycles_view(scene: Scene) -> dict:
+def _cycle(p) -> dict:
+    """One cycle of a branch as plain data: U*, tip amplitude, period, stability."""
+    return {"ustar": float(p.ustar), "tip_amplitude": float(p.tip_amplitude),
+            "period": float(p.period), "stable": bool(p.stable)}
+
+
+def cycles_view(scene: Scene, impact_points: int | None = None) -> dict:
     """The limit-cycle branch of ``scene`` from its first Hopf point up to the first wall
     contact (``cycle_branch`` with its default settings, as ``fsicas lco``) as plain data:
-    per cycle U*, tip amplitude, period and stability; the contact, status and message."""
+    per cycle U*, tip amplitude, period and stability; the contact, status and message.
+    With ``impact_points``, also the branch on through contact (``impacting``, as
+    ``fsicas lco --through-contact --impact-points``: :func:`impacting_view`; both
+    branches then on the contact law of ``through_contact_law``, whose eps also sets
+    where the contact-free one meets the wall)."""
+    if impact_points is not None and not (isinstance(impact_points, int)
+                                          and 1 <= impact_points <= MAX_IMPACT_POINTS):
+        raise ValueError(f"the impacting cycles must be an integer in [1, "
+                         f"{MAX_IMPACT_POINTS}], got {impact_points!r}")
+    if impact_points is not None:        # both branches on its law, as fsicas lco does
+        scene = through_contact_law(scene)
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
         branch = cycle_branch(scene, ustar_max=CYCLE_USTAR_MAX)
-    point = lambda p: {"ustar": float(p.ustar), "tip_amplitude": float(p.tip_amplitude),
-                       "period": float(p.period), "stable": bool(p.stable)}
+        impacting = None if impact_points is None else impacting_view(scene, branch,
+                                                                      impact_points)
     return {"status": branch.status, "message": branch.message, "hopf": branch.hopf,
-            "points": [point(p) for p in branch.points],
-            "contact": None if branch.contact is None else point(branch.contact),
-            "warnings": [str(w.message) for w in caught]}
+            "points": [_cycle(p) for p in branch.points],
+            "contact": None if branch.contact is None else _cycle(branch.contact),
+            "impacting": impacting, "warnings": [str(w.message) for w in caught]}
+
+
+def impacting_view(scene: Scene, branch, points: int) -> dict:
+    """The impacting cycles of ``scene`` (with its contact law) on through contact from
+    its contact-free ``branch`` (``impacting_cycles`` by adaptive collocation, as
+    ``fsicas lco --through-contact``), at most ``points`` of
+    them, up to :data:`CYCLE_USTAR_MAX`: per cycle also its contact intervals per period
+    and peak impact force; its located special cycles (kind and U*)."""
+    if branch.contact is None:
+        return {"status": "not_reached", "message": "the contact-free branch did not reach "
+                f"the wall below U* = {CYCLE_USTAR_MAX:g}", "points": [], "special": []}
+    imp = impacting_cycles(scene.replace(contact=True), branch,
+                           settings=CollocationImpactSettings(max_points=points),
+                           ustar_max=CYCLE_USTAR_MAX)
+    cycle = lambda p: {**_cycle(p), "impacts": int(p.impacts), "peak_force": float(p.peak_force)}
+    return {"status": imp.status, "message": imp.message,
+            "points": [cycle(p) for p in imp.points],
+            "special": [{"kind": p.kind, "ustar": float(p.ustar)} for p in imp.special]}
 
 
 #: The listener's distance (m) and the length (s) of the sound of a settled cycle.
