@@ -512,3 +512,50 @@ def test_the_branch_through_contact_is_that_of_its_command(page, server, tmp_pat
         assert mine["ustar"] == pytest.approx(theirs["ustar"], rel=1e-6)
         assert mine["tip_amplitude"] == pytest.approx(theirs["tip_amplitude"], rel=1e-5)
         assert (mine["impacts"], mine["stable"]) == (theirs["impacts"], theirs["stable"])
+
+
+def _curves(page, points: str) -> None:
+    """Ask for the grazing and fold curves, at most ``points`` points per direction."""
+    box = page.locator("[data-testid=curve-points]")
+    box.fill(points)
+    box.press("Enter")                                           # sent before the click
+    page.get_by_role("button", name="grazing and fold curves").click()
+
+
+def test_the_curves_refuse_a_bad_count_and_cancel(page, server):
+    _open(page, server, modes=4)
+    status = f"() => ({FIND})(document, 'curves-status').textContent"
+    _curves(page, "x")
+    page.wait_for_function(f"{status}.startsWith('error')")
+    assert _text(page, "curves-status") == "error: the curve points must be an integer, got 'x'"
+    _curves(page, "0")
+    page.wait_for_function(f"{status}.includes('[1,')")
+    assert _text(page, "curves-status") == ("error: ValueError: the curve points must be an "
+                                            "integer in [1, 1000], got 0")
+    _curves(page, "10")
+    page.wait_for_function(f"{status}.startsWith('computing')")
+    page.get_by_role("button", name="cancel curves").click()
+    page.wait_for_function(f"{status} === 'cancelled'")
+
+
+@pytest.mark.slow
+def test_the_grazing_and_fold_curves_are_those_of_their_command(page, server, tmp_path):
+    """N = 4 over M* in [0.1, 100], at most 10 points per direction: the curves on the
+    map are those of the page's own `fsicas grazing` line, run (a few minutes)."""
+    _open(page, server, modes=4)
+    _curves(page, "10")
+    page.locator("[data-testid=curves-grazing]").wait_for(timeout=1200000)
+    command = _text(page, "curves-command")
+    assert " --mstar 0.1:100:19 --max-points 10 --json" in command
+    done = subprocess.run([sys.executable, "-m", "fsicas.cli", *command.split()[1:]],
+                          capture_output=True, text=True, cwd=tmp_path, timeout=1200,
+                          env={**os.environ, "PYTHONPATH": str(ROOT)})
+    assert done.returncode == 0, done.stderr
+    cli = json.loads(done.stdout)
+    shown = _export(page)["curves"]
+    assert shown["seeds"] == pytest.approx(cli["seeds"], rel=1e-9)
+    for kind in ("grazing", "fold"):
+        assert int(_text(page, f"curves-{kind}")) == len(shown[kind])
+        points = [(m, u) for c in shown[kind] for m, u in zip(c["mstar"], c["ustar"])]
+        assert len(points) == len(cli[kind])
+        assert points == pytest.approx([(p["mstar"], p["ustar"]) for p in cli[kind]], rel=1e-6)

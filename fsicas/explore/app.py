@@ -3,6 +3,7 @@
 the reproducing command line, the state in the URL."""
 from __future__ import annotations
 
+import functools
 import math
 
 import panel as pn
@@ -11,6 +12,7 @@ from ..physical import Physical, load_physical, preset_names
 from ..scene import Scene
 from .background import RunPanel
 from .cycles import CyclePanel
+from .curves import CurvePanel
 from .compute import (INPUTS, PHYSICAL_INPUTS, boundary_view, export, input_text, instant_view,
                       onset_view, physical_scene, physical_texts, preset_scene,
                       read_scene_file, scene_of)
@@ -77,6 +79,7 @@ class Explorer:
         self.phase = 0.0
         self.run = RunPanel(self.jobs)
         self.cycles = CyclePanel(self.jobs)
+        self.curves = CurvePanel(self.jobs, self.map)
         self.download = pn.widgets.FileDownload(callback=self._export, filename="fsicas_explore.json",
                                                 label="export the view (JSON)", width=220)
         self._wire()
@@ -98,10 +101,12 @@ class Explorer:
         self.draw_map = pn.widgets.Button(name="compute the map", button_type="primary", width=150)
         self.draw_map.on_click(lambda _: self._ask("boundary", self._map_key(), boundary_view,
                                                    self.scene))
-        self.run.start.on_click(lambda _: self.run.ask(
-            self.scene, _key(self.scene), command_line(self.scene, "simulate", self.file)))
+        self.run.start.on_click(lambda _: self.run.ask(self.scene, _key(self.scene),
+                                                       self._commands()))
         self.cycles.start.on_click(lambda _: self.cycles.ask(
-            self.scene, _key(self.scene, "ustar"), command_line(self.scene, "lco", self.file)))
+            self.scene, _key(self.scene, "ustar"), self._commands()))
+        self.curves.start.on_click(lambda _: self.curves.ask(self.scene, self._map_key(),
+                                                             self._commands()))
         self.refresh()
 
     def start(self) -> None:
@@ -239,6 +244,10 @@ class Explorer:
         cached = RESULTS.get(("boundary", self._map_key()))
         self._show("boundary", "done" if cached else "idle", cached)
 
+    def _commands(self):
+        """The command lines of the current scene: ``(command, **extra) -> str``."""
+        return functools.partial(command_line, self.scene, file=self.file)
+
     def _map_key(self) -> str:
         """The boundary's cache key: the scene but U* and M*, and the decade of M*."""
         decade = math.floor(math.log10(self.scene.mstar))
@@ -275,8 +284,8 @@ class Explorer:
                 status = "idle"                      # a map of a scene left meanwhile
             if status != "idle":
                 self._show(kind, status, value)
-        self.run.poll()
-        self.cycles.poll()
+        for panel in (self.run, self.cycles, self.curves):
+            panel.poll()
 
     def _show(self, kind: str, status: str, value) -> None:
         if kind == "onset":
@@ -323,7 +332,8 @@ class Explorer:
                                   command_line(self.scene, "eig", self.file),
                                   boundary=RESULTS.get(("boundary", self._map_key())),
                                   cycles=of_scene(self.cycles.key, _key(self.scene, "ustar")),
-                                  run=of_scene(self.run.key, _key(self.scene))))
+                                  run=of_scene(self.run.key, _key(self.scene)),
+                                  curves=of_scene(self.curves.key, self._map_key())))
 
     @held
     def _frame(self) -> None:
@@ -341,7 +351,7 @@ class Explorer:
                             pn.pane.Bokeh(self.shape.figure), pn.pane.Bokeh(self.locus.figure))
         slower = pn.Column("### Onset", self.onset, "### Map", self.background,
                            pn.Row(self.draw_map, self.cancel),
-                           pn.pane.Bokeh(self.map.figure), self.cycles.page(),
+                           pn.pane.Bokeh(self.map.figure), self.curves.page(), self.cycles.page(),
                            self.run.page())
         title = "fsicas explore"
         return pn.Column(f"## {title}", pn.Row(inputs, instant, slower, sizing_mode="stretch_width"),

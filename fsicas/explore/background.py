@@ -75,15 +75,15 @@ class RunPanel(BackgroundPanel):
         self.spectrum_figure.line("hz", "spl_db", source=self.spectrum)
 
     @held
-    def ask(self, scene, key: str, command: str) -> None:
+    def ask(self, scene, key: str, command) -> None:
         """Start (or show the cached) run of ``scene`` to the page's t_end; ``command``
-        is the ``fsicas simulate`` line of the scene."""
+        gives the scene's command lines (:func:`command_line` of the scene)."""
         try:
             t_end = float(str(self.t_end.value))
         except ValueError:
             return self.show("error", f"t_end must be a number, got {self.t_end.value!r}")
         self.key = ("run", f"{key}|{t_end!r}")
-        self.command = command.replace(" --json", f" --t-end {t_end:g} --json")
+        self.command = command("simulate", t_end=t_end)
         cached = self.jobs.start(self.key, run_view, scene, t_end)
         self.show("done", cached) if cached is not None else self.show("running", 0.0)
 

@@ -10,7 +10,8 @@ from pathlib import Path
 
 import numpy as np
 
-from ..cycles.collocation import cycle_branch
+from ..cycles.collocation import CycleSettings, cycle_branch
+from ..cycles.curves import CurveSettings, curve_seeds, cycle_curves
 from ..cycles.impacting_collocation import CollocationImpactSettings
 from ..cycles.impacting_routes import impacting_cycles, through_contact_law
 from ..linear import critical_velocity, linear_stability, stability_boundary
@@ -23,7 +24,8 @@ from ..timedomain.sound import AUDIO_RATE, cycle_sound, line_spectrum
 
 __all__ = ["INPUTS", "PHYSICAL_INPUTS", "scene_of", "preset_scene", "physical_texts",
            "physical_scene", "read_scene_file", "input_text", "instant_view", "onset_view",
-           "boundary_view", "boundary_grid", "cycles_view", "impacting_view", "CYCLE_USTAR_MAX",
+           "boundary_view", "boundary_grid", "boundary_range", "curves_view",
+           "cycles_view", "impacting_view", "CYCLE_USTAR_MAX",
            "BOUNDARY_PER_DECADE", "run_view",
            "SOUND_DISTANCE", "SOUND_DURATION", "export"]
 
@@ -193,6 +195,12 @@ def boundary_grid(mstar: float) -> np.ndarray:
     return np.logspace(low, low + 3, 3 * BOUNDARY_PER_DECADE + 1)
 
 
+def boundary_range(mstar: float) -> str:
+    """:func:`boundary_grid` as the command line writes it, ``LO:HI:COUNT``."""
+    grid = boundary_grid(mstar)
+    return f"{grid[0]:g}:{grid[-1]:g}:{grid.size}"
+
+
 def boundary_view(scene: Scene) -> dict:
     """The stability boundary U*_c(M*) of ``scene`` (``stability_boundary``) on
     :func:`boundary_grid` as JSON."""
@@ -205,9 +213,38 @@ def boundary_view(scene: Scene) -> dict:
     return out
 
 
+def curves_view(scene: Scene, max_points: int) -> dict:
+    """The grazing and fold-of-cycles curves of ``scene`` over the map's M* window (as
+    ``fsicas grazing --mstar`` :func:`boundary_range` ``--max-points``): the flutter
+    boundary on :func:`boundary_grid` (``stability_boundary``), one seed per piece of it
+    between its mode switches (``curve_seeds``), the curves through the cycle branches
+    there (``cycle_curves``, up to U* = :data:`CYCLE_USTAR_MAX`, at most ``max_points``
+    points per direction); each curve as its (M*, U*) points."""
+    if not (isinstance(max_points, int) and 1 <= max_points <= MAX_CURVE_POINTS):
+        raise ValueError(f"the curve points must be an integer in [1, {MAX_CURVE_POINTS}], "
+                         f"got {max_points!r}")
+    if scene.contact:
+        raise ValueError("the curves are of contact-free cycles: the scene has the contact "
+                         "law on (contact = true)")
+    grid = boundary_grid(scene.mstar)
+    settings = CurveSettings(mstar_min=float(grid[0]), mstar_max=float(grid[-1]),
+                             max_points=max_points)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        boundary = stability_boundary(scene, grid, sweep_model(scene, guarded=False))
+        seeds = curve_seeds([s.mstar for s in boundary.switches], settings.mstar_min,
+                            settings.mstar_max)
+        curves = cycle_curves(scene, seeds, settings=settings, ustar_max=CYCLE_USTAR_MAX,
+                              cycles=CycleSettings(quadrature_tol=settings.quadrature_tol))
+    line = lambda c: {"mstar": c.column("mstar").tolist(), "ustar": c.column("ustar").tolist()}
+    return {"grazing": [line(c) for c in curves.grazing], "fold": [line(c) for c in curves.fold],
+            "seeds": curves.seeds, "failures": curves.failures,
+            "warnings": [str(w.message) for w in caught]}
+
+
 #: The U* up to which the limit-cycle branch is followed (``fsicas lco``'s default); the
-#: most impacting cycles asked for.
-CYCLE_USTAR_MAX, MAX_IMPACT_POINTS = 20.0, 1000
+#: most impacting cycles and curve points asked for.
+CYCLE_USTAR_MAX, MAX_IMPACT_POINTS, MAX_CURVE_POINTS = 20.0, 1000, 1000
 
 
 def _cycle(p) -> dict:
@@ -291,10 +328,11 @@ def run_view(scene: Scene, t_end: float) -> dict:
 
 def export(scene: Scene, view: dict, onset: dict | None, command: str, *,
            boundary: dict | None = None, cycles: dict | None = None,
-           run: dict | None = None) -> str:
+           run: dict | None = None, curves: dict | None = None) -> str:
     """The current view as JSON: the scene, the instant view (eigenvalues as [Re, Im]
     pairs, the mode shape dropped), the onset if known, the reproducing command; the map,
-    the limit-cycle branch and the time run of the scene where computed (the run's tip
+    the limit-cycle branch, the time run and the grazing and fold curves of the scene
+    where computed (the run's tip
     history and its sound's spectrum as lists, its sound without the samples)."""
     instant = {k: v for k, v in view.items() if k not in ("eigenvalues", "x", "y")}
     instant["eigenvalues"] = [[float(l.real), float(l.imag)] for l in view["eigenvalues"]]
@@ -306,4 +344,4 @@ def export(scene: Scene, view: dict, onset: dict | None, command: str, *,
                    "spectrum": {k: np.asarray(v).tolist() for k, v in sound["spectrum"].items()}}}
     return strict_json.dumps({"scene": scene.to_dict(), "instant": instant, "onset": onset,
                               "command": command, "boundary": boundary, "cycles": cycles,
-                              "run": run}, indent=1)
+                              "run": run, "curves": curves}, indent=1)

@@ -51,9 +51,9 @@ class CyclePanel(BackgroundPanel):
         self.figure = f
 
     @held
-    def ask(self, scene, key: str, command: str) -> None:
+    def ask(self, scene, key: str, command) -> None:
         """Start (or show the cached) branch of ``scene`` (on through contact where asked);
-        ``command`` is the ``fsicas lco`` line of the scene."""
+        ``command`` gives the scene's command lines (:func:`command_line` of the scene)."""
         points = None
         if self.through.value:
             text = str(self.impact_points.value).strip()
@@ -61,8 +61,8 @@ class CyclePanel(BackgroundPanel):
                 points = int(text)
             except ValueError:
                 return self.show("error", f"the impacting cycles must be an integer, got {text!r}")
-            command = command.replace(" --json", f" --through-contact --impact-points {points} --json")
-        self.command, self.key = command, ("lco", f"{key}|{points}")
+        extra = {} if points is None else {"through_contact": True, "impact_points": points}
+        self.command, self.key = command("lco", **extra), ("lco", f"{key}|{points}")
         cached = self.jobs.start(self.key, cycles_view, scene, points)
         self.show("done", cached) if cached is not None else self.show("running", 0.0)
 

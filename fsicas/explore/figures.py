@@ -10,7 +10,7 @@ from bokeh.plotting import figure as bokeh_figure
 __all__ = ["figure", "RootLocus", "ModeShape", "BoundaryMap", "STABLE_COLOR", "UNSTABLE_COLOR",
            "SVG_TOOL"]
 
-STABLE_COLOR, UNSTABLE_COLOR = "#1f77b4", "#d62728"
+STABLE_COLOR, UNSTABLE_COLOR, FOLD_COLOR = "#1f77b4", "#d62728", "#ff7f0e"
 _SIZE = dict(height=300, sizing_mode="stretch_width", toolbar_location="right")
 #: The description (tooltip) of the toolbar's SVG button.
 SVG_TOOL = "save as SVG"
@@ -107,7 +107,8 @@ class ModeShape:
 
 
 class BoundaryMap:
-    """U*_c(M*) (log M*), flutter and divergence points, a crosshair at (M*, U*)."""
+    """U*_c(M*) (log M*), flutter and divergence points, a crosshair at (M*, U*); the
+    grazing (black) and fold-of-cycles (dashed) curves where computed."""
 
     def __init__(self):
         self.source = ColumnDataSource({"mstar": [], "ustar": [], "color": []})
@@ -120,7 +121,23 @@ class BoundaryMap:
         self.horizontal = Span(location=5.0, dimension="width", line_color=UNSTABLE_COLOR)
         f.add_layout(self.vertical)
         f.add_layout(self.horizontal)
+        self.grazing = ColumnDataSource({"xs": [], "ys": []})
+        self.fold = ColumnDataSource({"xs": [], "ys": []})
+        f.multi_line("xs", "ys", source=self.grazing, color="black", line_width=2,
+                     legend_label="grazing")
+        f.multi_line("xs", "ys", source=self.fold, color=FOLD_COLOR, line_width=2,
+                     line_dash="dashed", legend_label="fold of cycles")
+        f.legend.location, f.legend.visible = "top_left", False
         self.figure = f
+
+    def curves(self, grazing: list[dict], fold: list[dict]) -> None:
+        """The grazing and fold-of-cycles curves, each ``{"mstar": [...], "ustar": [...]}``."""
+        for source, curves in ((self.grazing, grazing), (self.fold, fold)):
+            source.data = {"xs": [c["mstar"] for c in curves], "ys": [c["ustar"] for c in curves]}
+        self.figure.legend.visible = bool(grazing or fold)
+        top = max((u for c in grazing + fold for u in c["ustar"]), default=0.0)
+        if top > self.figure.y_range.end:
+            self.figure.y_range.update(end=1.05 * top)
 
     def update(self, points: list[dict]) -> None:
         points = [p for p in points if p.get("ustar_crit") is not None]

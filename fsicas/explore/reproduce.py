@@ -52,13 +52,19 @@ def _option(value) -> str:
     return f"{value:g}"
 
 
-def command_line(scene: Scene, command: str = "eig", file: SceneFile | None = None) -> str:
+def command_line(scene: Scene, command: str = "eig", file: SceneFile | None = None,
+                 **extra) -> str:
     """``fsicas <command> --mstar ... --modes ...`` for ``scene``'s values (with a scene
-    file, ``--scene NAME`` and the values that differ from it)."""
+    file, ``--scene NAME`` and the values that differ from it); ``extra``: the command's
+    own options (``t_end=20``; True for a flag), one of them in place of a scene field of
+    the same name (``grazing``'s ``--mstar LO:HI:COUNT``)."""
     values = {**_values(scene, file), **_beam(scene, file)}
-    options = " ".join(f"--{k.replace('_', '-')} {_option(v)}" for k, v in values.items())
-    head = "" if file is None else f"--scene {file.name} "
-    return f"fsicas {command} {head}{options}".rstrip() + " --json"
+    values = {k: v for k, v in values.items() if k not in extra}
+    options = [f"--{k.replace('_', '-')} {_option(v)}" for k, v in values.items()]
+    options += [f"--{k.replace('_', '-')}" + ("" if v is True else f" {_option(v)}")
+                for k, v in extra.items()]
+    head = [] if file is None else [f"--scene {file.name}"]
+    return " ".join(["fsicas", command, *head, *options, "--json"])
 
 
 def python_lines(scene: Scene, file: SceneFile | None = None) -> str:
