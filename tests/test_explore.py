@@ -177,7 +177,7 @@ def test_invalid_input_is_refused_with_the_library_message(page, server):
         Scene(slenderness=0.1)
     _set(page, "slenderness", "0.1")                             # with Euler-Bernoulli
     assert _text(page, "error") == str(refused.value)
-    page.get_by_label("beam").select_option("timoshenko")
+    page.get_by_label("beam", exact=True).select_option("timoshenko")
     page.wait_for_function(f"() => ({FIND})(document, 'command').textContent"
                            ".includes('--beam timoshenko --slenderness 0.1')")
     assert _text(page, "error") == ""
