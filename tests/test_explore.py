@@ -479,18 +479,6 @@ def _through_contact(page, points: str) -> None:
     page.get_by_role("button", name="limit cycles", exact=True).click()
 
 
-def test_the_branch_through_contact_refuses_a_bad_count(page, server):
-    _open(page, server, modes=4)
-    status = f"() => ({FIND})(document, 'lco-status').textContent"
-    _through_contact(page, "many")
-    page.wait_for_function(f"{status}.startsWith('error')")
-    assert _text(page, "lco-status") == "error: the impacting cycles must be an integer, got 'many'"
-    _through_contact(page, "0")
-    page.wait_for_function(f"{status}.includes('[1,')")
-    assert _text(page, "lco-status") == ("error: ValueError: the impacting cycles must be an "
-                                         "integer in [1, 1000], got 0")
-
-
 @pytest.mark.slow
 def test_the_branch_through_contact_is_that_of_its_command(page, server, tmp_path):
     """M* = 1, ζ = 0.01, N = 4 (docs/cycles.md): five impacting cycles past the first
@@ -522,19 +510,25 @@ def _curves(page, points: str) -> None:
     page.get_by_role("button", name="grazing and fold curves").click()
 
 
-def test_the_curves_refuse_a_bad_count_and_cancel(page, server):
+@pytest.mark.parametrize("ask, testid, what", [
+    (_through_contact, "lco-status", "impacting cycles"),
+    (_curves, "curves-status", "curve points")])
+def test_the_heavy_jobs_refuse_a_bad_count_and_cancel(page, server, ask, testid, what):
+    """The branch through contact and the curves: a count that is not a whole number is
+    refused by the page, one out of range by the job (the library's ValueError); a job
+    cancels."""
     _open(page, server, modes=4)
-    status = f"() => ({FIND})(document, 'curves-status').textContent"
-    _curves(page, "x")
+    status = f"() => ({FIND})(document, '{testid}').textContent"
+    ask(page, "many")
     page.wait_for_function(f"{status}.startsWith('error')")
-    assert _text(page, "curves-status") == "error: the curve points must be an integer, got 'x'"
-    _curves(page, "0")
+    assert _text(page, testid) == f"error: the {what} must be an integer, got 'many'"
+    ask(page, "0")
     page.wait_for_function(f"{status}.includes('[1,')")
-    assert _text(page, "curves-status") == ("error: ValueError: the curve points must be an "
-                                            "integer in [1, 1000], got 0")
-    _curves(page, "10")
+    assert _text(page, testid) == f"error: ValueError: the {what} must be an integer in [1, 1000], got 0"
+    ask(page, "10")
     page.wait_for_function(f"{status}.startsWith('computing')")
-    page.get_by_role("button", name="cancel curves").click()
+    cancel = "cancel cycles" if testid == "lco-status" else "cancel curves"
+    page.get_by_role("button", name=cancel).click()
     page.wait_for_function(f"{status} === 'cancelled'")
 
 

@@ -50,6 +50,15 @@ class BackgroundPanel:
     def _done(self, result: dict) -> None:
         raise NotImplementedError
 
+    def _count(self, box: NumberBox, what: str) -> int | None:
+        """The integer in ``box``, or None once the refusal (naming ``what``) is shown."""
+        text = str(box.value).strip()
+        try:
+            return int(text)
+        except ValueError:
+            self.show("error", f"the {what} must be an integer, got {text!r}")
+            return None
+
 
 class RunPanel(BackgroundPanel):
     """The time run's controls and results for one page."""

@@ -213,6 +213,12 @@ def boundary_view(scene: Scene) -> dict:
     return out
 
 
+def _check_count(what: str, value, most: int) -> None:
+    """ValueError naming ``what`` unless ``value`` is an integer in [1, ``most``]."""
+    if not (isinstance(value, int) and 1 <= value <= most):
+        raise ValueError(f"the {what} must be an integer in [1, {most}], got {value!r}")
+
+
 def curves_view(scene: Scene, max_points: int) -> dict:
     """The grazing and fold-of-cycles curves of ``scene`` over the map's M* window (as
     ``fsicas grazing --mstar`` :func:`boundary_range` ``--max-points``): the flutter
@@ -220,9 +226,7 @@ def curves_view(scene: Scene, max_points: int) -> dict:
     between its mode switches (``curve_seeds``), the curves through the cycle branches
     there (``cycle_curves``, up to U* = :data:`CYCLE_USTAR_MAX`, at most ``max_points``
     points per direction); each curve as its (M*, U*) points."""
-    if not (isinstance(max_points, int) and 1 <= max_points <= MAX_CURVE_POINTS):
-        raise ValueError(f"the curve points must be an integer in [1, {MAX_CURVE_POINTS}], "
-                         f"got {max_points!r}")
+    _check_count("curve points", max_points, MAX_CURVE_POINTS)
     if scene.contact:
         raise ValueError("the curves are of contact-free cycles: the scene has the contact "
                          "law on (contact = true)")
@@ -261,11 +265,8 @@ def cycles_view(scene: Scene, impact_points: int | None = None) -> dict:
     ``fsicas lco --through-contact --impact-points``: :func:`impacting_view`; both
     branches then on the contact law of ``through_contact_law``, whose eps also sets
     where the contact-free one meets the wall)."""
-    if impact_points is not None and not (isinstance(impact_points, int)
-                                          and 1 <= impact_points <= MAX_IMPACT_POINTS):
-        raise ValueError(f"the impacting cycles must be an integer in [1, "
-                         f"{MAX_IMPACT_POINTS}], got {impact_points!r}")
     if impact_points is not None:        # both branches on its law, as fsicas lco does
+        _check_count("impacting cycles", impact_points, MAX_IMPACT_POINTS)
         scene = through_contact_law(scene)
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")

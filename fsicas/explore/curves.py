@@ -34,11 +34,9 @@ class CurvePanel(BackgroundPanel):
     def ask(self, scene, key: str, command) -> None:
         """Start (or show the cached) curves of ``scene``; ``command`` gives the scene's
         command lines (:func:`command_line` of the scene)."""
-        text = str(self.max_points.value).strip()
-        try:
-            points = int(text)
-        except ValueError:
-            return self.show("error", f"the curve points must be an integer, got {text!r}")
+        points = self._count(self.max_points, "curve points")
+        if points is None:
+            return
         self.command = command("grazing", mstar=boundary_range(scene.mstar), max_points=points)
         self.key = ("curves", f"{key}|{points}")
         cached = self.jobs.start(self.key, curves_view, scene, points)

@@ -56,11 +56,9 @@ class CyclePanel(BackgroundPanel):
         ``command`` gives the scene's command lines (:func:`command_line` of the scene)."""
         points = None
         if self.through.value:
-            text = str(self.impact_points.value).strip()
-            try:
-                points = int(text)
-            except ValueError:
-                return self.show("error", f"the impacting cycles must be an integer, got {text!r}")
+            points = self._count(self.impact_points, "impacting cycles")
+            if points is None:
+                return
         extra = {} if points is None else {"through_contact": True, "impact_points": points}
         self.command, self.key = command("lco", **extra), ("lco", f"{key}|{points}")
         cached = self.jobs.start(self.key, cycles_view, scene, points)
