@@ -454,6 +454,8 @@ def test_each_figure_saves_as_svg_and_png(page, server):
     from fsicas.explore.figures import STABLE_COLOR, SVG_TOOL, UNSTABLE_COLOR
     _open(page, server, ustar=6)
     lam = linear_stability(Scene(ustar=6.0)).eigenvalues
+    buttons = page.locator(f"[title='{SVG_TOOL}']")               # one a figure shown, not
+    assert [buttons.nth(i).is_visible() for i in range(buttons.count())] == [True] * 5  # hidden
     name, svg = _saved(page, SVG_TOOL, 1)                         # figures: mode, locus, map
     assert name == "eigenvalues.svg"
     paths = [e.attrib for e in ET.fromstring(svg).iter("{http://www.w3.org/2000/svg}path")]

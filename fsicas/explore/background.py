@@ -74,13 +74,13 @@ class RunPanel(BackgroundPanel):
         self.stop.on_click(lambda _: self.jobs.cancel("run") and self.show("cancelled", None))
         self.source = ColumnDataSource({"t": [], "tip": []})
         self.figure = figure("tip_history", title="tip deflection y(1, t)", x_axis_label="t / T",
-                             y_axis_label="y / L", height=220, sizing_mode="stretch_width")
+                             y_axis_label="y / L", height=260, sizing_mode="stretch_width")
         self.figure.line("t", "tip", source=self.source)
         self.audio = pn.pane.Audio(None, sample_rate=AUDIO_RATE, name="snore", visible=False)
         self.spectrum = ColumnDataSource({"hz": [], "spl_db": []})
         self.spectrum_figure = figure("snore_spectrum", title="the snore's spectrum at the listener",
                                       x_axis_label="frequency (Hz)", y_axis_label="dB SPL",
-                                      height=220, sizing_mode="stretch_width", visible=False)
+                                      height=260, sizing_mode="stretch_width", visible=False)
         self.spectrum_figure.line("hz", "spl_db", source=self.spectrum)
 
     @held

@@ -40,7 +40,7 @@ class CyclePanel(BackgroundPanel):
         self.impacting = ColumnDataSource({"ustar": [], "amplitude": [], "color": []})
         f = figure("limit_cycles", title="limit cycles: tip amplitude (blue stable, red "
                    "unstable; squares: through contact)", x_axis_label="U*",
-                   y_axis_label="tip amplitude / L", height=220, sizing_mode="stretch_width")
+                   y_axis_label="tip amplitude / L", height=260, sizing_mode="stretch_width")
         f.line("ustar", "amplitude", source=self.source, color="gray")
         f.scatter("ustar", "amplitude", source=self.source, color="color", size=5)
         f.line("ustar", "amplitude", source=self.impacting, color="gray", line_dash="dotted")

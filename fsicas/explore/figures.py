@@ -28,13 +28,14 @@ _SVG_ICON = ("data:image/svg+xml;utf8,<svg xmlns='http://www.w3.org/2000/svg' wi
 
 def figure(name: str, **kwargs):
     """A Bokeh figure whose toolbar saves it as PNG (Bokeh's save tool) and as SVG
-    (:data:`SVG_TOOL`), both as ``name`` (Bokeh's default tools but its help, so that
-    every button fits beside a figure 220 px high)."""
+    (:data:`SVG_TOOL`), both as ``name`` (Bokeh's default tools but its help, and no
+    logo, so that every button fits beside a figure 260 px high)."""
     f = bokeh_figure(tools="pan,box_zoom,wheel_zoom,save,reset", **kwargs)
     f.add_tools(CustomAction(description=SVG_TOOL, icon=_SVG_ICON,
                              callback=CustomJS(args={"plot": f, "name": f"{name}.svg"},
                                                code=_SAVE_SVG)))
     f.select_one({"type": SaveTool}).filename = name
+    f.toolbar.logo = None
     return f
 
 

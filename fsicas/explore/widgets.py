@@ -23,7 +23,7 @@ class NumberBox(ReactiveHTML):
     testid = param.String(default="")
 
     _template = ('<label class="box">{{ label }} <input id="box" data-testid="{{ testid }}" '
-                 'value="${value}" size="9"></input></label>')
+                 'value="${value}" size="11"></input></label>')
     _dom_events = {"box": {"change": False}}
     _stylesheets = [":host { margin: 2px 6px; } input { font: inherit; }"]
 
