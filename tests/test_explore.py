@@ -400,16 +400,29 @@ def _wav(page) -> np.ndarray:
         return np.frombuffer(w.readframes(w.getnframes()), dtype="<i2") / 32767
 
 
-def test_the_snore_plays_with_its_spectrum_of_the_library(page, server):
-    """The harvester just past its supercritical onset settles on a cycle: the page plays
-    its sound and shows the spectrum of it, which is that of the WAV it plays, computed
-    by the library (line_spectrum) and by a plain FFT."""
-    import scipy.signal
-    from fsicas.timedomain.sound import P_REF, line_spectrum
+def _snore(page, server, t_end: str = "25") -> dict:
+    """The harvester just past its supercritical onset (U* = 3.5), run to ``t_end`` on
+    the page until it snores: the exported sound."""
     _open(page, server)
     page.get_by_label("physical preset").select_option("harvester")
     page.locator("[data-testid=flow]").wait_for(timeout=30000)
     _set(page, "ustar", "3.5")
+    box = page.locator("[data-testid=t-end]")
+    box.fill(t_end)
+    box.press("Enter")                                            # sent before the click
+    page.get_by_role("button", name="time run").click()
+    page.locator("[data-testid=sound-pitch]").wait_for(timeout=180000)
+    assert _text(page, "run-outcome") == "lco"
+    return _export(page)["run"]["sound"]
+
+
+def test_the_snore_plays_with_its_spectrum_of_the_library(page, server):
+    """The harvester's cycle: the page plays its sound and shows the spectrum of it,
+    which is that of the WAV it plays, computed by the library (line_spectrum) and by a
+    plain FFT; a bad t_end is refused."""
+    import scipy.signal
+    from fsicas.timedomain.sound import P_REF, line_spectrum
+    _open(page, server)
     t_end = page.locator("[data-testid=t-end]")
     t_end.fill("-1")
     t_end.press("Enter")
@@ -418,12 +431,7 @@ def test_the_snore_plays_with_its_spectrum_of_the_library(page, server):
                            ".startsWith('error')")
     assert "t_end must be in (0, 1000], got -1.0" in _text(page, "run-status")
     assert page.locator("audio").count() == 0 or not page.locator("audio").is_visible()
-    t_end.fill("25")
-    t_end.press("Enter")
-    page.get_by_role("button", name="time run").click()
-    page.locator("[data-testid=sound-pitch]").wait_for(timeout=180000)
-    assert _text(page, "run-outcome") == "lco"
-    sound = _export(page)["run"]["sound"]
+    sound = _snore(page, server)
     shown = np.array(sound["spectrum"]["spl_db"])
     pressure = _wav(page) * sound["peak_pa"]                      # back to Pa
     hz, db = line_spectrum(pressure, sound["sample_rate_hz"], 5000.0)
@@ -436,6 +444,17 @@ def test_the_snore_plays_with_its_spectrum_of_the_library(page, server):
     j = int(np.argmax(shown))
     assert shown[j] == pytest.approx(plain[j], abs=0.05)
     assert hz[j] == pytest.approx(float(_text(page, "sound-pitch").split()[0]), abs=1.0)
+
+
+@pytest.mark.slow
+def test_the_snore_python_lines_give_the_page_snore(page, server):
+    """The Python lines the page shows under the snore, run here, give its spectrum and
+    pitch."""
+    sound = _snore(page, server)
+    space = {}
+    exec(_text(page, "sound-python"), space)
+    assert space["sound"].fundamental_hz == pytest.approx(sound["fundamental_hz"], rel=1e-9)
+    assert space["spl_db"] == pytest.approx(np.array(sound["spectrum"]["spl_db"]), abs=1e-3)
 
 
 def _saved(page, title: str, index: int) -> tuple[str, bytes]:

@@ -9,8 +9,9 @@ import panel as pn
 from bokeh.models import ColumnDataSource
 
 from ..timedomain.sound import AUDIO_RATE
-from .compute import run_view
+from .compute import SOUND_DISTANCE, SOUND_DURATION, SPECTRUM_MAX_HZ, run_view
 from .figures import figure
+from .reproduce import sound_lines
 from .jobs import Jobs
 from .widgets import NumberBox, held, markup, readout
 
@@ -67,7 +68,7 @@ class RunPanel(BackgroundPanel):
 
     def __init__(self, jobs: Jobs):
         super().__init__(jobs, "not run")
-        self.key, self.command = None, ""
+        self.key, self.command, self.lines = None, "", ""
         self.t_end = NumberBox(value="20", label="t_end (T)", testid="t-end")
         self.start = pn.widgets.Button(name="time run", button_type="primary", width=120)
         self.stop = pn.widgets.Button(name="cancel run", width=110)
@@ -93,6 +94,8 @@ class RunPanel(BackgroundPanel):
             return self.show("error", f"t_end must be a number, got {self.t_end.value!r}")
         self.key = ("run", f"{key}|{t_end!r}")
         self.command = command("simulate", t_end=t_end)
+        self.lines = "" if scene.scales is None else sound_lines(
+            scene, t_end, SOUND_DISTANCE, SOUND_DURATION, SPECTRUM_MAX_HZ)
         cached = self.jobs.start(self.key, run_view, scene, t_end)
         self.show("done", cached) if cached is not None else self.show("running", 0.0)
 
@@ -112,6 +115,7 @@ class RunPanel(BackgroundPanel):
             peak = float(np.max(np.abs(sound["pressure"]))) or 1.0
             self.audio.object = (np.asarray(sound["pressure"]) / peak * 32767).astype(np.int16)
             self.spectrum.data = dict(sound["spectrum"])
+            lines.append(readout("sound-python", self.lines, "the snore in Python", "pre"))
         self.audio.visible = self.spectrum_figure.visible = sound is not None
         self.status.text = "<br>".join(lines)
 

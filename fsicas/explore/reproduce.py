@@ -7,7 +7,7 @@ import numpy as np
 
 from ..scene import Scene
 
-__all__ = ["SceneFile", "command_line", "python_lines"]
+__all__ = ["SceneFile", "command_line", "python_lines", "sound_lines"]
 
 #: The Scene fields written out (those the page sets, and k0 where a preset sets it).
 FIELDS = ("mstar", "ustar", "hstar", "friction", "k0", "kl", "zeta", "modes")
@@ -37,9 +37,11 @@ def _beam(scene: Scene, file: SceneFile | None) -> dict:
     """The beam fields where the beam is not the default Euler-Bernoulli one (nor the
     file's)."""
     reference = Scene() if file is None else file.scene
-    if (scene.beam, scene.slenderness) == (reference.beam, reference.slenderness):
+    if (scene.beam, scene.slenderness, scene.poisson) == (reference.beam, reference.slenderness,
+                                                          reference.poisson):
         return {}
-    return {"beam": scene.beam, "slenderness": scene.slenderness}
+    poisson = {} if scene.poisson == Scene().poisson else {"poisson": scene.poisson}
+    return {"beam": scene.beam, "slenderness": scene.slenderness, **poisson}
 
 
 def _option(value) -> str:
@@ -81,3 +83,19 @@ def python_lines(scene: Scene, file: SceneFile | None = None) -> str:
             f"scene = {make}\n"
             "stability = linear_stability(scene)   # .stable, .eigenvalues\n"
             "onset = critical_velocity(scene)      # .kind, .ustar, .omega, .l1")
+
+
+def sound_lines(scene: Scene, t_end: float, distance: float, duration: float,
+                max_hz: float) -> str:
+    """The Python lines that compute the snore of the physical ``scene`` (its scales
+    written out) and its spectrum as the page does: the run to ``t_end``, the sound at
+    ``distance`` m looped to ``duration`` s, its lines up to ``max_hz``."""
+    args = ", ".join(f"{k}={v!r}" for k, v in {**_values(scene, None), **_beam(scene, None)}.items())
+    return ("from fsicas import Scene\n"
+            "from fsicas.units import Scales\n"
+            "from fsicas.timedomain.run import run_case\n"
+            "from fsicas.timedomain.sound import cycle_sound, line_spectrum\n"
+            f"scene = Scene({args}, scales={scene.scales!r})\n"
+            f"run = run_case(scene, {t_end!r})\n"
+            f"sound = cycle_sound(run.trajectory, scene.scales, {distance!r}, {duration!r})\n"
+            f"hz, spl_db = line_spectrum(sound.pressure, sound.rate, {max_hz!r})")

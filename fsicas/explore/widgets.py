@@ -32,10 +32,11 @@ class NumberBox(ReactiveHTML):
 
 
 
-def readout(testid: str, text: str, label: str = "") -> str:
-    """The HTML of one readout: ``label`` and ``text`` in a span with ``data-testid``."""
+def readout(testid: str, text: str, label: str = "", tag: str = "span") -> str:
+    """The HTML of one readout: ``label`` and ``text`` in a ``tag`` (a span; ``pre`` for
+    lines of code) with ``data-testid``."""
     head = f"{html.escape(label)}: " if label else ""
-    return f'{head}<span data-testid="{testid}">{html.escape(text)}</span>'
+    return f'{head}<{tag} data-testid="{testid}">{html.escape(text)}</{tag}>'
 
 
 def markup(text: str = "", **styles: str) -> Div:
