@@ -326,7 +326,8 @@ def _load(page, path: Path) -> None:
     page.wait_for_function(f"old => ({state})() !== old", arg=old, timeout=30000)
 
 
-def test_a_scene_file_loads_as_the_cli_reads_it_and_a_bad_one_is_refused(page, server, tmp_path):
+def test_a_scene_file_loads_as_the_cli_reads_it_and_a_bad_one_is_refused(page, server, tmp_path,
+                                                                          monkeypatch):
     _open(page, server)
     mine = tmp_path / "mine.toml"
     mine.write_text("mstar = 2.0\nustar = 3.0\nk0 = 0.5\nmodes = 8\nzeta = 0.01\n")
@@ -339,6 +340,12 @@ def test_a_scene_file_loads_as_the_cli_reads_it_and_a_bad_one_is_refused(page, s
     assert _text(page, "command") == "fsicas eig --scene mine.toml --json"
     _set(page, "ustar", "3.5")                                   # the page's values win
     assert _text(page, "command") == "fsicas eig --scene mine.toml --ustar 3.5 --json"
+    space = {}
+    monkeypatch.chdir(tmp_path)                                  # where the file is
+    exec(_text(page, "python"), space)                           # the page's Python lines
+    assert space["scene"] == scene.replace(ustar=3.5)
+    assert _number(page, "growth-rate") == pytest.approx(
+        space["stability"].eigenvalues[0].real, rel=1e-5)
     for name, text in (("bad.toml", "mstar = [\n"), ("odd.toml", "mstar = 2.0\nspeed = 3\n"),
                        ("neg.toml", "mstar = -1.0\n")):
         (tmp_path / name).write_text(text)

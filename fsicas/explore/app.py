@@ -236,8 +236,8 @@ class Explorer:
         scene, view = self.scene, self.view
         self.locus.update(view["eigenvalues"])
         self.shape.update(view["x"], view["y"], scene.hstar)
-        self.command.text = (readout("command", command_line(scene, "eig", self.file)) + "<pre>"
-                             + python_lines(scene, self.file) + "</pre>")
+        self.command.text = (readout("command", command_line(scene, "eig", self.file))
+                             + readout("python", python_lines(scene, self.file), tag="pre"))
         self._ask("onset", _key(scene, "ustar"), onset_view, scene)
         self.map.crosshair(scene.mstar, scene.ustar)
         self.cycles.here.location = scene.ustar
