@@ -7,6 +7,7 @@ import functools
 import math
 
 import panel as pn
+import param
 
 from ..physical import Physical, load_physical, preset_names
 from ..scene import Scene
@@ -144,6 +145,9 @@ class Explorer:
         if not event.new:
             return
         name = self.upload.filename or "scene.toml"
+        with param.parameterized.discard_events(self.upload):
+            self.upload.value = None             # the same file loaded again is a change,
+        self.upload.clear()                      # here and in the browser's file input
         try:
             read = read_scene_file(name, event.new)
             base = physical_scene(read) if isinstance(read, Physical) else read
