@@ -22,6 +22,7 @@ from fsicas.cycles.collocation import cycle_branch
 from fsicas.linear import critical_velocity, linear_stability
 from fsicas.model.assembly import build_model
 from fsicas.physical import Physical, load_physical, parse_flow
+from fsicas.scene import load_scene
 from fsicas.timedomain.run import run_case
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -176,7 +177,7 @@ def test_invalid_input_is_refused_with_the_library_message(page, server):
         Scene(slenderness=0.1)
     _set(page, "slenderness", "0.1")                             # with Euler-Bernoulli
     assert _text(page, "error") == str(refused.value)
-    page.get_by_label("beam").select_option("timoshenko")
+    page.get_by_label("beam", exact=True).select_option("timoshenko")
     page.wait_for_function(f"() => ({FIND})(document, 'command').textContent"
                            ".includes('--beam timoshenko --slenderness 0.1')")
     assert _text(page, "error") == ""
@@ -261,11 +262,11 @@ def test_a_physical_preset_gives_hz_and_l_per_min_of_the_library(page, server):
     page.wait_for_function("() => location.search.includes('preset=soft_palate')")
 
 
-def _soft_palate_with(**values) -> Physical:
-    """The soft_palate preset with ``values`` (texts with units) in its [physical] table,
+def _preset_with(name: str = "soft_palate", **values) -> Physical:
+    """The preset ``name`` with ``values`` (texts with units) in its [physical] table,
     read by the library."""
-    preset = load_physical("soft_palate")
-    return Physical.from_table({**preset.raw, **values}, "soft_palate", preset.description,
+    preset = load_physical(name)
+    return Physical.from_table({**preset.raw, **values}, name, preset.description,
                                preset.scene_fields)
 
 
@@ -277,14 +278,14 @@ def test_physical_inputs_with_units_are_converted_by_the_library(page, server):
     assert page.locator("[data-testid=phys-flow]").input_value() == "20 L/min"
     _set(page, "phys-E", "4 kPa")
     _set(page, "phys-flow", "25 L/min")
-    scene = _soft_palate_with(E="4 kPa").scene(parse_flow("25 L/min"))
+    scene = _preset_with(E="4 kPa").scene(parse_flow("25 L/min"))
     assert float(_text(page, "flow").split()[0]) == pytest.approx(25.0, rel=1e-4)
     assert _number(page, "growth-rate") == pytest.approx(
         linear_stability(scene).eigenvalues[0].real, rel=1e-5)
     assert f"--mstar {scene.mstar:g} --ustar {scene.ustar:g} " in _text(page, "command")
     page.wait_for_function("() => location.search.includes('E=4')")
     with pytest.raises(ValueError) as refused:
-        _soft_palate_with(E="-3 kPa")
+        _preset_with(E="-3 kPa")
     _set(page, "phys-E", "-3 kPa")
     assert _text(page, "error") == str(refused.value)
     _set(page, "phys-E", "4 kPa")
@@ -314,3 +315,271 @@ def test_the_limit_cycle_branch_in_the_background_is_the_library_one(page, serve
     exported = _export(page)["cycles"]
     assert exported["contact"]["ustar"] == pytest.approx(branch.contact.ustar, rel=1e-9)
     assert [p["stable"] for p in exported["points"]] == [p.stable for p in branch.points]
+
+
+def _load(page, path: Path) -> None:
+    """Load the scene file ``path`` in the page and wait until it has answered (its
+    command line or its error changed)."""
+    state = f"() => ['command', 'error'].map(i => ({FIND})(document, i).textContent).join('|')"
+    old = page.evaluate(state)
+    page.locator("input[type=file]").set_input_files(str(path))
+    page.wait_for_function(f"old => ({state})() !== old", arg=old, timeout=30000)
+
+
+def test_a_scene_file_loads_as_the_cli_reads_it_and_a_bad_one_is_refused(page, server, tmp_path,
+                                                                          monkeypatch):
+    _open(page, server)
+    mine = tmp_path / "mine.toml"
+    mine.write_text("mstar = 2.0\nustar = 3.0\nk0 = 0.5\nmodes = 8\nzeta = 0.01\n")
+    _load(page, mine)
+    scene = load_scene(mine)
+    page.wait_for_function(f"() => ({FIND})(document, 'scene-file').textContent.length > 0")
+    assert _text(page, "scene-file") == "mine.toml (scene file)"
+    assert _number(page, "growth-rate") == pytest.approx(
+        linear_stability(scene).eigenvalues[0].real, rel=1e-5)
+    assert _text(page, "command") == "fsicas eig --scene mine.toml --json"
+    _set(page, "ustar", "3.5")                                   # the page's values win
+    assert _text(page, "command") == "fsicas eig --scene mine.toml --ustar 3.5 --json"
+    space = {}
+    monkeypatch.chdir(tmp_path)                                  # where the file is
+    exec(_text(page, "python"), space)                           # the page's Python lines
+    assert space["scene"] == scene.replace(ustar=3.5)
+    assert _number(page, "growth-rate") == pytest.approx(
+        space["stability"].eigenvalues[0].real, rel=1e-5)
+    _load(page, mine)                                            # again: the file's values
+    assert _text(page, "command") == "fsicas eig --scene mine.toml --json"
+    for name, text in (("bad.toml", "mstar = [\n"), ("odd.toml", "mstar = 2.0\nspeed = 3\n"),
+                       ("neg.toml", "mstar = -1.0\n")):
+        (tmp_path / name).write_text(text)
+        with pytest.raises(ValueError) as refused:
+            load_scene(tmp_path / name)
+        _load(page, tmp_path / name)
+        assert _text(page, "error") == str(refused.value).replace(f"{tmp_path}/", "")
+        assert "Traceback" not in _text(page, "error")
+    assert _number(page, "growth-rate") == pytest.approx(                    # the view stays
+        linear_stability(scene).eigenvalues[0].real, rel=1e-5)
+    physical = tmp_path / "palate.toml"                          # as fsicas onset --physical
+    physical.write_text('preset = "soft_palate"\n[physical]\nE = "4 kPa"\nflow = "25 L/min"\n')
+    _load(page, physical)
+    read = load_physical(str(physical))
+    assert _text(page, "scene-file") == "palate.toml (physical file)"
+    assert page.locator("[data-testid=phys-E]").input_value() == "4 kPa"
+    assert float(_text(page, "flow").split()[0]) == pytest.approx(25.0, rel=1e-4)
+    assert _number(page, "growth-rate") == pytest.approx(
+        linear_stability(read.scene(read.flow)).eigenvalues[0].real, rel=1e-5)
+
+
+def test_the_densities_poisson_ratio_and_viscosity_are_physical_inputs_too(page, server):
+    _open(page, server)
+    page.get_by_label("physical preset").select_option("harvester")
+    page.locator("[data-testid=flow]").wait_for(timeout=30000)
+    shown = {k: page.locator(f"[data-testid=phys-{k}]").input_value()
+             for k in ("nu", "rho_s", "rho_f", "viscosity")}
+    assert shown == {"nu": "0.38", "rho_s": "1390 kg/m^3", "rho_f": "1.2 kg/m^3",
+                     "viscosity": "1.8e-5 Pa*s"}
+    values = {"nu": "0.3", "rho_s": "1.2 g/cm^3", "rho_f": "1 kg/m^3", "viscosity": "3.6e-5 Pa*s"}
+    for key, text in values.items():
+        _set(page, f"phys-{key}", text)
+    physical = _preset_with("harvester", **values)
+    scene = physical.scene(physical.flow)
+    assert _number(page, "growth-rate") == pytest.approx(
+        linear_stability(scene).eigenvalues[0].real, rel=1e-5)
+    assert float(page.locator("[data-testid=friction]").input_value()) == pytest.approx(
+        physical.friction(physical.flow)[0], rel=1e-5)        # f from the viscosity's Re
+    assert f"--mstar {scene.mstar:g} " in _text(page, "command")
+    page.wait_for_function("() => location.search.includes('rho_s=1.2')")
+    for key, text in (("rho_f", "-1 kg/m^3"), ("viscosity", "2 m")):
+        with pytest.raises(ValueError) as refused:
+            _preset_with("harvester", **{**values, key: text})
+        _set(page, f"phys-{key}", text)
+        assert _text(page, "error") == str(refused.value)
+        _set(page, f"phys-{key}", values[key])
+        assert _text(page, "error") == ""
+
+
+def _wav(page) -> np.ndarray:
+    """The samples of the page's ``<audio>`` element (its WAV, served as a data: URL),
+    as floats in [-1, 1]."""
+    import base64
+    import io
+    import wave
+    src = page.locator("audio").get_attribute("src")
+    assert src.startswith("data:audio/wav;base64,"), src[:40]
+    with wave.open(io.BytesIO(base64.b64decode(src.split(",", 1)[1]))) as w:
+        return np.frombuffer(w.readframes(w.getnframes()), dtype="<i2") / 32767
+
+
+def _snore(page, server, t_end: str = "25") -> dict:
+    """The harvester just past its supercritical onset (U* = 3.5), run to ``t_end`` on
+    the page until it snores: the exported sound."""
+    _open(page, server)
+    page.get_by_label("physical preset").select_option("harvester")
+    page.locator("[data-testid=flow]").wait_for(timeout=30000)
+    _set(page, "ustar", "3.5")
+    box = page.locator("[data-testid=t-end]")
+    box.fill(t_end)
+    box.press("Enter")                                            # sent before the click
+    page.get_by_role("button", name="time run").click()
+    page.locator("[data-testid=sound-pitch]").wait_for(timeout=180000)
+    assert _text(page, "run-outcome") == "lco"
+    return _export(page)["run"]["sound"]
+
+
+def test_the_snore_plays_with_its_spectrum_of_the_library(page, server):
+    """The harvester's cycle: the page plays its sound and shows the spectrum of it,
+    which is that of the WAV it plays, computed by the library (line_spectrum) and by a
+    plain FFT; a bad t_end is refused."""
+    import scipy.signal
+    from fsicas.timedomain.sound import P_REF, line_spectrum
+    _open(page, server)
+    t_end = page.locator("[data-testid=t-end]")
+    t_end.fill("-1")
+    t_end.press("Enter")
+    page.get_by_role("button", name="time run").click()
+    page.wait_for_function(f"() => ({FIND})(document, 'run-status').textContent"
+                           ".startsWith('error')")
+    assert "t_end must be in (0, 1000], got -1.0" in _text(page, "run-status")
+    assert page.locator("audio").count() == 0 or not page.locator("audio").is_visible()
+    sound = _snore(page, server)
+    shown = np.array(sound["spectrum"]["spl_db"])
+    pressure = _wav(page) * sound["peak_pa"]                      # back to Pa
+    hz, db = line_spectrum(pressure, sound["sample_rate_hz"], 5000.0)
+    assert np.array(sound["spectrum"]["hz"]) == pytest.approx(hz)
+    strong = db > db.max() - 60                                    # above the WAV's rounding
+    assert shown[strong] == pytest.approx(db[strong], abs=0.05)
+    window = scipy.signal.get_window("hann", pressure.size)        # periodic, as periodogram
+    lines = np.abs(np.fft.rfft((pressure - pressure.mean()) * window)) ** 2
+    plain = 10 * np.log10(2 * lines / window.sum() ** 2 / P_REF ** 2)
+    j = int(np.argmax(shown))
+    assert shown[j] == pytest.approx(plain[j], abs=0.05)
+    assert hz[j] == pytest.approx(float(_text(page, "sound-pitch").split()[0]), abs=1.0)
+
+
+@pytest.mark.slow
+def test_the_snore_python_lines_give_the_page_snore(page, server):
+    """The Python lines the page shows under the snore, run here, give its spectrum and
+    pitch."""
+    sound = _snore(page, server)
+    space = {}
+    exec(_text(page, "sound-python"), space)
+    assert space["sound"].fundamental_hz == pytest.approx(sound["fundamental_hz"], rel=1e-9)
+    assert space["spl_db"] == pytest.approx(np.array(sound["spectrum"]["spl_db"]), abs=1e-3)
+
+
+def _saved(page, title: str, index: int) -> tuple[str, bytes]:
+    """The name and content of what the toolbar button ``title`` of figure ``index``
+    downloads."""
+    with page.expect_download() as download:
+        page.locator(f"[title='{title}']").nth(index).click()
+    return download.value.suggested_filename, Path(download.value.path()).read_bytes()
+
+
+def test_each_figure_saves_as_svg_and_png(page, server):
+    """The root locus saved as SVG draws one marker per eigenvalue of the library, the
+    unstable ones red; the same figure saves as PNG; an empty figure (the map before it
+    is computed) as an SVG without markers."""
+    import xml.etree.ElementTree as ET
+    from fsicas.explore.figures import STABLE_COLOR, SVG_TOOL, UNSTABLE_COLOR
+    _open(page, server, ustar=6)
+    lam = linear_stability(Scene(ustar=6.0)).eigenvalues
+    buttons = page.locator(f"[title='{SVG_TOOL}']")               # one a figure shown, not
+    assert [buttons.nth(i).is_visible() for i in range(buttons.count())] == [True] * 5  # hidden
+    name, svg = _saved(page, SVG_TOOL, 1)                         # figures: mode, locus, map
+    assert name == "eigenvalues.svg"
+    paths = [e.attrib for e in ET.fromstring(svg).iter("{http://www.w3.org/2000/svg}path")]
+    rgb = lambda color: "rgb({},{},{})".format(*bytes.fromhex(color[1:]))
+    markers = [p["fill"] for p in paths if " A 3.5 3.5 " in p.get("d", "")]
+    assert markers.count(rgb(UNSTABLE_COLOR)) == np.sum(lam.real > 0) == 2
+    assert markers.count(rgb(STABLE_COLOR)) == np.sum(lam.real <= 0)
+    assert b"growth rate" in svg                                   # the axis label, as text
+    name, png = _saved(page, "Save", 1)
+    assert name == "eigenvalues.png" and png.startswith(b"\x89PNG")
+    name, svg = _saved(page, SVG_TOOL, 2)
+    assert name == "boundary.svg"
+    assert not [p for p in ET.fromstring(svg).iter("{http://www.w3.org/2000/svg}path")
+                if " A 3" in p.get("d", "")]
+
+
+def _through_contact(page, points: str) -> None:
+    """Ask for the limit cycles on through contact, at most ``points`` impacting ones."""
+    page.locator("input[type=checkbox]").check()                # "on through contact"
+    box = page.locator("[data-testid=impact-points]")
+    box.fill(points)
+    box.press("Enter")                                           # sent before the click
+    page.get_by_role("button", name="limit cycles", exact=True).click()
+
+
+@pytest.mark.slow
+def test_the_branch_through_contact_is_that_of_its_command(page, server, tmp_path):
+    """M* = 1, ζ = 0.01, N = 4 (docs/cycles.md): five impacting cycles past the first
+    contact; the page's command line, run, gives the same branch (about 2 minutes)."""
+    _open(page, server, zeta=0.01, modes=4)
+    _through_contact(page, "5")
+    page.locator("[data-testid=impact-status]").wait_for(timeout=900000)
+    command = _text(page, "lco-command")
+    assert command.endswith("--through-contact --impact-points 5 --json")
+    done = subprocess.run([sys.executable, "-m", "fsicas.cli", *command.split()[1:]],
+                          capture_output=True, text=True, cwd=tmp_path, timeout=900,
+                          env={**os.environ, "PYTHONPATH": str(ROOT)})
+    assert done.returncode == 0, done.stderr
+    cli = json.loads(done.stdout)["impacting"]
+    shown = _export(page)["cycles"]["impacting"]
+    assert _text(page, "impact-status") == shown["status"] == cli["status"]
+    assert int(_text(page, "impact-count")) == len(cli["points"]) == 5
+    for mine, theirs in zip(shown["points"], cli["points"]):
+        assert mine["ustar"] == pytest.approx(theirs["ustar"], rel=1e-6)
+        assert mine["tip_amplitude"] == pytest.approx(theirs["tip_amplitude"], rel=1e-5)
+        assert (mine["impacts"], mine["stable"]) == (theirs["impacts"], theirs["stable"])
+
+
+def _curves(page, points: str) -> None:
+    """Ask for the grazing and fold curves, at most ``points`` points per direction."""
+    box = page.locator("[data-testid=curve-points]")
+    box.fill(points)
+    box.press("Enter")                                           # sent before the click
+    page.get_by_role("button", name="grazing and fold curves").click()
+
+
+@pytest.mark.parametrize("ask, testid, what", [
+    (_through_contact, "lco-status", "impacting cycles"),
+    (_curves, "curves-status", "curve points")])
+def test_the_heavy_jobs_refuse_a_bad_count_and_cancel(page, server, ask, testid, what):
+    """The branch through contact and the curves: a count that is not a whole number is
+    refused by the page, one out of range by the job (the library's ValueError); a job
+    cancels."""
+    _open(page, server, modes=4)
+    status = f"() => ({FIND})(document, '{testid}').textContent"
+    ask(page, "many")
+    page.wait_for_function(f"{status}.startsWith('error')")
+    assert _text(page, testid) == f"error: the {what} must be an integer, got 'many'"
+    ask(page, "0")
+    page.wait_for_function(f"{status}.includes('[1,')")
+    assert _text(page, testid) == f"error: ValueError: the {what} must be an integer in [1, 1000], got 0"
+    ask(page, "10")
+    page.wait_for_function(f"{status}.startsWith('computing')")
+    cancel = "cancel cycles" if testid == "lco-status" else "cancel curves"
+    page.get_by_role("button", name=cancel).click()
+    page.wait_for_function(f"{status} === 'cancelled'")
+
+
+@pytest.mark.slow
+def test_the_grazing_and_fold_curves_are_those_of_their_command(page, server, tmp_path):
+    """N = 4 over M* in [0.1, 100], at most 10 points per direction: the curves on the
+    map are those of the page's own `fsicas grazing` line, run (a few minutes)."""
+    _open(page, server, modes=4)
+    _curves(page, "10")
+    page.locator("[data-testid=curves-grazing]").wait_for(timeout=1200000)
+    command = _text(page, "curves-command")
+    assert " --mstar 0.1:100:19 --max-points 10 --json" in command
+    done = subprocess.run([sys.executable, "-m", "fsicas.cli", *command.split()[1:]],
+                          capture_output=True, text=True, cwd=tmp_path, timeout=1200,
+                          env={**os.environ, "PYTHONPATH": str(ROOT)})
+    assert done.returncode == 0, done.stderr
+    cli = json.loads(done.stdout)
+    shown = _export(page)["curves"]
+    assert shown["seeds"] == pytest.approx(cli["seeds"], rel=1e-9)
+    for kind in ("grazing", "fold"):
+        assert int(_text(page, f"curves-{kind}")) == len(shown[kind])
+        points = [(m, u) for c in shown[kind] for m, u in zip(c["mstar"], c["ustar"])]
+        assert len(points) == len(cli[kind])
+        assert points == pytest.approx([(p["mstar"], p["ustar"]) for p in cli[kind]], rel=1e-6)

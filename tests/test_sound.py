@@ -15,8 +15,9 @@ from fsicas.model.accuracy import IMPACT_QUADRATURE_TOL
 from fsicas.timedomain.energy import outlet_flow_rates
 from fsicas.timedomain.integrators import Settings
 from fsicas.timedomain.run import run_case
-from fsicas.timedomain.sound import (AUDIO_RATE, cycle_sound, flow_derivative, looped_sound,
-                                     median_rate, monopole_pressure, spl_db, write_wav)
+from fsicas.timedomain.sound import (AUDIO_RATE, cycle_sound, flow_derivative, line_spectrum,
+                                     looped_sound, median_rate, monopole_pressure, spl_db,
+                                     write_wav)
 from fsicas.units import Scales
 
 #: Scales of a 3 cm strip with T = 10 ms (the M* = 1 cycle then sings at 764 Hz).
@@ -51,6 +52,19 @@ def test_spl_of_a_known_sine():
     p = 0.2 * np.sin(2 * np.pi * 440 * t)
     assert spl_db(p) == pytest.approx(20 * np.log10(0.2 / np.sqrt(2) / 20e-6), abs=1e-9)
     assert spl_db(np.sqrt(2) * 20e-6 * np.sin(2 * np.pi * 440 * t)) == pytest.approx(0.0, abs=1e-9)
+
+
+def test_line_spectrum_of_two_known_sines():
+    """Each line of a sum of sines on the bins reads its own level (the mean left out);
+    between them, far below."""
+    t = np.arange(2 * AUDIO_RATE) / AUDIO_RATE
+    p = 3.0 + 0.2 * np.sin(2 * np.pi * 440 * t) + 0.02 * np.sin(2 * np.pi * 1000.5 * t)
+    hz, db = line_spectrum(p, AUDIO_RATE, max_hz=2000.0)
+    assert hz[-1] == 2000.0 and hz[1] == 0.5
+    for f, a in ((440.0, 0.2), (1000.5, 0.02)):
+        assert db[np.flatnonzero(hz == f)[0]] == pytest.approx(spl_db(a * np.sin(2 * np.pi * f * t)),
+                                                                abs=1e-6)
+    assert db[0] < 0 and db[np.flatnonzero(hz == 700.0)[0]] < 0
 
 
 def test_flow_derivative_is_the_time_derivative_of_the_outlet_flow(lco_run):

@@ -14,7 +14,8 @@ import continuation as C
 from ..cycles.collocation import CycleSettings, cycle_branch
 from ..cycles.impacting import ImpactSettings
 from ..cycles.impacting_collocation import CollocationImpactSettings
-from ..cycles.impacting_routes import impacting_cycles, impacting_start
+from ..cycles.impacting_routes import (THROUGH_EPS, THROUGH_STIFFNESS, impacting_cycles,
+                                       impacting_start, through_contact_law)
 from ..model import build_model
 from ..model.accuracy import QUADRATURE_TOL
 from ..model.contact import reference_force
@@ -35,9 +36,6 @@ _IMPACT_KEYS = ("ustar", "period", "tip_amplitude", "min_gap", "gap_ratio", "imp
 #: 1e-2-4e-2 and agreed with time integration to 1e-7, docs/cycles.md)
 COARSE_MESH = 0.1
 
-#: The contact law of ``--through-contact`` where none is given: that of Figs. 6-9
-#: (docs/simulate.md), smoothed (docs/cycles.md).
-THROUGH_STIFFNESS, THROUGH_EPS, THROUGH_SMOOTHING = 1e8, 1e-2, 0.1
 #: The impacting branch's points without ``--impact-points``: no limit that a branch
 #: bounded by ``--ustar-max`` reaches.
 UNLIMITED_POINTS = 10 ** 6
@@ -95,9 +93,7 @@ def _cmd_cycles(args) -> dict:
             raise ValueError(f"--{name.replace('_', '-')} must be at most {C.MAX_NTST}, got "
                              f"{getattr(args, name)}")
     if args.through_contact:
-        scene = scene.replace(contact_stiffness=args.contact_stiffness or THROUGH_STIFFNESS,
-                              contact_eps=args.contact_eps or THROUGH_EPS,
-                              contact_smoothing=scene.contact_smoothing or THROUGH_SMOOTHING)
+        scene = through_contact_law(scene, args.contact_stiffness, args.contact_eps)
     settings = CycleSettings(ntst=args.ntst, ncol=args.ncol, max_points=args.max_points,
                              quadrature_tol=args.quadrature_tol)
     record(args, scene, cycle_settings=settings)

@@ -30,13 +30,31 @@ from .collocation import CycleBranch, CycleSettings, cycle_branch
 from .impacting import ImpactBranch, ImpactSettings, pre_contact_start, shooting_branch
 from .impacting_collocation import CollocationImpactSettings, check_smooth, collocation_branch
 
-__all__ = ["ImpactMethod", "StartCycle", "impacting_cycles", "impacting_start"]
+__all__ = ["ImpactMethod", "StartCycle", "impacting_cycles", "impacting_start",
+           "through_contact_law", "THROUGH_STIFFNESS", "THROUGH_EPS", "THROUGH_SMOOTHING"]
 
 ImpactMethod = Literal["collocation", "shooting"]
 """The route of the impacting cycles: adaptive collocation of the smoothed contact law
 (the default; special cycles located) or multiple shooting (any contact law)."""
 
 #: each route's settings class and branch function
+#: The contact law of the impacting branch where none is given (``fsicas lco
+#: --through-contact``, ``fsicas explore``): that of Figs. 6-9 (docs/simulate.md),
+#: smoothed (docs/cycles.md).
+THROUGH_STIFFNESS, THROUGH_EPS, THROUGH_SMOOTHING = 1e8, 1e-2, 0.1
+
+
+def through_contact_law(scene: Scene, stiffness: float | None = None,
+                        eps: float | None = None) -> Scene:
+    """``scene`` with the contact law its cycles are continued through contact on:
+    k* = ``stiffness``, eps/H = ``eps`` (:data:`THROUGH_STIFFNESS`, :data:`THROUGH_EPS`
+    where None) and its smoothing (:data:`THROUGH_SMOOTHING` where it has none); the
+    contact switch itself as it is."""
+    return scene.replace(contact_stiffness=stiffness or THROUGH_STIFFNESS,
+                         contact_eps=eps or THROUGH_EPS,
+                         contact_smoothing=scene.contact_smoothing or THROUGH_SMOOTHING)
+
+
 _ROUTES = {"collocation": (CollocationImpactSettings, collocation_branch),
            "shooting": (ImpactSettings, shooting_branch)}
 

@@ -3,19 +3,23 @@
 the reproducing command line, the state in the URL."""
 from __future__ import annotations
 
+import functools
 import math
 
 import panel as pn
+import param
 
-from ..physical import preset_names
+from ..physical import Physical, load_physical, preset_names
 from ..scene import Scene
 from .background import RunPanel
 from .cycles import CyclePanel
-from .compute import (INPUTS, PHYSICAL_INPUTS, boundary_view, export, instant_view, onset_view,
-                      physical_scene, physical_texts, preset_scene, scene_of)
+from .curves import CurvePanel
+from .compute import (INPUTS, PHYSICAL_INPUTS, boundary_view, export, input_text, instant_view,
+                      onset_view, physical_scene, physical_texts, preset_scene,
+                      read_scene_file, scene_of)
 from .figures import BoundaryMap, ModeShape, RootLocus
 from .jobs import Jobs
-from .reproduce import command_line, python_lines
+from .reproduce import SceneFile, command_line, python_lines
 from .widgets import NumberBox, held, markup, readout
 
 __all__ = ["Explorer", "RESULTS"]
@@ -45,18 +49,22 @@ class Explorer:
 
     def __init__(self, preset: str | None = None):
         self.base = preset_scene(preset)
-        self.preset = preset
+        #: The physical input (a preset or a loaded file) the scene comes from, or None;
+        #: the nondimensional scene file loaded, or None.
+        self.source: Physical | None = None if preset is None else load_physical(preset)
+        self.file: SceneFile | None = None
         self.presets = pn.widgets.Select(name="physical preset", value=preset or NO_PRESET,
                                          options=[NO_PRESET, *preset_names()], width=200)
         self.holding = False
         self.beam = pn.widgets.Select(name="beam", value=self.base.beam,
                                       options=["euler-bernoulli", "timoshenko"], width=200)
-        self.slenderness = NumberBox(value="" if self.base.slenderness is None else
-                                     f"{self.base.slenderness:.6g}", label="e/L",
+        self.slenderness = NumberBox(value=input_text(self.base.slenderness), label="e/L",
                                      testid="slenderness")
+        self.upload = pn.widgets.FileInput(accept=".toml", multiple=False, width=220)
+        self.loaded = markup(readout("scene-file", ""))
         self.jobs = Jobs(RESULTS)
         self.scene = self.base
-        self.boxes = {k: NumberBox(value=f"{getattr(self.base, k):.6g}", label=label, testid=k)
+        self.boxes = {k: NumberBox(value=input_text(getattr(self.base, k)), label=label, testid=k)
                       for k, (label, _) in INPUTS.items()}
         self.boxes["modes"].testid = "modes"
         self.physical = {k: NumberBox(label=label, testid=f"phys-{k}", visible=False)
@@ -72,6 +80,7 @@ class Explorer:
         self.phase = 0.0
         self.run = RunPanel(self.jobs)
         self.cycles = CyclePanel(self.jobs)
+        self.curves = CurvePanel(self.jobs, self.map)
         self.download = pn.widgets.FileDownload(callback=self._export, filename="fsicas_explore.json",
                                                 label="export the view (JSON)", width=220)
         self._wire()
@@ -81,6 +90,7 @@ class Explorer:
         for box in self.boxes.values():
             box.param.watch(self._changed, "value")
         self.presets.param.watch(self._preset, "value")
+        self.upload.param.watch(self._uploaded, "value")
         for box in self.physical.values():
             box.param.watch(self._physical_changed, "value")
         self.beam.param.watch(self._changed, "value")
@@ -92,9 +102,12 @@ class Explorer:
         self.draw_map = pn.widgets.Button(name="compute the map", button_type="primary", width=150)
         self.draw_map.on_click(lambda _: self._ask("boundary", self._map_key(), boundary_view,
                                                    self.scene))
-        self.run.start.on_click(lambda _: self.run.ask(self.scene, _key(self.scene)))
-        self.cycles.start.on_click(lambda _: self.cycles.ask(self.scene,
-                                                             _key(self.scene, "ustar")))
+        self.run.start.on_click(lambda _: self.run.ask(self.scene, _key(self.scene),
+                                                       self._commands()))
+        self.cycles.start.on_click(lambda _: self.cycles.ask(
+            self.scene, _key(self.scene, "ustar"), self._commands()))
+        self.curves.start.on_click(lambda _: self.curves.ask(self.scene, self._map_key(),
+                                                             self._commands()))
         self.refresh()
 
     def start(self) -> None:
@@ -119,25 +132,56 @@ class Explorer:
     def _preset(self, event) -> None:
         """Start again from the preset's scene (or the default one): every box at once,
         the preset's physical inputs shown as its file writes them."""
-        self.preset = None if event.new == NO_PRESET else event.new
+        if self.holding:
+            return
+        self.source = None if event.new == NO_PRESET else load_physical(event.new)
+        self._start_from(Scene() if self.source is None else physical_scene(self.source), None)
+
+    def _uploaded(self, event) -> None:
+        """A scene file loaded in the page, read by the library as the CLI reads it: a
+        physical file as ``--physical`` (its physical inputs shown), any other as
+        ``--scene`` (written as ``--scene NAME`` in the commands); its message if it
+        refuses the file (the last valid view stays)."""
+        if not event.new:
+            return
+        name = self.upload.filename or "scene.toml"
+        with param.parameterized.discard_events(self.upload):
+            self.upload.value = None             # the same file loaded again is a change,
+        self.upload.clear()                      # here and in the browser's file input
+        try:
+            read = read_scene_file(name, event.new)
+            base = physical_scene(read) if isinstance(read, Physical) else read
+        except ValueError as err:
+            return self._refuse(err)
+        kind = "physical file" if isinstance(read, Physical) else "scene file"
+        self.source = read if isinstance(read, Physical) else None
+        self.holding, self.presets.value = True, NO_PRESET
+        self._start_from(base, None if self.source else SceneFile(name, base), f"{name} ({kind})")
+
+    def _start_from(self, base: Scene, file: SceneFile | None, loaded: str = "") -> None:
+        """``base`` as the page's scene, its physical inputs shown, ``file`` the scene
+        file the commands name, ``loaded`` the file's name and kind (for the readout)."""
+        self.file = file
+        self.loaded.text = readout("scene-file", loaded, "loaded" if loaded else "")
         self.holding = True
         self._show_physical()
-        self._apply(preset_scene(self.preset))
+        self._apply(base)
 
     def _show_physical(self) -> None:
-        """The preset's physical inputs as its file writes them (none without a preset)."""
-        texts = {} if self.preset is None else physical_texts(self.preset)
+        """The physical inputs as the preset's or file's table writes them (none without
+        one)."""
+        texts = {} if self.source is None else physical_texts(self.source)
         for name, box in self.physical.items():
             box.value, box.visible = texts.get(name, ""), name in texts
 
     def _physical_changed(self, _event=None) -> None:
         """The preset's scene with the physical inputs, converted by the library; its
         message if it refuses them (the last valid view stays)."""
-        if self.holding or self.preset is None:
+        if self.holding or self.source is None:
             return
         texts = {k: box.value for k, box in self.physical.items() if box.visible}
         try:
-            base = physical_scene(self.preset, texts)
+            base = physical_scene(self.source, texts)
         except ValueError as err:
             return self._refuse(err)
         self._apply(base)
@@ -146,10 +190,9 @@ class Explorer:
         """``base`` as the page's scene: its values in the boxes (held: one refresh)."""
         self.base, self.holding = base, True
         for name, box in self.boxes.items():
-            box.value = f"{getattr(self.base, name):.6g}"
+            box.value = input_text(getattr(self.base, name))
         self.beam.value = self.base.beam
-        self.slenderness.value = ("" if self.base.slenderness is None
-                                  else f"{self.base.slenderness:.6g}")
+        self.slenderness.value = input_text(self.base.slenderness)
         self.holding = False
         self.refresh()
 
@@ -197,13 +240,17 @@ class Explorer:
         scene, view = self.scene, self.view
         self.locus.update(view["eigenvalues"])
         self.shape.update(view["x"], view["y"], scene.hstar)
-        self.command.text = (readout("command", command_line(scene)) + "<pre>"
-                             + python_lines(scene) + "</pre>")
+        self.command.text = (readout("command", command_line(scene, "eig", self.file))
+                             + readout("python", python_lines(scene, self.file), tag="pre"))
         self._ask("onset", _key(scene, "ustar"), onset_view, scene)
         self.map.crosshair(scene.mstar, scene.ustar)
         self.cycles.here.location = scene.ustar
         cached = RESULTS.get(("boundary", self._map_key()))
         self._show("boundary", "done" if cached else "idle", cached)
+
+    def _commands(self):
+        """The command lines of the current scene: ``(command, **extra) -> str``."""
+        return functools.partial(command_line, self.scene, file=self.file)
 
     def _map_key(self) -> str:
         """The boundary's cache key: the scene but U* and M*, and the decade of M*."""
@@ -241,8 +288,8 @@ class Explorer:
                 status = "idle"                      # a map of a scene left meanwhile
             if status != "idle":
                 self._show(kind, status, value)
-        self.run.poll()
-        self.cycles.poll()
+        for panel in (self.run, self.cycles, self.curves):
+            panel.poll()
 
     def _show(self, kind: str, status: str, value) -> None:
         if kind == "onset":
@@ -283,12 +330,14 @@ class Explorer:
         map, the limit-cycle branch and the time run of this scene where computed."""
         import io
         onset = RESULTS.get(("onset", _key(self.scene, "ustar")))
-        run = self.run.key                                   # the last run asked for
-        run = RESULTS.get(run) if run and run[1].startswith(_key(self.scene) + "|") else None
-        return io.StringIO(export(self.scene, self.view, onset, command_line(self.scene),
+        of_scene = lambda key, scene: (RESULTS.get(key) if key and key[1].startswith(scene + "|")
+                                       else None)       # the last job asked for, if of this scene
+        return io.StringIO(export(self.scene, self.view, onset,
+                                  command_line(self.scene, "eig", self.file),
                                   boundary=RESULTS.get(("boundary", self._map_key())),
-                                  cycles=RESULTS.get(("lco", _key(self.scene, "ustar"))),
-                                  run=run))
+                                  cycles=of_scene(self.cycles.key, _key(self.scene, "ustar")),
+                                  run=of_scene(self.run.key, _key(self.scene)),
+                                  curves=of_scene(self.curves.key, self._map_key())))
 
     @held
     def _frame(self) -> None:
@@ -298,14 +347,15 @@ class Explorer:
 
     # -- the page -------------------------------------------------------------------
     def page(self) -> pn.viewable.Viewable:
-        inputs = pn.Column("### Inputs", self.presets, *self.physical.values(),
+        inputs = pn.Column("### Inputs", self.presets, "scene file (TOML)", self.upload,
+                           self.loaded, *self.physical.values(),
                            *self.boxes.values(), self.beam, self.slenderness, self.error,
                            width=260)
         instant = pn.Column("### Now", self.readouts, self.animate,
                             pn.pane.Bokeh(self.shape.figure), pn.pane.Bokeh(self.locus.figure))
         slower = pn.Column("### Onset", self.onset, "### Map", self.background,
                            pn.Row(self.draw_map, self.cancel),
-                           pn.pane.Bokeh(self.map.figure), self.cycles.page(),
+                           pn.pane.Bokeh(self.map.figure), self.curves.page(), self.cycles.page(),
                            self.run.page())
         title = "fsicas explore"
         return pn.Column(f"## {title}", pn.Row(inputs, instant, slower, sizing_mode="stretch_width"),

@@ -7,12 +7,12 @@ from __future__ import annotations
 import numpy as np
 import panel as pn
 from bokeh.models import ColumnDataSource
-from bokeh.plotting import figure
 
 from ..timedomain.sound import AUDIO_RATE
-from .compute import run_view
+from .compute import SOUND_DISTANCE, SOUND_DURATION, SPECTRUM_MAX_HZ, run_view
+from .figures import figure
+from .reproduce import sound_lines
 from .jobs import Jobs
-from .reproduce import command_line
 from .widgets import NumberBox, held, markup, readout
 
 __all__ = ["BackgroundPanel", "RunPanel"]
@@ -51,6 +51,15 @@ class BackgroundPanel:
     def _done(self, result: dict) -> None:
         raise NotImplementedError
 
+    def _count(self, box: NumberBox, what: str) -> int | None:
+        """The integer in ``box``, or None once the refusal (naming ``what``) is shown."""
+        text = str(box.value).strip()
+        try:
+            return int(text)
+        except ValueError:
+            self.show("error", f"the {what} must be an integer, got {text!r}")
+            return None
+
 
 class RunPanel(BackgroundPanel):
     """The time run's controls and results for one page."""
@@ -59,26 +68,34 @@ class RunPanel(BackgroundPanel):
 
     def __init__(self, jobs: Jobs):
         super().__init__(jobs, "not run")
-        self.key, self.command = None, ""
+        self.key, self.command, self.lines = None, "", ""
         self.t_end = NumberBox(value="20", label="t_end (T)", testid="t-end")
         self.start = pn.widgets.Button(name="time run", button_type="primary", width=120)
         self.stop = pn.widgets.Button(name="cancel run", width=110)
         self.stop.on_click(lambda _: self.jobs.cancel("run") and self.show("cancelled", None))
         self.source = ColumnDataSource({"t": [], "tip": []})
-        self.figure = figure(title="tip deflection y(1, t)", x_axis_label="t / T",
-                             y_axis_label="y / L", height=220, sizing_mode="stretch_width")
+        self.figure = figure("tip_history", title="tip deflection y(1, t)", x_axis_label="t / T",
+                             y_axis_label="y / L", height=260, sizing_mode="stretch_width")
         self.figure.line("t", "tip", source=self.source)
         self.audio = pn.pane.Audio(None, sample_rate=AUDIO_RATE, name="snore", visible=False)
+        self.spectrum = ColumnDataSource({"hz": [], "spl_db": []})
+        self.spectrum_figure = figure("snore_spectrum", title="the snore's spectrum at the listener",
+                                      x_axis_label="frequency (Hz)", y_axis_label="dB SPL",
+                                      height=260, sizing_mode="stretch_width", visible=False)
+        self.spectrum_figure.line("hz", "spl_db", source=self.spectrum)
 
     @held
-    def ask(self, scene, key: str) -> None:
-        """Start (or show the cached) run of ``scene`` to the page's t_end."""
+    def ask(self, scene, key: str, command) -> None:
+        """Start (or show the cached) run of ``scene`` to the page's t_end; ``command``
+        gives the scene's command lines (:func:`command_line` of the scene)."""
         try:
             t_end = float(str(self.t_end.value))
         except ValueError:
             return self.show("error", f"t_end must be a number, got {self.t_end.value!r}")
         self.key = ("run", f"{key}|{t_end!r}")
-        self.command = command_line(scene, "simulate").replace(" --json", f" --t-end {t_end:g} --json")
+        self.command = command("simulate", t_end=t_end)
+        self.lines = "" if scene.scales is None else sound_lines(
+            scene, t_end, SOUND_DISTANCE, SOUND_DURATION, SPECTRUM_MAX_HZ)
         cached = self.jobs.start(self.key, run_view, scene, t_end)
         self.show("done", cached) if cached is not None else self.show("running", 0.0)
 
@@ -97,9 +114,11 @@ class RunPanel(BackgroundPanel):
                          + f" at {sound['distance_m']:g} m")
             peak = float(np.max(np.abs(sound["pressure"]))) or 1.0
             self.audio.object = (np.asarray(sound["pressure"]) / peak * 32767).astype(np.int16)
-        self.audio.visible = sound is not None
+            self.spectrum.data = dict(sound["spectrum"])
+            lines.append(readout("sound-python", self.lines, "the snore in Python", "pre"))
+        self.audio.visible = self.spectrum_figure.visible = sound is not None
         self.status.text = "<br>".join(lines)
 
     def page(self) -> pn.viewable.Viewable:
         return pn.Column("### Time run", self.t_end, pn.Row(self.start, self.stop), self.status,
-                         self.audio, pn.pane.Bokeh(self.figure))
+                         self.audio, pn.pane.Bokeh(self.spectrum_figure), pn.pane.Bokeh(self.figure))

@@ -4,13 +4,39 @@ with a crosshair at the current point."""
 from __future__ import annotations
 
 import numpy as np
-from bokeh.models import ColumnDataSource, Range1d, Span
-from bokeh.plotting import figure
+from bokeh.models import ColumnDataSource, CustomAction, CustomJS, Range1d, SaveTool, Span
+from bokeh.plotting import figure as bokeh_figure
 
-__all__ = ["RootLocus", "ModeShape", "BoundaryMap", "STABLE_COLOR", "UNSTABLE_COLOR"]
+__all__ = ["figure", "RootLocus", "ModeShape", "BoundaryMap", "STABLE_COLOR", "UNSTABLE_COLOR",
+           "SVG_TOOL"]
 
-STABLE_COLOR, UNSTABLE_COLOR = "#1f77b4", "#d62728"
+STABLE_COLOR, UNSTABLE_COLOR, FOLD_COLOR = "#1f77b4", "#d62728", "#ff7f0e"
 _SIZE = dict(height=300, sizing_mode="stretch_width", toolbar_location="right")
+#: The description (tooltip) of the toolbar's SVG button.
+SVG_TOOL = "save as SVG"
+#: The figure drawn again by Bokeh's own SVG backend (``export("svg")`` of the figure's
+#: view, as its PNG save tool does on the canvas) and downloaded as ``name``.svg.
+_SAVE_SVG = """Promise.resolve(Bokeh.index.find_one(plot).export("svg").to_blob()).then((blob) => {
+  const link = document.createElement("a");
+  link.href = URL.createObjectURL(blob);
+  link.download = name;
+  link.dispatchEvent(new MouseEvent("click")); });"""
+_SVG_ICON = ("data:image/svg+xml;utf8,<svg xmlns='http://www.w3.org/2000/svg' width='20' "
+             "height='20'><text x='0' y='14' font-size='9' font-family='sans-serif' "
+             "font-weight='bold'>SVG</text></svg>")
+
+
+def figure(name: str, **kwargs):
+    """A Bokeh figure whose toolbar saves it as PNG (Bokeh's save tool) and as SVG
+    (:data:`SVG_TOOL`), both as ``name`` (Bokeh's default tools but its help, and no
+    logo, so that every button fits beside a figure 260 px high)."""
+    f = bokeh_figure(tools="pan,box_zoom,wheel_zoom,save,reset", **kwargs)
+    f.add_tools(CustomAction(description=SVG_TOOL, icon=_SVG_ICON,
+                             callback=CustomJS(args={"plot": f, "name": f"{name}.svg"},
+                                               code=_SAVE_SVG)))
+    f.select_one({"type": SaveTool}).filename = name
+    f.toolbar.logo = None
+    return f
 
 
 def _fit(axis: Range1d, values: np.ndarray) -> None:
@@ -29,7 +55,7 @@ class RootLocus:
 
     def __init__(self):
         self.source = ColumnDataSource({"re": [], "im": [], "color": []})
-        self.figure = figure(title="eigenvalues λ = σ + iω", x_axis_label="growth rate σ",
+        self.figure = figure("eigenvalues", title="eigenvalues λ = σ + iω", x_axis_label="growth rate σ",
                              y_axis_label="ω", x_range=Range1d(-1.0, 1.0),
                              y_range=Range1d(-1.0, 1.0), **_SIZE)
         self.figure.scatter("re", "im", color="color", size=7, source=self.source)
@@ -53,7 +79,7 @@ class ModeShape:
         self.source = ColumnDataSource({"x": [], "beam": [], "upper": [], "lower": []})
         self.walls = ColumnDataSource({"x": [0.0, 1.0], "top": [0.05, 0.05],
                                        "bottom": [-0.05, -0.05]})
-        f = figure(title="least stable mode in the channel", x_axis_label="x / L",
+        f = figure("mode_shape", title="least stable mode in the channel", x_axis_label="x / L",
                    y_axis_label="y / L", x_range=Range1d(-0.02, 1.02),
                    y_range=Range1d(-0.06, 0.06), **_SIZE)
         f.line("x", "top", source=self.walls, color="black", line_width=2)
@@ -82,11 +108,12 @@ class ModeShape:
 
 
 class BoundaryMap:
-    """U*_c(M*) (log M*), flutter and divergence points, a crosshair at (M*, U*)."""
+    """U*_c(M*) (log M*), flutter and divergence points, a crosshair at (M*, U*); the
+    grazing (black) and fold-of-cycles (dashed) curves where computed."""
 
     def __init__(self):
         self.source = ColumnDataSource({"mstar": [], "ustar": [], "color": []})
-        f = figure(title="stability boundary U*_c(M*) (click to move the point)",
+        f = figure("boundary", title="stability boundary U*_c(M*) (click to move the point)",
                    x_axis_type="log", x_axis_label="M*", y_axis_label="U*",
                    x_range=Range1d(0.1, 10.0), y_range=Range1d(0.0, 10.0), **_SIZE)
         f.line("mstar", "ustar", source=self.source, color="gray")
@@ -95,7 +122,23 @@ class BoundaryMap:
         self.horizontal = Span(location=5.0, dimension="width", line_color=UNSTABLE_COLOR)
         f.add_layout(self.vertical)
         f.add_layout(self.horizontal)
+        self.grazing = ColumnDataSource({"xs": [], "ys": []})
+        self.fold = ColumnDataSource({"xs": [], "ys": []})
+        f.multi_line("xs", "ys", source=self.grazing, color="black", line_width=2,
+                     legend_label="grazing")
+        f.multi_line("xs", "ys", source=self.fold, color=FOLD_COLOR, line_width=2,
+                     line_dash="dashed", legend_label="fold of cycles")
+        f.legend.location, f.legend.visible = "top_left", False
         self.figure = f
+
+    def curves(self, grazing: list[dict], fold: list[dict]) -> None:
+        """The grazing and fold-of-cycles curves, each ``{"mstar": [...], "ustar": [...]}``."""
+        for source, curves in ((self.grazing, grazing), (self.fold, fold)):
+            source.data = {"xs": [c["mstar"] for c in curves], "ys": [c["ustar"] for c in curves]}
+        self.figure.legend.visible = bool(grazing or fold)
+        top = max((u for c in grazing + fold for u in c["ustar"]), default=0.0)
+        if top > self.figure.y_range.end:
+            self.figure.y_range.update(end=1.05 * top)
 
     def update(self, points: list[dict]) -> None:
         points = [p for p in points if p.get("ustar_crit") is not None]

@@ -23,7 +23,7 @@ class NumberBox(ReactiveHTML):
     testid = param.String(default="")
 
     _template = ('<label class="box">{{ label }} <input id="box" data-testid="{{ testid }}" '
-                 'value="${value}" size="9"></input></label>')
+                 'value="${value}" size="11"></input></label>')
     _dom_events = {"box": {"change": False}}
     _stylesheets = [":host { margin: 2px 6px; } input { font: inherit; }"]
 
@@ -32,10 +32,11 @@ class NumberBox(ReactiveHTML):
 
 
 
-def readout(testid: str, text: str, label: str = "") -> str:
-    """The HTML of one readout: ``label`` and ``text`` in a span with ``data-testid``."""
+def readout(testid: str, text: str, label: str = "", tag: str = "span") -> str:
+    """The HTML of one readout: ``label`` and ``text`` in a ``tag`` (a span; ``pre`` for
+    lines of code) with ``data-testid``."""
     head = f"{html.escape(label)}: " if label else ""
-    return f'{head}<span data-testid="{testid}">{html.escape(text)}</span>'
+    return f'{head}<{tag} data-testid="{testid}">{html.escape(text)}</{tag}>'
 
 
 def markup(text: str = "", **styles: str) -> Div:

@@ -41,7 +41,7 @@ from .run import Run, controlled_run, guarded_model, quadrature_tolerance
 __all__ = ["Sound", "AUDIO_RATE", "P_REF", "SOUND_SPEED", "HARMONICS", "HARMONIC_FLOOR",
            "flow_derivative", "monopole_pressure", "spl_db", "harmonic_amplitudes", "pitch",
            "median_rate", "CONFIDENCE", "PITCH_RTOL",
-           "strongest_line", "looped_sound", "cycle_sound", "trajectory_sound",
+           "strongest_line", "line_spectrum", "looped_sound", "cycle_sound", "trajectory_sound",
            "breath_run", "write_wav"]
 
 #: Audio sample rate (Hz), reference pressure of dB SPL (Pa), speed of sound in air (m/s).
@@ -198,6 +198,19 @@ def strongest_line(pressure, rate: int) -> float | None:
     a, b, c = np.log(np.maximum(spectrum[j - 1:j + 2], 1e-300))
     shift = 0.5 * (a - c) / (a - 2 * b + c) if a - 2 * b + c < 0 else 0.0
     return float((j + shift) * rate / p.size)
+
+
+def line_spectrum(pressure, rate: int, max_hz: float | None = None
+                  ) -> tuple[np.ndarray, np.ndarray]:
+    """The spectrum of ``pressure`` (Pa) sampled at ``rate``: frequencies (Hz, up to
+    ``max_hz``) and the level of each line in dB SPL, ``10 log10(P_k / P_REF^2)`` with
+    ``P_k`` the line's mean square (the Hann-windowed periodogram of the signal less its
+    mean, scaled so that a sinusoid of amplitude A on a line reads ``A^2 / 2``)."""
+    from scipy.signal import periodogram
+    hz, power = periodogram(np.asarray(pressure, dtype=float), fs=rate, window="hann",
+                            detrend="constant", scaling="spectrum")
+    keep = slice(None) if max_hz is None else hz <= max_hz
+    return hz[keep], 10 * np.log10(np.maximum(power[keep], 1e-30) / P_REF**2)
 
 
 def _check(distance, duration, rate) -> None:
