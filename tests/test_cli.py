@@ -221,3 +221,18 @@ def test_version_and_helpful_scene_options(capsys):
     with pytest.raises(SystemExit):
         main(["--help"])
     assert "``" not in capsys.readouterr().out
+
+
+def test_zeta_per_mode_on_the_command_line(capsys):
+    """``--zeta z1,z2,z3``: one damping ratio per mode, as in a scene file; the eigenvalues
+    are those of the Scene with that tuple (and differ from one ratio for all)."""
+    assert main(["eig", "--mstar", "1", "--ustar", "5", "--modes", "3",
+                 "--zeta", "0.01,0.05,0.1", "--json"]) == 0
+    got = np.array([complex(*v) for v in json.loads(capsys.readouterr().out)["eigenvalues"]])
+    scene = fsicas.Scene(mstar=1.0, ustar=5.0, modes=3, zeta=(0.01, 0.05, 0.1))
+    want = np.asarray(fsicas.linear_stability(scene).eigenvalues)
+    assert np.sort_complex(got) == pytest.approx(np.sort_complex(want), rel=1e-12)
+    single = fsicas.linear_stability(scene.replace(zeta=0.01)).eigenvalues
+    assert np.sort_complex(got) != pytest.approx(np.sort_complex(np.asarray(single)), rel=1e-6)
+    assert main(["eig", "--modes", "3", "--zeta", "0.01,0.02", "--json"]) == 2
+    assert "one value per mode (3)" in json.loads(capsys.readouterr().out)["error"]

@@ -12,10 +12,19 @@ __all__ = ["check_ustar_max", "SCENE_OPTIONS", "BEAM_OPTIONS", "add_scene_option
            "scene_values",
            "scene_from_args", "physical_from_args"]
 
+def _zeta(text: str) -> float | tuple[float, ...]:
+    """``--zeta``: one damping ratio, or one per mode separated by commas."""
+    try:
+        return tuple(float(z) for z in text.split(",")) if "," in text else float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a number or a comma list of "
+                                         "numbers (one per mode)") from None
+
+
 #: CLI option (``--quad-nodes`` for ``quad_nodes``) -> type, one per Scene field.
 SCENE_OPTIONS = {
     "mstar": float, "ustar": float, "hstar": float, "friction": float, "k0": float,
-    "kl": float, "zeta": float, "modes": lambda text: text if text == "auto" else int(text),
+    "kl": float, "zeta": _zeta, "modes": lambda text: text if text == "auto" else int(text),
     "quad_nodes": int,
     "contact_stiffness": float, "contact_eps": float,
 }
@@ -29,7 +38,7 @@ SCENE_HELP = {
     "friction": "Fanning friction coefficient f, >= 0",
     "k0": "singular head loss at the inlet, >= 0",
     "kl": "singular head loss at the outlet, >= 0",
-    "zeta": "modal damping ratio (every mode), >= 0",
+    "zeta": "modal damping ratio, >= 0: one for every mode, or one per mode (z1,z2,...,zN)",
     "modes": "number of beam modes N, in [1, 200]; onset, boundary: also auto (N doubled "
              "from 10 until the onsets move by less than 1e-2 with twice the modes)",
     "quad_nodes": "Gauss-Legendre nodes of the flow integrals, in [2N, 2000]",
