@@ -75,9 +75,14 @@ class PeriodicProblem(Problem):
     def section_multipliers(self, X) -> np.ndarray:
         """The non-trivial multipliers, of the Poincare map on the section normal to
         the flow ``M(u0)^-1 F(u0)`` at ``u0 = state(X)`` (``floquet``): a fold's
-        multiplier at +1 as accurate as the others (the monodromy's pair is not)."""
-        return self.kept("section_multipliers", X, lambda: floquet.section_multipliers(
-            self.monodromy(X), self.flow(X)))
+        multiplier at +1 as accurate as the others (the monodromy's pair is not). The
+        section's map is formed from the product, so its multipliers below
+        ``floquet.SECTION_SMALL`` times the largest are replaced by the same number of
+        smallest ones of :meth:`multipliers` (``floquet.accurate_tail``), accurate relative
+        to their size with the periodic Schur route."""
+        return self.kept("section_multipliers", X, lambda: floquet.accurate_tail(
+            floquet.section_multipliers(self.monodromy(X), self.flow(X)),
+            self.multipliers(X)))
 
     def flow_defect(self, X) -> float:
         """``|Phi f - f| / |f|`` with ``f`` the flow at ``u(0)`` (:meth:`flow`): how far
@@ -98,6 +103,9 @@ class PeriodicProblem(Problem):
         of the transfer matrices) sorted by decreasing modulus, kept for the last ``X``."""
         if method == "product":
             compute = lambda: floquet.product_multipliers(self.monodromy(X))  # noqa: E731
+        elif method == "schur":
+            compute = lambda: floquet.schur_multipliers(  # noqa: E731
+                self.transfer_matrices(X), self.monodromy(X))
         else:
             compute = lambda: floquet.multipliers(self.transfer_matrices(X), method)  # noqa: E731
         return self.kept("multipliers", X, compute)

@@ -216,9 +216,12 @@ class CollocationSettings:
     """Orthogonal collocation of periodic orbits.
 
     ntst : number of mesh intervals (2 to :data:`MAX_NTST`); ncol : Gauss-Legendre collocation
-    points per interval (2 to 7). floquet : 'pencil' (QZ of the block-cyclic
-    pencil of the condensed transfer matrices), 'product' (eigenvalues of
-    their product) or 'auto' (pencil while ``n * ntst <= pencil_max``).
+    points per interval (2 to 7). floquet : 'schur' (a periodic Schur form of the
+    condensed transfer matrices: every multiplier accurate relative to its own size,
+    whatever their spread; see ``docs/continuation.md``), 'pencil' (QZ of their
+    block-cyclic pencil), 'product' (eigenvalues of their product: multipliers below
+    about 1e-16 times the largest are lost) or 'auto' (default: 'schur'; pencil_max is
+    kept for callers and no longer used).
     unstable_tol : a non-trivial multiplier counts as unstable when
     ``|mu| > 1 + unstable_tol``. adapt_every : re-mesh (equidistribution of
     the error indicator) after every ``adapt_every`` accepted points; 0 = never.
@@ -272,9 +275,9 @@ class CollocationSettings:
                              f"{self.ntst}")
         if not 2 <= self.ncol <= 7:
             raise ValueError(f"CollocationSettings.ncol must be in 2..7, got {self.ncol}")
-        if self.floquet not in ("auto", "pencil", "product"):
-            raise ValueError("CollocationSettings.floquet must be 'auto', 'pencil' or "
-                             f"'product', got {self.floquet!r}")
+        if self.floquet not in ("auto", "schur", "pencil", "product"):
+            raise ValueError("CollocationSettings.floquet must be 'auto', 'schur', 'pencil' "
+                             f"or 'product', got {self.floquet!r}")
 
 
 @dataclass(frozen=True)
@@ -284,7 +287,8 @@ class ShootingSettings:
     segments : number of shooting segments (>= 1); integrator : CasADi plugin
     ('cvodes', 'idas', 'rk'); abstol, reltol : integrator tolerances (their
     sensitivities give the exact Jacobian of the discrete map); floquet :
-    'pencil' or 'product' (see CollocationSettings); unstable_tol as there.
+    'schur' (default), 'pencil' or 'product' of the segments' sensitivities (see
+    CollocationSettings); unstable_tol as there.
     jacobian : 'blocks' (default: one integration with forward sensitivities per
     segment in the directions ``(x_i, T, p_free)`` only, assembled sparse and kept
     for the last ``X``) or 'graph' (CasADi differentiates the whole mapped
@@ -310,7 +314,7 @@ class ShootingSettings:
     integrator: str = "cvodes"
     abstol: float = 1e-12
     reltol: float = 1e-12
-    floquet: str = "pencil"
+    floquet: str = "schur"
     unstable_tol: float = 1e-8
     jacobian: str = "blocks"
     sensitivities: str = "exact"
@@ -328,6 +332,6 @@ class ShootingSettings:
         if self.integrator not in ("cvodes", "idas", "rk"):
             raise ValueError("ShootingSettings.integrator must be 'cvodes', 'idas' or 'rk', "
                              f"got {self.integrator!r}")
-        if self.floquet not in ("pencil", "product"):
-            raise ValueError("ShootingSettings.floquet must be 'pencil' or 'product', got "
-                             f"{self.floquet!r}")
+        if self.floquet not in ("schur", "pencil", "product"):
+            raise ValueError("ShootingSettings.floquet must be 'schur', 'pencil' or "
+                             f"'product', got {self.floquet!r}")
