@@ -190,23 +190,23 @@ def schur_multipliers(A: np.ndarray, mono: np.ndarray | None = None) -> np.ndarr
 
     The product (``mono``, formed if not given) decides: when the moduli of its
     eigenvalues span at most :data:`SCHUR_SPREAD` they are returned (already accurate
-    to about ``1e-10`` relative); otherwise a periodic Schur form by orthogonal iteration
-    on the chain: from an orthonormal
-    ``Q_0``, one sweep factors ``A_i Q_i = Q_{i+1} R_i`` (``i = 0 .. N-1``, QR), so
-    ``Phi Q_0 = Q_N R_{N-1} ... R_0``; where ``S = Q_0^T Q_N`` is block diagonal
-    (below :data:`SCHUR_TOL` off its blocks; a converged basis), the multipliers are
-    the eigenvalues of ``S_bb R_{N-1,bb} ... R_{0,bb}`` for each diagonal block ``b``
-    (1x1: a product of scalars, exact to rounding per factor; a larger block, as a
-    complex pair or multipliers of nearly equal modulus, from its formed product). The
-    sweeps stop when every block's moduli lie within :data:`SCHUR_GROUP` of each other,
-    each starting from the last ``Q_N``. ``Q_0`` is the orthonormalized real basis of
-    the product's eigenvectors ordered by decreasing modulus: the dominant ones are accurate there, the contracting ones converge at the
-    ratios of adjacent moduli per sweep (one or two sweeps when the spread is large).
-    After :data:`SCHUR_SWEEPS` sweeps the blocks of the last one are read as they are
-    (only a chain whose moduli decay too slowly for the iteration gets there)."""
+    to about ``1e-10`` relative). Otherwise a periodic Schur form by orthogonal
+    iteration on the chain: from an orthonormal ``Q_0``, one sweep factors
+    ``A_i Q_i = Q_{i+1} R_i`` (``i = 0 .. N-1``, QR), so ``Phi Q_0 = Q_N R_{N-1} ... R_0``;
+    where ``S = Q_0^T Q_N`` is block diagonal (below :data:`SCHUR_TOL` off its blocks: a
+    converged basis), the multipliers are the eigenvalues of
+    ``S_bb R_{N-1,bb} ... R_{0,bb}`` for each diagonal block ``b`` (1x1: a product of
+    scalars, exact to rounding per factor; a larger block, as a complex pair or
+    multipliers of nearly equal modulus, from its formed product). The sweeps stop when
+    every block's moduli lie within :data:`SCHUR_GROUP` of each other, each starting from
+    the last ``Q_N``. ``Q_0`` is the orthonormalized real basis of the product's
+    eigenvectors ordered by decreasing modulus: the dominant ones are accurate there, the
+    contracting ones converge at the ratios of adjacent moduli per sweep (1 to 16 sweeps
+    on the tests' chains and cycles). After :data:`SCHUR_SWEEPS` sweeps the blocks of the
+    last one are read as they are (only a chain spanning more than ``SCHUR_SPREAD``
+    whose adjacent moduli differ by a few per cent gets there, and may lose accuracy)."""
     A = np.asarray(A, dtype=float)
-    N, n, _ = A.shape
-    if n == 0:
+    if A.shape[1] == 0:
         return np.zeros(0, dtype=complex)
     with single_threaded():
         if mono is None:
@@ -216,17 +216,24 @@ def schur_multipliers(A: np.ndarray, mono: np.ndarray | None = None) -> np.ndarr
             return _by_modulus(mu)
         Q0 = _ordered_basis(mu, V)
         for _ in range(SCHUR_SWEEPS):
-            Q, R = Q0, np.empty_like(A)
-            for i in range(N):            # LAPACK directly: np.linalg.qr costs 2x at n = 2
-                qr, tau, _, _ = _geqrf(A[i] @ Q)
-                R[i] = np.triu(qr)
-                Q = _orgqr(qr, tau)[0]
+            Q, R = _sweep(A, Q0)
             S = Q0.T @ Q
             mu = [_block_eigenvalues(S, R, b) for b in _diagonal_blocks(S)]
             if all(m.size == 1 or _spread(m) <= SCHUR_GROUP for m in mu):
                 break
             Q0 = Q
         return _by_modulus(np.concatenate(mu))
+
+
+def _sweep(A: np.ndarray, Q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """``(Q_N, R)`` with ``A_i Q_i = Q_{i+1} R_i`` from ``Q_0 = Q`` (LAPACK's QR directly:
+    ``np.linalg.qr`` costs twice as much at n = 2)."""
+    R = np.empty_like(A)
+    for i in range(A.shape[0]):
+        qr, tau, _, _ = _geqrf(A[i] @ Q)
+        R[i] = np.triu(qr)
+        Q = _orgqr(qr, tau)[0]
+    return Q, R
 
 
 def _ordered_basis(mu: np.ndarray, V: np.ndarray) -> np.ndarray:
@@ -303,18 +310,20 @@ SECTION_SMALL = 1e-6
 
 
 def accurate_tail(rest: np.ndarray, mu: np.ndarray) -> np.ndarray:
-    """The Poincare map's multipliers ``rest`` (``n - 1``, from the formed product, each
-    only accurate to about ``1e-16`` times the largest) with those below
-    :data:`SECTION_SMALL` times the largest ``|mu|`` replaced by the same number of
-    smallest multipliers ``mu`` of the monodromy (all ``n``, by decreasing modulus; from
-    :func:`schur_multipliers` accurate relative to their own size). The trivial
-    multiplier (near 1) is never among them as long as it is far above that level."""
+    """The Poincare map's multipliers ``rest`` (``n - 1`` by decreasing modulus, from the
+    formed product: each only accurate to about ``1e-16`` times the largest) with those
+    below :data:`SECTION_SMALL` times the largest ``|mu|`` (and below 0.1: the ones near
+    the unit circle, where the section's matter, are never touched) replaced by as many
+    of the smallest non-trivial multipliers of ``mu`` (all ``n`` by decreasing modulus;
+    the one nearest +1 left out; from :func:`schur_multipliers` accurate relative to
+    their own size)."""
     rest, mu = np.array(rest, dtype=complex), np.asarray(mu, dtype=complex)
     if rest.size == 0 or mu.size != rest.size + 1:
         return rest
-    level = SECTION_SMALL * np.abs(mu[0])
+    mu = np.delete(mu, np.argmin(np.abs(mu - 1.0)))
+    level = min(SECTION_SMALL * np.abs(mu).max(initial=1.0), 0.1)
     k = int(min(np.sum(np.abs(rest) < level), np.sum(np.abs(mu) < level)))
-    if k and not np.any(np.abs(mu[mu.size - k:] - 1.0) < 0.5):
+    if k:
         rest[rest.size - k:] = mu[mu.size - k:]
     return rest
 

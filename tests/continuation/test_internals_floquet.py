@@ -172,3 +172,7 @@ def test_section_multipliers_take_their_small_tail_from_the_schur_route():
     got = floquet.accurate_tail(rest, mu)
     assert np.array_equal(got, [0.5, 1e-12, 1e-20])
     assert np.array_equal(floquet.accurate_tail(rest[:1], mu[:2]), rest[:1])
+    # an unstable 1e10 and a fold's pair near +1: the section's 1 + 1e-9 is kept
+    rest = np.array([1e10, 1 + 1e-9, 2e-9], dtype=complex)
+    mu = np.array([1e10, 1 + 3e-5, 1 - 3e-5, 1e-14], dtype=complex)
+    assert np.array_equal(floquet.accurate_tail(rest, mu), [1e10, 1 + 1e-9, 1e-14])
