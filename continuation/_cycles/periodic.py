@@ -76,10 +76,9 @@ class PeriodicProblem(Problem):
         """The non-trivial multipliers, of the Poincare map on the section normal to
         the flow ``M(u0)^-1 F(u0)`` at ``u0 = state(X)`` (``floquet``): a fold's
         multiplier at +1 as accurate as the others (the monodromy's pair is not). The
-        section's map is formed from the product, so its multipliers below
-        ``floquet.SECTION_SMALL`` times the largest are replaced by the same number of
-        smallest ones of :meth:`multipliers` (``floquet.accurate_tail``), accurate relative
-        to their size with the periodic Schur route."""
+        section's map is formed from the product, so its tiny multipliers are replaced by
+        as many of the smallest of :meth:`multipliers` (``floquet.accurate_tail``),
+        accurate relative to their size with the periodic Schur route."""
         return self.kept("section_multipliers", X, lambda: floquet.accurate_tail(
             floquet.section_multipliers(self.monodromy(X), self.flow(X)),
             self.multipliers(X)))
