@@ -183,10 +183,11 @@ SCHUR_SPREAD = 1e6
 SCHUR_GROUP = 1e4
 
 
-def schur_multipliers(A: np.ndarray, mono: np.ndarray | None = None) -> np.ndarray:
-    """Eigenvalues of ``A_{N-1} ... A_0`` (``A``: ``(N, n, n)``) sorted by decreasing
-    modulus, each accurate relative to its own size when the chain is (the periodic
-    condition number, not the spread of the multipliers, sets the error).
+def schur_multipliers(A, mono: np.ndarray | None = None) -> np.ndarray:
+    """Eigenvalues of ``A_{N-1} ... A_0`` (``A``: ``(N, n, n)``, or a function that
+    returns it, called only if the sweeps need it and ``mono`` is given) sorted by
+    decreasing modulus, each accurate relative to its own size when the chain is (the
+    periodic condition number, not the spread of the multipliers, sets the error).
 
     The product (``mono``, formed if not given) decides: when the moduli of its
     eigenvalues span at most :data:`SCHUR_SPREAD` they are returned (already accurate
@@ -200,20 +201,18 @@ def schur_multipliers(A: np.ndarray, mono: np.ndarray | None = None) -> np.ndarr
     multipliers of nearly equal modulus, from its formed product). The sweeps stop when
     every block's moduli lie within :data:`SCHUR_GROUP` of each other, each starting from
     the last ``Q_N``. ``Q_0`` is the orthonormalized real basis of the product's
-    eigenvectors ordered by decreasing modulus: the dominant ones are accurate there, the
-    contracting ones converge at the ratios of adjacent moduli per sweep (1 to 16 sweeps
-    on the tests' chains and cycles). After :data:`SCHUR_SWEEPS` sweeps the blocks of the
-    last one are read as they are (only a chain spanning more than ``SCHUR_SPREAD``
-    whose adjacent moduli differ by a few per cent gets there, and may lose accuracy)."""
-    A = np.asarray(A, dtype=float)
-    if A.shape[1] == 0:
+    eigenvectors by decreasing modulus; the contracting ones converge at the ratios of
+    adjacent moduli per sweep (1 to 16 sweeps in the tests). After :data:`SCHUR_SWEEPS`
+    the last blocks are read as they are (a chain spanning more than ``SCHUR_SPREAD``
+    with adjacent moduli a few per cent apart; accuracy may be lost)."""
+    mono = monodromy(A() if callable(A) else A) if mono is None else mono
+    if mono.shape[0] == 0:
         return np.zeros(0, dtype=complex)
     with single_threaded():
-        if mono is None:
-            mono = monodromy(A)
         mu, V = np.linalg.eig(mono)
         if _spread(mu) <= SCHUR_SPREAD:
             return _by_modulus(mu)
+        A = np.asarray(A() if callable(A) else A, dtype=float)
         Q0 = _ordered_basis(mu, V)
         for _ in range(SCHUR_SWEEPS):
             Q, R = _sweep(A, Q0)

@@ -95,16 +95,21 @@ class PeriodicProblem(Problem):
     def monodromy(self, X) -> np.ndarray:
         """``Phi = A_{N-1} ... A_0`` of :meth:`transfer_matrices` (kept for the last ``X``:
         the multipliers and the section's share it)."""
-        return self.kept("monodromy", X, lambda: floquet.monodromy(self.transfer_matrices(X)))
+        return self.kept("monodromy", X, lambda: floquet.monodromy(self.maps(X)))
+
+    def maps(self, X) -> np.ndarray:
+        """:meth:`transfer_matrices` kept for the last ``X`` (the monodromy and the
+        periodic Schur sweeps share them; a sparse Jacobian's maps cost a solve)."""
+        return self.kept("maps", X, lambda: self.transfer_matrices(X))
 
     def floquet_multipliers(self, X, method: str) -> np.ndarray:
         """Floquet multipliers by ``method`` ('product': of :meth:`monodromy`; 'pencil':
         of the transfer matrices) sorted by decreasing modulus, kept for the last ``X``."""
         if method == "product":
             compute = lambda: floquet.product_multipliers(self.monodromy(X))  # noqa: E731
-        elif method == "schur":
+        elif method == "schur":                 # the maps only if the sweeps need them
             compute = lambda: floquet.schur_multipliers(  # noqa: E731
-                self.transfer_matrices(X), self.monodromy(X))
+                lambda: self.maps(X), self.monodromy(X))
         else:
             compute = lambda: floquet.multipliers(self.transfer_matrices(X), method)  # noqa: E731
         return self.kept("multipliers", X, compute)
