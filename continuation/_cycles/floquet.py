@@ -27,6 +27,7 @@ of the order of the rounding unit, whatever the spread of the multipliers
 
 from __future__ import annotations
 
+import warnings
 from dataclasses import dataclass
 from functools import cached_property
 
@@ -203,8 +204,8 @@ def schur_multipliers(A, mono: np.ndarray | None = None) -> np.ndarray:
     the last ``Q_N``. ``Q_0`` is the orthonormalized real basis of the product's
     eigenvectors by decreasing modulus; the contracting ones converge at the ratios of
     adjacent moduli per sweep (1 to 16 sweeps in the tests). After :data:`SCHUR_SWEEPS`
-    the last blocks are read as they are (a chain spanning more than ``SCHUR_SPREAD``
-    with adjacent moduli a few per cent apart; accuracy may be lost)."""
+    the last blocks are read as they are, with a warning (a chain spanning more than
+    ``SCHUR_SPREAD`` with adjacent moduli a few per cent apart; accuracy may be lost)."""
     mono = monodromy(A() if callable(A) else A) if mono is None else mono
     if mono.shape[0] == 0:
         return np.zeros(0, dtype=complex)
@@ -221,6 +222,11 @@ def schur_multipliers(A, mono: np.ndarray | None = None) -> np.ndarray:
             if all(m.size == 1 or _spread(m) <= SCHUR_GROUP for m in mu):
                 break
             Q0 = Q
+        else:
+            warnings.warn(f"Floquet multipliers: the periodic Schur sweeps did not separate "
+                          f"the multipliers in {SCHUR_SWEEPS} sweeps (moduli "
+                          f"{_spread(np.concatenate(mu)):.1e} apart, some nearly equal); "
+                          "those below about 1e-16 times the largest may be inaccurate")
         return _by_modulus(np.concatenate(mu))
 
 

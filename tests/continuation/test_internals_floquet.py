@@ -119,6 +119,16 @@ def test_schur_multipliers_of_a_chain_spanning_1e20_to_1e_minus_20(ntst):
     assert np.all(np.abs(prod[-3:] / mu[-3:] - 1) > 1e-2)
 
 
+def test_schur_sweeps_that_do_not_converge_say_so(monkeypatch):
+    """Moduli 1e12 .. 1e-12 a few per cent apart need many sweeps: cut to one, the route
+    warns instead of returning blocks it has not separated as if it had."""
+    mu = np.geomspace(1e12, 1e-12, 40) * np.linspace(1.0, 1.03, 40)
+    A = _chain(np.sort(mu)[::-1], 20, np.random.default_rng(5), coupling=3.0)
+    monkeypatch.setattr(floquet, "SCHUR_SWEEPS", 1)
+    with pytest.warns(UserWarning, match="did not separate"):
+        floquet.multipliers(A, "schur")
+
+
 def test_schur_multipliers_with_complex_pairs_and_close_moduli():
     """A complex pair at 1e10, real ones at 1 and 0.99 (close moduli: no separation by
     the iteration needed), a pair at 1e-15 and a real one at -1e-18, each to 1e-10."""
