@@ -27,7 +27,7 @@ from .periodic import PeriodicProblem
 from .._casadi.symbolic import bound
 from .._casadi.vectorfield import VectorField
 from .._driver.problem import Description
-from .._driver.settings import CollocationSettings, kernel_backend
+from .settings import CollocationSettings, kernel_backend
 
 
 class CycleProblem(PeriodicProblem):

@@ -204,8 +204,7 @@ def schur_multipliers(A, mono: np.ndarray | None = None) -> np.ndarray:
     the last ``Q_N``. ``Q_0`` is the orthonormalized real basis of the product's
     eigenvectors by decreasing modulus; the contracting ones converge at the ratios of
     adjacent moduli per sweep (1 to 16 sweeps in the tests). After :data:`SCHUR_SWEEPS`
-    the last blocks are read as they are, with a warning (a chain spanning more than
-    ``SCHUR_SPREAD`` with adjacent moduli a few per cent apart; accuracy may be lost)."""
+    the last blocks are read as they are, with a warning (moduli a few per cent apart)."""
     mono = monodromy(A() if callable(A) else A) if mono is None else mono
     if mono.shape[0] == 0:
         return np.zeros(0, dtype=complex)
@@ -223,11 +222,15 @@ def schur_multipliers(A, mono: np.ndarray | None = None) -> np.ndarray:
                 break
             Q0 = Q
         else:
-            warnings.warn(f"Floquet multipliers: the periodic Schur sweeps did not separate "
-                          f"the multipliers in {SCHUR_SWEEPS} sweeps (moduli "
-                          f"{_spread(np.concatenate(mu)):.1e} apart, some nearly equal); "
-                          "those below about 1e-16 times the largest may be inaccurate")
+            _warn_unseparated(np.concatenate(mu))
         return _by_modulus(np.concatenate(mu))
+
+
+def _warn_unseparated(mu: np.ndarray) -> None:
+    warnings.warn(f"Floquet multipliers: the periodic Schur sweeps did not separate the "
+                  f"multipliers in {SCHUR_SWEEPS} sweeps (moduli {_spread(mu):.1e} apart, "
+                  "some nearly equal); those below about 1e-16 times the largest may be "
+                  "inaccurate")
 
 
 def _sweep(A: np.ndarray, Q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

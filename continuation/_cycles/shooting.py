@@ -46,7 +46,7 @@ import scipy.sparse as sp
 from .cycles import sample_orbit
 from .periodic import PeriodicProblem
 from .._casadi.symbolic import CompiledSystem, bound
-from .._driver.settings import ShootingSettings
+from .settings import ShootingSettings
 
 
 def options(settings: ShootingSettings) -> dict:
