@@ -43,6 +43,7 @@ from ._casadi.vectorfield import VectorField
 from ._cycles.cycle_curves import (Condition, CycleCurveProblem, CycleFold, Extremum,
                                    NeimarkSacker, PeriodDoubling, locate_cycle)
 from ._cycles.cycles import CycleProblem
+from ._cycles.settings import MAX_NTST, CollocationSettings, ShootingSettings
 from ._cycles.shooting import ShootingProblem
 from ._cycles.switching import cycle_from_bp, cycle_from_hopf, cycle_from_pd
 from ._cycles.symmetric import keeps_symmetry, locate_symmetry_breaking, symmetric_multipliers
@@ -51,8 +52,7 @@ from ._driver.driver import continuation, observing
 from ._driver.hooks import Event
 from ._driver.palc import ContinuationIterator, Step, correct
 from ._driver.problem import Problem
-from ._driver.settings import (MAX_NTST, CollocationSettings, ContinuationSettings,
-                               EigenSettings, NewtonSettings, PALC, ShootingSettings)
+from ._driver.settings import ContinuationSettings, EigenSettings, NewtonSettings, PALC
 from ._equilibria.branching import equilibrium_from_bp
 from ._equilibria.curves import FoldCurveProblem, HopfCurveProblem
 from ._equilibria.equilibrium import EquilibriumProblem, hopf_point

@@ -27,7 +27,7 @@ from .periodic import PeriodicProblem
 from .._casadi.symbolic import bound
 from .._casadi.vectorfield import VectorField
 from .._driver.problem import Description
-from .._driver.settings import CollocationSettings, kernel_backend
+from .settings import CollocationSettings, kernel_backend
 
 
 class CycleProblem(PeriodicProblem):
@@ -250,10 +250,8 @@ class CycleProblem(PeriodicProblem):
 
     def multipliers(self, X) -> np.ndarray:
         """Floquet multipliers sorted by decreasing modulus (kept for the last ``X``)."""
-        s = self.settings
-        method = s.floquet if s.floquet != "auto" else \
-            ("pencil" if self.vf.n * self.ntst <= s.pencil_max else "product")
-        return self.floquet_multipliers(X, method)
+        method = self.settings.floquet
+        return self.floquet_multipliers(X, "schur" if method == "auto" else method)
 
 
 def _collocation_system(settings: CollocationSettings) -> tuple:

@@ -75,9 +75,13 @@ class PeriodicProblem(Problem):
     def section_multipliers(self, X) -> np.ndarray:
         """The non-trivial multipliers, of the Poincare map on the section normal to
         the flow ``M(u0)^-1 F(u0)`` at ``u0 = state(X)`` (``floquet``): a fold's
-        multiplier at +1 as accurate as the others (the monodromy's pair is not)."""
-        return self.kept("section_multipliers", X, lambda: floquet.section_multipliers(
-            self.monodromy(X), self.flow(X)))
+        multiplier at +1 as accurate as the others (the monodromy's pair is not). The
+        section's map is formed from the product, so its tiny multipliers are replaced by
+        as many of the smallest of :meth:`multipliers` (``floquet.accurate_tail``),
+        accurate relative to their size with the periodic Schur route."""
+        return self.kept("section_multipliers", X, lambda: floquet.accurate_tail(
+            floquet.section_multipliers(self.monodromy(X), self.flow(X)),
+            self.multipliers(X)))
 
     def flow_defect(self, X) -> float:
         """``|Phi f - f| / |f|`` with ``f`` the flow at ``u(0)`` (:meth:`flow`): how far
@@ -91,13 +95,21 @@ class PeriodicProblem(Problem):
     def monodromy(self, X) -> np.ndarray:
         """``Phi = A_{N-1} ... A_0`` of :meth:`transfer_matrices` (kept for the last ``X``:
         the multipliers and the section's share it)."""
-        return self.kept("monodromy", X, lambda: floquet.monodromy(self.transfer_matrices(X)))
+        return self.kept("monodromy", X, lambda: floquet.monodromy(self.maps(X)))
+
+    def maps(self, X) -> np.ndarray:
+        """:meth:`transfer_matrices` kept for the last ``X`` (the monodromy and the
+        periodic Schur sweeps share them; a sparse Jacobian's maps cost a solve)."""
+        return self.kept("maps", X, lambda: self.transfer_matrices(X))
 
     def floquet_multipliers(self, X, method: str) -> np.ndarray:
         """Floquet multipliers by ``method`` ('product': of :meth:`monodromy`; 'pencil':
         of the transfer matrices) sorted by decreasing modulus, kept for the last ``X``."""
         if method == "product":
             compute = lambda: floquet.product_multipliers(self.monodromy(X))  # noqa: E731
+        elif method == "schur":                 # the maps only if the sweeps need them
+            compute = lambda: floquet.schur_multipliers(  # noqa: E731
+                lambda: self.maps(X), self.monodromy(X))
         else:
             compute = lambda: floquet.multipliers(self.transfer_matrices(X), method)  # noqa: E731
         return self.kept("multipliers", X, compute)

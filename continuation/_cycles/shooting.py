@@ -16,7 +16,7 @@ enter as a non-differentiated input) and the blocks are assembled sparse;
 ``'graph'`` lets CasADi differentiate the whole mapped integrator in the directions
 of all parameters (the reference; 2x slower at n = 20, see docs/continuation.md).
 The diagonal blocks ``d phi / d x_i`` are the transfer matrices whose product is
-the monodromy matrix, so the Floquet multipliers use the same block-cyclic pencil
+the monodromy matrix, so the Floquet multipliers use the same periodic Schur route
 as collocation; they reuse the last Jacobian (the tangent's) at the same ``X``.
 
 Where the time goes (flutter model with contact, N = 10, one impacting segment at
@@ -46,7 +46,7 @@ import scipy.sparse as sp
 from .cycles import sample_orbit
 from .periodic import PeriodicProblem
 from .._casadi.symbolic import CompiledSystem, bound
-from .._driver.settings import ShootingSettings
+from .settings import ShootingSettings
 
 
 def options(settings: ShootingSettings) -> dict:

@@ -26,7 +26,8 @@ import scipy.sparse as sp
 from .cycles import CycleProblem
 from .._driver.branch import SpecialPoint
 from .._driver.newton import factorize, newton
-from .._driver.settings import CollocationSettings, EigenSettings, NewtonSettings
+from .._driver.settings import EigenSettings, NewtonSettings
+from .settings import CollocationSettings
 from .._equilibria import eigen
 from .._equilibria.lyapunov import hopf_eigenvectors
 

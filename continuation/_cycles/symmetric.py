@@ -31,6 +31,7 @@ from dataclasses import replace
 import numpy as np
 import scipy.sparse as sp
 
+from . import floquet
 from .cycle_curves import bordered_solve, jacobian_derivative, matrix_null_vectors
 from .cycles import CycleProblem
 from .mesh import FLOOR, next_derivative
@@ -75,16 +76,17 @@ def symmetric_multipliers(problem: CycleProblem, X, symmetry, shift: float = 0.5
     if shift:
         _check_symmetric_mesh(problem.mesh)
     maps = problem.transfer_matrices(np.asarray(X, dtype=float))
-    if shift:
-        half = np.linalg.multi_dot([np.eye(problem.vf.n), *maps[: problem.ntst // 2][::-1]])
-        mu = np.linalg.eigvals(S @ half)                      # the half-period map's
+    if shift:                   # the half-period map S A_{h-1} ... A_0's, periodic Schur
+        mu = floquet.schur_multipliers(np.concatenate([maps[: problem.ntst // 2],
+                                                       np.asarray(S, float)[None]]))
         trivial = int(np.argmin(np.abs(mu - 1.0)))
         keep, rest = mu ** 2, np.zeros(0, complex)
-    else:
+    else:                       # every map keeps S's eigenspaces: the chains restricted
         plus, minus = _eigenspaces(S)
-        mono = np.linalg.multi_dot([np.eye(problem.vf.n), *maps[::-1]])
-        keep = np.linalg.eigvals(plus.T @ mono @ plus)
-        rest = np.linalg.eigvals(minus.T @ mono @ minus)
+        keep = floquet.schur_multipliers(plus.T @ maps @ plus) if plus.shape[1] \
+            else np.zeros(0, complex)
+        rest = floquet.schur_multipliers(minus.T @ maps @ minus) if minus.shape[1] \
+            else np.zeros(0, complex)
         trivial = int(np.argmin(np.abs(keep - 1.0)))
     rest = np.concatenate([np.delete(keep, trivial), rest]).astype(complex)
     return complex(keep[trivial]), rest[np.argsort(-np.abs(rest), kind="stable")]

@@ -1,4 +1,5 @@
-"""Immutable, validated settings: Newton, eigenvalues, PALC and continuation.
+"""Immutable, validated settings: Newton, eigenvalues, PALC and continuation (those of
+periodic orbits: ``_cycles.settings``).
 
 All classes are frozen dataclasses checked at construction; "changing" one is
 ``dataclasses.replace(settings, ds=...)``. A bad value raises ``ValueError``
@@ -8,13 +9,12 @@ naming the field.
 from __future__ import annotations
 
 import math
-import os
 from dataclasses import dataclass, field
 from types import MappingProxyType
 from typing import Mapping
 
 
-def _positive(obj, *names):
+def positive(obj, *names):
     for name in names:
         value = getattr(obj, name)
         if not (isinstance(value, (int, float)) and math.isfinite(value) and value > 0):
@@ -22,7 +22,7 @@ def _positive(obj, *names):
                              f"number, got {value!r}")
 
 
-def _positive_int(obj, *names):
+def positive_int(obj, *names):
     for name in names:
         value = getattr(obj, name)
         if not (isinstance(value, int) and not isinstance(value, bool) and value > 0):
@@ -52,8 +52,8 @@ class NewtonSettings:
     contraction: float = 1e-3
 
     def __post_init__(self):
-        _positive(self, "tol", "divergence")
-        _positive_int(self, "max_iter")
+        positive(self, "tol", "divergence")
+        positive_int(self, "max_iter")
         if not (math.isfinite(self.xtol) and self.xtol >= 0):
             raise ValueError(f"NewtonSettings.xtol must be >= 0, got {self.xtol!r}")
         if not 0 <= self.contraction < 1:
@@ -76,8 +76,8 @@ class EigenSettings:
     imag_tol: float = 1e-9
 
     def __post_init__(self):
-        _positive_int(self, "nev", "dense_max")
-        _positive(self, "imag_tol")
+        positive_int(self, "nev", "dense_max")
+        positive(self, "imag_tol")
         if not math.isfinite(self.sigma):
             raise ValueError(f"EigenSettings.sigma must be finite, got {self.sigma!r}")
 
@@ -148,8 +148,8 @@ class ContinuationSettings:
     progress: bool = False
 
     def __post_init__(self):
-        _positive(self, "ds", "ds_min", "ds_max", "step_grow", "locate_tol")
-        _positive_int(self, "max_steps", "easy_iterations", "locate_max_iter")
+        positive(self, "ds", "ds_min", "ds_max", "step_grow", "locate_tol")
+        positive_int(self, "max_steps", "easy_iterations", "locate_max_iter")
         if not self.ds_min <= self.ds <= self.ds_max:
             raise ValueError(f"ContinuationSettings.ds must satisfy ds_min <= ds <= "
                              f"ds_max, got ds_min={self.ds_min}, ds={self.ds}, "
@@ -189,145 +189,3 @@ def _check_bounds(bounds) -> dict:
                              f"got ({lo}, {hi})")
         checked[str(name)] = (lo, hi)
     return checked
-
-
-#: kernel backends of CollocationSettings.backend; the first is the default
-BACKENDS = ("auto", "mx", "compiled")
-
-
-def kernel_backend(backend: str | None) -> str:
-    """``backend``, or when None ``$CONTINUATION_BACKEND`` (validated), else 'auto'."""
-    if backend is not None:
-        return backend
-    env = os.environ.get("CONTINUATION_BACKEND", "").strip()
-    if env and env not in BACKENDS:
-        raise ValueError(f"CONTINUATION_BACKEND must be 'auto', 'mx' or 'compiled', got {env!r}")
-    return env or BACKENDS[0]
-
-
-MAX_NTST = 5000
-"""The most mesh intervals of a collocated cycle: beyond it one Newton step of a system of
-a few states already takes minutes and gigabytes; a cycle that needs more is better
-split by shooting or its mesh adapted (``adapt_every``)."""
-
-
-@dataclass(frozen=True)
-class CollocationSettings:
-    """Orthogonal collocation of periodic orbits.
-
-    ntst : number of mesh intervals (2 to :data:`MAX_NTST`); ncol : Gauss-Legendre collocation
-    points per interval (2 to 7). floquet : 'pencil' (QZ of the block-cyclic
-    pencil of the condensed transfer matrices), 'product' (eigenvalues of
-    their product) or 'auto' (pencil while ``n * ntst <= pencil_max``).
-    unstable_tol : a non-trivial multiplier counts as unstable when
-    ``|mu| > 1 + unstable_tol``. adapt_every : re-mesh (equidistribution of
-    the error indicator) after every ``adapt_every`` accepted points; 0 = never.
-    jacobian : how the collocation residual and its sparse Jacobian are evaluated:
-    'blocks' (default; one mapped CasADi call for ``F``, ``F_x``, ``M``, ... at all
-    collocation points, the matrix assembled by NumPy) or 'graph' (CasADi AD of the
-    whole discretised residual; the reference path).
-    backend : how the 'blocks' kernel is evaluated: 'mx' (CasADi's virtual machine),
-    'compiled' (C compiled once per vector field and cached on disk, see
-    ``docs/performance.md``; falls back to 'mx' without a C compiler) or 'auto'
-    ('compiled' for MX vector fields and small SX ones, 'mx' for large SX ones); None
-    (default):
-    ``$CONTINUATION_BACKEND`` if set, else 'auto'.
-    linear_solver : how the Newton and tangent systems are solved: 'condensed' (the
-    interior nodes of every interval eliminated by dense QR, then SuperLU on the
-    reduced system of the mesh points, as AUTO-07p does; 'blocks' only), 'sparse'
-    (SuperLU on the whole sparse matrix) or 'auto' (default: 'condensed' where the
-    interval blocks are dense enough, see ``docs/continuation.md``).
-    """
-
-    ntst: int = 20
-    ncol: int = 4
-    floquet: str = "auto"
-    pencil_max: int = 500
-    unstable_tol: float = 1e-8
-    adapt_every: int = 0
-    jacobian: str = "blocks"
-    backend: str | None = None
-    linear_solver: str = "auto"
-
-    def __post_init__(self):
-        _positive_int(self, "ntst", "ncol", "pencil_max")
-        if self.linear_solver not in ("auto", "condensed", "sparse"):
-            raise ValueError("CollocationSettings.linear_solver must be 'auto', 'condensed' "
-                             f"or 'sparse', got {self.linear_solver!r}")
-        if self.linear_solver == "condensed" and self.jacobian != "blocks":
-            raise ValueError("CollocationSettings.linear_solver = 'condensed' needs "
-                             f"jacobian = 'blocks', got jacobian = {self.jacobian!r}")
-        if self.backend is not None and self.backend not in BACKENDS:
-            raise ValueError("CollocationSettings.backend must be None, 'auto', 'mx' or "
-                             f"'compiled', got {self.backend!r}")
-        if self.jacobian not in ("blocks", "graph"):
-            raise ValueError("CollocationSettings.jacobian must be 'blocks' or 'graph', "
-                             f"got {self.jacobian!r}")
-        if not (isinstance(self.adapt_every, int) and self.adapt_every >= 0):
-            raise ValueError("CollocationSettings.adapt_every must be an integer >= 0, got "
-                             f"{self.adapt_every!r}")
-        _positive(self, "unstable_tol")
-        if not 2 <= self.ntst <= MAX_NTST:
-            raise ValueError(f"CollocationSettings.ntst must be in 2..{MAX_NTST}, got "
-                             f"{self.ntst}")
-        if not 2 <= self.ncol <= 7:
-            raise ValueError(f"CollocationSettings.ncol must be in 2..7, got {self.ncol}")
-        if self.floquet not in ("auto", "pencil", "product"):
-            raise ValueError("CollocationSettings.floquet must be 'auto', 'pencil' or "
-                             f"'product', got {self.floquet!r}")
-
-
-@dataclass(frozen=True)
-class ShootingSettings:
-    """Multiple shooting of periodic orbits with a CasADi integrator.
-
-    segments : number of shooting segments (>= 1); integrator : CasADi plugin
-    ('cvodes', 'idas', 'rk'); abstol, reltol : integrator tolerances (their
-    sensitivities give the exact Jacobian of the discrete map); floquet :
-    'pencil' or 'product' (see CollocationSettings); unstable_tol as there.
-    jacobian : 'blocks' (default: one integration with forward sensitivities per
-    segment in the directions ``(x_i, T, p_free)`` only, assembled sparse and kept
-    for the last ``X``) or 'graph' (CasADi differentiates the whole mapped
-    integrator in all parameter directions; the reference). Both are CasADi
-    forward derivatives of the integrator (the sensitivity equations appended to
-    the ODE and integrated by the plugin at ``abstol``/``reltol``).
-    sensitivities : how the 'blocks' route integrates the sensitivities: 'exact'
-    (default: CasADi's AD of the rate ``R = M^{-1} F`` in every direction, with the
-    second-order term of the augmented Newton matrix; the previous route) or 'fast'
-    (``[dR/dx, dR/dp_free] = M^{-1} [F_x - d(M v)/dx, F_p - d(M v)/dp]`` at
-    ``v = R`` from the field's Jacobians, evaluated once per right-hand side and
-    multiplied into all directions, the non-free parameters fixed in the
-    integrator, and without that second-order term: 6-15x faster on a modal
-    model with wall impacts). The two integrate the same residual and their
-    Jacobians differ by integration error only: each is equally far from the limit
-    both reach as the tolerances shrink (the tests check 'fast' against a reference
-    at 1e-13), so at equal tolerance neither is the more accurate. threads : segments
-    integrated in parallel by the 'blocks' route (CasADi ``map`` with threads; the
-    same numbers as one thread).
-    """
-
-    segments: int = 4
-    integrator: str = "cvodes"
-    abstol: float = 1e-12
-    reltol: float = 1e-12
-    floquet: str = "pencil"
-    unstable_tol: float = 1e-8
-    jacobian: str = "blocks"
-    sensitivities: str = "exact"
-    threads: int = 1
-
-    def __post_init__(self):
-        _positive_int(self, "segments", "threads")
-        if self.sensitivities not in ("exact", "fast"):
-            raise ValueError("ShootingSettings.sensitivities must be 'exact' or 'fast', got "
-                             f"{self.sensitivities!r}")
-        _positive(self, "abstol", "reltol", "unstable_tol")
-        if self.jacobian not in ("blocks", "graph"):
-            raise ValueError("ShootingSettings.jacobian must be 'blocks' or 'graph', got "
-                             f"{self.jacobian!r}")
-        if self.integrator not in ("cvodes", "idas", "rk"):
-            raise ValueError("ShootingSettings.integrator must be 'cvodes', 'idas' or 'rk', "
-                             f"got {self.integrator!r}")
-        if self.floquet not in ("pencil", "product"):
-            raise ValueError("ShootingSettings.floquet must be 'pencil' or 'product', got "
-                             f"{self.floquet!r}")

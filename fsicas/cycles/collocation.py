@@ -223,7 +223,7 @@ START_RETRIES = 5
 def _continued(scene: Scene, model: Model, hopf: HopfPoint, dp: float,
                settings: CycleSettings, ustar_max: float) -> CycleRun:
     """The branch from the Hopf point, started at the offset ``dp`` of Π from it."""
-    collocation = C.CollocationSettings(ntst=settings.ntst, ncol=settings.ncol, floquet="product",
+    collocation = C.CollocationSettings(ntst=settings.ntst, ncol=settings.ncol, floquet="schur",
                                         adapt_every=settings.adapt_every)
     problem = C.cycle_from_hopf(flutter_problem(scene, model, min(0.2, hopf.ustar / 2)),
                                 hopf.point, dp=dp, settings=collocation)

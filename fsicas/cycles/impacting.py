@@ -197,7 +197,7 @@ def _shot(scene, model, state, period, pressure_drop, ustar_range, direction, se
 def shooting_settings(settings: ImpactSettings) -> C.ShootingSettings:
     """The library's shooting settings of an impacting branch."""
     return C.ShootingSettings(segments=settings.segments, abstol=settings.tol,
-                              reltol=settings.tol, floquet="product", jacobian="blocks",
+                              reltol=settings.tol, floquet="schur", jacobian="blocks",
                               sensitivities=settings.sensitivities, threads=settings.threads)
 
 

@@ -191,7 +191,7 @@ def impacting_collocation_problem(scene: Scene, state, period: float, pressure_d
     vf = flutter_field(model)
     params = field_parameters(vf, model, steady_state(scene, model), scene, pressure_drop)
     orbit = _integrated_orbit(vf, np.asarray(state, float), period * TIME_SCALE, params, settings)
-    cs = C.CollocationSettings(ntst=settings.ntst, ncol=settings.ncol, floquet="product",
+    cs = C.CollocationSettings(ntst=settings.ntst, ncol=settings.ncol, floquet="schur",
                                adapt_every=settings.adapt_every)
     problem = C.CycleProblem(vf, orbit, period * TIME_SCALE, params, PI, settings=cs)
     for _ in range(settings.mesh_passes):

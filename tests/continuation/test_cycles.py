@@ -111,6 +111,24 @@ def test_pencil_keeps_strongly_contracting_multiplier():
     assert abs(prod[1] / exact - 1) > 0.1
 
 
+def test_default_multipliers_of_a_stiff_cycle_hold_the_small_one():
+    """The default route (periodic Schur of the transfer maps) on the radial-rate-3 and
+    -4 rings: the trivial multiplier agrees with the product's and the pencil's, and the
+    contracting one, exp(-6 T) = 4.2e-17 and exp(-8 T) = 1.2e-22, is kept to 1e-6
+    relative (the collocation's own error), also in the Poincare map's multipliers."""
+    T = 2 * np.pi
+    for radial in (3.0, 4.0):
+        F = ring(radial=radial)
+        prob, X = cycle_from_circle(F, 0.0, 60, 4, T)
+        exact = np.exp(-2 * radial * T)
+        mu, rest = prob.multipliers(X), prob.section_multipliers(X)
+        assert abs(mu[1] / exact - 1) < 1e-6 and abs(rest[0] / exact - 1) < 1e-6
+        for method in ("product", "pencil"):
+            other = C.CycleProblem(F, circle, T, {"e": 0.0}, "e", settings=C.CollocationSettings(
+                ntst=60, ncol=4, floquet=method)).multipliers(X)
+            assert abs(other[0] - mu[0]) < 1e-10
+
+
 def test_scalar_state_dependent_mass_rescales_time():
     """M = (2 + x1) I: same orbit r = 1, period int_0^{2 pi} (2 + cos s) ds = 4 pi,
     same Poincare map, so the same multiplier exp(-4 pi)."""

@@ -90,3 +90,25 @@ def test_shooting_settings_validation(models):
     with pytest.raises(ValueError, match="settings"):
         C.ShootingProblem(models.van_der_pol(), models.van_der_pol_guess, 6.6, {"mu": 1.0}, "mu",
                           settings=C.CollocationSettings())
+
+
+def test_shooting_multipliers_keep_a_strongly_contracting_one(models):
+    """r' = 3 r (1 - r^2) on the unit circle, period 2 pi: multiplier exp(-12 pi) = 4.2e-17,
+    below round-off relative to the trivial one. The default route (periodic Schur of the
+    8 segments' sensitivities) keeps it to 1e-5 relative (measured 9e-9; the integrator's
+    tolerance against each segment's contraction exp(-1.5 pi) bounds it), and so does
+    the Poincare map's; the product of the sensitivities loses it."""
+    x, p = ca.SX.sym("x", 2), ca.SX.sym("p", 1)
+    g = 3 * (1 - x[0] ** 2 - x[1] ** 2)
+    F = ca.Function("F", [x, p], [ca.vertcat(g * x[0] - x[1] + 0 * p[0], g * x[1] + x[0])])
+    orbit = lambda t: np.c_[np.cos(2 * np.pi * t), np.sin(2 * np.pi * t)]  # noqa: E731
+    sh = C.ShootingProblem(F, orbit, 2 * np.pi, {"e": 0.0}, "e",
+                           settings=C.ShootingSettings(segments=8))
+    X = models.corrected(sh)
+    exact = np.exp(-12 * np.pi)
+    mu = sh.multipliers(X)
+    assert abs(mu[0] - 1) < 1e-9 and abs(mu[1] / exact - 1) < 1e-5
+    assert abs(sh.section_multipliers(X)[0] / exact - 1) < 1e-5
+    prod = C.ShootingProblem(F, orbit, 2 * np.pi, {"e": 0.0}, "e", settings=C.ShootingSettings(
+        segments=8, floquet="product")).multipliers(X)
+    assert abs(prod[0] - 1) < 1e-9 and abs(prod[1] / exact - 1) > 1e-2

@@ -156,7 +156,7 @@ def test_missing_compiler_falls_back_to_mx(models, cache, monkeypatch):
 def test_backend_setting_and_environment_are_validated(monkeypatch):
     with pytest.raises(ValueError, match="CollocationSettings.backend"):
         C.CollocationSettings(backend="jit")
-    from continuation._driver.settings import kernel_backend
+    from continuation._cycles.settings import kernel_backend
     monkeypatch.delenv("CONTINUATION_BACKEND", raising=False)
     assert kernel_backend(None) == "auto"
     monkeypatch.setenv("CONTINUATION_BACKEND", "compiled")
