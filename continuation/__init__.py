@@ -16,7 +16,8 @@ Public API (everything else is private)::
     Lifted(D, P, L, A)                        # a matrix A(p) + P D(x, p) L (Galerkin structure)
     first_lyapunov(vf, x, p, omega)
     CycleProblem(F, orbit, period, params, active, *, M=None, settings=CollocationSettings())
-    cycle_from_hopf(problem, hopf_point, *, dp=1e-3, settings=None) -> CycleProblem
+    cycle_from_hopf(problem, hopf_point, *, dp=1e-3, settings=None, active=None) -> CycleProblem
+        # also from any point of a HopfCurveProblem's curve (active: one of its two)
     cycle_from_pd(cycle_problem, pd_point, *, amplitude=1e-2, settings=None) -> CycleProblem
     cycle_from_bp(cycle_problem, bp_point, *, amplitude=1e-2) -> CycleProblem   # pitchfork
     equilibrium_from_bp(problem, bp_point, *, amplitude=1e-2) -> EquilibriumProblem
