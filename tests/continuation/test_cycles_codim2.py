@@ -5,7 +5,6 @@ forms and, for a field that is not a normal form, against time integration."""
 import casadi as ca
 import numpy as np
 import pytest
-from scipy.integrate import solve_ivp
 
 import continuation as C
 
@@ -88,3 +87,55 @@ def test_cycle_from_a_hopf_curve_checks_its_point():
         C.cycle_from_hopf(curve, curve.X0, active="mu")
     with pytest.raises(ValueError, match="unknowns"):
         C.cycle_from_hopf(curve, curve.X0[:-1], active="s")
+
+
+@pytest.mark.parametrize("b, omega", [(-0.8, 1.3), (0.5, 0.7)])
+def test_fold_of_cycles_curve_from_a_generalized_hopf_point(b, omega):
+    """The continued LPC curve is ``mu = a^2 / (4 b)`` with the merging cycles' radius
+    ``r^2 = -a / (2 b)`` (closed forms of the normal form; ``a b < 0``)."""
+    curve, branch = hopf_curve(bautin(omega, b), 2, -0.4, (-0.8, 0.5))
+    (gh,) = branch.special("gh")
+    lpc = C.lpc_from_gh(curve, gh, epsilon=0.05, settings=SETTINGS)
+    folds = run(lpc, direction=lpc.away_direction, max_steps=25, ds=0.05, ds_max=0.3,
+                record=radius)
+    assert folds.status != "failed" and len(folds) > 10
+    mu, a = mu_a(folds.par("s"), folds.par("t"))
+    assert np.all(a * b < 0) and np.ptp(a) > 0.2                 # moved away from a = 0
+    np.testing.assert_allclose(mu, a ** 2 / (4 * b), rtol=0, atol=1e-8)
+    # the radius at a fold is the square root of what fixes it: discretization shows more
+    for r in (folds.columns["r"], folds.columns["r_min"]):
+        np.testing.assert_allclose(r, np.sqrt(-a / (2 * b)), rtol=2e-6)
+
+
+def settles(F, s, t, x0, t_end=3000.0):
+    """``max |(x1, x2)|`` over the last tenth of ``[0, t_end]`` from ``x0`` at ``(s, t)``
+    (CVODES, tolerances 1e-10)."""
+    x, p = ca.SX.sym("x", len(x0)), ca.SX.sym("p", 2)
+    grid = np.linspace(0.9 * t_end, t_end, 400)
+    flow = ca.integrator("flow", "cvodes", {"x": x, "p": p, "ode": F(x, p)}, 0.0, grid,
+                         {"reltol": 1e-10, "abstol": 1e-12, "max_num_steps": 10 ** 6})
+    tail = np.asarray(flow(x0=x0, p=[s, t])["xf"])
+    return float(np.max(np.hypot(tail[0], tail[1])))
+
+
+def test_fold_of_cycles_curve_against_time_integration():
+    """Not a normal form (a stable third mode feeds the amplitude back): between the Hopf
+    curve ``mu = 0`` and the continued LPC curve, at 1 % of their distance inside, the
+    equilibrium and a large cycle are both stable (the hysteresis); at 1 % outside the
+    large start decays to the equilibrium. (The fold is far from the normal form's
+    ``mu = a^2 / (4 b)``: the third mode moves it.)"""
+    F = bautin(extra=True)
+    curve, branch = hopf_curve(F, 3, -0.4, (-0.8, 0.5))
+    (gh,) = branch.special("gh")
+    lpc = C.lpc_from_gh(curve, gh, epsilon=0.05, settings=SETTINGS)
+    folds = run(lpc, direction=lpc.away_direction, max_steps=25, ds=0.05, ds_max=0.3,
+                record=radius)
+    k = np.argmin(np.abs(folds.par("t") - 0.25))
+    s_fold, t, r = folds.par("s")[k], folds.par("t")[k], folds.columns["r"][k]
+    s_hopf = -0.4 * t                                          # mu = 0 at x = 0
+    assert s_fold < s_hopf and abs(mu_a(s_fold, t)[0]) > 1e-3
+    inside, outside = (s_fold + f * (s_hopf - s_fold) for f in (0.01, -0.01))
+    large = [2 * r, 0.0, 0.0]
+    assert settles(F, inside, t, [0.05 * r, 0.0, 0.0]) < 1e-6
+    assert settles(F, inside, t, large) > 0.5 * r
+    assert settles(F, outside, t, large) < 1e-6

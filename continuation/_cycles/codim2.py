@@ -1,0 +1,111 @@
+"""Switching from a generalized Hopf (Bautin) point of a Hopf curve onto the curve of
+folds of cycles (LPC) born there.
+
+Near the point the normal form (``_equilibria.normal_forms``, ``|q| = 1``) is
+``z' = (beta1 + i omega) z + c1 z |z|^2 + c2 z |z|^4`` with ``beta1 = Re lambda``,
+``Re c1 = omega l1``, ``Re c2 = omega l2``; its cycles ``|z|^2 = s`` solve
+``beta1 + omega l1 s + omega l2 s^2 = 0``, and two of them merge (the LPC) where the
+root is double:
+
+    s = |z|^2 = -l1 / (2 l2),   beta1 = omega l1^2 / (4 l2),
+
+which exists on the side of the Hopf curve where ``l1 l2 < 0`` (for the Bautin form
+``w' = (mu + i omega) w + a w|w|^2 + b w|w|^4``: ``mu = a^2 / (4 b)``, ``|w|^2 = -a / (2b)``).
+The predictor takes the Hopf point ``(x_H, p_H)`` a distance ``epsilon`` along the Hopf
+curve from the Bautin point (on that side), its ``l1, l2, omega``, and maps ``beta1``
+to the parameter ``active`` by the crossing speed ``d Re lambda / d p_active``; the cycle
+``x_eq + 2 Re(z e^(2 pi i t) q)`` with ``|z|^2 = s`` is then corrected onto the fold
+(:func:`locate_cycle` with :class:`CycleFold`). Errors of the predictor are of higher
+order in ``epsilon``; the corrector removes them.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import scipy.sparse as sp
+
+from .cycle_curves import CycleCurveProblem, CycleFold, locate_cycle
+from .switching import crossing_speed, small_cycle
+from .._driver.branch import SpecialPoint
+from .._driver.newton import factorize, newton
+from .._driver.settings import CollocationSettings, NewtonSettings
+from .._equilibria.curves import HopfCurveProblem
+from .._equilibria.normal_forms import lyapunov_coefficients
+from .._linalg.sparse import append_row
+
+
+def lpc_from_gh(curve: HopfCurveProblem, point: SpecialPoint, *, epsilon: float = 1e-2,
+                active: str | None = None, settings: CollocationSettings | None = None,
+                newton_settings: NewtonSettings = NewtonSettings()) -> CycleCurveProblem:
+    """The fold-of-cycles curve born at the generalized Hopf ``point`` (a located 'gh'
+    SpecialPoint of ``curve``'s branch), as a :class:`CycleCurveProblem` in the curve's
+    two parameters at its first located fold (``X0``).
+
+    ``epsilon``: distance in the parameter plane along the Hopf curve from ``point`` to
+    the Hopf point the predictor starts from; ``active``: the parameter the predictor
+    moves off the Hopf curve (default: the one the curve's tangent moves least). The
+    returned problem's last free parameter is the other one; ``away_direction`` (+1/-1)
+    is the ``direction`` that continues away from the Bautin point. Raises
+    RuntimeError when the corrector fails (try a smaller ``epsilon``).
+    """
+    if not isinstance(point, SpecialPoint) or point.kind != "gh" or point.unknowns.size == 0:
+        raise ValueError("point must be a 'gh' SpecialPoint of a Hopf curve's branch")
+    if not (np.isfinite(epsilon) and epsilon > 0):
+        raise ValueError(f"epsilon must be a positive finite number, got {epsilon!r}")
+    X_gh = np.asarray(point.unknowns, dtype=float)
+    t = _curve_tangent(curve, X_gh)[-2:]
+    t /= np.linalg.norm(t)
+    active = active or curve.free[int(np.argmin(np.abs(t)))]
+    if active not in curve.free:
+        raise ValueError(f"active must be one of {curve.free}, got {active!r}")
+    other = curve.free[1 - curve.free.index(active)]
+    X_H, l1, l2, omega = _hopf_on_fold_side(curve, X_gh, t, epsilon, newton_settings)
+    vf, x_H, p_H = curve.vf, curve.state(X_H), curve.params(X_H)
+    beta1 = omega * l1 ** 2 / (4 * l2)
+    alpha = crossing_speed(vf, x_H, p_H, vf.par_index(active), omega, abs(beta1))
+    guess = small_cycle(vf, x_H, p_H, active, omega, beta1 / alpha,
+                        np.sqrt(-l1 / (2 * l2)), settings)
+    located, res = locate_cycle(guess, guess.X0, CycleFold(), newton_settings)
+    if not res.converged:
+        raise RuntimeError(f"the fold of cycles near the Bautin point was not located "
+                           f"({res.message}); try a smaller epsilon")
+    lpc = CycleCurveProblem(located, res.X, (active, other), CycleFold())
+    step = curve.params(X_H)[vf.par_index(other)] - curve.params(X_gh)[vf.par_index(other)]
+    lpc.away_direction = 1 if step > 0 else -1
+    return lpc
+
+
+def _curve_tangent(curve, X) -> np.ndarray:
+    """Unit null vector of ``G_X`` (``m x (m+1)``) at ``X``."""
+    rng = np.random.default_rng(3)
+    lu = factorize(sp.csc_matrix(append_row(curve.jacobian(X), rng.standard_normal(X.size))))
+    if lu is None:
+        raise np.linalg.LinAlgError("the Hopf curve is singular at the Bautin point")
+    e = np.zeros(X.size)
+    e[-1] = 1.0
+    tau = lu.solve(e)
+    return tau / np.linalg.norm(tau)
+
+
+def _hopf_on_fold_side(curve, X_gh, t, epsilon, settings):
+    """``(X_H, l1, l2, omega)`` at the Hopf point with ``t . (p - p_gh) = +-epsilon``
+    (``t`` the unit tangent in the curve's parameters) on the side where ``l1 l2 < 0``."""
+    full = _curve_tangent(curve, X_gh)
+    full /= np.linalg.norm(full[-2:])
+    tried = []
+    for sign in (1.0, -1.0):
+        target = sign * epsilon + t @ X_gh[-2:]
+        row = np.zeros(X_gh.size)
+        row[-2:] = t
+        res = newton(lambda X: np.append(curve.residual(X), row @ X - target),
+                     lambda X: append_row(curve.jacobian(X), row),
+                     X_gh + sign * epsilon * np.sign(full[-2:] @ t) * full, settings)
+        if not res.converged or curve.kappa(res.X) <= 0:
+            continue
+        omega = float(np.sqrt(curve.kappa(res.X)))
+        c = lyapunov_coefficients(curve.vf, curve.state(res.X), curve.params(res.X), omega)
+        tried.append((c["l1"], c["l2"]))
+        if c["l1"] * c["l2"] < 0:
+            return res.X, c["l1"], c["l2"], omega
+    raise RuntimeError(f"no Hopf point with l1 l2 < 0 at distance {epsilon} along the "
+                       f"curve (l1, l2 = {tried})")
