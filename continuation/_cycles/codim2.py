@@ -87,25 +87,32 @@ def _curve_tangent(curve, X) -> np.ndarray:
     return tau / np.linalg.norm(tau)
 
 
+def _along(curve, X0, t, step, settings):
+    """The point of the curve with ``t . (p - p0) = step`` (``t`` a unit vector in the
+    curve's parameters, ``p0`` those of ``X0``), by Newton from the tangent's guess; None
+    if Newton fails or the pair is no longer complex."""
+    full = _curve_tangent(curve, X0)
+    full /= full[-2:] @ t
+    row = np.zeros(X0.size)
+    row[-2:] = t
+    target = step + t @ X0[-2:]
+    res = newton(lambda X: np.append(curve.residual(X), row @ X - target),
+                 lambda X: append_row(curve.jacobian(X), row), X0 + step * full, settings)
+    return res.X if res.converged and curve.kappa(res.X) > 0 else None
+
+
 def _hopf_on_fold_side(curve, X_gh, t, epsilon, settings):
     """``(X_H, l1, l2, omega)`` at the Hopf point with ``t . (p - p_gh) = +-epsilon``
     (``t`` the unit tangent in the curve's parameters) on the side where ``l1 l2 < 0``."""
-    full = _curve_tangent(curve, X_gh)
-    full /= np.linalg.norm(full[-2:])
     tried = []
     for sign in (1.0, -1.0):
-        target = sign * epsilon + t @ X_gh[-2:]
-        row = np.zeros(X_gh.size)
-        row[-2:] = t
-        res = newton(lambda X: np.append(curve.residual(X), row @ X - target),
-                     lambda X: append_row(curve.jacobian(X), row),
-                     X_gh + sign * epsilon * np.sign(full[-2:] @ t) * full, settings)
-        if not res.converged or curve.kappa(res.X) <= 0:
+        X = _along(curve, X_gh, t, sign * epsilon, settings)
+        if X is None:
             continue
-        omega = float(np.sqrt(curve.kappa(res.X)))
-        c = lyapunov_coefficients(curve.vf, curve.state(res.X), curve.params(res.X), omega)
+        omega = float(np.sqrt(curve.kappa(X)))
+        c = lyapunov_coefficients(curve.vf, curve.state(X), curve.params(X), omega)
         tried.append((c["l1"], c["l2"]))
         if c["l1"] * c["l2"] < 0:
-            return res.X, c["l1"], c["l2"], omega
+            return X, c["l1"], c["l2"], omega
     raise RuntimeError(f"no Hopf point with l1 l2 < 0 at distance {epsilon} along the "
                        f"curve (l1, l2 = {tried})")
