@@ -1,5 +1,6 @@
 """Switching from a generalized Hopf (Bautin) point of a Hopf curve onto the curve of
-folds of cycles (LPC) born there.
+folds of cycles (LPC) born there, and from a double Hopf point onto the torus
+(Neimark-Sacker) curve of the curve's cycles (:func:`ns_from_hh`).
 
 Near the point the normal form (``_equilibria.normal_forms``, ``|q| = 1``) is
 ``z' = (beta1 + i omega) z + c1 z |z|^2 + c2 z |z|^4`` with ``beta1 = Re lambda``,
@@ -24,11 +25,12 @@ from __future__ import annotations
 import numpy as np
 import scipy.sparse as sp
 
-from .cycle_curves import CycleCurveProblem, CycleFold, locate_cycle
+from .cycle_curves import CycleCurveProblem, CycleFold, NeimarkSacker, locate_cycle
 from .switching import crossing_speed, small_cycle
 from .._driver.branch import SpecialPoint
 from .._driver.newton import factorize, newton
-from .._driver.settings import CollocationSettings, NewtonSettings
+from .._driver.settings import CollocationSettings, EigenSettings, NewtonSettings
+from .._equilibria import eigen
 from .._equilibria.curves import HopfCurveProblem
 from .._equilibria.normal_forms import lyapunov_coefficients
 from .._linalg.sparse import append_row
@@ -48,31 +50,93 @@ def lpc_from_gh(curve: HopfCurveProblem, point: SpecialPoint, *, epsilon: float 
     is the ``direction`` that continues away from the Bautin point. Raises
     RuntimeError when the corrector fails (try a smaller ``epsilon``).
     """
-    if not isinstance(point, SpecialPoint) or point.kind != "gh" or point.unknowns.size == 0:
-        raise ValueError("point must be a 'gh' SpecialPoint of a Hopf curve's branch")
-    if not (np.isfinite(epsilon) and epsilon > 0):
-        raise ValueError(f"epsilon must be a positive finite number, got {epsilon!r}")
-    X_gh = np.asarray(point.unknowns, dtype=float)
-    t = _curve_tangent(curve, X_gh)[-2:]
-    t /= np.linalg.norm(t)
-    active = active or curve.free[int(np.argmin(np.abs(t)))]
-    if active not in curve.free:
-        raise ValueError(f"active must be one of {curve.free}, got {active!r}")
-    other = curve.free[1 - curve.free.index(active)]
+    X_gh, t, active, other = _start(curve, point, "gh", epsilon, active)
     X_H, l1, l2, omega = _hopf_on_fold_side(curve, X_gh, t, epsilon, newton_settings)
     vf, x_H, p_H = curve.vf, curve.state(X_H), curve.params(X_H)
     beta1 = omega * l1 ** 2 / (4 * l2)
     alpha = crossing_speed(vf, x_H, p_H, vf.par_index(active), omega, abs(beta1))
     guess = small_cycle(vf, x_H, p_H, active, omega, beta1 / alpha,
                         np.sqrt(-l1 / (2 * l2)), settings)
-    located, res = locate_cycle(guess, guess.X0, CycleFold(), newton_settings)
+    return _corrected(guess, CycleFold(), newton_settings, curve, X_gh, X_H, (active, other))
+
+
+def ns_from_hh(curve: HopfCurveProblem, point: SpecialPoint, *, epsilon: float = 1e-2,
+               active: str | None = None, settings: CollocationSettings | None = None,
+               newton_settings: NewtonSettings = NewtonSettings()) -> CycleCurveProblem:
+    """The Neimark-Sacker curve of the cycles born on ``curve`` near its double Hopf
+    ``point`` (an 'hh' SpecialPoint with ``p11``, ``p21``), as a :class:`CycleCurveProblem`
+    in the curve's two parameters at its first located torus bifurcation (``X0``).
+
+    In the amplitude equations ``r1' = r1 (mu1 + p11 r1^2 + p12 r2^2)``, ``r2' = r2 (mu2 +
+    p21 r1^2 + p22 r2^2)`` (pair 1 the curve's) the cycles ``r1^2 = -mu1 / p11`` lose
+    stability in ``r2`` (a torus is born) at ``mu2 + p21 r1^2 = 0``. The predictor takes
+    the Hopf point ``epsilon`` along the curve (``mu1 = 0``, ``mu2`` the real part of the
+    other pair there) and moves ``active`` by ``dp = -mu2 / (a2 - a1 p21 / p11)`` (``a_k =
+    d Re lambda_k / d p_active``), on the side where ``r1^2 = -a1 dp / p11 > 0``; the cycle
+    is corrected by :func:`locate_cycle` with :class:`NeimarkSacker`. ``active`` and
+    ``away_direction`` as for :func:`lpc_from_gh`.
+    """
+    X_hh, t, active, other = _start(curve, point, "hh", epsilon, active)
+    if "p11" not in point.data:
+        raise ValueError(f"the double Hopf point has no coefficients ({point.message})")
+    X_H, dp, r2, omega1 = _torus_side(curve, X_hh, t, epsilon, active, point.data,
+                                      newton_settings)
+    guess = small_cycle(curve.vf, curve.state(X_H), curve.params(X_H), active, omega1, dp,
+                        np.sqrt(r2), settings)
+    return _corrected(guess, NeimarkSacker(), newton_settings, curve, X_hh, X_H,
+                      (active, other))
+
+
+def _corrected(guess, condition, settings, curve, X0, X_H, free) -> CycleCurveProblem:
+    """The curve of ``condition`` in ``free`` through the cycle located from ``guess``;
+    ``away_direction``: the side of the curve's point ``X0`` that its Hopf point ``X_H``
+    (the predictor's) lies on, in the last of ``free``."""
+    located, res = locate_cycle(guess, guess.X0, condition, settings)
     if not res.converged:
-        raise RuntimeError(f"the fold of cycles near the Bautin point was not located "
-                           f"({res.message}); try a smaller epsilon")
-    lpc = CycleCurveProblem(located, res.X, (active, other), CycleFold())
-    step = curve.params(X_H)[vf.par_index(other)] - curve.params(X_gh)[vf.par_index(other)]
-    lpc.away_direction = 1 if step > 0 else -1
-    return lpc
+        raise RuntimeError(f"the {type(condition).__name__} cycle was not located near the "
+                           f"codimension-two point ({res.message}); try a smaller epsilon")
+    out = CycleCurveProblem(located, res.X, free, condition)
+    k = curve.vf.par_index(free[-1])
+    out.away_direction = 1 if curve.params(X_H)[k] > curve.params(X0)[k] else -1
+    return out
+
+
+def _start(curve, point, kind, epsilon, active):
+    """``(X, t, active, other)``: the ``kind`` point's unknowns, the curve's unit tangent
+    in its parameters there, the parameter moved off the curve (default: the one ``t``
+    moves least) and the other."""
+    if not isinstance(point, SpecialPoint) or point.kind != kind or point.unknowns.size == 0:
+        raise ValueError(f"point must be a {kind!r} SpecialPoint of a Hopf curve's branch")
+    if not (np.isfinite(epsilon) and epsilon > 0):
+        raise ValueError(f"epsilon must be a positive finite number, got {epsilon!r}")
+    X = np.asarray(point.unknowns, dtype=float)
+    t = _curve_tangent(curve, X)[-2:]
+    t /= np.linalg.norm(t)
+    active = active or curve.free[int(np.argmin(np.abs(t)))]
+    if active not in curve.free:
+        raise ValueError(f"active must be one of {curve.free}, got {active!r}")
+    return X, t, active, curve.free[1 - curve.free.index(active)]
+
+
+def _torus_side(curve, X_hh, t, epsilon, active, data, settings):
+    """``(X_H, dp, r1^2, omega1)``: the Hopf point ``+-epsilon`` along the curve from
+    the double Hopf point and the offset of ``active`` to its cycles' torus bifurcation,
+    on the side where ``r1^2 > 0`` (see :func:`ns_from_hh`)."""
+    p11, p21, omega2 = (float(data[k]) for k in ("p11", "p21", "omega2"))
+    vf, ia = curve.vf, curve.vf.par_index(active)
+    for sign in (1.0, -1.0):
+        X_H = _along(curve, X_hh, t, sign * epsilon, settings)
+        if X_H is None:
+            continue
+        x_H, p_H, omega1 = curve.state(X_H), curve.params(X_H), float(np.sqrt(curve.kappa(X_H)))
+        second = eigen.nearest(eigen.eigenvalues(vf.jac_x(x_H, p_H), vf.mass(x_H, p_H),
+                                                 EigenSettings()), 1j * omega2)
+        a1, a2 = (crossing_speed(vf, x_H, p_H, ia, w, epsilon) for w in (omega1, second.imag))
+        dp = -second.real / (a2 - a1 * p21 / p11)
+        if -a1 * dp / p11 > 0:
+            return X_H, dp, -a1 * dp / p11, omega1
+    raise RuntimeError(f"no cycles with a torus bifurcation at distance {epsilon} along the "
+                       "curve")
 
 
 def _curve_tangent(curve, X) -> np.ndarray:

@@ -139,3 +139,50 @@ def test_fold_of_cycles_curve_against_time_integration():
     assert settles(F, inside, t, [0.05 * r, 0.0, 0.0]) < 1e-6
     assert settles(F, inside, t, large) > 0.5 * r
     assert settles(F, outside, t, large) < 1e-6
+
+
+def double_hopf(a, c=0.6, omega=(1.0, 1.7)):
+    """The truncated double-Hopf normal form ``w1' = (mu1 + i omega1) w1 + (a11 |w1|^2 +
+    a12 |w2|^2) w1``, ``w2' = (mu2 + i omega2) w2 + (a21 |w1|^2 + a22 |w2|^2) w2``, sheared
+    (``u4 = y4 + c y1^2``) and rotated: the cycles of pair 1, ``|w1|^2 = -mu1 / Re a11``,
+    bifurcate into tori where ``w2`` stops decaying, ``mu2 + Re a21 |w1|^2 = 0``: the line
+    ``mu2 = (Re a21 / Re a11) mu1`` (``mu1 / Re a11 < 0``)."""
+    x, p = ca.SX.sym("x", 4), ca.SX.sym("p", 2)
+    Q = np.linalg.qr(np.random.default_rng(3).standard_normal((4, 4)))[0]
+    u = ca.mtimes(ca.DM(Q), x)
+    y = ca.vertcat(u[0], u[1], u[2], u[3] - c * u[0] ** 2)
+    s1, s2 = y[0] ** 2 + y[1] ** 2, y[2] ** 2 + y[3] ** 2
+    g = []
+    for (w0, w1), mu, om, (k1, k2) in (((y[0], y[1]), p[0], omega[0], a[0]),
+                                       ((y[2], y[3]), p[1], omega[1], a[1])):
+        re, im = mu + k1.real * s1 + k2.real * s2, om + k1.imag * s1 + k2.imag * s2
+        g += [re * w0 - im * w1, im * w0 + re * w1]
+    g[3] = g[3] + 2 * c * y[0] * g[0]
+    return ca.Function("F", [x, p], [ca.mtimes(ca.DM(Q.T), ca.vertcat(*g))])
+
+
+@pytest.mark.parametrize("a", [
+    [[-1 + 0.3j, 0.5 - 0.2j], [-1.5 + 0.1j, -2 + 0.4j]],
+    [[1 + 0.3j, 0.5 - 0.2j], [0.7 + 0.1j, -2 + 0.4j]]])
+def test_neimark_sacker_curve_from_a_double_hopf_point(a):
+    """The continued torus curve is the closed-form line (1e-8); at its first point the
+    period is ``2 pi / (omega1 + Im a11 r^2)`` and the multiplier on the unit circle is
+    ``exp(+-i (omega2 + Im a21 r^2) T)`` (``r^2 = |w1|^2``), for both signs of ``p11``."""
+    F = double_hopf(a)
+    prob = C.EquilibriumProblem(F, np.zeros(4), {"mu1": -0.3, "mu2": -0.4}, "mu1")
+    (h,) = run(prob, bounds={"mu1": (-1.0, 0.3)}).special("hopf")
+    curve = C.HopfCurveProblem.from_point(prob, h, "mu2")
+    (hh,) = run(curve, bounds={"mu2": (-1.0, 0.5)},
+                compute_eigenvalues=True).special("hh")
+    ns = C.ns_from_hh(curve, hh, epsilon=0.05, settings=SETTINGS)
+    tori = run(ns, direction=ns.away_direction, max_steps=15, ds=0.05, ds_max=0.2)
+    assert tori.status != "failed" and len(tori) > 10
+    mu1, mu2 = tori.par("mu1"), tori.par("mu2")
+    assert np.ptp(mu2) > 0.1 and np.all(mu1 / a[0][0].real < 0)
+    np.testing.assert_allclose(mu2, a[1][0].real / a[0][0].real * mu1, rtol=0, atol=1e-8)
+    r2 = -ns.par_dict(ns.X0)["mu1"] / a[0][0].real
+    T = 2 * np.pi / (1.0 + a[0][0].imag * r2)
+    assert ns.period(ns.X0) == pytest.approx(T, rel=1e-9)
+    mu = ns.condition.multiplier_at(ns, ns.X0)
+    turn = np.exp(1j * (1.7 + a[1][0].imag * r2) * T)
+    assert min(abs(mu - turn), abs(mu - turn.conjugate())) < 1e-7
