@@ -186,3 +186,19 @@ def test_neimark_sacker_curve_from_a_double_hopf_point(a):
     mu = ns.condition.multiplier_at(ns, ns.X0)
     turn = np.exp(1j * (1.7 + a[1][0].imag * r2) * T)
     assert min(abs(mu - turn), abs(mu - turn.conjugate())) < 1e-7
+
+
+def test_neimark_sacker_curve_of_the_other_pair():
+    """Along the other Hopf curve (``mu2 = 0``) the double Hopf point carries the
+    coefficients with the pairs swapped, and the torus curve of the second pair's cycles
+    is ``mu1 = (Re a12 / Re a22) mu2`` (``mu2 / Re a22 < 0``)."""
+    a = [[-1 + 0.3j, 0.5 - 0.2j], [-1.5 + 0.1j, -2 + 0.4j]]
+    prob = C.EquilibriumProblem(double_hopf(a), np.zeros(4), {"mu1": -0.3, "mu2": -0.4}, "mu2")
+    (h,) = run(prob, bounds={"mu2": (-1.0, 0.3)}).special("hopf")
+    curve = C.HopfCurveProblem.from_point(prob, h, "mu1")
+    (hh,) = run(curve, bounds={"mu1": (-1.0, 0.5)}, compute_eigenvalues=True).special("hh")
+    ns = C.ns_from_hh(curve, hh, epsilon=0.05, settings=SETTINGS)
+    tori = run(ns, direction=ns.away_direction, max_steps=15, ds=0.05, ds_max=0.2)
+    mu1, mu2 = tori.par("mu1"), tori.par("mu2")
+    assert tori.status != "failed" and np.ptp(mu2) > 0.1 and np.all(mu2 / a[1][1].real < 0)
+    np.testing.assert_allclose(mu1, a[0][1].real / a[1][1].real * mu2, rtol=0, atol=1e-8)
