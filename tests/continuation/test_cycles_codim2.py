@@ -141,12 +141,14 @@ def test_fold_of_cycles_curve_against_time_integration():
     assert settles(F, outside, t, large) < 1e-6
 
 
-def double_hopf(a, c=0.6, omega=(1.0, 1.7)):
+def double_hopf(a, c=0.6, omega=(1.0, 1.7), quadratic=0.0):
     """The truncated double-Hopf normal form ``w1' = (mu1 + i omega1) w1 + (a11 |w1|^2 +
     a12 |w2|^2) w1``, ``w2' = (mu2 + i omega2) w2 + (a21 |w1|^2 + a22 |w2|^2) w2``, sheared
     (``u4 = y4 + c y1^2``) and rotated: the cycles of pair 1, ``|w1|^2 = -mu1 / Re a11``,
     bifurcate into tori where ``w2`` stops decaying, ``mu2 + Re a21 |w1|^2 = 0``: the line
-    ``mu2 = (Re a21 / Re a11) mu1`` (``mu1 / Re a11 < 0``)."""
+    ``mu2 = (Re a21 / Re a11) mu1`` (``mu1 / Re a11 < 0``). ``quadratic``: a term
+    ``quadratic y1^2`` added to ``y3'``: the cycles of pair 1 leave its plane (not a
+    normal form any more)."""
     x, p = ca.SX.sym("x", 4), ca.SX.sym("p", 2)
     Q = np.linalg.qr(np.random.default_rng(3).standard_normal((4, 4)))[0]
     u = ca.mtimes(ca.DM(Q), x)
@@ -157,6 +159,7 @@ def double_hopf(a, c=0.6, omega=(1.0, 1.7)):
                                        ((y[2], y[3]), p[1], omega[1], a[1])):
         re, im = mu + k1.real * s1 + k2.real * s2, om + k1.imag * s1 + k2.imag * s2
         g += [re * w0 - im * w1, im * w0 + re * w1]
+    g[2] = g[2] + quadratic * y[0] ** 2
     g[3] = g[3] + 2 * c * y[0] * g[0]
     return ca.Function("F", [x, p], [ca.mtimes(ca.DM(Q.T), ca.vertcat(*g))])
 
@@ -202,3 +205,27 @@ def test_neimark_sacker_curve_of_the_other_pair():
     mu1, mu2 = tori.par("mu1"), tori.par("mu2")
     assert tori.status != "failed" and np.ptp(mu2) > 0.1 and np.all(mu2 / a[1][1].real < 0)
     np.testing.assert_allclose(mu1, a[0][1].real / a[1][1].real * mu2, rtol=0, atol=1e-8)
+
+
+def test_neimark_sacker_curve_against_a_cycle_branch():
+    """Not a normal form (quadratic coupling): the torus bifurcation of the cycle branch in
+    mu1 at a fixed mu2 of the continued curve, detected by its Floquet multipliers
+    (no NeimarkSacker condition), lies on the curve."""
+    a = [[-1 + 0.3j, 0.5 - 0.2j], [-1.5 + 0.1j, -2 + 0.4j]]
+    F = double_hopf(a, quadratic=0.8)
+    prob = C.EquilibriumProblem(F, np.zeros(4), {"mu1": -0.3, "mu2": -0.4}, "mu1")
+    (h,) = run(prob, bounds={"mu1": (-1.0, 0.3)}).special("hopf")
+    curve = C.HopfCurveProblem.from_point(prob, h, "mu2")
+    (hh,) = run(curve, bounds={"mu2": (-1.0, 0.5)}, compute_eigenvalues=True).special("hh")
+    ns0 = C.ns_from_hh(curve, hh, epsilon=0.05, settings=SETTINGS)
+    tori = run(ns0, max_steps=10, ds=0.05, ds_max=0.1, direction=ns0.away_direction)
+    k = len(tori) - 1
+    mu1, mu2 = tori.par("mu1")[k], tori.par("mu2")[k]
+    eq = C.EquilibriumProblem(F, np.zeros(4), {"mu1": -0.2, "mu2": mu2}, "mu1")
+    (h1,) = run(eq, bounds={"mu1": (-1.0, 0.3)}).special("hopf")
+    cycle = C.cycle_from_hopf(eq, h1, dp=1e-3, settings=SETTINGS)
+    cycles = run(cycle, direction=cycle.hopf_direction, ds=0.01, ds_max=0.05,
+                 bounds={"mu1": (-1.0, 2 * mu1)})
+    (ns,) = cycles.special("ns")
+    assert ns.status == "converged" and abs(a[1][0].real / a[0][0].real * mu1 - mu2) > 1e-3
+    assert ns.params["mu1"] == pytest.approx(mu1, rel=1e-7)
