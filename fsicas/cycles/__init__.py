@@ -6,7 +6,7 @@ a contact-free branch or one cycle), the period-doubled and symmetry-broken bran
 switched onto; and the curves of special cycles in (M*, U*): grazing (first contact) and
 fold of cycles, also from the generalized Hopf points of the boundary."""
 
-from .bautin import BautinFold, fold_curves_from_bautin
+from .bautin import SwitchedCurve, fold_curves_from_bautin, torus_curves_from_double_hopf
 from .collocation import CycleBranch, CyclePoint, CycleSettings, cycle_branch
 from .curves import (CurveMap, CurvePoint, CurveSettings, CycleCurve, cycle_curves, curve_seeds,
                      fold_curves, grazing_curve)
@@ -24,4 +24,4 @@ __all__ = ["CycleBranch", "CyclePoint", "CycleSettings", "cycle_branch", "Impact
            "ImpactMethod", "StartCycle", "impacting_cycles", "impacting_start",
            "CurveMap", "CurvePoint", "CurveSettings",
            "CycleCurve", "cycle_curves", "curve_seeds", "fold_curves", "grazing_curve",
-           "BautinFold", "fold_curves_from_bautin"]
+           "SwitchedCurve", "fold_curves_from_bautin", "torus_curves_from_double_hopf"]

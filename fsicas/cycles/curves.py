@@ -44,8 +44,9 @@ __all__ = ["CurveKind", "CurveEnd", "CurveSettings", "CurvePoint", "CycleCurve",
            "fold_curves", "trace_curve", "cycle_curves", "curve_seeds", "crossings", "lowest_ustar",
            "expected_outcomes"]
 
-CurveKind = Literal["grazing", "fold"]
-"""A curve of grazing cycles (min gap = eps) or of cycle folds (LPC)."""
+CurveKind = Literal["grazing", "fold", "ns"]
+"""A curve of grazing cycles (min gap = eps), of cycle folds (LPC) or of torus
+bifurcations (Neimark-Sacker)."""
 
 CurveEnd = Literal["mstar_window", "ustar_bound", "bound", "budget", "wall", "hopf", "failed",
                    "stopped"]
@@ -348,7 +349,8 @@ def trace_curve(base: ProfileGauge, problem, X, kind: CurveKind, settings: Curve
     model, steady state and eps)."""
     start = time.perf_counter()
     gauge = ProfileGauge(base.model, base.x_eq, base.eps, settings.quadrature_tol)
-    condition = gauge.grazing_condition() if kind == "grazing" else C.CycleFold()
+    condition = {"grazing": gauge.grazing_condition, "fold": C.CycleFold,
+                 "ns": C.NeimarkSacker}[kind]()
     halves = []
     for direction in (-1, 1):
         curve = C.CycleCurveProblem(problem, X, (PI, LOG_M), condition)
