@@ -16,7 +16,12 @@ Public API (everything else is private)::
     Lifted(D, P, L, A)                        # a matrix A(p) + P D(x, p) L (Galerkin structure)
     first_lyapunov(vf, x, p, omega)
     CycleProblem(F, orbit, period, params, active, *, M=None, settings=CollocationSettings())
-    cycle_from_hopf(problem, hopf_point, *, dp=1e-3, settings=None) -> CycleProblem
+    cycle_from_hopf(problem, hopf_point, *, dp=1e-3, settings=None, active=None) -> CycleProblem
+        # also from any point of a HopfCurveProblem's curve (active: one of its two)
+    lpc_from_gh(hopf_curve, gh_point, *, epsilon=1e-2, active=None, settings=None)
+        -> CycleCurveProblem   # fold-of-cycles curve born at a generalized Hopf point
+    ns_from_hh(hopf_curve, hh_point, *, epsilon=1e-2, active=None, settings=None)
+        -> CycleCurveProblem   # torus curve of the curve's cycles born at a double Hopf point
     cycle_from_pd(cycle_problem, pd_point, *, amplitude=1e-2, settings=None) -> CycleProblem
     cycle_from_bp(cycle_problem, bp_point, *, amplitude=1e-2) -> CycleProblem   # pitchfork
     equilibrium_from_bp(problem, bp_point, *, amplitude=1e-2) -> EquilibriumProblem
@@ -40,6 +45,7 @@ Plotting lives in ``continuation.plotting`` (Matplotlib is imported there only).
 from ._casadi.lifted import Lifted
 from ._casadi.symbolic import BufferedFunction, CompiledSystem
 from ._casadi.vectorfield import VectorField
+from ._cycles.codim2 import lpc_from_gh, ns_from_hh
 from ._cycles.cycle_curves import (Condition, CycleCurveProblem, CycleFold, Extremum,
                                    NeimarkSacker, PeriodDoubling, locate_cycle)
 from ._cycles.cycles import CycleProblem
@@ -62,7 +68,7 @@ __all__ = [
     "MAX_NTST", "Branch", "BufferedFunction", "CompiledSystem", "Event", "Status", "CollocationSettings", "Condition", "CycleCurveProblem",
     "CycleFold", "Extremum", "NeimarkSacker", "PeriodDoubling", "locate_cycle", "ContinuationIterator", "ContinuationSettings",
     "CycleProblem", "EigenSettings", "ShootingProblem", "ShootingSettings", "cycle_from_hopf",
-    "cycle_from_bp", "cycle_from_pd", "equilibrium_from_bp",
+    "cycle_from_bp", "cycle_from_pd", "lpc_from_gh", "ns_from_hh", "equilibrium_from_bp",
     "EquilibriumProblem", "FoldCurveProblem", "HopfCurveProblem", "Lifted", "NewtonSettings",
     "PALC", "Problem", "SpecialPoint", "Step", "VectorField", "continuation", "correct", "observing",
     "first_lyapunov", "hopf_point", "keeps_symmetry", "locate_symmetry_breaking",

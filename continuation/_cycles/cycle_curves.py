@@ -200,14 +200,18 @@ class NeimarkSacker(Condition):
         if self._last is not None and np.array_equal(self._last[0], X):
             return self._last[1]
         J, mu = problem.cycle_jacobian(X), self.multiplier
+        last = np.inf
         for _ in range(30):
             A, A_mu = _twisted(problem, J, mu)
             v, w, g = bordered_solve(A, self.b, self.c)
             g_mu = -(w @ (A_mu @ v))
             step = g / g_mu
             mu -= step
-            if abs(step) <= 1e-13 * abs(mu):
+            # converged, or stalled at the round-off of a stiff Jacobian (5e-13 on a
+            # flutter cycle near a double Hopf point, where 1e-13 is never reached)
+            if abs(step) <= 1e-13 * abs(mu) or last <= abs(step) <= 1e-10 * abs(mu):
                 break
+            last = abs(step)
         else:
             raise np.linalg.LinAlgError("no multiplier near the unit circle: Newton in mu "
                                         "did not converge")

@@ -1,4 +1,5 @@
-"""Branch switching onto cycles: from a Hopf point of an equilibrium branch, and
+"""Branch switching onto cycles: from a Hopf point of an equilibrium branch or any
+point of a Hopf curve, and
 from the period doublings and branch points of a cycle branch.
 
 At a Hopf point ``(x_H, p_H)`` with ``J q = i omega M q`` (``|q| = 1``) and
@@ -29,49 +30,81 @@ from .._driver.newton import factorize, newton
 from .._driver.settings import EigenSettings, NewtonSettings
 from .settings import CollocationSettings
 from .._equilibria import eigen
-from .._equilibria.lyapunov import hopf_eigenvectors
+from .._equilibria.curves import HopfCurveProblem
+from .._equilibria.lyapunov import first_lyapunov, hopf_eigenvectors
 
 
-def cycle_from_hopf(problem, point: SpecialPoint, *, dp: float = 1e-3,
-                    settings: CollocationSettings | None = None) -> CycleProblem:
+def cycle_from_hopf(problem, point, *, dp: float = 1e-3,
+                    settings: CollocationSettings | None = None,
+                    active: str | None = None) -> CycleProblem:
     """A :class:`CycleProblem` started on the small cycle born at ``point``.
 
     ``problem`` is the EquilibriumProblem whose branch holds the Hopf ``point``
-    (with ``data['omega']`` and ``data['l1']``); ``dp > 0`` is the size of the
-    parameter offset, its sign is chosen by the normal form. The returned
-    problem's ``X0`` is the normal-form guess; ``hopf_direction`` (+1/-1) is the
-    side of the Hopf point the cycles live on (use it as ``direction``).
+    (with ``data['omega']`` and ``data['l1']``), or a HopfCurveProblem and ``point``
+    any point of its curve (a SpecialPoint of the curve's branch, or the curve's
+    unknowns ``X``) with ``active``, one of the curve's two parameters, the cycle's
+    continuation parameter (the other stays fixed; ``l1`` is computed there). ``dp > 0``
+    is the size of the parameter offset, its sign is chosen by the normal form. The
+    returned problem's ``X0`` is the normal-form guess; ``hopf_direction`` (+1/-1) is
+    the side of the Hopf point the cycles live on (use it as ``direction``).
     """
-    if not isinstance(point, SpecialPoint) or point.kind != "hopf":
-        raise ValueError("point must be a 'hopf' SpecialPoint")
-    if "l1" not in point.data or "omega" not in point.data:
-        raise ValueError(f"point.data must hold 'omega' and 'l1', got {sorted(point.data)}")
-    l1, omega = float(point.data["l1"]), float(point.data["omega"])
+    if isinstance(problem, HopfCurveProblem):
+        x_H, p_H, omega, l1, active = hopf_curve_point(problem, point, active)
+    else:
+        if not isinstance(point, SpecialPoint) or point.kind != "hopf":
+            raise ValueError("point must be a 'hopf' SpecialPoint")
+        if "l1" not in point.data or "omega" not in point.data:
+            raise ValueError(f"point.data must hold 'omega' and 'l1', got {sorted(point.data)}")
+        l1, omega, active = float(point.data["l1"]), float(point.data["omega"]), problem.active
+        x_H, p_H = point.x, np.array([point.params[k] for k in problem.vf.par_names], float)
     if l1 == 0 or not np.isfinite(l1):
-        raise ValueError(f"point.data['l1'] must be finite and nonzero, got {l1!r}")
+        raise ValueError(f"l1 must be finite and nonzero at the Hopf point, got {l1!r}")
     if not (np.isfinite(dp) and dp > 0):
         raise ValueError(f"dp must be a positive finite number, got {dp!r}")
-    vf, active = problem.vf, problem.active
-    p_H = np.array([point.params[k] for k in vf.par_names], dtype=float)
-    ia = vf.par_index(active)
-    alpha = _crossing_speed(vf, point.x, p_H, ia, omega, dp)
+    vf = problem.vf
+    alpha = crossing_speed(vf, x_H, p_H, vf.par_index(active), omega, dp)
     sign = 1.0 if -alpha / (l1 * omega) > 0 else -1.0
-    p = p_H.copy()
-    p[ia] += sign * dp
-    x_eq = _equilibrium(vf, point.x, p)
+    cycle = small_cycle(vf, x_H, p_H, active, omega, sign * dp,
+                        np.sqrt(abs(alpha * dp / (l1 * omega))), settings)
+    cycle.hopf_direction = int(sign)
+    return cycle
+
+
+def hopf_curve_point(curve: HopfCurveProblem, point, active):
+    """``(x, p, omega, l1, active)`` at a point of a Hopf curve (a SpecialPoint with
+    its unknowns, or the unknowns ``X``); ``active`` must be one of the curve's two."""
+    X = point.unknowns if isinstance(point, SpecialPoint) else np.asarray(point, float)
+    if X.size != curve.X0.size:
+        raise ValueError(f"the point needs the Hopf curve's {curve.X0.size} unknowns, "
+                         f"got {X.size}")
+    if active not in curve.free:
+        raise ValueError(f"active must be one of the curve's parameters {curve.free}, "
+                         f"got {active!r}")
+    if curve.kappa(X) <= 0:
+        raise ValueError("no Hopf point here: kappa = omega^2 <= 0 (a neutral saddle)")
+    omega = float(np.sqrt(curve.kappa(X)))
+    x, p = curve.state(X), curve.params(X)
+    return x, p, omega, first_lyapunov(curve.vf, x, p, omega), active
+
+
+def small_cycle(vf, x_H, p_H, active: str, omega: float, dp: float, z: float,
+                settings) -> CycleProblem:
+    """The cycle ``x_eq(p) + 2 Re(z e^(2 pi i t) q)``, ``T = 2 pi / omega``, at ``p`` =
+    ``p_H`` with ``dp`` added to ``active`` (``q`` of the eigenvalue near ``i omega``
+    at the equilibrium there, ``|q| = 1``)."""
+    p = np.array(p_H, dtype=float)
+    p[vf.par_index(active)] += dp
+    x_eq = _equilibrium(vf, x_H, p)
     J, M = vf.jac_x(x_eq, p), vf.mass(x_eq, p)
     q, _ = hopf_eigenvectors(sp.csc_matrix(J, dtype=complex), sp.csc_matrix(M, dtype=complex),
                              omega)
-    z = np.sqrt(abs(alpha * dp / (l1 * omega)))
 
     def orbit(t):
         t = np.atleast_1d(t)
         return x_eq[None, :] + 2 * z * np.real(np.exp(2j * np.pi * t)[:, None] * q[None, :])
 
     params = dict(zip(vf.par_names, map(float, p)))
-    cycle = CycleProblem(vf, orbit, 2 * np.pi / omega, params, active, settings=settings)
-    cycle.hopf_direction = int(sign)
-    return cycle
+    return CycleProblem(vf, orbit, 2 * np.pi / omega, params, active, settings=settings)
 
 
 def _equilibrium(vf, x0, p) -> np.ndarray:
@@ -81,7 +114,7 @@ def _equilibrium(vf, x0, p) -> np.ndarray:
     return res.X
 
 
-def _crossing_speed(vf, x, p, ia, omega, dp) -> float:
+def crossing_speed(vf, x, p, ia, omega, dp) -> float:
     """``d Re lambda / dp`` of the eigenvalue near ``i omega`` (central difference)."""
     h = min(dp, 1e-4) * max(1.0, abs(p[ia]))
     re = []

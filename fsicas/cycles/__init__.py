@@ -4,8 +4,9 @@ by adaptive collocation of the smoothed contact law, its folds, period doublings
 Neimark-Sacker and branch points located, or by multiple shooting; from the scene alone,
 a contact-free branch or one cycle), the period-doubled and symmetry-broken branches
 switched onto; and the curves of special cycles in (M*, U*): grazing (first contact) and
-fold of cycles."""
+fold of cycles, also from the generalized Hopf points of the boundary."""
 
+from .bautin import SwitchedCurve, fold_curves_from_bautin, torus_curves_from_double_hopf
 from .collocation import CycleBranch, CyclePoint, CycleSettings, cycle_branch
 from .curves import (CurveMap, CurvePoint, CurveSettings, CycleCurve, cycle_curves, curve_seeds,
                      fold_curves, grazing_curve)
@@ -22,4 +23,5 @@ __all__ = ["CycleBranch", "CyclePoint", "CycleSettings", "cycle_branch", "Impact
            "impacting_collocation_problem", "period_doubled_branch", "symmetry_broken_branch",
            "ImpactMethod", "StartCycle", "impacting_cycles", "impacting_start",
            "CurveMap", "CurvePoint", "CurveSettings",
-           "CycleCurve", "cycle_curves", "curve_seeds", "fold_curves", "grazing_curve"]
+           "CycleCurve", "cycle_curves", "curve_seeds", "fold_curves", "grazing_curve",
+           "SwitchedCurve", "fold_curves_from_bautin", "torus_curves_from_double_hopf"]

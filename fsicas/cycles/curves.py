@@ -41,11 +41,12 @@ from .records import check_settings, plain_value
 
 __all__ = ["CurveKind", "CurveEnd", "CurveSettings", "CurvePoint", "CycleCurve", "CurveMap",
            "grazing_curve",
-           "fold_curves", "cycle_curves", "curve_seeds", "crossings", "lowest_ustar",
+           "fold_curves", "trace_curve", "cycle_curves", "curve_seeds", "crossings", "lowest_ustar",
            "expected_outcomes"]
 
-CurveKind = Literal["grazing", "fold"]
-"""A curve of grazing cycles (min gap = eps) or of cycle folds (LPC)."""
+CurveKind = Literal["grazing", "fold", "ns"]
+"""A curve of grazing cycles (min gap = eps), of cycle folds (LPC) or of torus
+bifurcations (Neimark-Sacker)."""
 
 CurveEnd = Literal["mstar_window", "ustar_bound", "bound", "budget", "wall", "hopf", "failed",
                    "stopped"]
@@ -269,7 +270,8 @@ def _seed_curves(job) -> tuple[dict, list]:
     except CriticalVelocityError as err:
         return {"grazing": [], "fold": []}, [f"M* = {scene.mstar:.4g}: {err}"]
     pi_max = _pi_max(scene, run, ustar_max)
-    grazing = [_trace(run, run.problem_at(sp), sp.unknowns, "grazing", settings, pi_max)
+    grazing = [trace_curve(run.gauge, run.problem_at(sp), sp.unknowns, "grazing", settings,
+                           pi_max)
                for sp in run.branch.special("contact") if sp.status == "converged"]
     folds, failures = _fold_curves(run, settings, pi_max)
     return {"grazing": grazing, "fold": folds}, failures
@@ -285,7 +287,7 @@ def _fold_curves(run: CycleRun, settings: CurveSettings, pi_max: float) -> tuple
             continue
         square, result = run.refined_fold(sp, settings.tol)
         if result.converged:
-            curves.append(_trace(run, square, result.X, "fold", settings, pi_max))
+            curves.append(trace_curve(run.gauge, square, result.X, "fold", settings, pi_max))
         else:
             failures.append(f"M* = {run.hopf.mstar:.4g}: fold not refined ({result.message})")
     return curves, failures
@@ -315,8 +317,8 @@ def grazing_curve(scene: Scene, model: Model | None = None, *,
         raise ValueError(f"the cycle branch at M* = {scene.mstar:g} reaches no located wall "
                          f"contact below U* = {ustar_max:g} ({run.branch.message})")
     sp = contacts[0]
-    return _trace(run, run.problem_at(sp), sp.unknowns, "grazing", settings,
-                  _pi_max(scene, run, ustar_max))
+    return trace_curve(run.gauge, run.problem_at(sp), sp.unknowns, "grazing", settings,
+                       _pi_max(scene, run, ustar_max))
 
 
 def fold_curves(scene: Scene, model: Model | None = None, *,
@@ -340,13 +342,15 @@ def _pi_max(scene: Scene, run: CycleRun, ustar_max: float) -> float:
                  ustar_max)
 
 
-def _trace(run: CycleRun, problem, X, kind: CurveKind, settings: CurveSettings,
-           pi_max: float) -> CycleCurve:
+def trace_curve(base: ProfileGauge, problem, X, kind: CurveKind, settings: CurveSettings,
+                pi_max: float) -> CycleCurve:
     """Continue the curve of ``kind`` through the cycle ``X`` of ``problem`` both ways,
-    inside the M* window and below Π = ``pi_max``."""
+    inside the M* window and below Π = ``pi_max``, measured by a gauge like ``base`` (its
+    model, steady state and eps)."""
     start = time.perf_counter()
-    gauge = ProfileGauge(run.gauge.model, run.hopf.x, run.gauge.eps, settings.quadrature_tol)
-    condition = gauge.grazing_condition() if kind == "grazing" else C.CycleFold()
+    gauge = ProfileGauge(base.model, base.x_eq, base.eps, settings.quadrature_tol)
+    condition = {"grazing": gauge.grazing_condition, "fold": C.CycleFold,
+                 "ns": C.NeimarkSacker}[kind]()
     halves = []
     for direction in (-1, 1):
         curve = C.CycleCurveProblem(problem, X, (PI, LOG_M), condition)

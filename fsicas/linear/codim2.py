@@ -38,7 +38,9 @@ class CodimTwoPoint:
     """A ``kind`` ('gh' or 'hh') point at M*, U*; ``omega`` in the onset's time scale,
     ``on_boundary`` whether it lies on the stability boundary and ``data`` the point's
     normal-form coefficients (``l2``; or ``omega1, omega2, p11 .. p22, theta, delta,
-    simple, stable_torus``, the frequencies in the curve's time scale)."""
+    simple, stable_torus``, the frequencies in the curve's time scale); ``curve`` and
+    ``point``: the library's Hopf curve problem and the located special point on it (the
+    start of the curves switched onto, e.g. ``continuation.lpc_from_gh``)."""
 
     kind: str
     mstar: float
@@ -46,6 +48,8 @@ class CodimTwoPoint:
     omega: float
     on_boundary: bool
     data: dict = field(default_factory=dict)
+    curve: object = field(default=None, repr=False, compare=False)
+    point: object = field(default=None, repr=False, compare=False)
 
     @property
     def l2(self) -> float:
@@ -70,9 +74,9 @@ def codim_two_points(scene: Scene, model: Model, hopf: HopfPoint, window,
             ds=0.02, ds_min=1e-8, ds_max=0.05, max_steps=400, direction=direction,
             bounds={LOG_M: tuple(window), PI: (0.0, _pi_bound(hopf, ustar_max))},
             compute_eigenvalues="hh" in kinds)
-        branch = C.continuation(C.HopfCurveProblem.from_point(problem, hopf.point, LOG_M),
-                                settings=settings)
-        found += [_point(scene, model, p, ustar_max) for p in branch.special_points
+        curve = C.HopfCurveProblem.from_point(problem, hopf.point, LOG_M)
+        branch = C.continuation(curve, settings=settings)
+        found += [_point(scene, model, curve, p, ustar_max) for p in branch.special_points
                   if p.kind in kinds and p.status == "converged"]
     return sorted(found, key=lambda b: b.mstar)
 
@@ -82,7 +86,7 @@ def _pi_bound(hopf: HopfPoint, ustar_max: float) -> float:
     return 1.5 * hopf.point.params[PI] * (ustar_max / hopf.ustar) ** 2
 
 
-def _point(scene, model, point, ustar_max) -> CodimTwoPoint:
+def _point(scene, model, curve, point, ustar_max) -> CodimTwoPoint:
     mstar = float(10 ** point.params[LOG_M])
     ustar = float(point.x[-2:].sum() / scene.hstar)
     onset = first_onset(scene.replace(mstar=mstar), model, ustar_max)
@@ -90,4 +94,4 @@ def _point(scene, model, point, ustar_max) -> CodimTwoPoint:
         abs(onset.ustar - ustar) <= ON_BOUNDARY_RTOL * ustar
     data = {k: v for k, v in point.data.items() if k not in ("bracket", "kappa", "omega")}
     return CodimTwoPoint(point.kind, mstar, ustar, float(point.data["omega"] * TIME_SCALE),
-                         bool(on), data)
+                         bool(on), data, curve, point)
