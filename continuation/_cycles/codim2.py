@@ -29,7 +29,8 @@ from .cycle_curves import CycleCurveProblem, CycleFold, NeimarkSacker, locate_cy
 from .switching import crossing_speed, small_cycle
 from .._driver.branch import SpecialPoint
 from .._driver.newton import factorize, newton
-from .._driver.settings import CollocationSettings, EigenSettings, NewtonSettings
+from .._driver.settings import EigenSettings, NewtonSettings
+from .settings import CollocationSettings
 from .._equilibria import eigen
 from .._equilibria.curves import HopfCurveProblem
 from .._equilibria.normal_forms import lyapunov_coefficients
