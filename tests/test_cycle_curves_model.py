@@ -97,8 +97,9 @@ def test_fold_curve_ends_on_the_hopf_curve():
     fold refined by Newton on its minimally extended system, ends both ways where its
     cycles shrink to zero, i.e. on the Hopf curve (U* to 1e-2 relative of a Hopf point
     located independently there). At the upper end l1 vanishes (a generalized Hopf
-    point); at the lower end the Hopf curve turns back in M* (no Hopf point nearby 2 %
-    below that M*), where the crossing speed of the eigenvalues vanishes."""
+    point); the lower end is another generalized Hopf point (M* = 0.3199, l2 = +466:
+    tests/test_bautin_folds.py), near where the Hopf curve turns back in M* (no Hopf
+    point nearby 2 % below that M*)."""
     scene = Scene(mstar=0.6, modes=10)
     (fold,) = fold_curves(scene, settings=CurveSettings(mstar_min=0.2, mstar_max=2.0))
     assert fold.status == ("stopped", "stopped")
