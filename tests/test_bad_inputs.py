@@ -177,12 +177,14 @@ def test_ctrl_c_while_the_command_starts_ends_it_quietly():
     import signal
     import subprocess
     import sys
+    import time
     script = ("import sys; from fsicas.console import main; sys.stderr.write('up\\n'); "
               "sys.stderr.flush(); sys.exit(main())")
     run = subprocess.Popen([sys.executable, "-c", script, "boundary", "--mstar", "0.01:100:400"],
                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
                            preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
     assert run.stderr.readline() == "up\n"
+    time.sleep(0.1)        # into main()'s guarded imports (1-2 s), past the call itself
     run.send_signal(signal.SIGINT)
     out, err = run.communicate(timeout=300)
     assert run.returncode == 130 and "Traceback" not in err, err
