@@ -76,13 +76,11 @@ def _switched(scene, model, kind, mstar_onset, epsilon, settings, cycles, ustar_
         raise ValueError(f"no flutter onset below U* = {ustar_max:g} at M* = {mstar_onset:g}")
     window = (np.log10(settings.mstar_min), np.log10(settings.mstar_max))
     points = codim_two_points(scene, model, onset, window, ustar_max, kinds=(kind,))
-    collocation = C.CollocationSettings(ntst=cycles.ntst, ncol=cycles.ncol, floquet="product",
-                                        adapt_every=cycles.adapt_every)
     gauge = ProfileGauge(model, onset.x, scene.contact_gap, settings.quadrature_tol)
     switch, curve_kind = {"gh": (C.lpc_from_gh, "fold"), "hh": (C.ns_from_hh, "ns")}[kind]
     out = []
     for point in (p for p in points if p.on_boundary):
-        start = switch(point.curve, point.point, epsilon=epsilon, settings=collocation)
+        start = switch(point.curve, point.point, epsilon=epsilon, settings=cycles.collocation)
         pi_max = pi_of(scene.replace(mstar=point.mstar), model, ustar_max)
         curve = trace_curve(gauge, start, start.X0, curve_kind, settings, pi_max)
         out.append(SwitchedCurve(point, curve))

@@ -96,6 +96,12 @@ class CycleSettings:
             raise ValueError(f"ncol (collocation points per interval) must be in 2..7, got "
                              f"{self.ncol}")
 
+    @property
+    def collocation(self) -> C.CollocationSettings:
+        """The library's settings of this mesh and re-meshing (multipliers by the default
+        periodic Schur route)."""
+        return C.CollocationSettings(ntst=self.ntst, ncol=self.ncol, adapt_every=self.adapt_every)
+
 
 @dataclass(frozen=True)
 class CyclePoint(CycleMeasures):
@@ -223,10 +229,8 @@ START_RETRIES = 5
 def _continued(scene: Scene, model: Model, hopf: HopfPoint, dp: float,
                settings: CycleSettings, ustar_max: float) -> CycleRun:
     """The branch from the Hopf point, started at the offset ``dp`` of Π from it."""
-    collocation = C.CollocationSettings(ntst=settings.ntst, ncol=settings.ncol, floquet="schur",
-                                        adapt_every=settings.adapt_every)
     problem = C.cycle_from_hopf(flutter_problem(scene, model, min(0.2, hopf.ustar / 2)),
-                                hopf.point, dp=dp, settings=collocation)
+                                hopf.point, dp=dp, settings=settings.collocation)
     gauge = ProfileGauge(model, hopf.x, scene.contact_gap, settings.quadrature_tol)
     if settings.quadrature_tol is not None:
         problem.refine = gauge.refine

@@ -306,13 +306,13 @@ def trajectory_sound(traj, scales: Scales, distance: float = 0.3, rate: int = AU
     one = scale * spline(returns[j] + np.arange(_PERIOD_POINTS) * periods[j] / _PERIOD_POINTS)
     period_s = float(np.median(periods)) * scales.time
     fundamental = pitch(one, period_s)[0]
-    # the fundamental is g / median period (g: the divisor of the present harmonics)
-    g = fundamental * period_s
-    _, (lo, hi) = median_rate(periods * scales.time)
+    g = round(fundamental * period_s)       # fundamental = g / median period (pitch)
+    intervals_s = periods * scales.time
+    _, (lo, hi) = median_rate(intervals_s)
     ci = (g * lo, g * hi)
     return Sound(rate, p, fundamental, dominant, spl_db(p), harmonic_amplitudes(one),
                  distance, "trajectory", period_s, onset, offset, ci,
-                 _pitch_warning(fundamental, ci, periods * scales.time, dominant))
+                 _pitch_warning(fundamental, ci, intervals_s, dominant))
 
 
 #: Window (s) of the level that tells when a snore is heard, and the fraction of the
