@@ -57,10 +57,11 @@ def hopf_start(n: int):
     return eq, br.special("hopf")[0]
 
 
-def stepper(eq, hopf, floquet: str = "product", max_steps: int = 10 ** 6):
+def stepper(eq, hopf, floquet: str = "product", max_steps: int = 10 ** 6,
+            backend: str = "compiled"):
     """``(cycle problem, step iterator)`` of the benchmark's cycle branch from ``hopf``."""
     cyc = C.cycle_from_hopf(eq, hopf, dp=1e-3, settings=C.CollocationSettings(
-        ntst=50, ncol=4, floquet=floquet))
+        ntst=50, ncol=4, floquet=floquet, backend=backend))
     # AUTO's arclength uses the L2 norm of the profile over [0, 1]; ours is the
     # Euclidean norm of all NTST NCOL node values, sqrt(NTST NCOL) = sqrt(200) larger
     scale = np.sqrt(50 * 4)
@@ -69,11 +70,11 @@ def stepper(eq, hopf, floquet: str = "product", max_steps: int = 10 ** 6):
         direction=cyc.hopf_direction))
 
 
-def ours(n: int, points: int, floquet: str):
+def ours(n: int, points: int, floquet: str, backend: str = "compiled"):
     """Continue the cycles from the first Hopf point; returns timings and the last X."""
     eq, hopf = hopf_start(n)
     t0 = time.perf_counter()
-    cyc, it = stepper(eq, hopf, floquet, points - 1)
+    cyc, it = stepper(eq, hopf, floquet, points - 1, backend)
     first = it.start()           # the start and one step, untimed: they build the
     mus = [cyc.multipliers(first.X)]   # systems (CasADi functions, compiled kernels)
     second = it.advance(first)
@@ -223,7 +224,7 @@ def timed(n: int, args):
     each for the errors; ``res`` None without AUTO."""
     ours_t, auto_t, fortran_t, res = [], [], [], None
     for _ in range(args.repeats):
-        run = ours(n, args.points, args.floquet)
+        run = ours(n, args.points, args.floquet, args.backend)
         ours_t.append(run["per_point"])
         res = None if args.no_auto else auto(n, args.points)
         if res is not None:
@@ -239,6 +240,11 @@ def main(argv=None):
     ap.add_argument("--repeats", type=int, default=3,
                     help="runs of each tool, in turn; medians and the median ratio")
     ap.add_argument("--floquet", default="product", choices=["product", "pencil"])
+    ap.add_argument("--backend", default="compiled", choices=["compiled", "mx", "auto"],
+                    help="how our collocation kernel is evaluated: 'compiled' (C, built "
+                         "before the timed points, as AUTO's Fortran is), 'mx' (CasADi's "
+                         "virtual machine) or 'auto' (the library's default: the virtual "
+                         "machine until its calls have taken 2 s, then C)")
     ap.add_argument("--no-auto", action="store_true")
     args = ap.parse_args(argv)
     print(f"ms/point: median of {args.repeats} runs of each tool, taken in turn; ratio: "
@@ -250,7 +256,7 @@ def main(argv=None):
         X = run["steps"][-1].X
         B, T = run["cyc"].params(X)[1], run["cyc"].period(X)
         eT, emu = errors(T, run["mu"][-1], *reference(run, B))
-        print(f"| {n} | continuation ({args.floquet}) | {1e3 * np.median(ours_t):.1f} | "
+        print(f"| {n} | continuation ({args.floquet}, {args.backend}) | {1e3 * np.median(ours_t):.1f} | "
               f"{B:.5f} | {eT:.1e} | {emu:.1e} | build {run['build']:.2f} s, "
               f"Newton it/point {run['newton']:.1f}, rejected {run['stats']['rejected_steps']}, "
               f"B_H err {abs(run['hopf_B'] - hopf_b(n)):.0e} |", flush=True)

@@ -20,11 +20,12 @@ def test_bench_cycles_runs_the_tools_in_turn(models, monkeypatch):
     (the medians and ratios are taken from them); without AUTO only ours runs."""
     bench = models.benchmark("bench_cycles")
     calls, times = [], iter([1.0, 4.0, 2.0, 5.0, 3.0, 9.0])
-    monkeypatch.setattr(bench, "ours", lambda n, points, floquet: calls.append("ours")
+    monkeypatch.setattr(bench, "ours", lambda n, points, floquet, backend: calls.append("ours")
                         or {"per_point": next(times)})
     monkeypatch.setattr(bench, "auto", lambda n, points: calls.append("auto")
                         or {"per_point": next(times), "fortran_per_point": 0.5})
-    args = bench.argparse.Namespace(repeats=3, points=4, floquet="product", no_auto=False)
+    args = bench.argparse.Namespace(repeats=3, points=4, floquet="product", backend="mx",
+                                     no_auto=False)
     run, res, ours_t, auto_t, fortran_t = bench.timed(4, args)
     assert calls == ["ours", "auto"] * 3
     assert list(ours_t) == [1.0, 2.0, 3.0] and list(auto_t) == [4.0, 5.0, 9.0]
@@ -32,6 +33,6 @@ def test_bench_cycles_runs_the_tools_in_turn(models, monkeypatch):
     calls.clear()
     times = iter([7.0, 8.0])
     _, res, ours_t, auto_t, _ = bench.timed(4, bench.argparse.Namespace(
-        repeats=2, points=4, floquet="product", no_auto=True))
+        repeats=2, points=4, floquet="product", backend="mx", no_auto=True))
     assert calls == ["ours", "ours"] and res is None and auto_t.size == 0
     assert list(ours_t) == [7.0, 8.0]
