@@ -27,6 +27,8 @@ Public API (everything else is private)::
     equilibrium_from_bp(problem, bp_point, *, amplitude=1e-2) -> EquilibriumProblem
         # the other branch at a transcritical or pitchfork point, by the branching equation
     CycleCurveProblem(cycle_problem, X, free, condition)   # a cycle with one more equation:
+        # its curves' codimension-two points: 'cpc', 'r1'..'r4', 'lppd', 'lpns', 'pdns',
+        # 'nsns' (and 'lpc', 'pd', 'ns' on a grazing curve)
     locate_cycle(cycle_problem, X, condition) -> (problem, NewtonResult)   # curve / located
     Extremum(rows, offset, level), CycleFold(), PeriodDoubling(), NeimarkSacker()   # conditions
     locate_symmetry_breaking(cycle_problem, X, symmetry, shift=0.5) -> (problem, NewtonResult)
@@ -46,8 +48,9 @@ from ._casadi.lifted import Lifted
 from ._casadi.symbolic import BufferedFunction, CompiledSystem
 from ._casadi.vectorfield import VectorField
 from ._cycles.codim2 import lpc_from_gh, ns_from_hh
-from ._cycles.cycle_curves import (Condition, CycleCurveProblem, CycleFold, Extremum,
-                                   NeimarkSacker, PeriodDoubling, locate_cycle)
+from ._cycles.conditions import (Condition, CycleFold, Extremum, NeimarkSacker,
+                                 PeriodDoubling)
+from ._cycles.cycle_curves import CycleCurveProblem, locate_cycle
 from ._cycles.cycles import CycleProblem
 from ._cycles.settings import MAX_NTST, CollocationSettings, ShootingSettings
 from ._cycles.shooting import ShootingProblem

@@ -10,7 +10,10 @@ import numpy as np
 
 MARKERS = {"fold": ("s", "LP"), "hopf": ("o", "H"), "bp": ("D", "BP"),
            "bt": ("*", "BT"), "gh": ("P", "GH"), "hh": ("X", "HH"), "zh": ("v", "ZH"),
-           "pd": ("^", "PD"), "ns": ("h", "NS")}
+           "pd": ("^", "PD"), "ns": ("h", "NS"), "lpc": ("s", "LPC"), "cpc": ("<", "CPC"),
+           "r1": ("1", "R1"), "r2": ("2", "R2"), "r3": ("3", "R3"), "r4": ("4", "R4"),
+           "lppd": ("p", "LPPD"), "lpns": ("H", "LPNS"), "pdns": ("d", "PDNS"),
+           "nsns": ("8", "NSNS")}
 
 
 def _column(branch, spec):

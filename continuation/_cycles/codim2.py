@@ -25,7 +25,8 @@ from __future__ import annotations
 import numpy as np
 import scipy.sparse as sp
 
-from .cycle_curves import CycleCurveProblem, CycleFold, NeimarkSacker, locate_cycle
+from .conditions import CycleFold, NeimarkSacker
+from .cycle_curves import CycleCurveProblem, locate_cycle
 from .switching import crossing_speed, small_cycle
 from .._driver.branch import SpecialPoint
 from .._driver.newton import factorize, newton

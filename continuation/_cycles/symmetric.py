@@ -32,7 +32,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from . import floquet
-from .cycle_curves import bordered_solve, jacobian_derivative, matrix_null_vectors
+from .conditions import bordered_solve, jacobian_derivative, matrix_null_vectors
 from .cycles import CycleProblem
 from .mesh import FLOOR, next_derivative
 from .._driver.newton import NewtonResult, newton

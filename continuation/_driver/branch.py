@@ -23,7 +23,8 @@ FORMAT = "continuation.Branch/1"
 Status = Literal["max_steps", "bound", "failed", "event", "stopped"]
 
 #: special-point kinds of the built-in problems (user events may not reuse them)
-BUILTIN_KINDS = ("fold", "hopf", "bp", "bt", "gh", "hh", "zh", "pd", "ns")
+BUILTIN_KINDS = ("fold", "hopf", "bp", "bt", "gh", "hh", "zh", "pd", "ns", "lpc", "cpc", "r1",
+                 "r2", "r3", "r4", "lppd", "lpns", "pdns", "nsns")
 
 
 @dataclass(frozen=True)
@@ -31,7 +32,9 @@ class SpecialPoint:
     """A special point between points ``index - 1`` and ``index`` of a branch.
 
     kind : 'fold', 'hopf', 'bp' (equilibria); 'bt', 'gh', 'hh', 'zh' (curves);
-        'fold', 'pd', 'ns' (cycles); or the name of a user :class:`Event`.
+        'fold', 'pd', 'ns' (cycles); 'cpc', 'r1'..'r4', 'lppd', 'lpns', 'pdns', 'nsns',
+        'lpc', 'pd', 'ns' (curves of cycles, ``cycle_curves``); or the name of a user
+        :class:`Event`.
     status : 'converged' (located and refined to tolerance) or 'guess'.
     precision : residual of the refining Newton solve, or the arclength
         bracket of the location when not refined.
