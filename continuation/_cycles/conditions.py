@@ -39,6 +39,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from . import collocation as colloc
+from . import normal_forms
 from .._driver.newton import factorize
 from .._driver.problem import null_vectors
 
@@ -186,9 +187,7 @@ class CycleFold(_Bordered):
         """``cpc``: ``a = w^T G_YY[v, v]`` with the bordered ``v, w`` (unit borders), zero
         at a cusp of cycles."""
         v, w, _ = self._solved(problem, X)
-        d = padded(v, len(X))
-        H = jacobian_derivative(problem.cycle_jacobian, X, d)
-        return {"cpc": float(w @ (H @ d)) / (np.linalg.norm(v) ** 2 * np.linalg.norm(w))}
+        return {"cpc": normal_forms.fold_coefficient(problem, X, v, w)}
 
     def matrix(self, problem, J) -> sp.csc_matrix:
         return J[:, : J.shape[0]]
@@ -202,6 +201,15 @@ class PeriodDoubling(_Bordered):
     ``u_(NTST, 0) = -u_(0, 0)``) singular, i.e. a Floquet multiplier at -1."""
 
     crossings = ("lppd", "r2", "pdns")
+
+    def tests_names(self) -> tuple:
+        return ("gpd",)
+
+    def tests(self, problem, X) -> dict:
+        """``gpd``: the doubled cycles' cubic coefficient ``c``, zero at a generalized
+        period doubling (``normal_forms``)."""
+        v, w, _ = self._solved(problem, X)
+        return {"gpd": normal_forms.flip_coefficient(problem, X, v, w)}
 
     def rest(self, problem, X, mu) -> np.ndarray:
         return np.delete(mu, np.argmin(np.abs(mu + 1.0)))

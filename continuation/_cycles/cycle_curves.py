@@ -20,7 +20,7 @@ two) and the count of complex ones outside the circle, and located on
 curve                     rest at +1  rest at -1   rest pair     condition's own tests
 ========================  ==========  ===========  ============  =====================
 fold (LPC)                ``r1``      ``lppd``     ``lpns``      ``cpc``
-period doubling (PD)      ``lppd``    ``r2``       ``pdns``
+period doubling (PD)      ``lppd``    ``r2``       ``pdns``      ``gpd``
 Neimark-Sacker (NS)       ``lpns``    ``pdns``     ``nsns``      ``r3``, ``r4``
 grazing (``Extremum``)    ``lpc``     ``pd``       ``ns``
 ========================  ==========  ===========  ============  =====================
@@ -29,13 +29,12 @@ grazing (``Extremum``)    ``lpc``     ``pd``       ``ns``
 ``pdns``, ``nsns``: fold-flip, fold-Neimark-Sacker, flip-Neimark-Sacker, double
 Neimark-Sacker; on a grazing curve, where it meets the fold, doubling and torus curves.
 ``cpc`` (cusp of cycles): the fold's quadratic normal-form coefficient
-``a = w^T G_YY[v, v]`` (``v, w`` the bordered null vectors, ``Y = (U, T)``) changes sign;
-the same difference of Jacobians as the gradient gives it. ``r3``, ``r4``: the torus
-pair's angle, ``cos theta + 1/2`` and ``cos theta`` (``mu = e^{+-i theta}``: 1:3 and 1:4
-resonance). Not detected: the generalized period doubling and the Chenciner point
-(their normal-form coefficients need the third derivatives of the twisted problem), and
-1:1 / 1:2 resonance *on a torus curve*, where the pair meets on the real axis and the
-curve ends.
+``a = w^T G_YY[v, v]`` (``v, w`` the bordered null vectors, ``Y = (U, T)``) and ``gpd``
+(generalized period doubling): the doubled cycles' cubic coefficient, change sign
+(``normal_forms``). ``r3``, ``r4``: the torus pair's angle, ``cos theta + 1/2`` and
+``cos theta`` (``mu = e^{+-i theta}``: 1:3 and 1:4 resonance). Not detected: the
+Chenciner point, and 1:1 / 1:2 resonance *on a torus curve*, where the pair meets on the
+real axis and the curve ends.
 """
 
 from __future__ import annotations

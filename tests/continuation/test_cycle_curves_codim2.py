@@ -162,3 +162,59 @@ def test_grazing_curve_meets_a_fold_of_cycles_curve():
     found = {sp.kind: sp for sp in branch.special_points if sp.kind != "fold"}
     assert set(found) == {"lpc", "ns"}
     assert abs(found["lpc"].params["q"] - 0.3) < 1e-8 and abs(found["ns"].params["q"] - 0.5) < 1e-8
+
+
+def _turning(k, z1, z2, cos, sin, first=True):
+    """``cos(phi) zt^k`` (``first``) or ``sin(phi) zt^k`` with ``zt = cos(phi) z1 +
+    sin(phi) z2``, ``phi = theta / 2``, ``k`` odd: a polynomial in ``cos(phi), sin(phi)``
+    of even degree, written in ``cos theta, sin theta`` (single-valued on the plane)."""
+    from math import comb
+    c2, s2, cs = (1 + cos) / 2, (1 - cos) / 2, sin / 2
+    out = 0
+    for m in range(k + 1):                       # zt^k = sum C(k, m) (c z1)^(k-m) (s z2)^m
+        i, j = k - m + (1 if first else 0), m + (0 if first else 1)
+        low = min(i, j)
+        rest = (c2 ** ((i - low) // 2)) * (s2 ** ((j - low) // 2))
+        out = out + comb(k, m) * z1 ** (k - m) * z2 ** m * cs ** low * rest
+    return out
+
+
+def _flip_family(gamma=0.3, lam=1.0):
+    """The unit circle with a half-twisted plane whose turning-frame coordinates follow
+    ``zt1' = a zt1 + q zt1^3 - zt1^5 + gamma zt1 y``, ``zt2' = -zt2``, and a scalar
+    ``y' = -lam y + zt1^2``. The plane's multipliers are ``-e^{2 pi a}``, ``-e^{-2 pi}``:
+    period doubling on ``a = 0``. The doubled cycles are the turning frame's equilibria,
+    ``a + (q + gamma / lam) zt1^2 - zt1^4 = 0``: sub- or supercritical by the sign of
+    ``q + gamma / lam``, a generalized period doubling at ``q = -gamma / lam``."""
+    x, p = ca.SX.sym("x", 5), ca.SX.sym("p", 2)
+    rho = x[0] ** 2 + x[1] ** 2
+    r = ca.sqrt(rho)
+    cos, sin = x[0] / r, x[1] / r
+    z1, z2, y = x[2], x[3], x[4]
+    a, b, q = p[0], -1.0, p[1]
+    mean, half = (a + b) / 2, (a - b) / 2
+    lin1 = mean * z1 + half * (cos * z1 + sin * z2) - z2 / 2
+    lin2 = mean * z2 + half * (sin * z1 - cos * z2) + z1 / 2
+    # R(phi) (q zt^3 - zt^5 + gamma zt y, 0): cos(phi) and sin(phi) times the scalar
+    nl = [q * _turning(3, z1, z2, cos, sin, f) - _turning(5, z1, z2, cos, sin, f)
+          + gamma * y * _turning(1, z1, z2, cos, sin, f) for f in (True, False)]
+    zt1_sq = (1 + cos) / 2 * z1 ** 2 + sin * z1 * z2 + (1 - cos) / 2 * z2 ** 2
+    g = 1 - rho
+    F = ca.vertcat(g * x[0] - x[1], x[0] + g * x[1], lin1 + nl[0], lin2 + nl[1],
+                   -lam * y + zt1_sq)
+    return ca.Function("F", [x, p], [F]), 5
+
+
+def test_period_doubling_curve_generalized_period_doubling():
+    """On the doubling curve a = 0 of :func:`_flip_family`, the doubled cycles' cubic
+    coefficient changes sign at q = -gamma/lam = -0.3 (gamma = 0.3, lam = 1): the
+    generalized period doubling; with gamma = 0 it moves to q = 0 (the coupling through
+    the second-order term h2 is what moves it)."""
+    for gamma, expected in ((0.3, -0.3), (0.0, 0.0)):
+        F, n = _flip_family(gamma)
+        square, X = _start(F, n, 1.0, {"a": 0.02, "q": -0.6}, "a", C.PeriodDoubling())
+        branch = _curve(square, X, "q", C.PeriodDoubling(), {"q": (-0.7, 0.2)})
+        assert np.max(np.abs(branch.par("a"))) < 1e-9
+        found = [sp for sp in branch.special_points if sp.kind != "fold"]
+        assert [sp.kind for sp in found] == ["gpd"], found
+        assert found[0].status == "converged" and abs(found[0].params["q"] - expected) < 1e-9
