@@ -27,8 +27,8 @@ Public API (everything else is private)::
     equilibrium_from_bp(problem, bp_point, *, amplitude=1e-2) -> EquilibriumProblem
         # the other branch at a transcritical or pitchfork point, by the branching equation
     CycleCurveProblem(cycle_problem, X, free, condition)   # a cycle with one more equation:
-        # its curves' codimension-two points: 'cpc', 'r1'..'r4', 'lppd', 'lpns', 'pdns',
-        # 'nsns' (and 'lpc', 'pd', 'ns' on a grazing curve)
+        # its curves' codimension-two points: 'cpc', 'gpd', 'ch', 'r1'..'r4', 'lppd',
+        # 'lpns', 'pdns', 'nsns' (and 'lpc', 'pd', 'ns' on a grazing curve)
     locate_cycle(cycle_problem, X, condition) -> (problem, NewtonResult)   # curve / located
     Extremum(rows, offset, level), CycleFold(), PeriodDoubling(), NeimarkSacker()   # conditions
     locate_symmetry_breaking(cycle_problem, X, symmetry, shift=0.5) -> (problem, NewtonResult)

@@ -13,7 +13,7 @@ MARKERS = {"fold": ("s", "LP"), "hopf": ("o", "H"), "bp": ("D", "BP"),
            "pd": ("^", "PD"), "ns": ("h", "NS"), "lpc": ("s", "LPC"), "cpc": ("<", "CPC"),
            "r1": ("1", "R1"), "r2": ("2", "R2"), "r3": ("3", "R3"), "r4": ("4", "R4"),
            "lppd": ("p", "LPPD"), "lpns": ("H", "LPNS"), "pdns": ("d", "PDNS"),
-           "nsns": ("8", "NSNS")}
+           "nsns": ("8", "NSNS"), "gpd": (">", "GPD"), "ch": ("*", "CH")}
 
 
 def _column(branch, spec):

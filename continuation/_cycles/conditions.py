@@ -230,13 +230,15 @@ class NeimarkSacker(Condition):
     wrap ``u(1) = mu u(0)`` (complex, analytic in ``mu``), found by Newton in ``mu``
     from the last root (``g_mu = -w^T A_mu v``). Then ``mu_X = -g_X / g_mu`` with
     ``g_X = -w^T A_X v`` by the Jacobian differences of the fold, in real and imaginary
-    parts, and ``d|mu| = Re(conj(mu) mu_X) / |mu|``. ``multiplier``: the start (default:
-    the problem's complex multiplier nearest the unit circle, upper half-plane)."""
+    parts, and ``d|mu| = Re(conj(mu) mu_X) / |mu|``. The borders are the conjugates of
+    the last ``v, w`` (``c^T v = |v|^2``: a complex vector's ``v^T v`` may vanish).
+    ``multiplier``: the start (default: the problem's complex multiplier nearest the unit
+    circle, upper half-plane)."""
 
     crossings = ("lpns", "pdns", "nsns")
 
     def tests_names(self) -> tuple:
-        return ("r3", "r4")
+        return ("r3", "r4", "ch")
 
     def __init__(self, multiplier: complex | None = None):
         self.multiplier = None if multiplier is None else complex(multiplier)
@@ -248,7 +250,7 @@ class NeimarkSacker(Condition):
             problem.multipliers(X))
         bound = NeimarkSacker(mu)
         A, _ = _twisted(problem, problem.cycle_jacobian(X), mu)
-        bound.c, bound.b = matrix_null_vectors(A)
+        bound.c, bound.b = map(np.conj, matrix_null_vectors(A))   # c^T v = |v|^2
         return bound
 
     def _root(self, problem, X):
@@ -294,10 +296,15 @@ class NeimarkSacker(Condition):
 
     def tests(self, problem, X) -> dict:
         """``r3``, ``r4``: ``cos theta + 1/2`` and ``cos theta`` of ``mu = |mu| e^{i
-        theta}``, zero at the 1:3 and 1:4 resonances."""
-        m = self.multiplier_at(problem, X)
-        c = m.real / abs(m)
-        return {"r3": c + 0.5, "r4": c}
+        theta}``, zero at the 1:3 and 1:4 resonances; ``ch``: the first Lyapunov
+        coefficient of the torus bifurcation, zero at a Chenciner point
+        (``normal_forms``)."""
+        mu, v, w, _ = self._root(problem, X)
+        c = mu.real / abs(mu)
+        J = problem.cycle_jacobian(X)
+        ch = normal_forms.torus_coefficient(problem, X, mu, v, w,
+                                            lambda nu: _twisted(problem, J, nu)[0])
+        return {"r3": c + 0.5, "r4": c, "ch": ch}
 
     def gradient(self, problem, X) -> np.ndarray:
         mu, v, w, g_mu = self._root(problem, X)
@@ -312,7 +319,7 @@ class NeimarkSacker(Condition):
     def accept(self, problem, X) -> None:
         mu, v, w, _ = self._root(problem, X)
         self.multiplier = mu
-        self.c, self.b = v / np.linalg.norm(v), w / np.linalg.norm(w)
+        self.c, self.b = np.conj(v / np.linalg.norm(v)), np.conj(w / np.linalg.norm(w))
         self._last = None
 
 

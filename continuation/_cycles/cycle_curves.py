@@ -16,25 +16,25 @@ the count of real ones beyond +-1 (a complex pair meeting on the real axis chang
 two) and the count of complex ones outside the circle, and located on
 ``floquet.crossing(rest, +-1)`` and ``|mu| - 1`` of the complex one nearest the circle:
 
-========================  ==========  ===========  ============  =====================
+========================  ==========  ===========  ============  ======================
 curve                     rest at +1  rest at -1   rest pair     condition's own tests
-========================  ==========  ===========  ============  =====================
+========================  ==========  ===========  ============  ======================
 fold (LPC)                ``r1``      ``lppd``     ``lpns``      ``cpc``
 period doubling (PD)      ``lppd``    ``r2``       ``pdns``      ``gpd``
-Neimark-Sacker (NS)       ``lpns``    ``pdns``     ``nsns``      ``r3``, ``r4``
+Neimark-Sacker (NS)       ``lpns``    ``pdns``     ``nsns``      ``r3``, ``r4``, ``ch``
 grazing (``Extremum``)    ``lpc``     ``pd``       ``ns``
-========================  ==========  ===========  ============  =====================
+========================  ==========  ===========  ============  ======================
 
 ``r1``/``r2``: a second multiplier at +1 / -1 (1:1, 1:2 resonance); ``lppd``, ``lpns``,
 ``pdns``, ``nsns``: fold-flip, fold-Neimark-Sacker, flip-Neimark-Sacker, double
 Neimark-Sacker; on a grazing curve, where it meets the fold, doubling and torus curves.
 ``cpc`` (cusp of cycles): the fold's quadratic normal-form coefficient
 ``a = w^T G_YY[v, v]`` (``v, w`` the bordered null vectors, ``Y = (U, T)``) and ``gpd``
-(generalized period doubling): the doubled cycles' cubic coefficient, change sign
+(generalized period doubling): the doubled cycles' cubic coefficient, and ``ch``
+(Chenciner): the torus bifurcation's first Lyapunov coefficient, change sign
 (``normal_forms``). ``r3``, ``r4``: the torus pair's angle, ``cos theta + 1/2`` and
-``cos theta`` (``mu = e^{+-i theta}``: 1:3 and 1:4 resonance). Not detected: the
-Chenciner point, and 1:1 / 1:2 resonance *on a torus curve*, where the pair meets on the
-real axis and the curve ends.
+``cos theta`` (``mu = e^{+-i theta}``: 1:3 and 1:4 resonance). Not detected: 1:1 / 1:2
+resonance *on a torus curve*, where the pair meets on the real axis and the curve ends.
 """
 
 from __future__ import annotations

@@ -16,6 +16,14 @@ interval's nodes, so the two directions give every row its true form.
   are the pitchfork of the antisymmetric ``v`` in the doubled problem, whose cubic
   coefficient is ``c = w^T (G_UUU[v, v, v] + 3 G_YY[v, h2])`` with ``h2`` the symmetric
   (single-period) solution of ``G_Y h2 = -G_UU[v, v]``.
+* torus (``ch``, Chenciner): with ``mu = e^{i theta}``, ``v`` twisted by ``mu``, the
+  periodic ``h11`` of ``G_Y h11 = -G_UU[v, conj v]`` and ``h20`` twisted by ``mu^2``
+  (``A(mu^2) h20 = -G_UU[v, v]``), ``c = w^T (G_UUU[v, v, conj v] + 2 G_YY[v, h11] +
+  G_UU[conj v, h20])`` over the pairing ``s = w^T A_mu v`` (the derivative of the twisted
+  matrix in ``mu``, which stands for the map's ``p^H q``); the first Lyapunov
+  coefficient of the Neimark-Sacker point is ``Re(conj(mu) c / s)``. Complex directions
+  enter the real Jacobian differences by linearity (``D_(a + ib) = D_a + i D_b``) and
+  polarization (``D2_(a + ib) = D2_a - D2_b + i (D2_(a+b) - D2_a - D2_b)``).
 
 Each is divided by ``|v|^k |w|`` (``k`` its degree in ``v``): its sign along a curve is
 what matters, and the bordered ``v, w`` are continuous there.
@@ -56,6 +64,35 @@ def flip_coefficient(problem, X, v, w) -> float:
     return float(c) / (np.linalg.norm(v) ** 3 * np.linalg.norm(w))
 
 
+def torus_coefficient(problem, X, mu, v, w, twisted_matrix) -> float:
+    """The first Lyapunov coefficient ``Re(conj(mu) c / s) / |v|^2`` of the torus pair
+    ``mu`` (module doc); ``v`` over ``U``, ``w`` its transposed adjoint,
+    ``twisted_matrix(nu)`` the collocation ``G_U`` with the wrap ``u(1) = nu u(0)``."""
+    rows, size = problem.n_nodes * problem.vf.n, len(X)
+    last = _last_rows(problem, rows + 1)
+    blocks = [twisted_directions(problem, v, mu, size),          # (rows but last, last)
+              twisted_directions(problem, np.conj(v), np.conj(mu), size)]
+    (v1, v2), (c1, c2) = blocks
+    H1, K1 = _complex_differences(problem, X, v1)
+    H2, K2 = _complex_differences(problem, X, v2)
+    B_vc = np.real(np.where(last, H2 @ c2, H1 @ c1))              # G_UU[v, conj v]
+    B_vv = np.where(last, H2 @ v2, H1 @ v1)
+    C = np.where(last, K2 @ c2, K1 @ c1)                          # G_UUU[v, v, conj v]
+    A = problem.cycle_jacobian(X)[:, : rows + 1].tocsc()
+    h11 = spla.spsolve(A, -B_vc)
+    h20 = spla.spsolve(twisted_matrix(mu ** 2).tocsc(), -B_vv[:rows])
+    H11, _ = _differences(problem, X, _padded(h11, size), second=False)
+    B_h11 = np.where(last, H11 @ v2, H11 @ v1)
+    d1, d2 = twisted_directions(problem, h20, mu ** 2, size)
+    G1, _ = _complex_differences(problem, X, d1, second=False)
+    G2, _ = _complex_differences(problem, X, d2, second=False)
+    B_h20 = np.where(last, G2 @ c2, G1 @ c1)
+    c = w @ (C + 2.0 * B_h11 + B_h20)[:rows]
+    last_u, wrap = last[:rows], np.arange(rows) < problem.vf.n
+    s = w[last_u] @ (twisted_matrix(1.0)[last_u][:, wrap] @ v[wrap])
+    return float(np.real(np.conj(mu) * c / s)) / np.linalg.norm(v) ** 2
+
+
 def twisted_directions(problem, v, mu, size: int) -> tuple:
     """``(d1, d2)``: ``v`` (over ``U``) as seen by the rows of every interval but the
     last, and by the last one (node 0 times ``mu``), zero-padded to ``size``."""
@@ -80,6 +117,19 @@ def _differences(problem, X, d, second: bool = True) -> tuple:
         return H, None
     K = (16 * (J[1] + J[-1]) - (J[2] + J[-2]) - 30 * problem.cycle_jacobian(X)) / (12 * h ** 2)
     return H, K
+
+
+def _complex_differences(problem, X, d, second: bool = True) -> tuple:
+    """:func:`_differences` along a complex ``d`` (module doc)."""
+    a, b = np.real(d), np.imag(d)
+    Ha, Ka = _differences(problem, X, a, second)
+    if not np.any(b):
+        return Ha, Ka
+    Hb, Kb = _differences(problem, X, b, second)
+    if not second:
+        return Ha + 1j * Hb, None
+    Kab = _differences(problem, X, a + b)[1]
+    return Ha + 1j * Hb, Ka - Kb + 1j * (Kab - Ka - Kb)
 
 
 def _padded(v, size) -> np.ndarray:

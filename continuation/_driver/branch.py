@@ -24,7 +24,7 @@ Status = Literal["max_steps", "bound", "failed", "event", "stopped"]
 
 #: special-point kinds of the built-in problems (user events may not reuse them)
 BUILTIN_KINDS = ("fold", "hopf", "bp", "bt", "gh", "hh", "zh", "pd", "ns", "lpc", "cpc", "r1",
-                 "r2", "r3", "r4", "lppd", "lpns", "pdns", "nsns")
+                 "r2", "r3", "r4", "lppd", "lpns", "pdns", "nsns", "gpd", "ch")
 
 
 @dataclass(frozen=True)
@@ -32,7 +32,7 @@ class SpecialPoint:
     """A special point between points ``index - 1`` and ``index`` of a branch.
 
     kind : 'fold', 'hopf', 'bp' (equilibria); 'bt', 'gh', 'hh', 'zh' (curves);
-        'fold', 'pd', 'ns' (cycles); 'cpc', 'r1'..'r4', 'lppd', 'lpns', 'pdns', 'nsns',
+        'fold', 'pd', 'ns' (cycles); 'cpc', 'gpd', 'ch', 'r1'..'r4', 'lppd', 'lpns', 'pdns', 'nsns',
         'lpc', 'pd', 'ns' (curves of cycles, ``cycle_curves``); or the name of a user
         :class:`Event`.
     status : 'converged' (located and refined to tolerance) or 'guess'.

@@ -218,3 +218,41 @@ def test_period_doubling_curve_generalized_period_doubling():
         found = [sp for sp in branch.special_points if sp.kind != "fold"]
         assert [sp.kind for sp in found] == ["gpd"], found
         assert found[0].status == "converged" and abs(found[0].params["q"] - expected) < 1e-9
+
+
+def _torus_family(gamma, eps, delta, k=0.23):
+    """The unit circle with a decoupled complex ``w`` and its slaves: ``w' = (m + i k) w
+    + (q + i delta) w |w|^2 - w |w|^4 + gamma w s + eps conj(w) z``, ``s' = -s + |w|^2``,
+    ``z' = -z + w^2``. A torus bifurcation on ``m = 0`` (the pair ``e^{2 pi (m +- i k)}``);
+    on the invariant circle ``s = |w|^2`` and ``z = w^2 / (1 + 2 i k)``, so the cubic
+    coefficient is ``q + i delta + gamma + eps / (1 + 2 i k)``: a Chenciner point where
+    its real part vanishes, ``q = -gamma - eps / (1 + 4 k^2)``."""
+    x, p = ca.SX.sym("x", 7), ca.SX.sym("p", 2)
+    rho = x[0] ** 2 + x[1] ** 2
+    w1, w2, s, z1, z2 = x[2], x[3], x[4], x[5], x[6]
+    m, q = p[0], p[1]
+    r2 = w1 ** 2 + w2 ** 2
+    a, b = m + q * r2 - r2 ** 2 + gamma * s, k + delta * r2    # (a + i b) w
+    cz1, cz2 = w1 * z1 + w2 * z2, w1 * z2 - w2 * z1             # conj(w) z
+    g = 1 - rho
+    F = ca.vertcat(g * x[0] - x[1], x[0] + g * x[1],
+                   a * w1 - b * w2 + eps * cz1, a * w2 + b * w1 + eps * cz2,
+                   -s + r2, -z1 + w1 ** 2 - w2 ** 2, -z2 + 2 * w1 * w2)
+    return ca.Function("F", [x, p], [F]), 7
+
+
+@pytest.mark.parametrize("gamma, eps, delta", [(0.2, 0.5, 0.7), (0.0, 0.0, -0.4)])
+def test_torus_curve_chenciner_point(gamma, eps, delta):
+    """The Chenciner point of :func:`_torus_family` at ``q = -gamma - eps / (1 + 4 k^2)``:
+    the slaves move it through the second-order solutions (``s`` through the periodic
+    ``h11``, ``z`` through ``h20``, twisted by ``mu^2``), ``delta`` tests the phase of the
+    coefficient."""
+    k = 0.23
+    F, n = _torus_family(gamma, eps, delta, k)
+    expected = -gamma - eps / (1 + 4 * k ** 2)
+    square, X = _start(F, n, 1.0, {"m": 0.02, "q": expected - 0.3}, "m", C.NeimarkSacker())
+    branch = _curve(square, X, "q", C.NeimarkSacker(), {"q": (expected - 0.35, expected + 0.3)})
+    assert np.max(np.abs(branch.par("m"))) < 1e-9
+    found = [sp for sp in branch.special_points if sp.kind != "fold"]
+    assert [sp.kind for sp in found] == ["ch"], found
+    assert found[0].status == "converged" and abs(found[0].params["q"] - expected) < 1e-8
