@@ -22,6 +22,8 @@ Public API (everything else is private)::
         -> CycleCurveProblem   # fold-of-cycles curve born at a generalized Hopf point
     ns_from_hh(hopf_curve, hh_point, *, epsilon=1e-2, active=None, settings=None)
         -> CycleCurveProblem   # torus curve of the curve's cycles born at a double Hopf point
+    ns_from_zh(hopf_curve, zh_point, *, epsilon=1e-2, active=None, settings=None)
+        -> CycleCurveProblem   # ... and at a zero-Hopf point (where s theta < 0)
     cycle_from_pd(cycle_problem, pd_point, *, amplitude=1e-2, settings=None) -> CycleProblem
     cycle_from_bp(cycle_problem, bp_point, *, amplitude=1e-2) -> CycleProblem   # pitchfork
     equilibrium_from_bp(problem, bp_point, *, amplitude=1e-2) -> EquilibriumProblem
@@ -47,7 +49,7 @@ Plotting lives in ``continuation.plotting`` (Matplotlib is imported there only).
 from ._casadi.lifted import Lifted
 from ._casadi.symbolic import BufferedFunction, CompiledSystem
 from ._casadi.vectorfield import VectorField
-from ._cycles.codim2 import lpc_from_gh, ns_from_hh
+from ._cycles.codim2 import lpc_from_gh, ns_from_hh, ns_from_zh
 from ._cycles.conditions import (Condition, CycleFold, Extremum, NeimarkSacker,
                                  PeriodDoubling)
 from ._cycles.cycle_curves import CycleCurveProblem, locate_cycle
@@ -71,7 +73,8 @@ __all__ = [
     "MAX_NTST", "Branch", "BufferedFunction", "CompiledSystem", "Event", "Status", "CollocationSettings", "Condition", "CycleCurveProblem",
     "CycleFold", "Extremum", "NeimarkSacker", "PeriodDoubling", "locate_cycle", "ContinuationIterator", "ContinuationSettings",
     "CycleProblem", "EigenSettings", "ShootingProblem", "ShootingSettings", "cycle_from_hopf",
-    "cycle_from_bp", "cycle_from_pd", "lpc_from_gh", "ns_from_hh", "equilibrium_from_bp",
+    "cycle_from_bp", "cycle_from_pd", "lpc_from_gh", "ns_from_hh", "ns_from_zh",
+    "equilibrium_from_bp",
     "EquilibriumProblem", "FoldCurveProblem", "HopfCurveProblem", "Lifted", "NewtonSettings",
     "PALC", "Problem", "SpecialPoint", "Step", "VectorField", "continuation", "correct", "observing",
     "first_lyapunov", "hopf_point", "keeps_symmetry", "locate_symmetry_breaking",

@@ -1,6 +1,7 @@
 """Switching from a generalized Hopf (Bautin) point of a Hopf curve onto the curve of
-folds of cycles (LPC) born there, and from a double Hopf point onto the torus
-(Neimark-Sacker) curve of the curve's cycles (:func:`ns_from_hh`).
+folds of cycles (LPC) born there, and from a double Hopf point (:func:`ns_from_hh`) or a
+zero-Hopf point (:func:`ns_from_zh`) onto the torus (Neimark-Sacker) curve of the curve's
+cycles.
 
 Near the point the normal form (``_equilibria.normal_forms``, ``|q| = 1``) is
 ``z' = (beta1 + i omega) z + c1 z |z|^2 + c2 z |z|^4`` with ``beta1 = Re lambda``,
@@ -27,7 +28,9 @@ import scipy.sparse as sp
 
 from .conditions import CycleFold, NeimarkSacker
 from .cycle_curves import CycleCurveProblem, locate_cycle
-from .switching import crossing_speed, small_cycle
+from .switching import crossing_speed, cycle_from_hopf, small_cycle
+from .._driver.driver import continuation
+from .._driver.settings import ContinuationSettings
 from .._driver.branch import SpecialPoint
 from .._driver.newton import factorize, newton
 from .._driver.settings import EigenSettings, NewtonSettings
@@ -59,7 +62,8 @@ def lpc_from_gh(curve: HopfCurveProblem, point: SpecialPoint, *, epsilon: float 
     alpha = crossing_speed(vf, x_H, p_H, vf.par_index(active), omega, abs(beta1))
     guess = small_cycle(vf, x_H, p_H, active, omega, beta1 / alpha,
                         np.sqrt(-l1 / (2 * l2)), settings)
-    return _corrected(guess, CycleFold(), newton_settings, curve, X_gh, X_H, (active, other))
+    return _corrected(guess, guess.X0, CycleFold(), newton_settings, curve, X_gh, X_H,
+                      (active, other))
 
 
 def ns_from_hh(curve: HopfCurveProblem, point: SpecialPoint, *, epsilon: float = 1e-2,
@@ -85,15 +89,71 @@ def ns_from_hh(curve: HopfCurveProblem, point: SpecialPoint, *, epsilon: float =
                                       newton_settings)
     guess = small_cycle(curve.vf, curve.state(X_H), curve.params(X_H), active, omega1, dp,
                         np.sqrt(r2), settings)
-    return _corrected(guess, NeimarkSacker(), newton_settings, curve, X_hh, X_H,
+    return _corrected(guess, guess.X0, NeimarkSacker(), newton_settings, curve, X_hh, X_H,
                       (active, other))
 
 
-def _corrected(guess, condition, settings, curve, X0, X_H, free) -> CycleCurveProblem:
-    """The curve of ``condition`` in ``free`` through the cycle located from ``guess``;
-    ``away_direction``: the side of the curve's point ``X0`` that its Hopf point ``X_H``
-    (the predictor's) lies on, in the last of ``free``."""
-    located, res = locate_cycle(guess, guess.X0, condition, settings)
+def ns_from_zh(curve: HopfCurveProblem, point: SpecialPoint, *, epsilon: float = 1e-2,
+               active: str | None = None, settings: CollocationSettings | None = None,
+               max_steps: int = 200,
+               newton_settings: NewtonSettings = NewtonSettings()) -> CycleCurveProblem:
+    """The Neimark-Sacker curve of the cycles born on ``curve`` near its zero-Hopf
+    ``point`` (a 'zh' SpecialPoint with ``s``, ``theta``), as a :class:`CycleCurveProblem`
+    in the curve's two parameters at its first located torus bifurcation (``X0``).
+
+    In the amplitude equations ``xi' = beta1 + B xi^2 + C r^2``, ``r' = r (beta2 + Re(D)
+    xi + ...)`` the cycles are the equilibria with ``r > 0``; their 2x2 Jacobian has the
+    determinant ``-2 C Re(D) r^2``, so a torus is born on them (the trace crossing zero)
+    only where ``C Re(D) < 0``, i.e. ``s theta < 0`` (``s = sign(B C)``, ``theta = Re(D) /
+    B``); elsewhere a ValueError says so. The unfolding's higher-order terms place the
+    curve, so it is found by continuation rather than predicted: from the Hopf point a
+    distance ``epsilon`` along the curve (either side), the cycles born there
+    (:func:`cycle_from_hopf`) are continued in ``active`` (default: the parameter the
+    curve moves least at the point, the one that opens the cycles) for at most
+    ``max_steps`` points until a torus bifurcation, which :func:`locate_cycle` refines.
+    ``away_direction`` as for :func:`lpc_from_gh`. Raises RuntimeError when no torus
+    bifurcation is met (try another ``epsilon``).
+    """
+    X_zh, t, active, other = _start(curve, point, "zh", epsilon, active)
+    if "s" not in point.data or "theta" not in point.data:
+        raise ValueError(f"the zero-Hopf point has no coefficients ({point.message})")
+    s, theta = float(point.data["s"]), float(point.data["theta"])
+    if not s * theta < 0:
+        raise ValueError(f"no torus curve at this zero-Hopf point: s theta = {s * theta:.3g}"
+                         " >= 0, so the cycles born near it have no Neimark-Sacker "
+                         "bifurcation")
+    X_H, problem, X = _first_torus(curve, X_zh, t, epsilon, active, settings, max_steps,
+                                   newton_settings)
+    return _corrected(problem, X, NeimarkSacker(), newton_settings, curve, X_zh, X_H,
+                      (active, other))
+
+
+def _first_torus(curve, X_zh, t, epsilon, active, settings, max_steps, newton_settings):
+    """``(X_H, problem, X)``: the Hopf point ``+-epsilon`` along the curve and the first
+    torus bifurcation of the cycles born there, continued in ``active``."""
+    tried = []
+    for sign in (1.0, -1.0):
+        X_H = _along(curve, X_zh, t, sign * epsilon, newton_settings)
+        if X_H is None:
+            continue
+        cycles = cycle_from_hopf(curve, X_H, dp=epsilon ** 2, settings=settings,
+                                 active=active)
+        branch = continuation(cycles, settings=ContinuationSettings(
+            ds=epsilon, ds_max=10 * epsilon, max_steps=max_steps,
+            direction=cycles.hopf_direction, stop_at=("ns",)))
+        torus = branch.special("ns")
+        if torus:
+            return (X_H, *cycles.at(torus[0]))
+        tried.append(f"{branch.status} after {len(branch.s)} points ({branch.message})")
+    raise RuntimeError("no torus bifurcation on the cycles born near the zero-Hopf point: "
+                       + ("; ".join(tried) or "no Hopf point along the curve"))
+
+
+def _corrected(guess, X, condition, settings, curve, X0, X_H, free) -> CycleCurveProblem:
+    """The curve of ``condition`` in ``free`` through the cycle located from the cycle
+    ``X`` of ``guess``; ``away_direction``: the side of the curve's point ``X0`` that its
+    Hopf point ``X_H`` (the predictor's) lies on, in the last of ``free``."""
+    located, res = locate_cycle(guess, X, condition, settings)
     if not res.converged:
         raise RuntimeError(f"the {type(condition).__name__} cycle was not located near the "
                            f"codimension-two point ({res.message}); try a smaller epsilon")

@@ -229,3 +229,48 @@ def test_neimark_sacker_curve_against_a_cycle_branch():
     (ns,) = cycles.special("ns")
     assert ns.status == "converged" and abs(a[1][0].real / a[0][0].real * mu1 - mu2) > 1e-3
     assert ns.params["mu1"] == pytest.approx(mu1, rel=1e-7)
+
+
+def zero_hopf(theta, e=-0.5, omega=1.3):
+    """``xi' = b1 + xi^2 - r^2``, ``w' = (b2 + e r^2 + i omega + (theta + 0.4 i) xi) w``
+    (``r = |w|``): the zero-Hopf point ``b1 = b2 = 0`` of the Hopf curve ``b1 = -b2^2 /
+    theta^2`` (normal form B = 1, C = -1 per ``r^2``, D = theta + 0.4 i: ``s = -1``). The
+    cycles are the amplitude equilibria ``b1 + xi^2 - r^2 = 0``, ``b2 + theta xi + e r^2 =
+    0``; their Jacobian ``[[2 xi, -2 r], [theta r, 2 e r^2]]`` has the trace zero (a torus
+    born) on ``xi = -e rho`` (``rho = r^2``): the Neimark-Sacker curve ``b1 = rho - e^2
+    rho^2``, ``b2 = e (theta - 1) rho``, where the determinant ``2 rho (theta - 2 e^2 rho)``
+    is positive, so only for ``theta > 0`` (``s theta < 0``)."""
+    x, p = ca.SX.sym("x", 3), ca.SX.sym("p", 2)
+    xi, r2 = x[0], x[1] ** 2 + x[2] ** 2
+    re, im = p[1] + theta * xi + e * r2, omega + 0.4 * xi
+    return ca.Function("F", [x, p], [ca.vertcat(p[0] + xi ** 2 - r2, re * x[1] - im * x[2],
+                                                im * x[1] + re * x[2])])
+
+
+def zero_hopf_curve(theta):
+    F = zero_hopf(theta)
+    prob = C.EquilibriumProblem(F, [-0.5, 0.0, 0.0], {"b1": -0.25, "b2": 0.5 * theta - 0.2},
+                                "b2")
+    (h,) = run(prob, bounds={"b2": (-2.0, 2.0)}).special("hopf")
+    curve = C.HopfCurveProblem.from_point(prob, h, "b1")
+    return curve, run(curve, bounds={"b1": (-1.0, 0.01)}, max_steps=200)
+
+
+def test_torus_curve_switched_onto_from_a_zero_hopf_point():
+    theta, e = 0.8, -0.5
+    curve, branch = zero_hopf_curve(theta)
+    (zh,) = branch.special("zh")
+    assert zh.data["s"] == -1 and zh.data["theta"] == pytest.approx(theta, abs=1e-7)
+    ns = C.ns_from_zh(curve, zh, epsilon=0.005, settings=SETTINGS)
+    rho = ns.par_dict(ns.X0)["b2"] / (e * (theta - 1))
+    assert rho > 0 and abs(ns.par_dict(ns.X0)["b1"] - (rho - e ** 2 * rho ** 2)) < 1e-8
+    torus = C.continuation(ns, settings=C.ContinuationSettings(
+        ds=0.01, ds_max=0.05, max_steps=150, direction=ns.away_direction,
+        bounds={"b2": (0.0, 0.03)}, compute_eigenvalues=False))
+    b1, b2 = torus.par("b1"), torus.par("b2")
+    rho = b2 / (e * (theta - 1))
+    assert torus.status == "bound" and rho.max() > 0.2
+    assert np.max(np.abs(b1 - (rho - e ** 2 * rho ** 2))) < 1e-8
+    with pytest.raises(ValueError, match="no torus curve"):
+        other, branch = zero_hopf_curve(-1.2)
+        C.ns_from_zh(other, branch.special("zh")[0], settings=SETTINGS)

@@ -25,7 +25,7 @@ def test_public_names():
         "PALC", "Problem", "SpecialPoint", "Step", "VectorField", "continuation", "observing",
         "first_lyapunov", "hopf_point", "CollocationSettings", "MAX_NTST", "CycleProblem",
         "cycle_from_hopf", "ShootingProblem", "ShootingSettings",
-        "cycle_from_pd", "cycle_from_bp", "lpc_from_gh", "ns_from_hh", "equilibrium_from_bp", "correct", "Event", "Lifted", "Status", "Condition",
+        "cycle_from_pd", "cycle_from_bp", "lpc_from_gh", "ns_from_hh", "ns_from_zh", "equilibrium_from_bp", "correct", "Event", "Lifted", "Status", "Condition",
         "CycleCurveProblem", "CycleFold", "Extremum", "NeimarkSacker", "PeriodDoubling",
         "locate_cycle", "BufferedFunction", "locate_symmetry_breaking", "symmetric_multipliers",
         "keeps_symmetry", "CompiledSystem"}
