@@ -185,3 +185,21 @@ def test_plot_diagram_draws_every_branch():
     labels = [line.get_label() for line in ax.get_lines() if not line.get_label().startswith("_")]
     assert labels == ["equilibrium", "equilibrium from bp", "equilibrium from bp"]
     plt.close(fig)
+
+
+def test_a_period_doubling_is_switched_onto_the_doubled_cycles(models):
+    """The half-twisted circle (test_cycles_pd): period doubling at mu = 0 exactly; the
+    doubled cycles (r - 1)^2 + z^2 = mu, period 4 pi, found from a cycle branch as root."""
+    root = C.CycleProblem(models.half_twisted(), lambda t: np.c_[np.cos(2 * np.pi * t),
+                                                                 np.sin(2 * np.pi * t), 0 * t],
+                          6.0, {"mu": -0.3}, "mu", settings=C.CollocationSettings(ntst=20, ncol=4))
+    diagram = C.bifurcation_diagram(root, C.ContinuationSettings(
+        ds=0.05, ds_max=0.3, max_steps=30, bounds={"mu": (-1, 0.3)}), depth=1, amplitude=0.05)
+    (node,) = diagram.root.children
+    doubled = node.branch
+    assert node.birth.kind == "pd" and abs(node.birth.params["mu"]) < 1e-10
+    mu = doubled.par("mu")
+    assert len(doubled) > 5 and np.all(mu > 0)
+    assert np.max(np.abs(doubled.columns["period"] - 4 * np.pi)) < 1e-9
+    r = np.hypot(doubled.x[:, 0], doubled.x[:, 1])
+    assert np.max(np.abs((r - 1) ** 2 + doubled.x[:, 2] ** 2 - mu)) < 1e-8
