@@ -148,12 +148,14 @@ class _Options:
     dp: float
     switch: tuple
     atol: float
+    record: object
 
 
 def bifurcation_diagram(problem: Problem, settings: ContinuationSettings | None = None,
                         depth: int = 2, *, cycle_settings: ContinuationSettings | None = None,
                         collocation=None, amplitude: float = 1e-2, dp: float = 1e-3,
-                        switch: tuple = SWITCHES, atol: float = 1e-8) -> Diagram:
+                        switch: tuple = SWITCHES, atol: float = 1e-8,
+                        record=None) -> Diagram:
     """Continue ``problem``, switch at every special point of a kind in ``switch`` on its
     branch, continue the new branches and switch on them, to ``depth`` levels below the
     root (0: the root alone); a branch met twice is kept once (module doc).
@@ -165,9 +167,12 @@ def bifurcation_diagram(problem: Problem, settings: ContinuationSettings | None 
     amplitude : the offset along the new branch at a branch point or period doubling;
         dp : the parameter offset of the first cycle at a Hopf point.
     atol : absolute part of the distance under which a point lies on a branch.
+    record : ``record(problem, X) -> {name: value}``, the ``record`` callback of every
+        branch's :func:`continuation` (its columns; ``problem.kind`` tells the branches'
+        kinds apart).
     """
     opts = _options(problem, settings, depth, cycle_settings, collocation, amplitude, dp,
-                    switch, atol)
+                    switch, atol, record)
     found, skipped = [], []
     root = _grow(problem, Birth("start"), opts, depth, found, skipped, settings=opts.settings)
     warnings = [f"the {node.branch.kind} branch born at {node.birth.kind} "
@@ -177,7 +182,7 @@ def bifurcation_diagram(problem: Problem, settings: ContinuationSettings | None 
 
 
 def _options(problem, settings, depth, cycle_settings, collocation, amplitude, dp, switch,
-             atol) -> _Options:
+             atol, record) -> _Options:
     """The checked options (ValueError naming the bad one)."""
     if not isinstance(problem, Problem):
         raise ValueError(f"problem must be a continuation Problem, got {type(problem).__name__}")
@@ -193,15 +198,17 @@ def _options(problem, settings, depth, cycle_settings, collocation, amplitude, d
     for name, value in (("settings", settings), ("cycle_settings", cycle_settings)):
         if value is not None and not isinstance(value, ContinuationSettings):
             raise ValueError(f"{name} must be a ContinuationSettings, got {value!r}")
+    if record is not None and not callable(record):
+        raise ValueError(f"record must be callable or None, got {record!r}")
     return _Options(settings, cycle_settings or settings, collocation, float(amplitude),
-                    float(dp), switch, float(atol))
+                    float(dp), switch, float(atol), record)
 
 
 def _grow(problem, birth, opts, depth, found, skipped, settings) -> DiagramNode | None:
     """Continue ``problem`` (None when it retraces a branch of ``found``), then its
     children to ``depth`` more levels."""
     watch = _Watch(problem.kind, found, opts.atol)
-    branch = continuation(problem, settings=settings, stop=watch)
+    branch = continuation(problem, settings=settings, stop=watch, record=opts.record)
     if watch.duplicate is not None:
         skipped.append({"kind": birth.kind, "params": birth.params,
                         "reason": f"retraces branch {watch.duplicate}"})

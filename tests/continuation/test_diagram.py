@@ -90,7 +90,9 @@ def test_depth_two_reaches_the_hopf_points_of_the_switched_branches():
               collocation=C.CollocationSettings(ntst=20, ncol=4))
     shallow = C.bifurcation_diagram(problem, _settings(), depth=1, **kw)
     assert [n.branch.kind for n in shallow.nodes()] == ["equilibrium"] * 3
-    diagram = C.bifurcation_diagram(problem, _settings(), depth=2, **kw)
+    record = lambda problem, X: {"x0_mean": float(np.mean(  # noqa: E731
+        problem.nodes(X)[:, 0] if problem.kind == "cycle" else X[:1]))}
+    diagram = C.bifurcation_diagram(problem, _settings(), depth=2, record=record, **kw)
     nodes = list(diagram.root.walk())
     assert [(n.birth.kind, n.branch.kind, d) for n, d in nodes] == [
         ("start", "equilibrium", 0), ("bp", "equilibrium", 1), ("hopf", "cycle", 2),
@@ -103,8 +105,10 @@ def test_depth_two_reaches_the_hopf_points_of_the_switched_branches():
         mu = cycles.par("mu")
         assert np.all(mu > 0.25) and cycles.stable.all()
         _assert_circle(cycles, np.sqrt(mu - 0.25), (1, 2))
-        # the cycles keep the half's x = +-sqrt(mu)
-        assert np.max(np.abs(cycles.x[:, 0] - np.sign(half.branch.x[-1, 0]) * np.sqrt(mu))) < 1e-8
+        # the cycles keep the half's x = +-sqrt(mu) (also the record's column)
+        side = np.sign(half.branch.x[-1, 0])
+        assert np.max(np.abs(cycles.x[:, 0] - side * np.sqrt(mu))) < 1e-8
+        assert np.max(np.abs(cycles.columns["x0_mean"] - side * np.sqrt(mu))) < 1e-8
 
 
 def _bubble(x, mu):
@@ -163,7 +167,8 @@ def _branch_file(tmp_path, diagram):
 @pytest.mark.parametrize("kw, name", [({"depth": -1}, "depth"), ({"depth": 1.5}, "depth"),
                                       ({"amplitude": 0.0}, "amplitude"), ({"dp": -1}, "dp"),
                                       ({"switch": ("ns",)}, "switch"),
-                                      ({"cycle_settings": 3}, "cycle_settings")])
+                                      ({"cycle_settings": 3}, "cycle_settings"),
+                                      ({"record": 1}, "record")])
 def test_bad_options_are_refused_before_any_work(kw, name):
     problem = C.EquilibriumProblem(_field(_pitchfork), [0, 0, 0], {"mu": -0.5}, "mu")
     with pytest.raises(ValueError, match=name):
