@@ -30,6 +30,7 @@ from .._cycles.cycles import CycleProblem
 from .._cycles.switching import cycle_from_bp, cycle_from_hopf, cycle_from_pd
 from .._driver.branch import Branch
 from .._driver.driver import continuation
+from .._driver.hooks import Event
 from .._driver.problem import Problem
 from .._driver.settings import ContinuationSettings
 from .._equilibria.branching import equilibrium_from_bp
@@ -149,13 +150,14 @@ class _Options:
     switch: tuple
     atol: float
     record: object
+    events: tuple
 
 
 def bifurcation_diagram(problem: Problem, settings: ContinuationSettings | None = None,
                         depth: int = 2, *, cycle_settings: ContinuationSettings | None = None,
                         collocation=None, amplitude: float = 1e-2, dp: float = 1e-3,
                         switch: tuple = SWITCHES, atol: float = 1e-8,
-                        record=None) -> Diagram:
+                        record=None, events=()) -> Diagram:
     """Continue ``problem``, switch at every special point of a kind in ``switch`` on its
     branch, continue the new branches and switch on them, to ``depth`` levels below the
     root (0: the root alone); a branch met twice is kept once (module doc).
@@ -170,9 +172,11 @@ def bifurcation_diagram(problem: Problem, settings: ContinuationSettings | None 
     record : ``record(problem, X) -> {name: value}``, the ``record`` callback of every
         branch's :func:`continuation` (its columns; ``problem.kind`` tells the branches'
         kinds apart).
+    events : :class:`Event` objects of every branch (a terminal one ends a branch, e.g.
+        where its solutions leave the model's domain).
     """
     opts = _options(problem, settings, depth, cycle_settings, collocation, amplitude, dp,
-                    switch, atol, record)
+                    switch, atol, record, events)
     found, skipped = [], []
     root = _grow(problem, Birth("start"), opts, depth, found, skipped, settings=opts.settings)
     warnings = [f"the {node.branch.kind} branch born at {node.birth.kind} "
@@ -182,7 +186,7 @@ def bifurcation_diagram(problem: Problem, settings: ContinuationSettings | None 
 
 
 def _options(problem, settings, depth, cycle_settings, collocation, amplitude, dp, switch,
-             atol, record) -> _Options:
+             atol, record, events) -> _Options:
     """The checked options (ValueError naming the bad one)."""
     if not isinstance(problem, Problem):
         raise ValueError(f"problem must be a continuation Problem, got {type(problem).__name__}")
@@ -200,15 +204,18 @@ def _options(problem, settings, depth, cycle_settings, collocation, amplitude, d
             raise ValueError(f"{name} must be a ContinuationSettings, got {value!r}")
     if record is not None and not callable(record):
         raise ValueError(f"record must be callable or None, got {record!r}")
+    if not all(isinstance(e, Event) for e in events):
+        raise ValueError(f"events must be continuation Events, got {events!r}")
     return _Options(settings, cycle_settings or settings, collocation, float(amplitude),
-                    float(dp), switch, float(atol), record)
+                    float(dp), switch, float(atol), record, tuple(events))
 
 
 def _grow(problem, birth, opts, depth, found, skipped, settings) -> DiagramNode | None:
     """Continue ``problem`` (None when it retraces a branch of ``found``), then its
     children to ``depth`` more levels."""
     watch = _Watch(problem.kind, found, opts.atol)
-    branch = continuation(problem, settings=settings, stop=watch, record=opts.record)
+    branch = continuation(problem, settings=settings, stop=watch, record=opts.record,
+                          events=opts.events)
     if watch.duplicate is not None:
         skipped.append({"kind": birth.kind, "params": birth.params,
                         "reason": f"retraces branch {watch.duplicate}"})

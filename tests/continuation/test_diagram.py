@@ -208,3 +208,21 @@ def test_a_period_doubling_is_switched_onto_the_doubled_cycles(models):
     assert np.max(np.abs(doubled.columns["period"] - 4 * np.pi)) < 1e-9
     r = np.hypot(doubled.x[:, 0], doubled.x[:, 1])
     assert np.max(np.abs((r - 1) ** 2 + doubled.x[:, 2] ** 2 - mu)) < 1e-8
+
+
+def test_a_terminal_event_ends_the_branches_it_applies_to():
+    """The cycles of the Hopf normal form end where their radius, measured at u(0), is 1/2
+    (mu = 1/4); the equilibria (event function -1) run on to the bound."""
+    problem = C.EquilibriumProblem(_field(_hopf), [0, 0, 0], {"mu": -0.5}, "mu")
+    half = C.Event("half", lambda problem, X: float(np.hypot(X[0], X[1]) - 0.5)
+                   if problem.kind == "cycle" else -1.0, terminal=True)
+    diagram = C.bifurcation_diagram(problem, _settings(), depth=1, events=(half,),
+                                    cycle_settings=_settings(max_steps=60, ds_max=0.2),
+                                    collocation=C.CollocationSettings(ntst=20, ncol=4))
+    assert diagram.root.branch.status == "bound"
+    (node,) = diagram.root.children
+    cycles = node.branch
+    assert cycles.status == "event" and len(cycles.special("half")) == 1
+    assert abs(cycles.par("mu")[-1] - 0.25) < 1e-8
+    with pytest.raises(ValueError, match="events"):
+        C.bifurcation_diagram(problem, events=(lambda p, X: 0.0,))

@@ -1,0 +1,88 @@
+"""``fsicas diagram`` on small scenes: its special points against a direct eigenvalue
+scan of the steady states (an independent route: no continuation), its tree file, its
+figure and the inputs it refuses."""
+
+import json
+
+import numpy as np
+import pytest
+from scipy.optimize import brentq
+
+from fsicas import Scene
+from fsicas.cli import main
+from fsicas.linear.stability import eigenvalues
+from fsicas.linear.steady import steady_state
+from fsicas.model import build_model
+
+
+def _run(capsys, *argv):
+    code = main(["diagram", *argv, "--json"])
+    printed = capsys.readouterr()
+    return code, json.loads(printed.out), printed.err
+
+
+def _crossing(scene, f, lo, hi):
+    """The U* in (lo, hi) where ``f(eigenvalues)`` of the steady state changes sign."""
+    model = build_model(scene)
+    g = lambda u: f(eigenvalues(model, steady_state(scene.replace(ustar=u), model)))  # noqa: E731
+    return brentq(g, lo, hi, xtol=1e-12)
+
+
+def test_flutter_scene_diagram(capsys, tmp_path):
+    """N = 3, M* = 1: one Hopf point (the rightmost eigenvalue's real part crosses 0 there,
+    found by the scan to 1e-7) and the cycles born there, stable (supercritical)."""
+    out, plot = tmp_path / "tree.json", tmp_path / "diagram.png"
+    code, result, err = _run(capsys, "--modes", "3", "--ustar-max", "8", "--max-points", "20",
+                             "--ntst", "10", "--out", str(out), "--plot", str(plot))
+    assert code == 0 and result["status"] == "ok"
+    assert "fsicas diagram [" in err and "the diagram up to U* = 8" in err
+    steady, cycles = result["branches"]
+    assert (steady["kind"], steady["born"], cycles["kind"], cycles["born"]) == \
+        ("steady", "start", "cycle", "hopf")
+    (hopf,) = steady["special"]
+    scan = _crossing(Scene(modes=3), lambda ev: ev.real.max(), 5.0, 5.5)
+    assert hopf["label"] == "H" and abs(hopf["ustar"] - scan) < 1e-7
+    assert cycles["parent"] == 0 and cycles["ustar_range"][0] > hopf["ustar"]
+    tree = json.loads(out.read_text())
+    assert "meta" in tree and len(tree["branches"]) == 2
+    assert all(tree["branches"][1]["stable"]) and len(tree["branches"][1]["tip"]) == 20
+    assert plot.stat().st_size > 0
+
+
+def test_divergence_bubble_between_two_pitchforks(capsys):
+    """H* = 0.2, KL = 0, M* = 30, N = 3: a real eigenvalue crosses 0 at two U* (the scan's
+    sign changes of det J); the deflected states join the two branch points in one closed
+    branch, found once although it is reached four times."""
+    code, result, _ = _run(capsys, "--modes", "3", "--hstar", "0.2", "--kl", "0", "--mstar",
+                           "30", "--ustar-max", "3", "--max-points", "10", "--ntst", "10",
+                           "--depth", "1")
+    assert code == 0
+    scene = Scene(modes=3, hstar=0.2, kl=0.0, mstar=30.0)
+    det = lambda ev: float(np.prod(ev).real)  # noqa: E731
+    low, high = _crossing(scene, det, 1.2, 1.45), _crossing(scene, det, 1.5, 1.8)
+    steady = result["branches"][0]
+    bps = [p["ustar"] for p in steady["special"] if p["kind"] == "bp"]
+    assert np.allclose(bps, [low, high], rtol=0, atol=1e-7)
+    bubbles = [b for b in result["branches"] if b["born"] == "bp"]
+    assert len(bubbles) == 1 and bubbles[0]["message"].startswith("closed")
+    assert np.allclose(bubbles[0]["ustar_range"], [low, high], rtol=0, atol=1e-6)
+    assert sum(s["reason"].startswith("retraces") for s in result["skipped"]) >= 3
+
+
+@pytest.mark.parametrize("argv, named", [
+    (["--depth", "9"], "--depth"), (["--ntst", "1"], "--ntst"), (["--ncol", "1"], "--ncol"),
+    (["--max-points", "1"], "--max-points"), (["--mstar", "0:1:3"], "--mstar"),
+    (["--mstar", "1,1"], "--mstar"), (["--contact"], "--contact"),
+    (["--ustar-max", "0.1"], "--ustar-max")])
+def test_bad_inputs_are_refused_before_work(capsys, argv, named):
+    code = main(["diagram", "--modes", "3", *argv, "--json"])
+    printed = capsys.readouterr()
+    assert code == 2 and named in json.loads(printed.out)["error"]
+
+
+def test_an_existing_file_that_is_no_result_is_not_overwritten(capsys, tmp_path):
+    notes = tmp_path / "notes.json"
+    notes.write_text("my notes")
+    code = main(["diagram", "--modes", "3", "--out", str(notes), "--json"])
+    assert code == 2 and "notes.json" in json.loads(capsys.readouterr().out)["error"]
+    assert notes.read_text() == "my notes"
