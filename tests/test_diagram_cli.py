@@ -86,3 +86,28 @@ def test_an_existing_file_that_is_no_result_is_not_overwritten(capsys, tmp_path)
     code = main(["diagram", "--modes", "3", "--out", str(notes), "--json"])
     assert code == 2 and "notes.json" in json.loads(capsys.readouterr().out)["error"]
     assert notes.read_text() == "my notes"
+
+
+def test_window_of_mass_ratios(capsys, tmp_path):
+    """N = 3, M* in [0.5, 1]: the onset is subcritical at 0.5 and supercritical at 1; the
+    generalized Hopf point between them is where l1 of the one-parameter onset (another
+    route: the steady branch at fixed M*) changes sign, and the fold-of-cycles curve born
+    there lies below the onset (the hysteresis: the cycles fold back before the Hopf
+    point) on the subcritical side."""
+    from fsicas.linear.hopf import first_onset
+
+    out = tmp_path / "window.json"
+    code, result, err = _run(capsys, "--modes", "3", "--mstar", "0.5:1:2", "--max-points", "10",
+                             "--ntst", "10", "--out", str(out))
+    assert code == 0 and "codimension-two points over M* in [0.5, 1]" in err
+    assert [o["kind"] for o in result["onsets"]] == ["flutter", "flutter"]
+    (gh,) = result["codim2"]
+    assert gh["kind"] == "gh" and gh["on_boundary"] and gh["l2"] < 0
+    model = build_model(Scene(modes=3))
+    l1 = [first_onset(Scene(modes=3, mstar=gh["mstar"] * f), model, 20.0).l1 for f in (0.99, 1.01)]
+    assert l1[0] > 0 > l1[1]
+    (curve,) = json.loads(out.read_text())["curves"]
+    assert curve["curve"]["kind"] == "fold" and len(curve["curve"]["points"]) >= 5
+    lowest = min(curve["curve"]["points"], key=lambda p: p["mstar"])
+    onset = first_onset(Scene(modes=3, mstar=lowest["mstar"]), model, 20.0)
+    assert lowest["mstar"] < 0.95 * gh["mstar"] and lowest["ustar"] < onset.ustar
