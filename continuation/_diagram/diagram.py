@@ -241,7 +241,8 @@ def _switches(problem, point, index, opts, skipped) -> list:
     switched kind that could not be switched at, and why)."""
     if point.kind not in opts.switch:
         return []
-    births = lambda sides: [Birth(point.kind, index, s, dict(point.params)) for s in sides]  # noqa: E731
+    births = lambda sides: [Birth(point.kind, index, s, dict(point.params))  # noqa: E731
+                            for s in sides]
     try:
         if isinstance(problem, EquilibriumProblem) and point.kind == "bp":
             made = [equilibrium_from_bp(problem, point, amplitude=s * opts.amplitude)

@@ -90,7 +90,8 @@ class DiagramBranch:
     def to_json(self, points: bool = True) -> dict:
         out = {"kind": self.kind, "born": self.born, "parent": self.parent, "side": self.side,
                "depth": self.depth, "n_points": int(self.ustar.size),
-               "ustar_range": [float(self.ustar.min()), float(self.ustar.max())],
+               "ustar_range": [float(self.ustar.min()), float(self.ustar.max())]
+               if self.ustar.size else None,
                "special": list(self.special), "status": self.status, "message": self.message}
         if points:
             out.update(ustar=self.ustar.tolist(), tip=self.tip.tolist(),
@@ -103,8 +104,9 @@ class DiagramBranch:
 class SceneDiagram:
     """The diagram of ``scene`` up to ``ustar_max``: its ``branches`` in the tree's depth
     first order (each names its parent), the switches not made (``skipped``: ``{kind,
-    ustar, reason}``, duplicates of a branch already found, failures), ``status`` 'failed' when a branch's corrector
-    failed (``warnings`` say which), and the library's tree (``diagram``)."""
+    ustar, reason}``, duplicates of a branch already found, failures), ``status``
+    'failed' when a branch's corrector failed (``warnings`` say which), and the library's
+    tree (``diagram``)."""
 
     scene: Scene
     ustar_max: float
@@ -144,7 +146,7 @@ def scene_diagram(scene: Scene, model: Model | None = None, *, ustar_max: float 
         record=measure, events=(C.Event("contact", measure.contact, terminal=True),))
     steady = _SteadyUstar(root.vf, diagram.root.branch, scene.hstar)
     branches = _branches(diagram, steady)
-    warnings = tuple(f"the {b.kind} branch born at {b.born} (U* = {b.ustar[0]:.6g}) failed: "
+    warnings = tuple(f"the {b.kind} branch born at {b.born} on branch {b.parent} failed: "
                      f"{b.message}" for b in branches if b.status == "failed")
     skipped = tuple({"kind": s["kind"], "ustar": steady(s["params"][PI]), "reason": s["reason"]}
                     for s in diagram.skipped)
@@ -200,10 +202,15 @@ def _branches(diagram: C.Diagram, steady: "_SteadyUstar") -> list:
         special = tuple(_special(point, steady) for point in b.special_points)
         out.append(DiagramBranch(
             "cycle" if cycle else "steady", node.birth.kind, parents.get(id(node)),
-            node.birth.side, depth, ustar, np.asarray(b.columns["tip"], float), b.stable,
-            np.asarray(b.columns["period"]) / TIME_SCALE if cycle else None, special,
+            node.birth.side, depth, ustar, _column(b, "tip"), np.asarray(b.stable, bool),
+            _column(b, "period") / TIME_SCALE if cycle else None, special,
             b.status, b.message))
     return out
+
+
+def _column(branch: C.Branch, name: str) -> np.ndarray:
+    """A column of ``branch`` (empty for a branch without points: its start failed)."""
+    return np.asarray(branch.columns.get(name, np.zeros(0)), dtype=float)
 
 
 def _special(point, steady) -> dict:

@@ -1,9 +1,10 @@
 """The codimension-two picture over a window of M*: the onsets at COUNT mass ratios, the
 generalized Hopf and double Hopf points on the Hopf curves through the flutter onsets
 (:func:`fsicas.linear.codim2.codim_two_points`; the curve is traced from every flutter
-onset, and a point found from several onsets of one curve is kept once), and the curves switched onto from those on the boundary: a
-fold-of-cycles curve from each generalized Hopf point, a torus curve from each double
-Hopf point (:func:`fsicas.cycles.bautin.switched_curves`).
+onset, and a point found from several onsets of one curve is kept once), and the curves
+switched onto from those on the boundary: a fold-of-cycles curve from each generalized
+Hopf point, a torus curve from each double Hopf point
+(:func:`fsicas.cycles.bautin.switched_curves`).
 """
 from __future__ import annotations
 
