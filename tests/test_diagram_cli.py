@@ -111,3 +111,27 @@ def test_window_of_mass_ratios(capsys, tmp_path):
     lowest = min(curve["curve"]["points"], key=lambda p: p["mstar"])
     onset = first_onset(Scene(modes=3, mstar=lowest["mstar"]), model, 20.0)
     assert lowest["mstar"] < 0.95 * gh["mstar"] and lowest["ustar"] < onset.ustar
+
+
+@pytest.mark.slow     # 30-70 s: the integration settles slowly (a real eigenvalue near 0)
+def test_the_deflected_states_are_where_a_time_integration_settles(capsys, tmp_path):
+    """Another route to the bubble's deflected states and their stability: integrated in
+    time at U* = 1.48 from the perturbed straight state (unstable there), the beam settles
+    on a static deflection; the diagram's stable deflected branch has that tip at 1.48
+    (linear interpolation between its points, measured 1.2e-6 apart)."""
+    from fsicas.timedomain.run import run_case
+
+    out = tmp_path / "tree.json"
+    code, result, _ = _run(capsys, "--modes", "3", "--hstar", "0.2", "--kl", "0", "--mstar",
+                           "30", "--ustar-max", "3", "--max-points", "10", "--ntst", "10",
+                           "--depth", "1", "--out", str(out))
+    (bubble,) = [b for b in json.loads(out.read_text())["branches"] if b["born"] == "bp"]
+    ustar, tip = np.array(bubble["ustar"]), np.array(bubble["tip"])
+    assert all(bubble["stable"])
+    run = run_case(Scene(modes=3, hstar=0.2, kl=0.0, mstar=30.0, ustar=1.48), 600.0,
+                   stop_early=False, quadrature_tol=None)
+    settled = run.model.tip_deflection(run.trajectory.x)
+    assert np.ptp(settled[-50:]) < 1e-12 and settled[-1] > 0.01      # static, deflected
+    upper = tip > 0
+    order = np.argsort(ustar[upper])
+    assert abs(np.interp(1.48, ustar[upper][order], tip[upper][order]) - settled[-1]) < 5e-6

@@ -227,3 +227,23 @@ def test_a_terminal_event_ends_the_branches_it_applies_to():
     assert abs(cycles.par("mu")[-1] - 0.25) < 1e-8
     with pytest.raises(ValueError, match="events"):
         C.bifurcation_diagram(problem, events=(lambda p, X: 0.0,))
+
+
+def test_a_cycle_branch_point_is_switched_onto_both_halves():
+    """The ring of test_cycle_branch_points: z -> -z symmetric cycles (z = 0) lose their
+    stability at MU_BP (closed form) to cycles with z != 0; the diagram leaves the branch
+    point away from it (z of one sign) and through it onto the mirror half (the other)."""
+    from .test_cycle_branch_points import MU_BP, T, _ring_orbit, _symmetric_ring
+
+    root = C.CycleProblem(_symmetric_ring(), _ring_orbit, T, {"mu": MU_BP - 0.1}, "mu",
+                          settings=C.CollocationSettings(ntst=20, ncol=4))
+    steps = C.ContinuationSettings(ds=0.02, ds_max=0.05, max_steps=15,
+                                   bounds={"mu": (MU_BP - 0.2, MU_BP + 0.1)})
+    diagram = C.bifurcation_diagram(root, steps, depth=1)
+    (bp,) = diagram.root.branch.special("bp")
+    assert abs(bp.params["mu"] - MU_BP) < 1e-6
+    halves = diagram.root.children
+    assert [(n.birth.kind, n.birth.side) for n in halves] == [("bp", 1), ("bp", -1)]
+    z_end = [n.branch.x[-1, 2] for n in halves]
+    assert min(abs(z) for z in z_end) > 1e-2 and z_end[0] * z_end[1] < 0
+    assert all(n.branch.stable[-1] for n in halves)
