@@ -84,5 +84,6 @@ def _settings(args) -> DiagramSettings:
         raise ValueError(f"--ntst must be at most {C.MAX_NTST}, got {args.ntst}")
     if not 0 <= args.depth <= 5:
         raise ValueError(f"--depth must be an integer in 0..5, got {args.depth}")
-    cycles = CycleSettings(ntst=args.ntst, ncol=args.ncol, max_points=args.max_points)
+    cycles = CycleSettings(ntst=args.ntst, ncol=args.ncol, max_points=args.max_points,
+                           quadrature_tol=None)        # the scene's nodes throughout
     return DiagramSettings(depth=args.depth, cycles=cycles)

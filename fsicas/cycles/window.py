@@ -1,4 +1,6 @@
-"""The codimension-two picture over a window of M*: the onsets at COUNT mass ratios, the
+"""The codimension-two picture over a window of M*: the stability boundary through the
+onsets at COUNT mass ratios (:func:`fsicas.linear.boundary.stability_boundary`: its
+curves and mode switches), the
 generalized Hopf and double Hopf points on the Hopf curves through the flutter onsets
 (:func:`fsicas.linear.codim2.codim_two_points`; the curve is traced from every flutter
 onset, and a point found from several onsets of one curve is kept once), and the curves
@@ -10,10 +12,11 @@ from __future__ import annotations
 
 import math
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
+from ..linear.boundary import StabilityBoundary, stability_boundary
 from ..linear.codim2 import codim_two_points
 from ..linear.hopf import first_onset
 from ..model.assembly import Model
@@ -32,7 +35,8 @@ SAME_POINT_RTOL = 1e-6
 class WindowDiagram:
     """``onsets``: ``{mstar, kind, ustar}`` at each M* of the window (kind None: no onset
     below ``ustar_max``); ``points``: the CodimTwoPoints found, sorted by M*; ``curves``:
-    the SwitchedCurves born at those on the boundary; ``warnings``."""
+    the SwitchedCurves born at those on the boundary; ``warnings``; ``boundary``: the
+    stability boundary over the window (its curves drawn, its mode switches reported)."""
 
     mstar_window: tuple
     ustar_max: float
@@ -41,6 +45,7 @@ class WindowDiagram:
     curves: tuple
     warnings: tuple
     wall_time: float
+    boundary: StabilityBoundary = field(repr=False, compare=False)
 
     def to_json(self, points: bool = True) -> dict:
         curves = [c.to_json() for c in self.curves]
@@ -50,6 +55,7 @@ class WindowDiagram:
                       for c in curves]
         return {"mstar_window": list(self.mstar_window), "ustar_max": self.ustar_max,
                 "onsets": list(self.onsets), "codim2": [p.to_json() for p in self.points],
+                "switches": [vars(s) for s in self.boundary.switches],
                 "curves": curves, "warnings": list(self.warnings), "wall_time": self.wall_time}
 
 
@@ -63,7 +69,9 @@ def window_diagram(scene: Scene, model: Model, mstars, *, ustar_max: float = 20.
     start = time.perf_counter()
     mstars = np.sort(np.asarray(mstars, dtype=float))
     window = (math.log10(mstars[0]), math.log10(mstars[-1]))
-    onsets, points, warnings = [], [], []
+    progress(f"the stability boundary at {mstars.size} M*")
+    boundary = stability_boundary(scene, mstars, model, ustar_max)
+    onsets, points, warnings = [], [], list(boundary.warnings)
     for m in mstars:
         progress(f"the onset at M* = {m:g}")
         onset = first_onset(scene.replace(mstar=float(m)), model, ustar_max)
@@ -84,7 +92,7 @@ def window_diagram(scene: Scene, model: Model, mstars, *, ustar_max: float = 20.
                         "curves are not searched (only the Hopf curves')")
     return WindowDiagram((float(mstars[0]), float(mstars[-1])), float(ustar_max), tuple(onsets),
                          tuple(sorted(points, key=lambda p: p.mstar)), tuple(curves),
-                         tuple(warnings), time.perf_counter() - start)
+                         tuple(warnings), time.perf_counter() - start, boundary)
 
 
 def _known(point, points) -> bool:

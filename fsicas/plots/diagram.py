@@ -4,6 +4,7 @@ from __future__ import annotations
 import numpy as np
 
 from .backend import NONDIM, PALETTE, finish, styled, subplots
+from .linear import draw_boundary
 
 __all__ = ["plot_scene_diagram", "plot_window_diagram", "MEASURES"]
 
@@ -61,11 +62,16 @@ def _special_marks(ax, branch, color) -> None:
 
 @styled
 def plot_window_diagram(result, path=None):
-    """The (U*, M*) plane of a :class:`fsicas.cycles.window.WindowDiagram`: the onsets
-    (flutter dots, divergence squares), the codimension-two points labelled (GH, HH; filled
-    where on the boundary) and the curves switched onto from them. Returns the Figure."""
+    """The (U*, M*) plane of a :class:`fsicas.cycles.window.WindowDiagram`: the onset
+    curves and the stability boundary, the onsets (flutter dots, divergence squares), the codimension-two points
+    labelled (GH, HH; filled where on the boundary) and the curves switched onto from
+    them. Returns the Figure."""
     fig, axes = subplots(figsize=(6.4, 3.9))
     ax = axes[0][0]
+    for k, curve in enumerate(result.boundary.curves):
+        ax.plot(curve.ustar, curve.mstar, color="0.6", lw=0.8, zorder=1,
+                label="onset curves (Hopf, divergence)" if k == 0 else None)
+    draw_boundary(ax, result.boundary)
     for kind, marker in (("flutter", "o"), ("divergence", "s")):
         on = [o for o in result.onsets if o["kind"] == kind]
         if on:
