@@ -82,7 +82,7 @@ def plot_window_diagram(result, path=None):
         ax.plot([p.ustar for p in points], [p.mstar for p in points], "-.",
                 color=PALETTE[(i + 1) % len(PALETTE)],
                 label=f"{'fold of cycles' if switched.curve.kind == 'fold' else 'torus'} "
-                      f"from {switched.point.kind.upper()}")
+                      f"from {switched.point.kind.upper()} (M* = {switched.point.mstar:.3g})")
     for point in result.points:
         ax.plot([point.ustar], [point.mstar], "D", color="k",
                 markerfacecolor="k" if point.on_boundary else "none", markersize=5)
