@@ -135,3 +135,19 @@ def test_the_deflected_states_are_where_a_time_integration_settles(capsys, tmp_p
     upper = tip > 0
     order = np.argsort(ustar[upper])
     assert abs(np.interp(1.48, ustar[upper][order], tip[upper][order]) - settled[-1]) < 5e-6
+
+
+def test_zero_hopf_points_where_the_hopf_curve_meets_the_divergence_curves(capsys):
+    """H* = 0.2, KL = 0, N = 3, M* in [1, 30]: the steady problem depends on M* U*^2 only,
+    so the divergence curves through the two branch points at M* = 30 (found by the sign
+    changes of det J, no continuation) are M* U*^2 = 30 U_d^2; the zero-Hopf points on the
+    Hopf curve lie on them, one on each (to 1e-6; measured 8e-11 and 5e-10)."""
+    code, result, _ = _run(capsys, "--modes", "3", "--hstar", "0.2", "--kl", "0", "--mstar",
+                           "1:30:2", "--max-points", "10", "--ntst", "10")
+    assert code == 0 and [o["kind"] for o in result["onsets"]] == ["flutter", "divergence"]
+    assert any("divergence curves are not searched" in w for w in result["warnings"])
+    scene = Scene(modes=3, hstar=0.2, kl=0.0, mstar=30.0)
+    det = lambda ev: float(np.prod(ev).real)  # noqa: E731
+    levels = [30.0 * _crossing(scene, det, lo, hi) ** 2 for lo, hi in ((1.2, 1.45), (1.5, 1.8))]
+    zh = sorted(p["mstar"] * p["ustar"] ** 2 for p in result["codim2"] if p["kind"] == "zh")
+    assert len(zh) == 2 and np.allclose(zh, levels, rtol=1e-6, atol=0)

@@ -1,7 +1,7 @@
 """The codimension-two picture over a window of M*: the stability boundary through the
 onsets at COUNT mass ratios (:func:`fsicas.linear.boundary.stability_boundary`: its
-curves and mode switches), the
-generalized Hopf and double Hopf points on the Hopf curves through the flutter onsets
+curves and mode switches), the generalized Hopf, double Hopf and zero-Hopf points on the
+Hopf curves through the flutter onsets
 (:func:`fsicas.linear.codim2.codim_two_points`; the curve is traced from every flutter
 onset, and a point found from several onsets of one curve is kept once), and the curves
 switched onto from those on the boundary: a fold-of-cycles curve from each generalized
@@ -25,8 +25,11 @@ from .bautin import switched_curves
 from .collocation import CycleSettings
 from .curves import CurveSettings
 
-__all__ = ["WindowDiagram", "window_diagram", "SAME_POINT_RTOL"]
+__all__ = ["WindowDiagram", "window_diagram", "SAME_POINT_RTOL", "KINDS"]
 
+#: the codimension-two points searched on the Hopf curves: generalized Hopf, double Hopf,
+#: zero-Hopf (where a Hopf curve meets a divergence curve)
+KINDS = ("gh", "hh", "zh")
 #: two codimension-two points of one kind closer than this in M* and U* (relative) are one
 SAME_POINT_RTOL = 1e-6
 
@@ -79,8 +82,8 @@ def window_diagram(scene: Scene, model: Model, mstars, *, ustar_max: float = 20.
                        "ustar": None if onset is None else float(onset.ustar)})
         if onset is not None and onset.kind == "flutter":
             progress(f"the Hopf curve through the onset at M* = {m:g}")
-            points += [p for p in codim_two_points(scene, model, onset, window, ustar_max)
-                       if not _known(p, points)]
+            points += [p for p in codim_two_points(scene, model, onset, window, ustar_max,
+                                                   kinds=KINDS) if not _known(p, points)]
     settings = CurveSettings(mstar_min=float(mstars[0]), mstar_max=float(mstars[-1]),
                              max_points=curve_points)
     on_boundary = [p for p in sorted(points, key=lambda p: p.mstar) if p.on_boundary]
@@ -88,8 +91,9 @@ def window_diagram(scene: Scene, model: Model, mstars, *, ustar_max: float = 20.
     curves = switched_curves(scene, model, on_boundary, epsilon=epsilon, settings=settings,
                              cycles=cycles, ustar_max=ustar_max) if on_boundary else []
     if any(o["kind"] == "divergence" for o in onsets):
-        warnings.append("divergence onsets in the window: the codimension-two points of their "
-                        "curves are not searched (only the Hopf curves')")
+        warnings.append("divergence onsets in the window: the divergence curves are not "
+                        "searched for codimension-two points of their own (the zero-Hopf points "
+                        "where a Hopf curve meets them are)")
     return WindowDiagram((float(mstars[0]), float(mstars[-1])), float(ustar_max), tuple(onsets),
                          tuple(sorted(points, key=lambda p: p.mstar)), tuple(curves),
                          tuple(warnings), time.perf_counter() - start, boundary)
