@@ -37,6 +37,11 @@ Public API (everything else is private)::
     symmetric_multipliers(cycle_problem, X, symmetry, shift=0.5) -> (trivial, rest)
     keeps_symmetry(cycle_problem, X, symmetry, shift=0.5) -> bool   # what those two accept
     ShootingProblem(F, orbit, period, params, active, *, M=None, settings=ShootingSettings())
+    bifurcation_diagram(problem, settings=None, depth=2, *, cycle_settings=None,
+                        collocation=None, amplitude=1e-2, dp=1e-3, switch=("bp", "hopf", "pd"))
+        -> Diagram   # the branch, every branch switched onto from it, recursively
+    Diagram(root, depth, skipped, warnings) / .nodes() / .save(path) / Diagram.load(path)
+    DiagramNode(branch, birth, children), Birth(kind, point, side, params)
     Branch, SpecialPoint, ContinuationIterator, PALC, ContinuationSettings,
     NewtonSettings, EigenSettings, CollocationSettings, ShootingSettings
     BufferedFunction(fun)                     # a CasADi Function called zero-copy on NumPy
@@ -58,6 +63,7 @@ from ._cycles.settings import MAX_NTST, CollocationSettings, ShootingSettings
 from ._cycles.shooting import ShootingProblem
 from ._cycles.switching import cycle_from_bp, cycle_from_hopf, cycle_from_pd
 from ._cycles.symmetric import keeps_symmetry, locate_symmetry_breaking, symmetric_multipliers
+from ._diagram.diagram import Birth, Diagram, DiagramNode, bifurcation_diagram
 from ._driver.branch import Branch, SpecialPoint, Status
 from ._driver.driver import continuation, observing
 from ._driver.hooks import Event
@@ -78,5 +84,5 @@ __all__ = [
     "EquilibriumProblem", "FoldCurveProblem", "HopfCurveProblem", "Lifted", "NewtonSettings",
     "PALC", "Problem", "SpecialPoint", "Step", "VectorField", "continuation", "correct", "observing",
     "first_lyapunov", "hopf_point", "keeps_symmetry", "locate_symmetry_breaking",
-    "symmetric_multipliers",
+    "symmetric_multipliers", "Birth", "Diagram", "DiagramNode", "bifurcation_diagram",
 ]

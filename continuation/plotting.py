@@ -109,3 +109,20 @@ def plot_cycle(problem, X, i=0, j=1, ax=None, *, samples=400, **style):
     else:
         ax.plot(u[:, i], u[:, j], **style)
     return ax
+
+
+def plot_diagram(diagram, x=None, y=None, ax=None, *, special=True):
+    """Draw every branch of a ``Diagram`` on ``ax`` (created if None), one colour per
+    branch, solid where stable and dashed where not, special points labelled; return
+    ``ax``. ``x``, ``y`` as in :func:`plot_branch`, for every branch (default: the
+    continuation parameter against ``'norm'`` for equilibria and ``'amplitude'`` for
+    cycles)."""
+    import matplotlib.pyplot as plt
+
+    ax = plt.gca() if ax is None else ax
+    for node, depth in diagram.root.walk():
+        branch = node.branch
+        yy = y if y is not None else ("amplitude" if branch.kind == "cycle" else "norm")
+        label = f"{branch.kind} from {node.birth.kind}" if depth else f"{branch.kind}"
+        plot_branch(branch, x, yy, ax, label=label, special=special, stability=True)
+    return ax

@@ -17,7 +17,7 @@ _WINGS = {
     ".provenance": ("__version__",),
     ".cycles": ("CollocationImpactSettings", "CycleBranch", "CyclePoint", "CycleSettings",
                 "ImpactBranch", "ImpactPoint", "ImpactSettings", "StartCycle",
-                "cycle_branch", "impacting_cycles"),
+                "cycle_branch", "impacting_cycles", "scene_diagram"),
     ".linear": ("CriticalVelocityError", "HopfPoint", "LinearStability", "StabilityBoundary",
                 "SteadyState", "SteadyStateError", "critical_velocity", "design_for_flow",
                 "hopf_points", "linear_stability", "onset_sensitivity", "palate_sensitivity",

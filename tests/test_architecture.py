@@ -35,7 +35,7 @@ ALLOWED = {
 
 #: continuation's rooms, bottom first: a room may import itself and the rooms below it
 #: (``top``: the package's ``__init__`` with the public API, and ``plotting``)
-ROOMS = ("_linalg", "_casadi", "_driver", "_equilibria", "_cycles", "top")
+ROOMS = ("_linalg", "_casadi", "_driver", "_equilibria", "_cycles", "_diagram", "top")
 #: public modules that belong to a room but keep their path at the top of the package
 PUBLIC_IN_ROOM = {"continuation.compilation": "_casadi"}
 

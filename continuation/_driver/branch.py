@@ -131,6 +131,23 @@ class Branch:
     # -- file I/O ---------------------------------------------------------------
     def save(self, path) -> None:
         """Write the branch to ``path`` (.npz with a JSON header)."""
+        header, arrays = self.to_arrays()
+        with open(path, "wb") as fh:
+            np.savez(fh, header=np.array(json.dumps(header)), **arrays)
+
+    @classmethod
+    def load(cls, path) -> "Branch":
+        """Read a branch written by :meth:`save`."""
+        with np.load(path, allow_pickle=False) as data:
+            header = json.loads(str(data["header"]))
+            if header.get("format") != FORMAT:
+                raise ValueError(f"{path} is not a {FORMAT} file")
+            arrays = {k: data[k] for k in data.files if k != "header"}
+        return cls.from_arrays(header, arrays)
+
+    def to_arrays(self) -> tuple[dict, dict]:
+        """``(header, arrays)``: the branch as a JSON-ready header and named NumPy arrays
+        (what :meth:`save` writes; a file of several branches prefixes the names)."""
         sizes = np.array([ev.size for ev in self.eigenvalues], dtype=int)
         flat = np.concatenate(self.eigenvalues) if self.eigenvalues else np.zeros(0, complex)
         arrays = {"x": self.x, "params": self.params, "s": self.s, "ds": self.ds,
@@ -145,23 +162,17 @@ class Branch:
                   "failure": {k: v for k, v in self.failure.items() if k != "X"},
                   "stats": self.stats, "special_points":
                       [p.to_json() for p in self.special_points]}
-        with open(path, "wb") as fh:
-            np.savez(fh, header=np.array(json.dumps(header)), **arrays)
+        return header, arrays
 
     @classmethod
-    def load(cls, path) -> "Branch":
-        """Read a branch written by :meth:`save`."""
-        with np.load(path, allow_pickle=False) as data:
-            header = json.loads(str(data["header"]))
-            if header.get("format") != FORMAT:
-                raise ValueError(f"{path} is not a {FORMAT} file")
-            arr = {k: data[k] for k in data.files}
+    def from_arrays(cls, header: dict, arr: dict) -> "Branch":
+        """The branch of :meth:`to_arrays`' ``(header, arrays)``."""
         splits = np.cumsum(arr["eig_sizes"])[:-1]
         eigs = list(np.split(arr["eig_values"], splits)) if arr["eig_sizes"].size else []
         sps = [SpecialPoint(d["kind"], d["index"], arr["sp_x"][i], d["params"],
                             d["status"], d["precision"], d["data"], d["message"])
                for i, d in enumerate(header["special_points"])]
-        pick = lambda prefix: {k[len(prefix):]: v for k, v in arr.items()
+        pick = lambda prefix: {k[len(prefix):]: v for k, v in arr.items()  # noqa: E731
                                if k.startswith(prefix)}
         return cls(header["kind"], tuple(header["par_names"]), tuple(header["free"]),
                    arr["x"], arr["params"], arr["s"], arr["ds"], arr["iterations"],

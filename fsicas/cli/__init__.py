@@ -38,6 +38,7 @@ from ..plots.backend import select_file_backend
 from .curves import add_curve_command
 from .cycles import add_cycle_commands
 from .design import add_design_command
+from .diagram import add_diagram_command
 from .explore import add_explore_command
 from .human import print_report
 from .linear import add_linear_commands
@@ -73,6 +74,7 @@ def build_parser() -> argparse.ArgumentParser:
     add_time_commands(sub)          # simulate, map (docs/simulate.md)
     add_cycle_commands(sub)         # lco, alias cycles (docs/cycles.md)
     add_curve_command(sub)          # grazing, Fig. 4's boundaries as curves (docs/cycles.md)
+    add_diagram_command(sub)        # diagram, the bifurcation diagram by itself (docs/cli.md)
     add_onset_command(sub)          # onset, in physical units (docs/units.md)
     add_sound_command(sub)          # sound, the radiated snore (docs/sound.md)
     add_design_command(sub)         # design, what change stops the snore (docs/design.md)

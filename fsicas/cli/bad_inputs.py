@@ -46,11 +46,11 @@ GROUPS = {
     "grids": "`boundary`, `map`: grids that are empty, malformed, not finite, negative on a log "
              "scale, too long, or repeat a value (`--ustar 4,5,4`, `--mstar 1:1:3`); "
              "`--ustar-max` 0 or -5; no pressure losses at all",
-    "other options": "`map`, `lco`, `modes`, `grazing`, `sound`, `design`: `--workers` 0 or "
-                     "beyond the cores without `--oversubscribe`, `--t-end 0`, `--max-points 0`, "
+    "other options": "`map`, `lco`, `modes`, `grazing`, `sound`, `design`, `diagram`: "
+                     "`--workers` 0 or beyond the cores without `--oversubscribe`, `--t-end 0`, `--max-points 0`, "
                      "`--ntst 0`, `--ncol` 0 or 100000, `design --vary nonsense`, "
                      "`--target-flow \"1e308 L/min\"`, `--ustar-max` -1 or 1e308, `--modes 100000000`, `sound` without "
-                     "`--physical` or with `--duration 1e-300`",
+                     "`--physical` or with `--duration 1e-300`, `diagram --depth 9`",
     "sizes": "sizes that cannot fit: `simulate --dt-out 1e-9`, `--t-end 1e12 --full`, "
              "`--breath-period 1e-300`; `lco --ntst 100000`, `--impact-ntst 100000`; a map of "
              "2000 x 2000 points; `map --t-end 1e12`",
@@ -131,7 +131,9 @@ _OPTIONS = {
         (("lco", "--contact"), "contact"), (("onset", "--ustar-max", "1e308"), "--ustar-max"),
         (("modes", "--modes", "0"), "modes"), (("modes", "--modes", "100000000"), "modes"),
         (("sound", "--out", "s.wav"), "--physical"),
-        (("sound", "--physical", "soft_palate", "--duration", "1e-300"), "--duration")],
+        (("sound", "--physical", "soft_palate", "--duration", "1e-300"), "--duration"),
+        (("diagram", "--depth", "9"), "--depth"), (("diagram", "--ntst", "0"), "--ntst"),
+        (("diagram", "--mstar", "0:1:3"), "--mstar"), (("diagram", "--contact"), "contact")],
     "sizes": [
         (("simulate", "--mstar", "1", "--ustar", "6", "--dt-out", "1e-9", "--t-end", "10"),
          "GiB"),

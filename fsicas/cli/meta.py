@@ -68,6 +68,12 @@ UNITS = {
                 f"{_LENGTH}", "fold": "as grazing", "hopf": f"mstar, ustar {_RATIO}; omega "
                 f"{_RATE}; l1 nondimensional", "switches": "mstar, ustar " + _RATIO,
                 "seeds": "mstar " + _RATIO},
+    "diagram": {"branches": f"ustar_range, ustar {_RATIO}; tip {_LENGTH} (deflection of "
+                "steady states, half-amplitude of cycles); period {_TIME}",
+                "ustar_max": _RATIO, "onsets": f"mstar, ustar {_RATIO}",
+                "codim2": f"mstar, ustar {_RATIO}; omega {_RATE}; coefficients nondimensional",
+                "curves": f"mstar, ustar {_RATIO}; tip_amplitude {_LENGTH}",
+                "mstar_window": _RATIO},
     "onset": {"mstar": _RATIO, "ustar_crit": _BRANCH["ustar"], "pressure_drop": _PRESSURE,
               "omega": _RATE, "freq_ratio": _RATIO + " (omega / omega_1)",
               "ustar_reference": _BRANCH["ustar"], "ustar_max": _BRANCH["ustar"],

@@ -7,7 +7,7 @@ if missing); every other ``--out`` and ``--plot`` is a file whose folder must ex
 (``--plot fig`` writes ``fig.png``, Matplotlib's default format, so that name is checked).
 
 No run damages a file it did not make: an existing ``--out`` must be a file of the kind
-the command writes (a results file of ``map``, a JSON result of ``lco``/``grazing``, a
+the command writes (a results file of ``map``, a JSON result of ``lco``/``grazing``/``diagram``, a
 WAV of ``sound``; ``study`` checks its table); anything else is refused and left as it is.
 """
 from __future__ import annotations
@@ -61,6 +61,7 @@ def _is_wav(path: Path) -> bool:
 _KINDS = {"lco": (_is_json_result, "a JSON result of fsicas"),
           "cycles": (_is_json_result, "a JSON result of fsicas"),
           "grazing": (_is_json_result, "a JSON result of fsicas"),
+          "diagram": (_is_json_result, "a JSON result of fsicas"),
           "sound": (_is_wav, "a WAV file")}
 
 

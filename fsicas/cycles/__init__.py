@@ -4,9 +4,12 @@ by adaptive collocation of the smoothed contact law, its folds, period doublings
 Neimark-Sacker and branch points located, or by multiple shooting; from the scene alone,
 a contact-free branch or one cycle), the period-doubled and symmetry-broken branches
 switched onto; and the curves of special cycles in (M*, U*): grazing (first contact) and
-fold of cycles, also from the generalized Hopf points of the boundary."""
+fold of cycles, also from the generalized Hopf points of the boundary; the bifurcation
+diagram of a scene over U* (``scene_diagram``) and the codimension-two picture over a
+window of M* (``window_diagram``)."""
 
-from .bautin import SwitchedCurve, fold_curves_from_bautin, torus_curves_from_double_hopf
+from .bautin import (SwitchedCurve, fold_curves_from_bautin, switched_curves,
+                     torus_curves_from_double_hopf)
 from .collocation import CycleBranch, CyclePoint, CycleSettings, cycle_branch
 from .curves import (CurveMap, CurvePoint, CurveSettings, CycleCurve, cycle_curves, curve_seeds,
                      fold_curves, grazing_curve)
@@ -16,6 +19,8 @@ from .branch_switching import period_doubled_branch, symmetry_broken_branch
 from .impacting_collocation import (CollocatedImpactBranch, CollocatedImpactPoint,
                                     CollocationImpactSettings, impacting_collocation_problem)
 from .impacting_routes import ImpactMethod, StartCycle, impacting_cycles, impacting_start
+from .diagram import DiagramBranch, DiagramSettings, SceneDiagram, scene_diagram
+from .window import WindowDiagram, window_diagram
 
 __all__ = ["CycleBranch", "CyclePoint", "CycleSettings", "cycle_branch", "ImpactBranch",
            "ImpactPoint", "ImpactSettings", "cycle_from_trajectory", "pre_contact_start",
@@ -24,4 +29,6 @@ __all__ = ["CycleBranch", "CyclePoint", "CycleSettings", "cycle_branch", "Impact
            "ImpactMethod", "StartCycle", "impacting_cycles", "impacting_start",
            "CurveMap", "CurvePoint", "CurveSettings",
            "CycleCurve", "cycle_curves", "curve_seeds", "fold_curves", "grazing_curve",
-           "SwitchedCurve", "fold_curves_from_bautin", "torus_curves_from_double_hopf"]
+           "SwitchedCurve", "fold_curves_from_bautin", "torus_curves_from_double_hopf",
+           "switched_curves", "DiagramBranch", "DiagramSettings", "SceneDiagram",
+           "scene_diagram", "WindowDiagram", "window_diagram"]

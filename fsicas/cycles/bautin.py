@@ -29,7 +29,8 @@ from ..scene import Scene
 from .collocation import CycleSettings, ProfileGauge
 from .curves import CurveSettings, CycleCurve, trace_curve
 
-__all__ = ["SwitchedCurve", "fold_curves_from_bautin", "torus_curves_from_double_hopf"]
+__all__ = ["SwitchedCurve", "fold_curves_from_bautin", "torus_curves_from_double_hopf",
+           "switched_curves"]
 
 
 @dataclass(frozen=True)
@@ -76,13 +77,22 @@ def _switched(scene, model, kind, mstar_onset, epsilon, settings, cycles, ustar_
         raise ValueError(f"no flutter onset below U* = {ustar_max:g} at M* = {mstar_onset:g}")
     window = (np.log10(settings.mstar_min), np.log10(settings.mstar_max))
     points = codim_two_points(scene, model, onset, window, ustar_max, kinds=(kind,))
-    gauge = ProfileGauge(model, onset.x, scene.contact_gap, settings.quadrature_tol)
-    switch, curve_kind = {"gh": (C.lpc_from_gh, "fold"), "hh": (C.ns_from_hh, "ns")}[kind]
+    return switched_curves(scene, model, [p for p in points if p.on_boundary], epsilon=epsilon,
+                           settings=settings, cycles=cycles, ustar_max=ustar_max)
+
+
+def switched_curves(scene: Scene, model: Model, points, *, epsilon: float,
+                    settings: CurveSettings, cycles: CycleSettings,
+                    ustar_max: float) -> list[SwitchedCurve]:
+    """The curve born at each of ``points`` (CodimTwoPoint): the fold-of-cycles curve of a
+    'gh' point (``continuation.lpc_from_gh``), the torus curve of an 'hh' point
+    (``continuation.ns_from_hh``), traced inside ``settings``' M* window."""
     out = []
-    for point in (p for p in points if p.on_boundary):
+    for point in points:
+        switch, curve_kind = {"gh": (C.lpc_from_gh, "fold"), "hh": (C.ns_from_hh, "ns")}[point.kind]
+        gauge = ProfileGauge(model, point.point.x, scene.contact_gap, settings.quadrature_tol)
         start = switch(point.curve, point.point, epsilon=epsilon, settings=cycles.collocation)
         pi_max = pi_of(scene.replace(mstar=point.mstar), model, ustar_max)
-        curve = trace_curve(gauge, start, start.X0, curve_kind, settings, pi_max)
-        out.append(SwitchedCurve(point, curve))
+        out.append(SwitchedCurve(point, trace_curve(gauge, start, start.X0, curve_kind, settings,
+                                                     pi_max)))
     return out
-

@@ -28,7 +28,8 @@ def test_public_names():
         "cycle_from_pd", "cycle_from_bp", "lpc_from_gh", "ns_from_hh", "ns_from_zh", "equilibrium_from_bp", "correct", "Event", "Lifted", "Status", "Condition",
         "CycleCurveProblem", "CycleFold", "Extremum", "NeimarkSacker", "PeriodDoubling",
         "locate_cycle", "BufferedFunction", "locate_symmetry_breaking", "symmetric_multipliers",
-        "keeps_symmetry", "CompiledSystem"}
+        "keeps_symmetry", "CompiledSystem", "Birth", "Diagram", "DiagramNode",
+        "bifurcation_diagram"}
 
 
 def test_new_problem_kind_plugs_into_palc():

@@ -1,0 +1,1 @@
+"""The bifurcation diagram: branches continued and switched onto recursively (diagram)."""
