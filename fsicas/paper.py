@@ -26,8 +26,10 @@ from pathlib import Path
 import numpy as np
 
 from . import __version__, strict_json
+from .cycles.bautin import switched_curves
 from .cycles.collocation import CycleSettings
 from .cycles.curves import CurveMap, CurveSettings, curve_seeds, cycle_curves, expected_outcomes
+from .cycles.window import onset_points
 from .linear.boundary import stability_boundary
 from .linear.steady import steady_state, straight_pressure_drop
 from .model.assembly import build_model
@@ -81,7 +83,9 @@ REPORT_FIELDS = {
     "fig4_curves": "Fig. 4's map against its curves (fig4_curves.json: grazing and fold-of-"
                    "cycles curves, mstar and ustar per point): points whose outcome agrees "
                    "with the region the curves put them in, and the exceptions; the curves' "
-                   "settings (CurveSettings)",
+                   "settings (CurveSettings); from_generalized_hopf: the boundary's "
+                   "generalized Hopf points (l1 = 0, with l2) and the fold-of-cycles curve "
+                   "switched onto from each",
     "impacting_cycles": "Figs. 6-9: per U* the outcome (impacting_lco: a cycle that repeats "
                         "to its convergence; impacting_nonperiodic: one that does not, measured "
                         "over its last cycles), period (units of T; the mean return time when "
@@ -226,8 +230,10 @@ def _time_domain(out: Path, quick: bool, say, linear=None) -> dict:
     say(f"Fig. 4: the impact map, {ustars.size * mstars.size} time integrations")
     result = impact_map(ustars, mstars, out / "fig4_map.jsonl", t_end=t_map, workers=2)
     curves = None if quick or linear is None else _fig4_curves(linear, mstars, ustars, say)
+    switched = [] if curves is None else _fig4_bautin(linear, mstars, ustars, say)
     plot_map(result, out / "fig4_impact_map.png", linear=linear, curves=curves,
-             cases=[] if quick else [(f"1{c}", u, 1.0) for c, u in zip("abc", CYCLE_USTARS)])
+             cases=[] if quick else [(f"1{c}", u, 1.0) for c, u in zip("abc", CYCLE_USTARS)],
+             switched=switched)
     jobs, coarser = _cycle_jobs(out, quick)
     say(f"Figs. 6-9: {len(jobs)} impacting cycles (N = {jobs[0][1]}) and {len(coarser)} "
         f"with N = {coarser[0][1]} (their truncation)")
@@ -243,7 +249,8 @@ def _time_domain(out: Path, quick: bool, say, linear=None) -> dict:
         curve_settings = fig4_curve_settings(mstars)
         (out / "fig4_curves.json").write_text(strict_json.dumps(curves.to_json(), indent=1))
         report["fig4_curves"] = {"scene": held(MAP_SCENE), "settings": asdict(curve_settings),
-                                 **consistency(result, curves, boundary_function(linear))}
+                                 **consistency(result, curves, boundary_function(linear)),
+                                 "from_generalized_hopf": [c.to_json() for c in switched]}
     return report
 
 
@@ -275,6 +282,29 @@ def _fig4_curves(linear, mstars, ustars, say) -> CurveMap:
     return cycle_curves(MAP_SCENE, seeds, settings=settings,
                         cycles=CycleSettings(quadrature_tol=settings.quadrature_tol),
                         ustar_max=float(ustars.max()), workers=2, progress=say)
+
+
+def _fig4_bautin(linear, mstars, ustars, say) -> list:
+    """The fold-of-cycles curves born at the generalized Hopf points of the map's
+    boundary: the Hopf curve of each of its pieces (through the onset at the piece's
+    middle M*) searched for l1 = 0 (``onset_points``), each point on the boundary switched
+    from (``continuation.lpc_from_gh``) and its curve traced over the window."""
+    settings = fig4_curve_settings(mstars)
+    window = (np.log10(settings.mstar_min), np.log10(settings.mstar_max))
+    edges = np.log10([settings.mstar_min, *sorted(s.mstar for s in linear.switches
+                                                  if settings.mstar_min < s.mstar
+                                                  < settings.mstar_max), settings.mstar_max])
+    middles = 10 ** ((edges[:-1] + edges[1:]) / 2)
+    model = build_model(MAP_SCENE)
+    ustar_max = float(ustars.max())
+    say(f"Fig. 4: the generalized Hopf points on the Hopf curves of {middles.size} pieces "
+        "of the boundary")
+    _, points = onset_points(MAP_SCENE, model, middles, window, ustar_max, ("gh",))
+    points = [p for p in points if p.on_boundary]
+    say(f"Fig. 4: the fold-of-cycles curves from {len(points)} generalized Hopf points")
+    return switched_curves(MAP_SCENE, model, points, epsilon=0.02, settings=settings,
+                           cycles=CycleSettings(quadrature_tol=settings.quadrature_tol),
+                           ustar_max=ustar_max)
 
 
 def consistency(result, curves: CurveMap, hopf) -> dict:

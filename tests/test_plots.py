@@ -405,3 +405,27 @@ def test_a_run_without_contact_says_why_its_force_panel_is_empty():
     force = fig.axes[2]
     assert [t.get_text() for t in force.texts] == ["no wall contact in this run (contact law off)"]
     assert not np.any(force.lines[0].get_ydata())
+
+
+def test_fig4_marks_the_generalized_hopf_points_and_their_fold_curves(boundary6):
+    """A fold curve switched onto from a generalized Hopf point is drawn from its point,
+    and the point is marked (one legend entry); without branch fold curves the curve is
+    labelled as the fold of cycles."""
+    from fsicas.cycles.bautin import SwitchedCurve
+    from fsicas.linear.codim2 import CodimTwoPoint
+    from fsicas.plots import plot_map
+    boundary, _ = boundary6
+    synthetic = _synthetic_curves()
+    gh = CodimTwoPoint("gh", 0.3, 3.5, 40.0, True, {"l2": -1.0})
+    switched = [SwitchedCurve(gh, synthetic.fold[0])]
+    points = [{"ustar": 4.0, "mstar": 1.0, "outcome": "lco"}]
+    result = _map_result(points, {"mstar": [1.0], "ustar_crit": [5.5], "omega": [45.0]})
+    fig = plot_map(result, linear=boundary, curves=synthetic, switched=switched)
+    labels = [t.get_text() for t in fig.legends[0].get_texts()]
+    assert labels.count("fold of cycles") == 1
+    assert "generalized Hopf: $l_1$ = 0, a fold curve is born" in labels
+    ax = _panels(fig)[0]
+    (mark,) = [line for line in ax.lines if line.get_marker() == "P"]
+    assert mark.get_xydata().tolist() == [[3.5, 0.3]]
+    fig = plot_map(result, linear=boundary, switched=switched)
+    assert "fold of cycles" in [t.get_text() for t in fig.legends[0].get_texts()]

@@ -25,7 +25,7 @@ from .bautin import switched_curves
 from .collocation import CycleSettings
 from .curves import CurveSettings
 
-__all__ = ["WindowDiagram", "window_diagram", "SAME_POINT_RTOL", "KINDS"]
+__all__ = ["WindowDiagram", "window_diagram", "onset_points", "SAME_POINT_RTOL", "KINDS"]
 
 #: the codimension-two points searched on the Hopf curves: generalized Hopf, double Hopf,
 #: zero-Hopf (where a Hopf curve meets a divergence curve)
@@ -74,16 +74,8 @@ def window_diagram(scene: Scene, model: Model, mstars, *, ustar_max: float = 20.
     window = (math.log10(mstars[0]), math.log10(mstars[-1]))
     progress(f"the stability boundary at {mstars.size} M*")
     boundary = stability_boundary(scene, mstars, model, ustar_max)
-    onsets, points, warnings = [], [], list(boundary.warnings)
-    for m in mstars:
-        progress(f"the onset at M* = {m:g}")
-        onset = first_onset(scene.replace(mstar=float(m)), model, ustar_max)
-        onsets.append({"mstar": float(m), "kind": None if onset is None else onset.kind,
-                       "ustar": None if onset is None else float(onset.ustar)})
-        if onset is not None and onset.kind == "flutter":
-            progress(f"the Hopf curve through the onset at M* = {m:g}")
-            points += [p for p in codim_two_points(scene, model, onset, window, ustar_max,
-                                                   kinds=KINDS) if not _known(p, points)]
+    onsets, points = onset_points(scene, model, mstars, window, ustar_max, KINDS, progress)
+    warnings = list(boundary.warnings)
     settings = CurveSettings(mstar_min=float(mstars[0]), mstar_max=float(mstars[-1]),
                              max_points=curve_points)
     on_boundary = [p for p in sorted(points, key=lambda p: p.mstar) if p.on_boundary]
@@ -97,6 +89,24 @@ def window_diagram(scene: Scene, model: Model, mstars, *, ustar_max: float = 20.
     return WindowDiagram((float(mstars[0]), float(mstars[-1])), float(ustar_max), tuple(onsets),
                          tuple(sorted(points, key=lambda p: p.mstar)), tuple(curves),
                          tuple(warnings), time.perf_counter() - start, boundary)
+
+
+def onset_points(scene: Scene, model: Model, mstars, window, ustar_max: float, kinds,
+                 progress=lambda text: None) -> tuple[list, list]:
+    """``(onsets, points)``: the onset at each of ``mstars`` (``{mstar, kind, ustar}``) and
+    the ``kinds`` of codimension-two points inside ``window`` (log10 M*) on the Hopf curves
+    through the flutter onsets, each point once, sorted by M*."""
+    onsets, points = [], []
+    for m in mstars:
+        progress(f"the onset at M* = {m:g}")
+        onset = first_onset(scene.replace(mstar=float(m)), model, ustar_max)
+        onsets.append({"mstar": float(m), "kind": None if onset is None else onset.kind,
+                       "ustar": None if onset is None else float(onset.ustar)})
+        if onset is not None and onset.kind == "flutter":
+            progress(f"the Hopf curve through the onset at M* = {m:g}")
+            points += [p for p in codim_two_points(scene, model, onset, window, ustar_max,
+                                                   kinds=kinds) if not _known(p, points)]
+    return onsets, sorted(points, key=lambda p: p.mstar)
 
 
 def _known(point, points) -> bool:

@@ -102,6 +102,22 @@ def _curve_ends(ax, curves) -> None:
                 label=words, gid=f"curve end: {reason}")      # under the map's points
 
 
+def draw_switched(ax, switched, labelled_fold: bool = True) -> None:
+    """The fold-of-cycles curves started at generalized Hopf points (``switched``:
+    :class:`fsicas.cycles.bautin.SwitchedCurve` of kind 'gh'), in the fold curves' style
+    (labelled unless ``labelled_fold`` says the fold curves already are), and each point
+    where l1 changes sign on the boundary."""
+    style = dict(_CURVE_STYLE["fold"])
+    label = style.pop("label")
+    for k, item in enumerate(switched):
+        curve = item.curve
+        ax.plot(curve.column("ustar"), curve.column("mstar"), lw=1.4, zorder=2,
+                label=label if k == 0 and not labelled_fold else None, **style)
+        ax.plot(item.point.ustar, item.point.mstar, "P", ms=8, mfc=PALETTE[1], mec="k",
+                mew=0.8, zorder=3.5, label="generalized Hopf: $l_1$ = 0, a fold curve is born"
+                if k == 0 else None)
+
+
 def mark_cases(ax, cases) -> None:
     """The marked cases ``[(label, U*, M*)]`` (e.g. the paper's (1a)-(1c)): star and label."""
     for k, (label, ustar, mstar) in enumerate(cases):

@@ -14,7 +14,7 @@ from ..model.contact import reference_force
 from ..model.patch import penetration
 from .backend import NONDIM, PALETTE, finish, outcome_words, styled, subplots
 from .impacting import cycle_view, cycle_window, plot_cycle, plot_cycles, return_period
-from .cycles import draw_curves, mark_cases
+from .cycles import draw_curves, draw_switched, mark_cases
 from .linear import draw_boundary
 
 __all__ = ["plot_run", "plot_map", "plot_cycle", "plot_cycles", "cycle_view", "cycle_window",
@@ -59,7 +59,7 @@ def plot_run(run, path=None):
 
 
 @styled
-def plot_map(result, path=None, linear=None, curves=None, cases=()):
+def plot_map(result, path=None, linear=None, curves=None, cases=(), switched=()):
     """Fig. 4: outcome of each (U*, M*) point and the linear stability boundary.
 
     ``linear``: a dense :class:`~fsicas.linear.boundary.StabilityBoundary` of the map's
@@ -68,7 +68,9 @@ def plot_map(result, path=None, linear=None, curves=None, cases=()):
     jumps between neighbours (a mode switch between them). ``curves``: a
     :class:`~fsicas.cycles.curves.CurveMap` (grazing and fold-of-cycles curves; with
     ``linear`` the band of contact-free cycles shaded); ``cases``: ``[(label, U*, M*)]``
-    marked. Returns the Figure."""
+    marked; ``switched``: the fold curves started at the boundary's generalized Hopf
+    points (:class:`~fsicas.cycles.bautin.SwitchedCurve`), drawn with their points.
+    Returns the Figure."""
     fig, axes = subplots(figsize=(6.4, 3.9))
     ax = axes[0][0]
     for kind, (color, marker) in _MARKERS.items():
@@ -83,14 +85,9 @@ def plot_map(result, path=None, linear=None, curves=None, cases=()):
         _sampled_boundary(ax, result.boundary)
     if curves is not None:
         draw_curves(ax, curves, boundary_function(linear) if linear is not None else None)
+    draw_switched(ax, switched, labelled_fold=curves is not None and bool(curves.fold))
     mark_cases(ax, cases)
-    ms = [p["mstar"] for p in result.points]
-    if ms:
-        ax.set_ylim(min(ms) / 1.25, max(ms) * 1.25)
-    us = [p["ustar"] for p in result.points]
-    if us:
-        pad = 0.04 * (max(us) - min(us) or 1.0)
-        ax.set_xlim(min(us) - pad, max(us) + pad)
+    _map_limits(ax, result.points)
     ax.set(yscale="log", xlabel=f"flow velocity $U^*$ {NONDIM}", ylabel=f"mass ratio $M^*$ {NONDIM}")
     scene = result.scene
     if scene is not None:
@@ -99,6 +96,17 @@ def plot_map(result, path=None, linear=None, curves=None, cases=()):
                      f"$N$ = {scene.modes}")
     fig.legend(*ax.get_legend_handles_labels(), loc="outside right upper")   # off the points
     return finish(fig, path)
+
+
+def _map_limits(ax, points) -> None:
+    """The axes just around the map's points (M* logarithmic)."""
+    ms = [p["mstar"] for p in points]
+    if ms:
+        ax.set_ylim(min(ms) / 1.25, max(ms) * 1.25)
+    us = [p["ustar"] for p in points]
+    if us:
+        pad = 0.04 * (max(us) - min(us) or 1.0)
+        ax.set_xlim(min(us) - pad, max(us) + pad)
 
 
 def _sampled_boundary(ax, boundary: dict) -> None:
