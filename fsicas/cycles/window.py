@@ -1,7 +1,7 @@
 """The codimension-two picture over a window of M*: the stability boundary through the
 onsets at COUNT mass ratios (:func:`fsicas.linear.boundary.stability_boundary`: its
-curves and mode switches), the generalized Hopf, double Hopf and zero-Hopf points on the
-Hopf curves through the flutter onsets
+curves and mode switches), the generalized Hopf, double Hopf, zero-Hopf and
+Bogdanov-Takens points on the Hopf curves through the flutter onsets
 (:func:`fsicas.linear.codim2.codim_two_points`; the curve is traced from every flutter
 onset, and a point found from several onsets of one curve is kept once), and the curves
 switched onto from those on the boundary: a fold-of-cycles curve from each generalized
@@ -28,8 +28,9 @@ from .curves import CurveSettings
 __all__ = ["WindowDiagram", "window_diagram", "onset_points", "SAME_POINT_RTOL", "KINDS"]
 
 #: the codimension-two points searched on the Hopf curves: generalized Hopf, double Hopf,
-#: zero-Hopf (where a Hopf curve meets a divergence curve)
-KINDS = ("gh", "hh", "zh")
+#: zero-Hopf (where a Hopf curve crosses a divergence curve), Bogdanov-Takens (where it
+#: ends on one, its frequency going to zero)
+KINDS = ("gh", "hh", "zh", "bt")
 #: two codimension-two points of one kind closer than this in M* and U* (relative) are one
 SAME_POINT_RTOL = 1e-6
 
@@ -84,8 +85,9 @@ def window_diagram(scene: Scene, model: Model, mstars, *, ustar_max: float = 20.
                              cycles=cycles, ustar_max=ustar_max) if on_boundary else []
     if any(o["kind"] == "divergence" for o in onsets):
         warnings.append("divergence onsets in the window: the divergence curves are not "
-                        "searched for codimension-two points of their own (the zero-Hopf points "
-                        "where a Hopf curve meets them are)")
+                        "searched for codimension-two points of their own (the zero-Hopf and "
+                        "Bogdanov-Takens points where a Hopf curve meets them are; cusps of "
+                        "the divergence curves are not)")
     return WindowDiagram((float(mstars[0]), float(mstars[-1])), float(ustar_max), tuple(onsets),
                          tuple(sorted(points, key=lambda p: p.mstar)), tuple(curves),
                          tuple(warnings), time.perf_counter() - start, boundary)
