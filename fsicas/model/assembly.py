@@ -15,14 +15,14 @@ from dataclasses import dataclass, field
 import casadi as ca
 import numpy as np
 
-from .beam import ModalBasis, clamped_free_modes
+from .beam import ModalBasis, uniform_modes
 from .beam_timoshenko import TimoshenkoBeam, timoshenko_modes
 from .beam_timoshenko_fe import timoshenko_fe_elements, timoshenko_fe_modes
 from .equations import LiftedEquations
 from .beam_fe import default_n_elements, nonuniform_beam_modes
 from .impact_rule import ImpactRule, impact_rule
 from .quadrature import composite_gauss_legendre, gauss_legendre
-from ..scene import CONTACT_PARAMETERS, MODEL_PARAMETERS, STRUCTURE_FIELDS, Scene
+from ..scene import CLAMPED_FREE, CONTACT_PARAMETERS, MODEL_PARAMETERS, STRUCTURE_FIELDS, Scene
 
 __all__ = ["Model", "build_model", "modal_basis", "parameter_names", "per_model", "contact_rule"]
 
@@ -41,18 +41,27 @@ def parameter_names(scene: Scene) -> tuple[str, ...]:
 
 
 def modal_basis(scene: Scene, x) -> ModalBasis:
-    """The scene's beam modes at points x: analytic when uniform, FE when ``thickness`` is
-    set; Timoshenko (:mod:`.beam_timoshenko`, FE :mod:`.beam_timoshenko_fe` when
-    ``thickness`` is set) when ``beam = "timoshenko"``."""
+    """The scene's beam modes at points x, with its ``ends``: analytic when uniform, FE
+    when ``thickness`` is set; Timoshenko (:mod:`.beam_timoshenko`, FE
+    :mod:`.beam_timoshenko_fe` when ``thickness`` is set or the ends are not
+    clamped–free) when ``beam = "timoshenko"``."""
     x = np.asarray(x, dtype=float)
     if scene.beam == "timoshenko":
         beam = TimoshenkoBeam(scene.slenderness, scene.poisson, scene.shear_coefficient)
-        if scene.thickness is None:
+        if not _finite_elements(scene):
             return timoshenko_modes(scene.modes, x, beam)
-        return timoshenko_fe_modes(scene.modes, x, beam, thickness=scene.thickness)
+        return timoshenko_fe_modes(scene.modes, x, beam, thickness=scene.thickness,
+                                   ends=scene.ends)
     if scene.thickness is None:
-        return clamped_free_modes(scene.modes, x)
-    return nonuniform_beam_modes(scene.modes, x, thickness=scene.thickness)
+        return uniform_modes(scene.modes, x, scene.ends)
+    return nonuniform_beam_modes(scene.modes, x, thickness=scene.thickness, ends=scene.ends)
+
+
+def _finite_elements(scene: Scene) -> bool:
+    """Whether the scene's modes are FE modes (piecewise polynomials): a non-uniform
+    beam, or a Timoshenko beam with other ends than the cantilever's."""
+    return scene.thickness is not None or (scene.beam == "timoshenko"
+                                           and scene.ends != CLAMPED_FREE)
 
 
 def quadrature_rule(scene: Scene) -> tuple[np.ndarray, np.ndarray]:
@@ -62,7 +71,7 @@ def quadrature_rule(scene: Scene) -> tuple[np.ndarray, np.ndarray]:
     piecewise cubic, so the rule is composite and aligned with the elements, with
     ``ceil(n_quad / elements)`` (at least 4) nodes per element.
     """
-    if scene.thickness is None:
+    if not _finite_elements(scene):
         return gauss_legendre(scene.n_quad)
     if scene.beam == "timoshenko":     # piecewise quintic w: at least 6 nodes per element
         elements, least = timoshenko_fe_elements(scene.modes), 6
