@@ -40,7 +40,8 @@ def plot_run(run, path=None):
     ax[0].plot(tr.t, tr.tip / (model.scene.hstar / 2), lw=0.7)
     for y in (-1.0, 1.0):
         ax[0].axhline(y, color="k", ls="--", lw=0.7)
-    ax[0].set_ylabel(f"tip $y(L)/(H^*L/2)$ {NONDIM}")
+    where = "tip $y(L)" if model.x_ref == 1.0 else f"$y({model.x_ref:.3g}\\,L)"
+    ax[0].set_ylabel(f"{where}/(H^*L/2)$ {NONDIM}")
     ax[0].set_title(f"$U^*$ = {run.scene.ustar:g}, $M^*$ = {run.scene.mstar:g}, "
                     f"$N$ = {run.scene.modes}: {outcome_words(run.outcome.outcome)}")
     ax[1].plot(tr.t, tr.x[:, -2], lw=0.7, label="$Q_1$ (above)")
