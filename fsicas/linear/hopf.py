@@ -23,7 +23,8 @@ import continuation as C
 from ..model.assembly import Model, build_model
 from ..scene import Scene
 from .adapter import LOG_M, PI, PI_SCALE, TIME_SCALE, dense, flutter_field, pi_of
-from .divergence import DIVERGENCE_KINDS, DivergencePoint, divergence_point_from
+from .divergence import (DIVERGENCE_KINDS, DivergencePoint, divergence_between,
+                         divergence_point_from)
 from .stability import generalized_eigen
 from .truncation import truncation_error, truncation_warning
 from .steady import SteadyStateError, steady_state
@@ -296,7 +297,8 @@ MAX_RESTARTS = 20
 
 def _first_loss(model: Model, scene: Scene, branch: C.Branch) -> Onset | None:
     """The special point (the lowest in U* of those in that step) of the first step
-    after which the branch has an unstable eigenvalue; None if it stays stable.
+    after which the branch has an unstable eigenvalue; None if it stays stable. A
+    divergence the library did not locate is solved between the step's ends in U*.
     CriticalVelocityError when no special point was located in that step."""
     unstable = np.flatnonzero(branch.n_unstable > 0)
     if not unstable.size:
@@ -309,4 +311,11 @@ def _first_loss(model: Model, scene: Scene, branch: C.Branch) -> Onset | None:
             f"{branch.x[step - 1, -2:].sum() / scene.hstar:.6g} and "
             f"{branch.x[step, -2:].sum() / scene.hstar:.6g} (M* = {scene.mstar:g}) but no "
             "Hopf, branch or fold point was located there")
-    return _onset_from(model, scene, min(found, key=lambda p: p.x[-2:].sum()))
+    first = min(found, key=lambda p: p.x[-2:].sum())
+    if first.kind in DIVERGENCE_KINDS and first.status != "converged":
+        # the library's location failed: the divergence lies between the two steps
+        lo, hi = (float(branch.x[k, -2:].sum() / scene.hstar) for k in (step - 1, step))
+        located = divergence_between(scene, model, lo, hi)
+        if located is not None:
+            return located
+    return _onset_from(model, scene, first)
