@@ -185,3 +185,20 @@ def test_modal_basis_routes_every_ends(ends):
     assert np.all(np.abs(timo.omega / uniform_betas(3, ends) ** 2 - 1) < 1e-2)
     model = build_model(scene)
     assert model.basis.n_modes == 3
+
+
+@pytest.mark.parametrize("ends", HELD)
+def test_timoshenko_fe_running_integrals_against_quadrature(ends):
+    """Phi and Psi of the Timoshenko FE modes against Gauss rules on the elements (the
+    shape is a piecewise quintic: 6 nodes per element integrate it exactly)."""
+    beam, n_el = TimoshenkoBeam(0.05), 24
+    g, w = gauss_legendre(6)
+    nodes = (np.arange(n_el)[:, None] + g[None, :]).ravel() / n_el
+    phi = timoshenko_fe_modes(4, nodes, beam, ends=ends).phi
+    cells = (phi * np.tile(w, n_el) / n_el).reshape(4, n_el, 6).sum(axis=2)
+    edges = np.arange(n_el + 1) / n_el
+    m = timoshenko_fe_modes(4, edges, beam, ends=ends)
+    head = np.hstack([np.zeros((4, 1)), np.cumsum(cells, axis=1)])
+    assert np.abs(m.Phi - head).max() < 1e-13
+    assert np.abs(m.Psi - (head[:, -1:] - head)).max() < 1e-13
+    assert np.abs(m.phi[:, [0, -1]]).max() < 1e-12            # both ends held

@@ -181,3 +181,63 @@ def test_pinned_plate_cycles_follow_hopf_theory(pinned_cycles):
     T0 = np.polyval(np.polyfit(mu[:8], T[:8], 3), 0.0)
     assert abs(T0 * abs(lam.imag) / (2 * np.pi) - 1) < 1e-5
     assert abs(np.polyfit(A[:8] ** 2, mu[:8], 2)[-1]) < 0.02 * mu[0]
+
+
+def test_a_study_fixes_the_ends_in_its_scene_table(tmp_path):
+    from fsicas.studies.spec import load_study
+    path = tmp_path / "plates.toml"
+    path.write_text('analysis = "onset"\n[scene]\nmodes = 6\nends = "pinned-pinned"\n'
+                    '[grid]\nmstar = [0.1, 1.0]\n')
+    study = load_study(str(path))
+    assert study.scene["ends"] == "pinned-pinned"
+    path.write_text('analysis = "onset"\n[scene]\nends = "free-free"\n[grid]\nmstar = [1.0]\n')
+    with pytest.raises(ValueError, match="ends must be one of"):
+        load_study(str(path))
+
+
+def test_a_physical_file_sets_the_ends(tmp_path):
+    from pathlib import Path
+    import fsicas
+    from fsicas.physical import load_physical
+    preset = Path(fsicas.__file__).parent / "presets" / "reed.toml"
+    path = tmp_path / "plate.toml"
+    path.write_text('ends = "clamped-pinned"\n' + preset.read_text())
+    physical = load_physical(str(path))
+    assert physical.scene(physical.flow).ends == "clamped-pinned"
+
+
+def test_clamped_plate_flow_satisfies_continuity_momentum_and_end_conditions():
+    """The fields of the formal solution (cumulative Simpson, 8001 points) at t - dt, t,
+    t + dt of a tight integration of M xdot = F: finite differences in x and t satisfy
+    the channel equations, and the inlet and outlet pressures their loss conditions,
+    for a clamped-clamped plate (its flow rows and beam rows together)."""
+    import scipy.integrate
+    from fsicas import flow_fields
+    scene = Scene(mstar=2.0, ustar=4.0, modes=4, k0=0.3, kl=0.8, zeta=0.02,
+                  ends="clamped-clamped", channel1=Profile.linear(0.05, 0.04),
+                  channel2=Profile.table([0.0, 0.5, 1.0], [0.05, 0.06, 0.045]))
+    model = build_model(scene)
+    x0, dp, dt = _random_state(scene, 1), 30.0, 2e-5
+    p = model.parameters(pressure_drop=dp)
+    grid = np.linspace(0.0, 1.0, 8001)
+    fields = []
+    for t_end in (-dt, 0.0, dt):
+        z = x0 if t_end == 0.0 else scipy.integrate.solve_ivp(
+            lambda t, z: model.xdot(z, p), (0.0, t_end), x0, method="DOP853",
+            rtol=1e-13, atol=1e-15).y[:, -1]
+        fields.append(flow_fields(scene, z, model.xdot(z, p), dp, grid))
+    before, now, after = fields
+    grad = lambda a: np.gradient(a, grid, edge_order=2)
+    for c in range(2):
+        h, u, pc = now.h[c], now.u[c], now.p[c]
+        h_t = (after.h[c] - before.h[c]) / (2 * dt)
+        flux_t = (after.h[c] * after.u[c] - before.h[c] * before.u[c]) / (2 * dt)
+        momentum = scene.mstar * (flux_t + grad(h * u**2) + scene.friction * u * abs(u)) \
+            + h * grad(pc)
+        scale = np.max(np.abs(h * grad(pc)))
+        assert np.max(np.abs(h_t + grad(h * u))) < 1e-5 * max(np.max(np.abs(h_t)), 1e-3)
+        assert np.max(np.abs(momentum)) < 1e-5 * scale
+        assert pc[0] == pytest.approx(dp - scene.mstar / 2 * (u[0]**2 + scene.k0 * u[0] * abs(u[0])),
+                                      rel=1e-13)
+        assert pc[-1] == pytest.approx(-scene.mstar / 2 * (u[-1]**2 - scene.kl * u[-1] * abs(u[-1])),
+                                       rel=1e-11, abs=1e-11 * scale)

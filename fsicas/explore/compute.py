@@ -169,6 +169,7 @@ def instant_view(scene: Scene) -> dict:
             "hz": _hz(scene, abs(float(lam[0].imag))), "x": shape["x"], "y": shape["y"],
             "l_per_min": _l_per_min(scene),
             "pressure_drop": steady["pressure_drop"], "tip": steady["tip_deflection"],
+            "x_ref": steady["x_ref"],
             "warnings": [str(w.message) for w in caught]}
 
 
