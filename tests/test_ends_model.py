@@ -92,8 +92,23 @@ def test_frictionless_held_plates_diverge_at_their_closed_form(ends, mstar):
     scene = Scene(modes=8, mstar=mstar, ends=ends, friction=0.0, k0=0.3, kl=0.8)
     onset = critical_velocity(scene, build_model(scene))
     exact = uniform_betas(1, ends)[0] ** 2 * np.sqrt(scene.hstar / (4 * mstar))
-    assert onset.kind == "divergence" and onset.symmetry_breaking
+    assert onset.kind == "divergence" and onset.symmetry_breaking and onset.point is not None
     assert onset.ustar == pytest.approx(exact, rel=1e-9)
+
+
+def test_deflected_branch_of_a_clamped_plate_is_a_pitchfork_measured_at_x_ref():
+    """The deflected states born at the divergence: y(x_ref)^2 grows linearly in
+    |U* - U*_c| near it (here towards lower U*: subcritical), with y(1) = 0 throughout."""
+    from fsicas.linear.deflected import deflected_branch
+    scene = Scene(modes=6, mstar=1.0, ends="clamped-clamped", friction=0.0)
+    model = build_model(scene)
+    onset = _onset(scene)
+    branch = deflected_branch(scene, model, onset, ustar_max=2 * onset.ustar)
+    assert branch.x_ref == 0.5
+    near = np.abs(branch.ustar - onset.ustar) < 0.1 * onset.ustar
+    slope = branch.tip_deflection[near] ** 2 / np.abs(branch.ustar[near] - onset.ustar)
+    assert near.sum() >= 2 and np.ptp(slope) < 0.05 * slope.max()
+    assert np.abs([model.deflection(x, [1.0])[0] for x in branch.states]).max() < 1e-14
 
 
 def test_clamped_plate_with_friction_diverges_where_a_direct_scan_says():
@@ -241,3 +256,21 @@ def test_clamped_plate_flow_satisfies_continuity_momentum_and_end_conditions():
                                       rel=1e-13)
         assert pc[-1] == pytest.approx(-scene.mstar / 2 * (u[-1]**2 - scene.kl * u[-1] * abs(u[-1])),
                                        rel=1e-11, abs=1e-11 * scale)
+
+
+def test_command_line_takes_the_ends(capsys):
+    """--ends on modes and onset; the onset of a frictionless clamped plate is its
+    closed-form divergence, and a bad value is refused naming ends."""
+    import json
+    from fsicas.cli import main
+    from fsicas.model.beam import uniform_betas
+    assert main(["modes", "--modes", "3", "--ends", "clamped-pinned", "--json"]) == 0
+    beta = json.loads(capsys.readouterr().out)["beta"]
+    assert np.allclose(beta, [3.926602, 7.068583, 10.210176], atol=5e-7)
+    assert main(["onset", "--ends", "clamped-clamped", "--friction", "0", "--mstar", "1",
+                 "--modes", "6", "--json"]) == 0
+    out = json.loads(capsys.readouterr().out)
+    exact = uniform_betas(1, "clamped-clamped")[0] ** 2 * np.sqrt(0.1 / 4)
+    assert out["kind"] == "divergence" and out["ustar_crit"] == pytest.approx(exact, rel=1e-9)
+    assert main(["steady", "--ends", "free-free", "--json"]) == 2
+    assert "ends must be one of" in json.loads(capsys.readouterr().out)["error"]

@@ -268,7 +268,26 @@ def first_onset(scene: Scene, model: Model | None = None, ustar_max: float = 40.
         onset = None
     if onset is None:
         _lost(scene, branch, ustar_max)
+    elif onset.kind == "divergence" and onset.point is None:
+        onset = _relocated(scene, model, onset, ustar_max)
     return onset
+
+
+def _relocated(scene: Scene, model: Model, onset: DivergencePoint, ustar_max: float
+               ) -> DivergencePoint:
+    """A divergence solved between two steps (:func:`_first_loss`) located again by the
+    library from 1 % below it, so that it carries its point of the steady branch (the
+    start of the deflected branches); the solved one if that fails."""
+    branch = steady_branch(scene, model, ustar_max, RELOCATE * onset.ustar, stop_at=ONSET_KINDS)
+    for point in branch.special_points:
+        if point.kind in DIVERGENCE_KINDS and point.status == "converged" and \
+                abs(point.x[-2:].sum() / scene.hstar / onset.ustar - 1) < 1e-8:
+            return divergence_point_from(model, scene, point)
+    return onset
+
+
+#: Where a divergence solved between two steps is located again from (its U* times this).
+RELOCATE = 0.99
 
 
 def onset_points(scene: Scene, model: Model | None = None, ustar_max: float = 40.0,
