@@ -274,3 +274,22 @@ def test_command_line_takes_the_ends(capsys):
     assert out["kind"] == "divergence" and out["ustar_crit"] == pytest.approx(exact, rel=1e-9)
     assert main(["steady", "--ends", "free-free", "--json"]) == 2
     assert "ends must be one of" in json.loads(capsys.readouterr().out)["error"]
+
+
+def test_boundary_of_a_clamped_plate_switches_from_flutter_to_divergence():
+    """At f = 0.05 the boundary U*_c(M*) runs on flutter at low M* and on divergence
+    above a located switch where the two curves cross (U*_c continuous there); the onset
+    on either side of it is of the kind the boundary says."""
+    from fsicas.linear.boundary import stability_boundary
+    scene = Scene(modes=6, ends="clamped-clamped", friction=0.05)
+    model = build_model(scene)
+    boundary = stability_boundary(scene, np.array([0.02, 0.05, 0.1]), model)
+    assert [p.kind for p in boundary.points] == ["flutter", "flutter", "divergence"]
+    (switch,) = boundary.switches
+    assert switch.located and 0.05 < switch.mstar < 0.1 and switch.omega_above == 0.0
+    assert switch.ustar_above == pytest.approx(switch.ustar_below, rel=1e-8)
+    for factor, kind in ((0.98, "flutter"), (1.02, "divergence")):
+        onset = _onset(scene.replace(mstar=factor * switch.mstar))
+        assert onset.kind == kind
+    at = _onset(scene.replace(mstar=0.1))
+    assert boundary.points[-1].ustar_crit == pytest.approx(at.ustar, rel=1e-9)
