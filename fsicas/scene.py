@@ -16,7 +16,7 @@ from .profile import Profile
 from .units import MAX_BEAM_RATIO, THIN_BEAM_RATIO, Scales, thick_beam_message
 
 __all__ = ["Scene", "load_scene", "PARAMETER_FIELDS", "MODEL_PARAMETERS", "CONTACT_PARAMETERS",
-           "STRUCTURE_FIELDS", "BEAM_ENDS"]
+           "STRUCTURE_FIELDS", "BEAM_ENDS", "check_ends"]
 
 
 def default_quad_nodes(n_modes: int) -> int:
@@ -44,6 +44,12 @@ MAX_SLENDERNESS = MAX_BEAM_RATIO
 #: Beam ends of :class:`Scene`, root (x = 0) then x = 1 (docs/beam.md, "Beam ends").
 CLAMPED_FREE = "clamped-free"
 BEAM_ENDS = (CLAMPED_FREE, "clamped-clamped", "pinned-pinned", "clamped-pinned")
+
+
+def check_ends(ends) -> str:
+    """``ends`` if it is one of :data:`BEAM_ENDS`, else a ValueError naming them."""
+    require(ends in BEAM_ENDS, f"ends must be one of {', '.join(BEAM_ENDS)}, got {ends!r}")
+    return ends
 #: Beam-theory fields that only the Timoshenko beam uses, with their defaults.
 _TIMOSHENKO_FIELDS = ("beam", "slenderness", "poisson", "shear_coefficient")
 _DEFAULTS = dict(beam=EULER_BERNOULLI, slenderness=None, poisson=0.3, shear_coefficient=None)
@@ -274,7 +280,7 @@ def _validate_channel(s: Scene) -> None:
 
 def _validate_beam(s: Scene) -> None:
     """Beam theory, ends and parameters (docs/beam.md)."""
-    require(s.ends in BEAM_ENDS, f"ends must be one of {', '.join(BEAM_ENDS)}, got {s.ends!r}")
+    check_ends(s.ends)
     require(s.beam in BEAM_THEORIES, f"beam must be one of {', '.join(BEAM_THEORIES)}, "
             f"got {s.beam!r}")
     require(0 <= finite_number("poisson", s.poisson) < 0.5,

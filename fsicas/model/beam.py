@@ -37,7 +37,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..scene import BEAM_ENDS, CLAMPED_FREE
+from ..scene import CLAMPED_FREE, check_ends
 
 __all__ = ["ModalBasis", "clamped_free_betas", "clamped_free_modes", "uniform_betas",
            "uniform_modes"]
@@ -113,12 +113,6 @@ def clamped_free_modes(n_modes: int, x: np.ndarray) -> ModalBasis:
 
 
 # ------------------------------------------------------------------------ other ends
-def _check_ends(ends: str) -> str:
-    if ends not in BEAM_ENDS:
-        raise ValueError(f"ends must be one of {', '.join(BEAM_ENDS)}, got {ends!r}")
-    return ends
-
-
 #: Stable characteristic functions f(b), f'(b) and the offset of their n-th root from n pi.
 _CHARACTERISTIC = {
     "clamped-clamped": (lambda b, t, se: np.cos(b) - se,
@@ -130,7 +124,7 @@ _CHARACTERISTIC = {
 
 def uniform_betas(n_modes: int, ends: str = CLAMPED_FREE) -> np.ndarray:
     """Wavenumbers beta_n (``omega_n = beta_n^2``) of the uniform beam with these ends."""
-    if _check_ends(ends) == CLAMPED_FREE:
+    if check_ends(ends) == CLAMPED_FREE:
         return clamped_free_betas(n_modes)
     if int(n_modes) != n_modes or n_modes < 1:
         raise ValueError(f"n_modes must be a positive integer, got {n_modes!r}")
@@ -181,7 +175,7 @@ def _pinned_modes(beta: np.ndarray, x: np.ndarray) -> dict[str, np.ndarray]:
 
 def uniform_modes(n_modes: int, x: np.ndarray, ends: str = CLAMPED_FREE) -> ModalBasis:
     """The first ``n_modes`` modes of the uniform beam with these ends, at ``x``."""
-    if _check_ends(ends) == CLAMPED_FREE:
+    if check_ends(ends) == CLAMPED_FREE:
         return clamped_free_modes(n_modes, x)
     x = np.asarray(x, dtype=float)
     if x.ndim != 1 or np.any(x < 0.0) or np.any(x > 1.0):

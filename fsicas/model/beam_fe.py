@@ -43,7 +43,7 @@ import numpy as np
 import scipy.linalg
 
 from .beam import ModalBasis
-from ..scene import BEAM_ENDS, CLAMPED_FREE
+from ..scene import CLAMPED_FREE, check_ends
 
 __all__ = ["nonuniform_beam_modes", "default_n_elements"]
 
@@ -286,8 +286,7 @@ def nonuniform_beam_modes(n_modes: int, x, thickness: Profile | None = None,
     as O(h^4); phi, Phi, Psi as O(h^4), dphi as O(h^3), ddphi as O(h^2).
     """
     n_modes = _check_n_modes(n_modes)
-    if ends not in BEAM_ENDS:
-        raise ValueError(f"ends must be one of {', '.join(BEAM_ENDS)}, got {ends!r}")
+    check_ends(ends)
     n_elements = _check_n_elements(n_elements, n_modes)
     x = _check_x(x)
     _sample_profile("thickness", thickness, x)

@@ -27,7 +27,7 @@ from numpy.polynomial import legendre
 
 from .beam import ModalBasis
 from .beam_timoshenko import TimoshenkoBeam
-from ..scene import BEAM_ENDS, CLAMPED_FREE
+from ..scene import CLAMPED_FREE, check_ends
 
 __all__ = ["timoshenko_fe_modes", "timoshenko_fe_elements", "DEGREE"]
 
@@ -147,8 +147,7 @@ def timoshenko_fe_modes(n_modes: int, x, beam: TimoshenkoBeam, thickness=None,
     """The first ``n_modes`` Timoshenko modes of the beam of relative thickness
     ``thickness(x)`` (vectorized callable, None: uniform) with these ``ends``
     (:data:`fsicas.scene.BEAM_ENDS`, default the cantilever) at the points x."""
-    if ends not in BEAM_ENDS:
-        raise ValueError(f"ends must be one of {', '.join(BEAM_ENDS)}, got {ends!r}")
+    check_ends(ends)
     x = np.asarray(x, dtype=float)
     if x.ndim != 1 or not np.all(np.isfinite(x)) or np.any(x < 0.0) or np.any(x > 1.0):
         raise ValueError("x must be a 1-D array of finite points in [0, 1]")
