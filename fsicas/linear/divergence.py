@@ -119,23 +119,25 @@ def divergence_at(scene: Scene, model: Model, ustar_guess: float) -> DivergenceP
     no sign change is bracketed (or no steady state is found there)."""
     for half in BRACKETS:
         point = divergence_between(scene, model, ustar_guess * (1 - half),
-                                   ustar_guess * (1 + half))
+                                   ustar_guess * (1 + half), scale=ustar_guess)
         if point is not None:
             return point
     return None
 
 
-def divergence_between(scene: Scene, model: Model, lo: float, hi: float
-                       ) -> DivergencePoint | None:
+def divergence_between(scene: Scene, model: Model, lo: float, hi: float,
+                       scale: float | None = None) -> DivergencePoint | None:
     """The divergence of ``scene`` with U* in [lo, hi]: the sign change there of the
     real eigenvalue nearest 0 along the steady states, solved by Brent's method to
-    round-off; None when its signs at lo and hi agree (or a steady state is not found)."""
+    :data:`XTOL` relative to ``scale`` (default hi); None when its signs at lo and hi
+    agree (or a steady state is not found)."""
+    scale = hi if scale is None else scale
     rate = lambda u: real_rate(scene, model, u)[0]
     try:
         if np.sign(rate(lo)) == np.sign(rate(hi)):
             return None
-        u = brentq(rate, lo, hi, xtol=XTOL * hi, rtol=XTOL)
+        u = brentq(rate, lo, hi, xtol=XTOL * scale, rtol=XTOL)
         st = real_rate(scene, model, u)[1]
     except SteadyStateError:
         return None
-    return _point(model, scene, st.x, st.p, st.pressure_drop, None, XTOL * (hi + abs(u)))
+    return _point(model, scene, st.x, st.p, st.pressure_drop, None, XTOL * (scale + abs(u)))
