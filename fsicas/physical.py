@@ -64,7 +64,7 @@ REQUIRED = ("E", "nu", "rho_s", "e", "L", "b", "rho_f")
 #: Nondimensional Scene fields a physical file may set at its top level (the others are
 #: derived from the physical values).
 SCENE_FIELDS = ("friction", "k0", "kl", "zeta", "modes", "quad_nodes", "contact",
-                "contact_stiffness", "contact_eps", "contact_smoothing")
+                "contact_stiffness", "contact_eps", "contact_smoothing", "ends")
 
 
 class PhysicalValidityWarning(UserWarning):

@@ -16,7 +16,7 @@ from .profile import Profile
 from .units import MAX_BEAM_RATIO, THIN_BEAM_RATIO, Scales, thick_beam_message
 
 __all__ = ["Scene", "load_scene", "PARAMETER_FIELDS", "MODEL_PARAMETERS", "CONTACT_PARAMETERS",
-           "STRUCTURE_FIELDS"]
+           "STRUCTURE_FIELDS", "BEAM_ENDS", "check_ends"]
 
 
 def default_quad_nodes(n_modes: int) -> int:
@@ -41,6 +41,15 @@ MAX_HSTAR, MAX_LOSS, MAX_CONTACT_STIFFNESS = 10.0, 1e4, 1e12
 EULER_BERNOULLI, TIMOSHENKO = "euler-bernoulli", "timoshenko"
 BEAM_THEORIES = (EULER_BERNOULLI, TIMOSHENKO)
 MAX_SLENDERNESS = MAX_BEAM_RATIO
+#: Beam ends of :class:`Scene`, root (x = 0) then x = 1 (docs/beam.md, "Beam ends").
+CLAMPED_FREE = "clamped-free"
+BEAM_ENDS = (CLAMPED_FREE, "clamped-clamped", "pinned-pinned", "clamped-pinned")
+
+
+def check_ends(ends) -> str:
+    """``ends`` if it is one of :data:`BEAM_ENDS`, else a ValueError naming them."""
+    require(ends in BEAM_ENDS, f"ends must be one of {', '.join(BEAM_ENDS)}, got {ends!r}")
+    return ends
 #: Beam-theory fields that only the Timoshenko beam uses, with their defaults.
 _TIMOSHENKO_FIELDS = ("beam", "slenderness", "poisson", "shear_coefficient")
 _DEFAULTS = dict(beam=EULER_BERNOULLI, slenderness=None, poisson=0.3, shear_coefficient=None)
@@ -85,6 +94,9 @@ class Scene:
     the Timoshenko beam only and ``to_dict`` leaves them out of Euler–Bernoulli scenes;
     with ``thickness`` the Timoshenko modes are the locking-free FE modes of
     :mod:`fsicas.model.beam_timoshenko_fe` (slenderness at the root).
+    ends: the supports at the root x = 0 and at x = 1, one of :data:`BEAM_ENDS`:
+    "clamped-free" (default, the cantilever), "clamped-clamped", "pinned-pinned",
+    "clamped-pinned" (docs/beam.md); ``to_dict`` leaves out the default.
     """
 
     mstar: float = 1.0
@@ -107,6 +119,7 @@ class Scene:
     slenderness: float | None = None
     poisson: float = 0.3
     shear_coefficient: float | None = None
+    ends: str = CLAMPED_FREE
     scales: Scales | None = field(default=None, compare=False)
 
     def __post_init__(self):
@@ -169,6 +182,8 @@ class Scene:
         if self.beam == EULER_BERNOULLI:       # the dict of every scene before Timoshenko
             for name in _TIMOSHENKO_FIELDS:
                 del d[name]
+        if self.ends == CLAMPED_FREE:          # the dict of every cantilever
+            del d["ends"]
         return d
 
     # -- construction --------------------------------------------------------------
@@ -264,7 +279,8 @@ def _validate_channel(s: Scene) -> None:
 
 
 def _validate_beam(s: Scene) -> None:
-    """Beam theory and its parameters (docs/beam.md)."""
+    """Beam theory, ends and parameters (docs/beam.md)."""
+    check_ends(s.ends)
     require(s.beam in BEAM_THEORIES, f"beam must be one of {', '.join(BEAM_THEORIES)}, "
             f"got {s.beam!r}")
     require(0 <= finite_number("poisson", s.poisson) < 0.5,

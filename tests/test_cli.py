@@ -26,7 +26,7 @@ def test_modes_json(capsys):
 
 def test_steady_json_matches_the_closed_form(capsys):
     code, out = run_json(capsys, ["steady", "--mstar", "2", "--ustar", "3", "--modes", "5", "--json"])
-    assert code == 0 and set(out) - {"meta"} == {"pressure_drop", "Q", "q", "tip_deflection"}
+    assert code == 0 and set(out) - {"meta"} == {"pressure_drop", "Q", "q", "tip_deflection", "x_ref"}
     assert out["pressure_drop"] == pytest.approx(2 * 9 * (0.5 + 2 * 0.14 / 0.1), rel=1e-14)
     assert out["Q"] == pytest.approx([0.15, 0.15], rel=1e-14) and len(out["q"]) == 5
 

@@ -56,6 +56,7 @@ GROUPS = {
              "2000 x 2000 points; `map --t-end 1e12`",
     "scene files": "scene files: missing, a folder, invalid TOML, not UTF-8, nested thousands "
                    "deep, an unknown key, `zeta = \"abc\"`, `modes = 1e30`, `contact = \"yes\"`, "
+                   "`ends = \"free-free\"`, "
                    "a list or a nested list where a number belongs (`mstar = [[1]]`)",
     "physical input": "physical input: `E = \"3 * 10**400 Pa\"`, `L = \"1e300 m\"`, `--flow "
                       "\"1 * 10**10**8 m/s\"`, `--flow \"1e999 m/s\"`, `E = -3000`, a nested "
@@ -154,7 +155,7 @@ def _option_cases():
 def _file_cases():
     texts = {"modes = = 3": "TOML", "heights = [[0.05]]": "heights", 'zeta = "abc"': "zeta",
              "modes = 99999999999999999999": "modes", "modes = 1e30": "modes",
-             'contact = "yes"': "contact", "mstar = [1, 2]": "mstar", "mstar = [[1]]": "mstar",
+             'contact = "yes"': "contact", 'ends = "free-free"': "ends", "mstar = [1, 2]": "mstar", "mstar = [[1]]": "mstar",
              "zeta = [[[0.1]]]": "zeta", "modes = [[3]]": "modes", "hstar = {a = 1}": "hstar",
              "a = " + "[" * 5000 + "]" * 5000: "nested too deeply"}
     cases = [Case("scene files", ("steady", "--scene", "s.toml"), named, (("s.toml", text),))

@@ -8,8 +8,8 @@ from ..linear.boundary import stability_boundary
 from ..linear.truncation import with_enough_modes
 from ..linear.stability import linear_stability
 from ..linear.steady import steady_state
-from ..model.assembly import build_model
-from ..model.beam import clamped_free_betas
+from ..model.assembly import build_model, modal_basis
+from ..model.beam import uniform_betas
 from ..model.beam_timoshenko import TimoshenkoBeam, timoshenko_frequencies
 from ..physical_report import add_physical
 from ..scene import MAX_MODES, Scene
@@ -58,9 +58,10 @@ def _cmd_modes(args) -> dict:
     scene = Scene(modes=args.modes, **beam_fields(args))   # checks the beam options, naming them
     if scene.beam == "timoshenko":   # beta = sqrt(omega), the thin beam's beta_n (docs/beam.md)
         omega = timoshenko_frequencies(args.modes, TimoshenkoBeam(
-            scene.slenderness, scene.poisson, scene.shear_coefficient))
+            scene.slenderness, scene.poisson, scene.shear_coefficient)) \
+            if scene.ends == "clamped-free" else modal_basis(scene, np.zeros(1)).omega
         return {"beta": np.sqrt(omega).tolist(), "omega": omega.tolist()}
-    beta = clamped_free_betas(args.modes)
+    beta = uniform_betas(args.modes, scene.ends)
     return {"beta": beta.tolist(), "omega": (beta**2).tolist()}
 
 

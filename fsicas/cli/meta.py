@@ -43,7 +43,7 @@ _BRANCH = {"ustar": _RATIO + " (U* = U0 T / L, docs/model.md)",
 UNITS = {
     "modes": {"beta": "nondimensional (beta_n L)", "omega": _RATE},
     "steady": {"pressure_drop": _PRESSURE, "Q": _FLOW, "q": _LENGTH + " (modal amplitudes)",
-               "tip_deflection": _LENGTH},
+               "tip_deflection": _LENGTH + " (at x_ref)", "x_ref": _LENGTH},
     "eig": {"eigenvalues": "[re, im], " + _RATE, "ustar": _BRANCH["ustar"],
             "pressure_drop": _PRESSURE},
     "boundary": {"points": "mstar, ustar_crit, freq_ratio " + _RATIO + "; omega " + _RATE +

@@ -55,6 +55,8 @@ BEAM_OPTIONS = {
     "poisson": (float, "Poisson ratio nu of the Timoshenko beam, in [0, 0.5) (default 0.3)"),
     "shear_coefficient": (float, "shear coefficient kappa of the Timoshenko beam, in (0, 1] "
                                  "(default Cowper's 10(1 + nu)/(12 + 11 nu))"),
+    "ends": (str, "beam ends, root then x = 1: clamped-free (default), clamped-clamped, "
+                  "pinned-pinned or clamped-pinned"),
 }
 
 
@@ -79,7 +81,7 @@ def add_scene_options(parser: argparse.ArgumentParser, mstar: bool = True) -> No
 
 
 def add_beam_options(group) -> None:
-    """``--beam``, ``--slenderness``, ``--poisson``, ``--shear-coefficient``."""
+    """``--beam``, ``--slenderness``, ``--poisson``, ``--shear-coefficient``, ``--ends``."""
     for name, (kind, text) in BEAM_OPTIONS.items():
         group.add_argument("--" + name.replace("_", "-"), dest=name, type=kind, default=None,
                            metavar=name.upper(), help=text)

@@ -9,7 +9,7 @@ guess), which is continued by pseudo-arclength collocation in the adapter's para
 - U*: the inlet velocity (Q1 + Q2)/H* of the *steady state at the same pressure drop*
   (time integration holds Δp fixed at the steady value of the requested U*, so a cycle
   "at U*" is the cycle at that Δp);
-- period T and angular frequency omega = 2π/T; tip half-amplitude (max − min of y(1, t) over the cycle)/2;
+- period T and angular frequency omega = 2π/T; tip half-amplitude (max − min of y(x_ref, t) over the cycle)/2;
 - the Floquet multipliers (condensed monodromy product) and stability (all non-trivial
   multipliers inside the unit circle);
 - the minimal gap min_{x,t} h_c(x, t) over the cycle and its ratio to the contact
@@ -310,7 +310,7 @@ class ProfileGauge(Gauge):
                 "min_gap": gap, "gap_ratio": gap / self.eps}
 
     def tip_extremes(self, problem, X) -> tuple[float, float]:
-        """``(min_t y(1, t), max_t y(1, t))`` (kept for the last X)."""
+        """``(min_t y(x_ref, t), max_t y(x_ref, t))`` (kept for the last X)."""
         return self.kept("tip", problem, X, lambda: self._extrema.tip(problem, X))
 
     def grazing_condition(self) -> C.Extremum:

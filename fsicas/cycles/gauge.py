@@ -9,7 +9,7 @@ A cycle problem of :mod:`continuation` on ``flutter_field`` has unknowns
 - ``pressure_drop`` Δp = 100 M* Π, the period in units of T, the Floquet multipliers and
   stability (all non-trivial multipliers, those of the Poincare map, inside the unit
   circle), the state at phase 0;
-- from the profile, by the route: the tip half-amplitude (max − min of y(1, t))/2 and
+- from the profile, by the route: the tip half-amplitude (max − min of y(x_ref, t))/2 and
   the minimal gap min_{x,t} h_c(x, t) with its ratio to eps (:mod:`fsicas.model.contact`);
 - ``quadrature_error``: the relative error of the equations over the cycle from the flow
   quadrature, against a rule of twice the nodes (:mod:`fsicas.model.accuracy`), and
@@ -94,7 +94,7 @@ class Gauge:
         return last[2]
 
     def tip(self, x) -> np.ndarray:
-        """Tip deflection y(1) of states x (rows)."""
+        """Deflection y(x_ref) of states x (rows) at the model's reference point."""
         return self.model.tip_deflection(x)
 
     def impact_measures(self, x, weights, p) -> dict:
@@ -139,20 +139,20 @@ def model_parameters(model, problem, X) -> np.ndarray:
 
 class PolynomialExtrema:
     """Tip extremes and the minimal gap of a collocated cycle, exact for its polynomial
-    (``continuation.CycleProblem.extrema``): the tip ``y(1, t)`` and the gaps
+    (``continuation.CycleProblem.extrema``): the tip ``y(x_ref, t)`` and the gaps
     ``h_c(x_j, t) = H_c(x_j) + s_c y(x_j, t)`` at ``GAP_POINTS``, both walls."""
 
     def __init__(self, model):
         n = model.n_modes
         rows = lambda phi: np.hstack([np.zeros((phi.shape[1], n)), phi.T,
                                       np.zeros((phi.shape[1], 2))])
-        self._tip_row = rows(model.tip.phi[:, 1:])
+        self._tip_row = rows(model.probe.phi[:, 1:])
         phi = model.basis_at(contact.GAP_POINTS).phi
         self._gap_rows = np.vstack([s * rows(phi) for s in contact.WALL_SIGNS])
         self._walls = np.concatenate([wall(contact.GAP_POINTS) for wall in model.scene.walls])
 
     def tip(self, problem, X) -> tuple[float, float]:
-        """``(min_t y(1, t), max_t y(1, t))``."""
+        """``(min_t y(x_ref, t), max_t y(x_ref, t))``."""
         low, high = problem.extrema(X, self._tip_row)
         return float(low[0]), float(high[0])
 

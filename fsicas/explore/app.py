@@ -267,7 +267,9 @@ class Explorer:
                  readout("frequency", _fmt(view["omega"], 6), "frequency ω") + hz,
                  readout("freq-ratio", _fmt(view["freq_ratio"]), "ω/ω₁"),
                  readout("pressure-drop", _fmt(view["pressure_drop"]), "pressure drop Δp"),
-                 readout("tip", _fmt(view["tip"]), "static tip deflection") + flow]
+                 readout("tip", _fmt(view["tip"]), "static tip deflection"
+                         if view["x_ref"] == 1.0 else f"static deflection at x = {view['x_ref']:.3g} L")
+                 + flow]
         lines += [readout("warning", w) for w in view["warnings"]]
         return "<br>".join(lines)
 

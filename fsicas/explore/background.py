@@ -74,7 +74,7 @@ class RunPanel(BackgroundPanel):
         self.stop = pn.widgets.Button(name="cancel run", width=110)
         self.stop.on_click(lambda _: self.jobs.cancel("run") and self.show("cancelled", None))
         self.source = ColumnDataSource({"t": [], "tip": []})
-        self.figure = figure("tip_history", title="tip deflection y(1, t)", x_axis_label="t / T",
+        self.figure = figure("tip_history", title="deflection y(x_ref, t) (x_ref: the free tip of a cantilever)", x_axis_label="t / T",
                              y_axis_label="y / L", height=260, sizing_mode="stretch_width")
         self.figure.line("t", "tip", source=self.source)
         self.audio = pn.pane.Audio(None, sample_rate=AUDIO_RATE, name="snore", visible=False)

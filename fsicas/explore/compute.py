@@ -169,6 +169,7 @@ def instant_view(scene: Scene) -> dict:
             "hz": _hz(scene, abs(float(lam[0].imag))), "x": shape["x"], "y": shape["y"],
             "l_per_min": _l_per_min(scene),
             "pressure_drop": steady["pressure_drop"], "tip": steady["tip_deflection"],
+            "x_ref": steady["x_ref"],
             "warnings": [str(w.message) for w in caught]}
 
 
@@ -306,7 +307,7 @@ HISTORY_POINTS, SPECTRUM_MAX_HZ = 2000, 5000.0
 def run_view(scene: Scene, t_end: float) -> dict:
     """A time run of ``scene`` to ``t_end`` (``run_case``: the perturbed steady state
     integrated and classified) as ``fsicas simulate --json``, the tip deflection
-    y(1, t) (at most :data:`HISTORY_POINTS` samples) and, for a physical scene whose run
+    y(x_ref, t) (at most :data:`HISTORY_POINTS` samples) and, for a physical scene whose run
     settled on a cycle, its sound (``cycle_sound``: Pa at :data:`SOUND_DISTANCE`) and the
     sound's spectrum (``line_spectrum``: Hz and dB SPL up to :data:`SPECTRUM_MAX_HZ`)."""
     if not (math.isfinite(t_end) and 0 < t_end <= 1000):
@@ -316,7 +317,7 @@ def run_view(scene: Scene, t_end: float) -> dict:
         run = run_case(scene, t_end)
     traj, n = run.trajectory, scene.modes
     step = max(1, traj.t.size // HISTORY_POINTS)
-    tip = traj.x[::step, n:2 * n] @ np.asarray(run.model.tip.phi)[:, 1]
+    tip = traj.x[::step, n:2 * n] @ np.asarray(run.model.probe.phi)[:, 1]
     out = {**run.to_json(), "t": traj.t[::step], "tip": tip, "sound": None}
     out["warnings"] = list(dict.fromkeys(out["warnings"] + [str(w.message) for w in caught]))
     if scene.scales is not None and run.outcome.periodic:

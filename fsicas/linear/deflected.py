@@ -28,7 +28,8 @@ __all__ = ["DeflectedBranch", "deflected_branch"]
 
 @dataclass(frozen=True)
 class DeflectedBranch:
-    """One deflected branch: ``ustar``, ``tip_deflection`` (y(1) in units of L, the sign
+    """One deflected branch: ``ustar``, ``tip_deflection`` (y(x_ref) in units of L at the
+    reference point ``x_ref``, :func:`fsicas.model.assembly.reference_point`; the sign
     of one side; the mirror branch has the opposite), ``stable``, ``pressure_drop`` and
     the ``states`` along it, in the order continued from the branch point;
     ``status``/``message`` of the continuation."""
@@ -40,9 +41,11 @@ class DeflectedBranch:
     message: str = ""
     pressure_drop: np.ndarray = field(default=None, repr=False)
     states: np.ndarray = field(default=None, repr=False)
+    x_ref: float = 1.0
 
     def to_json(self) -> dict:
         return {"ustar": self.ustar.tolist(), "tip_deflection": self.tip_deflection.tolist(),
+                "x_ref": self.x_ref,
                 "stable": self.stable.tolist(), "status": self.status, "message": self.message}
 
 
@@ -70,7 +73,7 @@ def deflected_branch(scene: Scene, model: Model, onset: DivergencePoint, ustar_m
     keep = ustar <= ustar_max
     if branch.status == "event":      # its end is the straight state at the other branch point
         keep[-1] = False
-    tip = np.array([float(model.deflection(x, [1.0])[0]) for x in branch.x[keep]])
+    tip = np.array([float(model.deflection(x, [model.x_ref])[0]) for x in branch.x[keep]])
     dp = branch.par(PI)[keep] * PI_SCALE * scene.mstar
     return DeflectedBranch(ustar[keep], tip, branch.n_unstable[keep] == 0, branch.status,
-                           branch.message, dp, branch.x[keep])
+                           branch.message, dp, branch.x[keep], model.x_ref)

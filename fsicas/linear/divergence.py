@@ -22,8 +22,8 @@ from .adapter import LOG_M, PI, PI_SCALE
 from .stability import generalized_eigen
 from .steady import SteadyStateError, steady_state
 
-__all__ = ["DivergencePoint", "divergence_point_from", "divergence_at", "DIVERGENCE_KINDS",
-           "BRACKETS"]
+__all__ = ["DivergencePoint", "divergence_point_from", "divergence_at", "divergence_between",
+           "DIVERGENCE_KINDS", "BRACKETS"]
 
 #: The library's special points where a real eigenvalue crosses zero, and their names.
 DIVERGENCE_KINDS = {"bp": "branch point", "fold": "fold"}
@@ -117,15 +117,27 @@ def divergence_at(scene: Scene, model: Model, ustar_guess: float) -> DivergenceP
     the real eigenvalue nearest 0 along the steady states in U*, bracketed within
     :data:`BRACKETS` of the guess and solved by Brent's method to round-off; None when
     no sign change is bracketed (or no steady state is found there)."""
+    for half in BRACKETS:
+        point = divergence_between(scene, model, ustar_guess * (1 - half),
+                                   ustar_guess * (1 + half), scale=ustar_guess)
+        if point is not None:
+            return point
+    return None
+
+
+def divergence_between(scene: Scene, model: Model, lo: float, hi: float,
+                       scale: float | None = None) -> DivergencePoint | None:
+    """The divergence of ``scene`` with U* in [lo, hi]: the sign change there of the
+    real eigenvalue nearest 0 along the steady states, solved by Brent's method to
+    :data:`XTOL` relative to ``scale`` (default hi); None when its signs at lo and hi
+    agree (or a steady state is not found)."""
+    scale = hi if scale is None else scale
     rate = lambda u: real_rate(scene, model, u)[0]
     try:
-        for half in BRACKETS:
-            lo, hi = ustar_guess * (1 - half), ustar_guess * (1 + half)
-            if np.sign(rate(lo)) != np.sign(rate(hi)):
-                u = brentq(rate, lo, hi, xtol=XTOL * ustar_guess, rtol=XTOL)
-                st = real_rate(scene, model, u)[1]
-                return _point(model, scene, st.x, st.p, st.pressure_drop, None,
-                              XTOL * (ustar_guess + abs(u)))
+        if np.sign(rate(lo)) == np.sign(rate(hi)):
+            return None
+        u = brentq(rate, lo, hi, xtol=XTOL * scale, rtol=XTOL)
+        st = real_rate(scene, model, u)[1]
     except SteadyStateError:
         return None
-    return None
+    return _point(model, scene, st.x, st.p, st.pressure_drop, None, XTOL * (scale + abs(u)))

@@ -23,7 +23,8 @@ import continuation as C
 from ..model.assembly import Model, build_model
 from ..scene import Scene
 from .adapter import LOG_M, PI, PI_SCALE, TIME_SCALE, dense, flutter_field, pi_of
-from .divergence import DIVERGENCE_KINDS, DivergencePoint, divergence_point_from
+from .divergence import (DIVERGENCE_KINDS, DivergencePoint, divergence_between,
+                         divergence_point_from)
 from .stability import generalized_eigen
 from .truncation import truncation_error, truncation_warning
 from .steady import SteadyStateError, steady_state
@@ -267,7 +268,26 @@ def first_onset(scene: Scene, model: Model | None = None, ustar_max: float = 40.
         onset = None
     if onset is None:
         _lost(scene, branch, ustar_max)
+    elif onset.kind == "divergence" and onset.point is None:
+        onset = _relocated(scene, model, onset, ustar_max)
     return onset
+
+
+def _relocated(scene: Scene, model: Model, onset: DivergencePoint, ustar_max: float
+               ) -> DivergencePoint:
+    """A divergence solved between two steps (:func:`_first_loss`) located again by the
+    library from 1 % below it, so that it carries its point of the steady branch (the
+    start of the deflected branches); the solved one if that fails."""
+    branch = steady_branch(scene, model, ustar_max, RELOCATE * onset.ustar, stop_at=ONSET_KINDS)
+    for point in branch.special_points:
+        if point.kind in DIVERGENCE_KINDS and point.status == "converged" and \
+                abs(point.x[-2:].sum() / scene.hstar / onset.ustar - 1) < 1e-8:
+            return divergence_point_from(model, scene, point)
+    return onset
+
+
+#: Where a divergence solved between two steps is located again from (its U* times this).
+RELOCATE = 0.99
 
 
 def onset_points(scene: Scene, model: Model | None = None, ustar_max: float = 40.0,
@@ -296,7 +316,8 @@ MAX_RESTARTS = 20
 
 def _first_loss(model: Model, scene: Scene, branch: C.Branch) -> Onset | None:
     """The special point (the lowest in U* of those in that step) of the first step
-    after which the branch has an unstable eigenvalue; None if it stays stable.
+    after which the branch has an unstable eigenvalue; None if it stays stable. A
+    divergence the library did not locate is solved between the step's ends in U*.
     CriticalVelocityError when no special point was located in that step."""
     unstable = np.flatnonzero(branch.n_unstable > 0)
     if not unstable.size:
@@ -309,4 +330,11 @@ def _first_loss(model: Model, scene: Scene, branch: C.Branch) -> Onset | None:
             f"{branch.x[step - 1, -2:].sum() / scene.hstar:.6g} and "
             f"{branch.x[step, -2:].sum() / scene.hstar:.6g} (M* = {scene.mstar:g}) but no "
             "Hopf, branch or fold point was located there")
-    return _onset_from(model, scene, min(found, key=lambda p: p.x[-2:].sum()))
+    first = min(found, key=lambda p: p.x[-2:].sum())
+    if first.kind in DIVERGENCE_KINDS and first.status != "converged":
+        # the library's location failed: the divergence lies between the two steps
+        lo, hi = (float(branch.x[k, -2:].sum() / scene.hstar) for k in (step - 1, step))
+        located = divergence_between(scene, model, lo, hi)
+        if located is not None:
+            return located
+    return _onset_from(model, scene, first)

@@ -49,7 +49,8 @@ class SteadyState:
 
     def to_json(self, model: Model) -> dict:
         return {"pressure_drop": self.pressure_drop, "Q": self.Q.tolist(), "q": self.q.tolist(),
-                "tip_deflection": float(model.deflection(self.x, [1.0])[0])}
+                "tip_deflection": float(model.deflection(self.x, [model.x_ref])[0]),
+                "x_ref": model.x_ref}
 
 
 def straight_pressure_drop(scene: Scene) -> float:

@@ -14,17 +14,19 @@ from dataclasses import dataclass, field
 
 import casadi as ca
 import numpy as np
+import scipy.optimize
 
-from .beam import ModalBasis, clamped_free_modes
+from .beam import ModalBasis, uniform_modes
 from .beam_timoshenko import TimoshenkoBeam, timoshenko_modes
 from .beam_timoshenko_fe import timoshenko_fe_elements, timoshenko_fe_modes
 from .equations import LiftedEquations
 from .beam_fe import default_n_elements, nonuniform_beam_modes
 from .impact_rule import ImpactRule, impact_rule
 from .quadrature import composite_gauss_legendre, gauss_legendre
-from ..scene import CONTACT_PARAMETERS, MODEL_PARAMETERS, STRUCTURE_FIELDS, Scene
+from ..scene import CLAMPED_FREE, CONTACT_PARAMETERS, MODEL_PARAMETERS, STRUCTURE_FIELDS, Scene
 
-__all__ = ["Model", "build_model", "modal_basis", "parameter_names", "per_model", "contact_rule"]
+__all__ = ["Model", "build_model", "modal_basis", "parameter_names", "per_model", "contact_rule",
+           "reference_point"]
 
 #: Structure fields compared by :meth:`Model.require_structure` (``contact`` apart: a
 #: model with contact also serves a contact-free scene).
@@ -41,18 +43,42 @@ def parameter_names(scene: Scene) -> tuple[str, ...]:
 
 
 def modal_basis(scene: Scene, x) -> ModalBasis:
-    """The scene's beam modes at points x: analytic when uniform, FE when ``thickness`` is
-    set; Timoshenko (:mod:`.beam_timoshenko`, FE :mod:`.beam_timoshenko_fe` when
-    ``thickness`` is set) when ``beam = "timoshenko"``."""
+    """The scene's beam modes at points x, with its ``ends``: analytic when uniform, FE
+    when ``thickness`` is set; Timoshenko (:mod:`.beam_timoshenko`, FE
+    :mod:`.beam_timoshenko_fe` when ``thickness`` is set or the ends are not
+    clamped–free) when ``beam = "timoshenko"``."""
     x = np.asarray(x, dtype=float)
     if scene.beam == "timoshenko":
         beam = TimoshenkoBeam(scene.slenderness, scene.poisson, scene.shear_coefficient)
-        if scene.thickness is None:
+        if not _finite_elements(scene):
             return timoshenko_modes(scene.modes, x, beam)
-        return timoshenko_fe_modes(scene.modes, x, beam, thickness=scene.thickness)
+        return timoshenko_fe_modes(scene.modes, x, beam, thickness=scene.thickness,
+                                   ends=scene.ends)
     if scene.thickness is None:
-        return clamped_free_modes(scene.modes, x)
-    return nonuniform_beam_modes(scene.modes, x, thickness=scene.thickness)
+        return uniform_modes(scene.modes, x, scene.ends)
+    return nonuniform_beam_modes(scene.modes, x, thickness=scene.thickness, ends=scene.ends)
+
+
+def _finite_elements(scene: Scene) -> bool:
+    """Whether the scene's modes are FE modes (piecewise polynomials): a non-uniform
+    beam, or a Timoshenko beam with other ends than the cantilever's."""
+    return scene.thickness is not None or (scene.beam == "timoshenko"
+                                           and scene.ends != CLAMPED_FREE)
+
+
+def reference_point(scene: Scene) -> float:
+    """Where the "tip" measures of a scene are taken: the free end x = 1 of the
+    cantilever; with both ends held (y(1) = 0), the largest deflection of the first mode:
+    x = 0.5 for a uniform beam with symmetric ends, else the zero of phi_1' around the
+    largest sample of |phi_1| on 401 points (Brent, to 1e-12)."""
+    if scene.ends == CLAMPED_FREE:
+        return 1.0
+    if scene.ends in ("clamped-clamped", "pinned-pinned") and scene.thickness is None:
+        return 0.5
+    grid = np.linspace(0.0, 1.0, 401)
+    k = int(np.argmax(np.abs(modal_basis(scene, grid).phi[0])))
+    slope = lambda z: float(modal_basis(scene, np.array([z])).dphi[0, 0])
+    return float(scipy.optimize.brentq(slope, grid[k - 1], grid[k + 1], xtol=1e-12))
 
 
 def quadrature_rule(scene: Scene) -> tuple[np.ndarray, np.ndarray]:
@@ -62,7 +88,7 @@ def quadrature_rule(scene: Scene) -> tuple[np.ndarray, np.ndarray]:
     piecewise cubic, so the rule is composite and aligned with the elements, with
     ``ceil(n_quad / elements)`` (at least 4) nodes per element.
     """
-    if scene.thickness is None:
+    if not _finite_elements(scene):
         return gauss_legendre(scene.n_quad)
     if scene.beam == "timoshenko":     # piecewise quintic w: at least 6 nodes per element
         elements, least = timoshenko_fe_elements(scene.modes), 6
@@ -87,7 +113,9 @@ class Model:
     (the implicit residual ``M z − F`` of time integration), ``jac_mass_action(x, p, v)``
     its derivative ``d(M v)/dx``. ``lifted`` holds ``jac_rhs``, ``jac_mass_action`` and
     ``mass`` as :class:`continuation.Lifted` (their structure ``A + P D L``).
-    ``tip`` maps x to (y(1), dy/dt(1)); ``contact_basis`` and ``impact_rule`` are the
+    ``tip`` holds the modes at x = [0, 1] (the equations' outlet), ``probe`` those at
+    [0, x_ref], the reference point of every "tip" measure (:func:`reference_point`;
+    ``probe is tip`` for the cantilever); ``contact_basis`` and ``impact_rule`` are the
     modes at the impact load's own nodes and its rule (:func:`contact_rule`; None without
     contact). Use :meth:`parameters` for the numeric p.
     Models compare and hash by identity (caches keyed by a model die with it).
@@ -102,6 +130,7 @@ class Model:
     basis: ModalBasis = field(repr=False)
     weights: np.ndarray = field(repr=False)
     tip: ModalBasis = field(repr=False)
+    probe: ModalBasis | None = field(default=None, repr=False)
     mass_action: ca.Function = field(default=None, repr=False)
     jac_mass_action: ca.Function = field(default=None, repr=False)
     lifted: dict = field(default_factory=dict, repr=False)
@@ -122,15 +151,21 @@ class Model:
         uniform beam, the lowest FE eigenvalue's root for a non-uniform one."""
         return float(self.basis.omega[0])
 
+    @property
+    def x_ref(self) -> float:
+        """The reference point where "tip" measures are taken (:func:`reference_point`)."""
+        return float(self.probe.x[1])
+
     def tip_deflection(self, x) -> np.ndarray | float:
-        """Tip displacement ``y(1) = Σ phi_n(1) q_n`` of one state (a float) or of the rows
-        of an array of states."""
+        """Displacement ``y(x_ref) = Σ phi_n(x_ref) q_n`` at the reference point (the tip
+        x = 1 of the cantilever) of one state (a float) or of the rows of an array of
+        states."""
         n = self.n_modes
-        return _tip(np.asarray(x, dtype=float)[..., n:2 * n], self.tip.phi[:, 1])
+        return _tip(np.asarray(x, dtype=float)[..., n:2 * n], self.probe.phi[:, 1])
 
     def tip_velocity(self, x) -> np.ndarray | float:
-        """Tip velocity ``dy/dt(1) = Σ phi_n(1) r_n`` of one state or of rows of states."""
-        return _tip(np.asarray(x, dtype=float)[..., :self.n_modes], self.tip.phi[:, 1])
+        """Velocity ``dy/dt(x_ref) = Σ phi_n(x_ref) r_n`` of one state or of rows of states."""
+        return _tip(np.asarray(x, dtype=float)[..., :self.n_modes], self.probe.phi[:, 1])
 
     def index(self, name: str) -> int:
         """Position of parameter ``name`` in p."""
@@ -238,6 +273,8 @@ def build_model(scene: Scene, symbolic: str = "MX") -> Model:
     nodes, weights = quadrature_rule(scene)
     basis = modal_basis(scene, nodes)
     tip = modal_basis(scene, [0.0, 1.0])
+    x_ref = reference_point(scene)
+    probe = tip if x_ref == 1.0 else modal_basis(scene, [0.0, x_ref])
     impact = None
     if scene.contact:
         rule = contact_rule(scene)
@@ -254,7 +291,7 @@ def build_model(scene: Scene, symbolic: str = "MX") -> Model:
                  rhs=fun("F", [x, p], force, xp),
                  jac_rhs=fun("dFdx", [x, p], lifted["jac_rhs"].expr(x, p), xp),
                  jac_rhs_p=fun("dFdp", [x, p], ca.jacobian(force, p), xp),
-                 basis=basis, weights=weights, tip=tip,
+                 basis=basis, weights=weights, tip=tip, probe=probe,
                  mass_action=fun("Mv", [x, p, v], eqs.mass_action(), xpv),
                  jac_mass_action=fun("dMvdx", [x, p, v], lifted["jac_mass_action"].expr(x, p, v), xpv),
                  lifted=lifted, contact_basis=impact and impact[0],

@@ -1,4 +1,4 @@
-"""Clamped–free modes of a non-uniform Euler–Bernoulli beam (Hermite-cubic FE).
+"""Modes of a non-uniform Euler–Bernoulli beam (Hermite-cubic FE), clamped–free by default.
 
 Nondimensional beam on x in [0, 1] with profiles relative to the root, t(x) = thickness,
 b(x) = width (t(0) = b(0) = 1 for the uniform beam):
@@ -28,7 +28,9 @@ largest omega^-2.  Same Galerkin eigenpairs, accurate to ~1e-14 relative for ome
 
 Modes are normalized to
 ``∫ m phi^2 dx = 1`` (the analytic normalization of :mod:`fsicas.beam` when m = 1) with
-the tip sign of the analytic modes, ``sign phi_n(1) = (-1)^(n+1)``.  ``Phi = ∫_0^x phi``
+the tip sign of the analytic modes, ``sign phi_n(1) = (-1)^(n+1)``.  Other ends
+(:data:`fsicas.scene.BEAM_ENDS`) constrain the curvature DOFs (a pinned root adds the
+root slope): see :func:`_held`; their modes take the root sign of :mod:`.beam`.  ``Phi = ∫_0^x phi``
 and ``Psi = ∫_x^1 phi`` are exact for the FE shape (closed-form shape-function integrals).
 """
 from __future__ import annotations
@@ -41,6 +43,7 @@ import numpy as np
 import scipy.linalg
 
 from .beam import ModalBasis
+from ..scene import CLAMPED_FREE, check_ends
 
 __all__ = ["nonuniform_beam_modes", "default_n_elements"]
 
@@ -154,15 +157,16 @@ def _hermite_stiffness(xi, w, ei_q, h) -> np.ndarray:
     return np.einsum("eg,g,ag,bg->eab", ei_q, w, ddN, ddN) / h**3
 
 
-def _assemble(Ae: np.ndarray) -> np.ndarray:
-    """Global nodal matrix from element blocks, clamped root DOFs (w, h w' at 0) removed."""
+def _assemble(Ae: np.ndarray, first: int = 2) -> np.ndarray:
+    """Global nodal matrix from element blocks without the root DOFs before ``first``
+    (2: both of the clamped root, w and h w' at 0; 1: w(0) of a pinned root)."""
     n_el = Ae.shape[0]
     dofs = 2 * np.arange(n_el)[:, None] + np.arange(4)[None, :]
     rows = np.broadcast_to(dofs[:, :, None], Ae.shape).ravel()
     cols = np.broadcast_to(dofs[:, None, :], Ae.shape).ravel()
     A = np.zeros((2 * (n_el + 1),) * 2)
     np.add.at(A, (rows, cols), Ae.ravel())
-    return A[2:, 2:]
+    return A[first:, first:]
 
 
 def _curvature_stiffness(xi, w, ei_q, h) -> np.ndarray:
@@ -193,6 +197,27 @@ def _curvature_to_nodal(n_elements: int) -> np.ndarray:
     return T
 
 
+def _held(ends: str, T: np.ndarray, mass, K_c: np.ndarray):
+    """The supports other than the clamped root and free end, on curvature DOFs.
+
+    A pinned root adds its slope DOF ``t = h w'(0)`` (w_j = j t, h w'_j = t, no
+    curvature); the held end x = 1 gives the constraint rows w(1) = 0 (and w'(1) = 0 when
+    clamped), and the admissible DOFs are ``Z d`` with Z an orthonormal basis of their
+    null space. Returns ``T`` mapping the DOFs to the nodal DOFs from h w'(0) on, Z, and
+    ``Z^T K Z``, ``Z^T M Z``; ``mass(first)`` is the nodal mass from DOF ``first`` on.
+    """
+    n_el = T.shape[0] // 2
+    if ends.startswith("pinned"):
+        slope = np.r_[1.0, np.ravel(np.column_stack([np.arange(1, n_el + 1), np.ones(n_el)]))]
+        T = np.column_stack([slope, np.vstack([np.zeros((1, T.shape[1])), T])])
+        K_c, M = scipy.linalg.block_diag(0.0, K_c), T.T @ mass(1) @ T
+    else:
+        T = np.vstack([np.zeros((1, T.shape[1])), T])
+        M = T[1:].T @ mass(2) @ T[1:]
+    Z = scipy.linalg.null_space(T[-2:] if ends.endswith("clamped") else T[-2:-1])
+    return T, Z, Z.T @ K_c @ Z, Z.T @ M @ Z
+
+
 def _solve(K_c: np.ndarray, M_c: np.ndarray, n_modes: int) -> tuple[np.ndarray, np.ndarray]:
     """Lowest ``n_modes`` of ``K_c c = omega^2 M_c c`` as the largest of ``M_c c = mu K_c c``.
 
@@ -207,10 +232,15 @@ def _solve(K_c: np.ndarray, M_c: np.ndarray, n_modes: int) -> tuple[np.ndarray, 
     return 1.0 / np.sqrt(mu), C
 
 
-def _orient(V: np.ndarray, C: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Flip modes so that ``sign phi_n(1) = (-1)^(n+1)`` as in :mod:`fsicas.beam`."""
-    target = np.where(np.arange(V.shape[1]) % 2 == 0, 1.0, -1.0)
-    flip = np.where(np.sign(V[-2]) == target, 1.0, -1.0)
+def _orient(V: np.ndarray, C: np.ndarray, ends: str = CLAMPED_FREE
+            ) -> tuple[np.ndarray, np.ndarray]:
+    """Flip modes as in :mod:`.beam`: ``sign phi_n(1) = (-1)^(n+1)`` for the cantilever,
+    else phi''(0) > 0 (clamped root) or phi'(0) > 0 (pinned root)."""
+    if ends == CLAMPED_FREE:
+        target = np.where(np.arange(V.shape[1]) % 2 == 0, 1.0, -1.0)
+        flip = np.where(np.sign(V[-2]) == target, 1.0, -1.0)
+    else:
+        flip = np.where((V[1] if ends.startswith("pinned") else C[0]) < 0, -1.0, 1.0)
     return V * flip, C * flip
 
 
@@ -243,30 +273,33 @@ def _evaluate(V: np.ndarray, C: np.ndarray, x: np.ndarray) -> dict[str, np.ndarr
 # ------------------------------------------------------------------------ public API
 def nonuniform_beam_modes(n_modes: int, x, thickness: Profile | None = None,
                           width: Profile | None = None,
-                          n_elements: int | None = None) -> ModalBasis:
-    """Lowest ``n_modes`` clamped–free modes of a non-uniform beam, sampled at ``x``.
+                          n_elements: int | None = None,
+                          ends: str = CLAMPED_FREE) -> ModalBasis:
+    """Lowest ``n_modes`` modes of a non-uniform beam with these ``ends``
+    (:data:`fsicas.scene.BEAM_ENDS`, default the cantilever), sampled at ``x``.
 
     Solves ``∫ EI w'' v'' = omega^2 ∫ m w v`` with ``m = b t``, ``EI = b t^3`` (t =
     ``thickness(x)``, b = ``width(x)``, vectorized callables relative to the root, None
     = 1) on ``n_elements`` Hermite-cubic elements (default ``max(40, 8 n_modes)``).
-    Modes satisfy ``∫ m phi_i phi_j dx = delta_ij`` and ``sign phi_n(1) = (-1)^(n+1)``;
+    Modes satisfy ``∫ m phi_i phi_j dx = delta_ij`` and the signs of :func:`_orient`;
     ``Phi``/``Psi`` are the exact running integrals of the FE shape.  Frequencies converge
     as O(h^4); phi, Phi, Psi as O(h^4), dphi as O(h^3), ddphi as O(h^2).
     """
     n_modes = _check_n_modes(n_modes)
+    check_ends(ends)
     n_elements = _check_n_elements(n_elements, n_modes)
     x = _check_x(x)
     _sample_profile("thickness", thickness, x)
     b_x = _sample_profile("width", width, x)
     try:
-        omega, V, C = _mesh_modes(n_modes, n_elements, thickness, width)
+        omega, V, C = _mesh_modes(n_modes, n_elements, thickness, width, ends)
     except TypeError:          # an unhashable profile object: solve without the cache
-        omega, V, C = _mesh_modes.__wrapped__(n_modes, n_elements, thickness, width)
+        omega, V, C = _mesh_modes.__wrapped__(n_modes, n_elements, thickness, width, ends)
     return ModalBasis(x=x, omega=omega.copy(), width=b_x, **_evaluate(V, C, x))
 
 
 @functools.lru_cache(maxsize=16)
-def _mesh_modes(n_modes: int, n_elements: int, thickness, width):
+def _mesh_modes(n_modes: int, n_elements: int, thickness, width, ends=CLAMPED_FREE):
     """Frequencies and nodal/curvature mode vectors, solved once per beam and mesh
     (profiles must be hashable: Profile objects and plain functions are)."""
     xi_g, w_g, x_q = _gauss_points(n_elements)
@@ -277,10 +310,16 @@ def _mesh_modes(n_modes: int, n_elements: int, thickness, width):
     t_q = t_s[N_PROFILE_SAMPLES:].reshape(x_q.shape)
     b_q = b_s[N_PROFILE_SAMPLES:].reshape(x_q.shape)
     T = _curvature_to_nodal(n_elements)
-    M_c = T.T @ _assemble(_hermite_mass(xi_g, w_g, b_q * t_q, h)) @ T
+    mass_e = _hermite_mass(xi_g, w_g, b_q * t_q, h)
     K_c = _curvature_stiffness(xi_g, w_g, b_q * t_q**3, h)
-    omega, C = _solve(K_c, M_c, n_modes)
-    V, C = _orient(np.vstack([np.zeros((2, n_modes)), T @ C]), C)
+    if ends == CLAMPED_FREE:
+        omega, C = _solve(K_c, T.T @ _assemble(mass_e) @ T, n_modes)
+        V, C = _orient(np.vstack([np.zeros((2, n_modes)), T @ C]), C)
+    else:
+        T, Z, K_d, M_d = _held(ends, T, lambda first: _assemble(mass_e, first), K_c)
+        omega, D = _solve(K_d, M_d, n_modes)
+        C = Z @ D
+        V, C = _orient(np.vstack([np.zeros((1, n_modes)), T @ C]), C[-2 * n_elements:], ends)
     for array in (omega, V, C):
         array.setflags(write=False)
     return omega, V, C

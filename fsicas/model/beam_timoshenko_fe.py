@@ -1,9 +1,11 @@
-"""Clamped–free Timoshenko modes of a beam of non-uniform thickness (locking-free FE).
+"""Timoshenko modes of a beam of non-uniform thickness (locking-free FE), any ends.
 
 Thickness t(x) relative to the root (t(0) = 1), root slenderness s = e(0)/L, units of
 the root (:mod:`.beam_timoshenko`): mass t, rotary inertia r^2 t^3, bending stiffness
 t^3 and shear stiffness S t, with ``S = 6 kappa (1 - nu) / s^2`` and ``r^2 = s^2 / 12``.
-Weak form, w(0) = psi(0) = 0 (the free-end conditions are natural)::
+Weak form of the cantilever, w(0) = psi(0) = 0 (the free-end conditions are natural;
+other ends of :data:`fsicas.scene.BEAM_ENDS` hold w and, when clamped, psi at their
+end, :func:`_held_dofs`)::
 
     ∫ t^3 psi' dpsi' + S t (w' - psi)(dw' - dpsi) dx
         = omega^2 ∫ t w dw + r^2 t^3 psi dpsi dx.
@@ -13,7 +15,7 @@ Gauss–Lobatto points). Since w' and psi then lie in the same polynomial space,
 Kirchhoff constraint w' = psi of a thin beam is met exactly by the C^1 splines of degree
 P + 1 in the space: no shear locking. Element integrals by 10-point Gauss–Legendre.
 Modes: ``eigh(K, M)``, normalized by the full mass (``∫ t phi^2 + r^2 t^3 psi^2 = 1``),
-sign phi_n(1) = (-1)^(n+1). ``Phi = ∫_0^x phi`` and ``Psi = ∫_x^1 phi`` are exact for
+sign phi_n(1) = (-1)^(n+1) (other ends: :func:`_orient`). ``Phi = ∫_0^x phi`` and ``Psi = ∫_x^1 phi`` are exact for
 the FE shape (antiderivatives of the element polynomials, accumulated forward and
 backward).
 """
@@ -25,6 +27,7 @@ from numpy.polynomial import legendre
 
 from .beam import ModalBasis
 from .beam_timoshenko import TimoshenkoBeam
+from ..scene import CLAMPED_FREE, check_ends
 
 __all__ = ["timoshenko_fe_modes", "timoshenko_fe_elements", "DEGREE"]
 
@@ -65,8 +68,8 @@ def _dofs(n_el: int, degree: int) -> np.ndarray:
     return np.arange(n_el)[:, None] * degree + np.arange(degree + 1)[None, :]
 
 
-def _assemble(beam: TimoshenkoBeam, thickness, n_el: int):
-    """Global K and M on the DOFs (w, then psi), clamped DOFs removed."""
+def _assemble(beam: TimoshenkoBeam, thickness, n_el: int, ends: str = CLAMPED_FREE):
+    """Global K and M on the DOFs (w, then psi), held DOFs (:func:`_held_dofs`) removed."""
     Cw, Cp = _lagrange(DEGREE + 1), _lagrange(DEGREE)
     xg, wg = legendre.leggauss(N_GAUSS)
     xg, wg = (xg + 1) / 2, wg / 2
@@ -84,8 +87,27 @@ def _assemble(beam: TimoshenkoBeam, thickness, n_el: int):
         K[np.ix_(dp, dp)] += ((dLp / h) * (t**3 * g)) @ (dLp / h).T
         M[np.ix_(dw, dw)] += (Lw * (t * g)) @ Lw.T
         M[np.ix_(dp, dp)] += (Lp * (r2 * t**3 * g)) @ Lp.T
-    keep = np.setdiff1d(np.arange(n), [0, nw])
+    keep = np.setdiff1d(np.arange(n), _held_dofs(ends, nw, n))
     return K[np.ix_(keep, keep)], M[np.ix_(keep, keep)], keep, nw
+
+
+def _held_dofs(ends: str, nw: int, n: int) -> list[int]:
+    """The DOFs the supports hold: w(0) always, psi(0) at a clamped root, w(1) at a held
+    end x = 1 and psi(1) at a clamped one (w DOFs 0..nw-1, then psi DOFs nw..n-1)."""
+    root, end = ends.split("-")
+    return ([0] + ([nw] if root == "clamped" else []) + ([nw - 1] if end != "free" else [])
+            + ([n - 1] if end == "clamped" else []))
+
+
+def _orient(full: np.ndarray, ends: str, nw: int) -> np.ndarray:
+    """Signs of :mod:`.beam`: ``sign phi_n(1) = (-1)^(n+1)`` for the cantilever, else
+    rising from the root (psi > 0 at the first node inside a clamped root's element,
+    phi > 0 there at a pinned root)."""
+    if ends == CLAMPED_FREE:
+        sign = np.sign(full[:, nw - 1]) * (-1.0) ** np.arange(len(full))
+    else:
+        sign = np.where(full[:, 1 if ends.startswith("pinned") else nw + 1] < 0, -1.0, 1.0)
+    return full * sign[:, None]
 
 
 def _element_of(x: np.ndarray, n_el: int) -> tuple[np.ndarray, np.ndarray]:
@@ -121,9 +143,11 @@ def _lowest(K: np.ndarray, M: np.ndarray, n_modes: int):
 
 
 def timoshenko_fe_modes(n_modes: int, x, beam: TimoshenkoBeam, thickness=None,
-                        n_elements: int | None = None) -> ModalBasis:
-    """The first ``n_modes`` clamped–free Timoshenko modes of the beam of relative
-    thickness ``thickness(x)`` (vectorized callable, None: uniform) at the points x."""
+                        n_elements: int | None = None, ends: str = CLAMPED_FREE) -> ModalBasis:
+    """The first ``n_modes`` Timoshenko modes of the beam of relative thickness
+    ``thickness(x)`` (vectorized callable, None: uniform) with these ``ends``
+    (:data:`fsicas.scene.BEAM_ENDS`, default the cantilever) at the points x."""
+    check_ends(ends)
     x = np.asarray(x, dtype=float)
     if x.ndim != 1 or not np.all(np.isfinite(x)) or np.any(x < 0.0) or np.any(x > 1.0):
         raise ValueError("x must be a 1-D array of finite points in [0, 1]")
@@ -132,11 +156,10 @@ def timoshenko_fe_modes(n_modes: int, x, beam: TimoshenkoBeam, thickness=None,
         raise ValueError(f"n_elements must be at least {max(2, n_modes // 2)} for {n_modes} "
                          f"modes, got {n_el}")
     profile = thickness if thickness is not None else (lambda z: np.ones_like(z))
-    K, M, keep, nw = _assemble(beam, profile, n_el)
+    K, M, keep, nw = _assemble(beam, profile, n_el, ends)
     lam, vec = _lowest(K, M, n_modes)
-    full = np.zeros((n_modes, K.shape[0] + 2))
+    full = np.zeros((n_modes, nw + n_el * DEGREE + 1))
     full[:, keep] = vec.T
-    tip = full[:, nw - 1]
-    full *= (np.sign(tip) * (-1.0) ** np.arange(n_modes))[:, None]
+    full = _orient(full, ends, nw)
     fields = _fields(full, x, n_el, nw)
     return ModalBasis(x=x, omega=np.sqrt(lam), **fields)

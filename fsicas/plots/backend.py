@@ -20,7 +20,7 @@ from pathlib import Path
 
 from ..timedomain.outcome import OUTCOME_WORDS, outcome_words   # for titles and legends
 
-__all__ = ["FILE_BACKEND", "PALETTE", "OUTCOME_WORDS", "NONDIM", "pyplot", "select_file_backend",
+__all__ = ["FILE_BACKEND", "PALETTE", "OUTCOME_WORDS", "NONDIM", "probe_label", "pyplot", "select_file_backend",
            "styled", "subplots", "finish", "outcome_words"]
 
 #: The backend the command line uses to write figure files (no display needed).
@@ -33,6 +33,16 @@ PALETTE = ("#0072B2", "#D55E00", "#009E73", "#CC79A7", "#E69F00", "#56B4E9", "#0
 
 #: The unit suffix of a nondimensional quantity's axis label.
 NONDIM = "(nondim.)"
+
+
+def probe_label(x_ref: float, what: str = "y", noun: str = "") -> str:
+    """Where a "tip" quantity is measured, for labels, the math left open for the caller:
+    ``tip {noun}$y(L)`` at the free tip, else ``{noun}$y(0.5\\,L)`` (x_ref:
+    :func:`fsicas.model.assembly.reference_point`)."""
+    if x_ref == 1.0:
+        return f"tip {noun}${what}(L)"
+    return f"{noun}${what}({x_ref:.3g}\\,L)"
+
 
 #: Raster resolution of saved figures (vector formats ignore it).
 DPI = 200

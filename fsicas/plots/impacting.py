@@ -29,13 +29,13 @@ from ..model.assembly import modal_basis
 from ..model.contact import reference_force
 from ..model.patch import contact_intervals, penetration
 from ..timedomain.returns import poincare_returns
-from .backend import NONDIM, PALETTE, finish, outcome_words, pyplot, styled, subplots
+from .backend import (NONDIM, PALETTE, finish, outcome_words, probe_label, pyplot, styled,
+                      subplots)
 
 __all__ = ["CycleView", "cycle_view", "cycle_window", "return_period", "tip_spectrum",
            "first_contact", "plot_cycle", "plot_cycles"]
 
 TAU = "time $t/T_0$"
-Y_TIP = f"tip $y(L)/L$ {NONDIM}"
 #: The quantities of the panels, in the order of :func:`plot_cycles`' rows.
 ROWS = ("snapshots", "modal velocities", "flow rates", "tip", "phase portrait", "spectrum",
         "modal rms", "impact force", "first contact")
@@ -50,7 +50,7 @@ class CycleView:
     -H2(x); ``r`` the modal velocities (samples x N, units of L/T); ``Q`` the flow rates
     (samples x 2, units of L^2/T) and ``Q_steady`` those of the steady state; ``tip``,
     ``tip_velocity`` (units of L and L/T); ``freq`` (f / f0) and ``spectrum`` (amplitude of
-    the tip velocity, relative to its largest); ``rms`` of each q_n / L; ``force`` the
+    the tip velocity, relative to its largest), both at ``x_ref``; ``rms`` of each q_n / L; ``force`` the
     total impact force / F0. ``settled``: False when the run did not settle and the last
     tip return is shown instead."""
 
@@ -76,6 +76,8 @@ class CycleView:
     spectrum: np.ndarray
     rms: np.ndarray
     force: np.ndarray
+    #: where ``tip`` is measured (the model's reference point; 1: the free tip)
+    x_ref: float = 1.0
 
     @property
     def title(self) -> str:
@@ -156,7 +158,7 @@ def cycle_view(run, snapshots: int = 24) -> CycleView:
         r=X[:, :n].copy(), Q=X[:, -2:].copy(), Q_steady=np.asarray(run.steady.x[-2:], float),
         tip=tr.tip[w].copy(), tip_velocity=tr.tip_velocity[w].copy(), freq=freq,
         spectrum=spectrum, rms=np.sqrt(np.mean((q - q.mean(axis=0)) ** 2, axis=0)),
-        force=total_force(model, force))
+        force=total_force(model, force), x_ref=model.x_ref)
 
 
 def _law(scene) -> str:
@@ -257,13 +259,19 @@ def _draw_case(panels: dict, view: CycleView, colorbar: bool, titles: bool) -> N
 
 
 def _walls(ax, view: CycleView, along_x: bool) -> None:
-    """The walls: their profiles along x, or their positions at the tip (dashed)."""
+    """The walls: their profiles along x, or their positions at x_ref (dashed)."""
     if along_x:
         ax.plot(view.x, view.wall_upper, color="k", lw=1.4)
         ax.plot(view.x, view.wall_lower, color="k", lw=1.4)
     else:
-        for y in (view.wall_upper[-1], view.wall_lower[-1]):
+        for y in _walls_at_probe(view):
             ax.axhline(y, color="k", ls="--", lw=0.7)
+
+
+def _walls_at_probe(view: CycleView) -> tuple[float, float]:
+    """The two walls' positions at x_ref."""
+    return tuple(float(np.interp(view.x_ref, view.x, w))
+                 for w in (view.wall_upper, view.wall_lower))
 
 
 def _snapshots_panel(ax, view: CycleView) -> None:
@@ -315,13 +323,15 @@ def _flow_panel(ax, view: CycleView) -> None:
 
 def _tip_panels(ax_phase, ax_tip, view: CycleView) -> None:
     """Fig. 8: tip phase portrait and tip displacement over the cycle, the walls dashed."""
+    y_tip = f"{probe_label(view.x_ref)}/L$ {NONDIM}"
     ax_phase.plot(view.tip, view.tip_velocity, lw=0.7, color=PALETTE[0])
-    for y in (view.wall_upper[-1], view.wall_lower[-1]):
+    for y in _walls_at_probe(view):
         ax_phase.axvline(y, color="k", ls="--", lw=0.7)
-    ax_phase.set(xlabel=Y_TIP, ylabel=r"tip velocity $\dot y(L)$ (units of $L/T$)")
+    velocity = probe_label(view.x_ref, r"\dot y", "velocity ")
+    ax_phase.set(xlabel=y_tip, ylabel=f"{velocity}$ (units of $L/T$)")
     ax_tip.plot(view.tau, view.tip, color=PALETTE[0])
     _walls(ax_tip, view, along_x=False)
-    ax_tip.set(xlabel=TAU, ylabel=Y_TIP, xlim=(0, 1))
+    ax_tip.set(xlabel=TAU, ylabel=y_tip, xlim=(0, 1))
 
 
 def _spectrum_panel(ax, view: CycleView, top: float = 30.0) -> None:

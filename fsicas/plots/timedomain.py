@@ -12,7 +12,7 @@ import numpy as np
 from ..linear.stretches import boundary_function, branch_lines
 from ..model.contact import reference_force
 from ..model.patch import penetration
-from .backend import NONDIM, PALETTE, finish, outcome_words, styled, subplots
+from .backend import NONDIM, PALETTE, finish, outcome_words, probe_label, styled, subplots
 from .impacting import cycle_view, cycle_window, plot_cycle, plot_cycles, return_period
 from .cycles import draw_curves, draw_switched, mark_cases
 from .linear import draw_boundary
@@ -40,7 +40,7 @@ def plot_run(run, path=None):
     ax[0].plot(tr.t, tr.tip / (model.scene.hstar / 2), lw=0.7)
     for y in (-1.0, 1.0):
         ax[0].axhline(y, color="k", ls="--", lw=0.7)
-    ax[0].set_ylabel(f"tip $y(L)/(H^*L/2)$ {NONDIM}")
+    ax[0].set_ylabel(f"{probe_label(model.x_ref)}/(H^*L/2)$ {NONDIM}")
     ax[0].set_title(f"$U^*$ = {run.scene.ustar:g}, $M^*$ = {run.scene.mstar:g}, "
                     f"$N$ = {run.scene.modes}: {outcome_words(run.outcome.outcome)}")
     ax[1].plot(tr.t, tr.x[:, -2], lw=0.7, label="$Q_1$ (above)")

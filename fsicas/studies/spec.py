@@ -7,7 +7,7 @@
     physical = "soft_palate"      # a preset or FILE.toml: the parameters are its [physical]
                                   # keys (SI numbers or strings with units); without it they
                                   # are nondimensional Scene fields
-    [scene]                       # fixed nondimensional Scene fields (modes, zeta, ...)
+    [scene]                       # fixed nondimensional Scene fields (modes, zeta, ends...)
     modes = 8
     [settings]                    # the analysis' settings (below)
     ustar_max = 40.0
@@ -61,6 +61,8 @@ DISTRIBUTIONS = {"uniform": ("low", "high"), "loguniform": ("low", "high"),
                  "normal": ("mean", "std"), "lognormal": ("median", "sigma")}
 _SCENE_FIELDS = ("mstar", "ustar", "hstar", "friction", "k0", "kl", "zeta", "modes",
                  "quad_nodes", "contact", "contact_stiffness", "contact_eps")
+#: The fixed [scene] keys of a study: its parameters' fields and the beam's ends.
+_FIXED_FIELDS = _SCENE_FIELDS + ("ends",)
 
 
 @dataclass(frozen=True)
@@ -106,10 +108,10 @@ def load_study(path) -> Study:
     if physical is not None:
         load_physical(physical)                      # refused here if it does not exist
     scene = _table(doc, "scene", label)
-    bad = sorted(set(scene) - set(_SCENE_FIELDS))
+    bad = sorted(set(scene) - set(_FIXED_FIELDS))
     if bad:
         raise ValueError(f"{label}: [scene] keys {bad} are not Scene fields of a study; "
-                         f"allowed: {', '.join(_SCENE_FIELDS)}")
+                         f"allowed: {', '.join(_FIXED_FIELDS)}")
     settings = {**SETTINGS[analysis], **_table(doc, "settings", label)}
     bad = sorted(set(settings) - set(SETTINGS[analysis]))
     if bad:

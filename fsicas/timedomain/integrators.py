@@ -116,7 +116,7 @@ class Trajectory:
 
     @property
     def tip(self) -> np.ndarray:
-        """Tip displacement y(1, t)."""
+        """Tip displacement y(x_ref, t)."""
         return self.model.tip_deflection(self.x)
 
     @property
