@@ -20,7 +20,6 @@ point (a closed loop, e.g. the bubble between two pitchforks) stops there.
 
 from __future__ import annotations
 
-import json
 import math
 from dataclasses import dataclass, field, replace
 
@@ -28,7 +27,7 @@ import numpy as np
 
 from .._cycles.cycles import CycleProblem
 from .._cycles.switching import cycle_from_bp, cycle_from_hopf, cycle_from_pd
-from .._driver.branch import Branch
+from .._driver.branch import Branch, load_npz, save_npz
 from .._driver.driver import continuation
 from .._driver.hooks import Event
 from .._driver.problem import Problem
@@ -106,19 +105,13 @@ class Diagram:
             arrays.update({f"b{i}__{k}": v for k, v in arr.items()})
             entries.append({"branch": header, "birth": node.birth.__dict__, "depth": depth,
                             "children": len(node.children)})
-        header = {"format": FORMAT, "depth": self.depth, "nodes": entries,
-                  "skipped": list(self.skipped), "warnings": list(self.warnings)}
-        with open(path, "wb") as fh:
-            np.savez(fh, header=np.array(json.dumps(header)), **arrays)
+        save_npz(path, {"format": FORMAT, "depth": self.depth, "nodes": entries,
+                        "skipped": list(self.skipped), "warnings": list(self.warnings)}, arrays)
 
     @classmethod
     def load(cls, path) -> "Diagram":
         """Read a diagram written by :meth:`save`."""
-        with np.load(path, allow_pickle=False) as data:
-            header = json.loads(str(data["header"]))
-            if header.get("format") != FORMAT:
-                raise ValueError(f"{path} is not a {FORMAT} file")
-            arrays = {k: data[k] for k in data.files if k != "header"}
+        header, arrays = load_npz(path, FORMAT)
         flat = []
         for i, entry in enumerate(header["nodes"]):
             arr = {k.split("__", 1)[1]: v for k, v in arrays.items()

@@ -131,19 +131,12 @@ class Branch:
     # -- file I/O ---------------------------------------------------------------
     def save(self, path) -> None:
         """Write the branch to ``path`` (.npz with a JSON header)."""
-        header, arrays = self.to_arrays()
-        with open(path, "wb") as fh:
-            np.savez(fh, header=np.array(json.dumps(header)), **arrays)
+        save_npz(path, *self.to_arrays())
 
     @classmethod
     def load(cls, path) -> "Branch":
         """Read a branch written by :meth:`save`."""
-        with np.load(path, allow_pickle=False) as data:
-            header = json.loads(str(data["header"]))
-            if header.get("format") != FORMAT:
-                raise ValueError(f"{path} is not a {FORMAT} file")
-            arrays = {k: data[k] for k in data.files if k != "header"}
-        return cls.from_arrays(header, arrays)
+        return cls.from_arrays(*load_npz(path, FORMAT))
 
     def to_arrays(self) -> tuple[dict, dict]:
         """``(header, arrays)``: the branch as a JSON-ready header and named NumPy arrays
@@ -179,3 +172,18 @@ class Branch:
                    arr["residual"], eigs, pick("test_"), pick("col_"), sps,
                    header["status"], header["message"], header["failure"],
                    header["stats"])
+
+
+def save_npz(path, header: dict, arrays: dict) -> None:
+    """``arrays`` and the JSON ``header`` in one ``.npz`` file (no pickling)."""
+    with open(path, "wb") as fh:
+        np.savez(fh, header=np.array(json.dumps(header)), **arrays)
+
+
+def load_npz(path, fmt: str) -> tuple[dict, dict]:
+    """``(header, arrays)`` of a file of :func:`save_npz` whose header's format is ``fmt``."""
+    with np.load(path, allow_pickle=False) as data:
+        header = json.loads(str(data["header"]))
+        if header.get("format") != fmt:
+            raise ValueError(f"{path} is not a {fmt} file")
+        return header, {k: data[k] for k in data.files if k != "header"}
