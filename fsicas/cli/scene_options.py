@@ -6,7 +6,7 @@ from __future__ import annotations
 import argparse
 
 from ..physical import Flow, Physical, load_physical, parse_flow, preset_names
-from ..scene import MAX_ABS_USTAR, Scene, load_scene
+from ..scene import DIRECTIONS, MAX_ABS_USTAR, Scene, load_scene
 
 __all__ = ["check_ustar_max", "SCENE_OPTIONS", "BEAM_OPTIONS", "add_scene_options", "add_beam_options", "beam_fields",
            "scene_values",
@@ -71,6 +71,10 @@ def add_scene_options(parser: argparse.ArgumentParser, mstar: bool = True) -> No
             group.add_argument("--" + name.replace("_", "-"), dest=name, type=kind, default=None,
                                metavar=name.upper(),
                                help=f"{SCENE_HELP[name]} (default {shown})")
+    group.add_argument("--direction", choices=DIRECTIONS, default=None,
+                       help="flow direction: forward (root to tip, default) or reverse (tip "
+                       "to root, expiration: the sign of U* and of --flow; with it give "
+                       "their magnitude)")
     group.add_argument("--contact", dest="contact", action=argparse.BooleanOptionalAction,
                        default=None, help="regularized wall impact on or off (default off)")
     add_beam_options(group)
@@ -103,7 +107,8 @@ def _add_physical_options(parser: argparse.ArgumentParser) -> None:
 
 def scene_values(args: argparse.Namespace) -> dict:
     """The nondimensional Scene fields given as options (a physical input's overrides)."""
-    values = {k: getattr(args, k, None) for k in (*SCENE_OPTIONS, *BEAM_OPTIONS, "contact")}
+    values = {k: getattr(args, k, None)
+              for k in (*SCENE_OPTIONS, *BEAM_OPTIONS, "contact", "direction")}
     return {k: v for k, v in values.items() if v is not None}
 
 
@@ -139,7 +144,7 @@ def scene_from_args(args: argparse.Namespace, need_flow: bool = False) -> Scene:
     values = scene_values(args)
     if args.scene:
         return load_scene(args.scene, **values)
-    return Scene(**values)
+    return Scene.from_dict(values)
 
 
 

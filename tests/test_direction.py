@@ -1,0 +1,174 @@
+"""Flow in both directions (docs/model.md, "Reversed flow"): the direction of a scene,
+the head losses of reversed flow against independent integrations of the steady
+bulk-flow equations, the mirror identity of the flow alone."""
+import numpy as np
+import pytest
+from scipy.integrate import solve_bvp, solve_ivp
+
+from fsicas.model.assembly import build_model
+from fsicas.model.fields import flow_fields
+from fsicas.linear.steady import steady_state
+from fsicas.profile import Profile
+from fsicas.scene import Scene, directed_ustar
+
+
+# -- the direction of a scene ------------------------------------------------------------
+def test_direction_sets_the_sign_of_the_speed():
+    assert Scene.from_dict({"direction": "reverse", "ustar": 3}).ustar == -3.0
+    assert Scene.from_dict({"direction": "forward", "ustar": 3}).ustar == 3.0
+    assert Scene.from_dict({"direction": "reverse"}).ustar == -Scene().ustar
+    assert Scene(ustar=-2).direction == "reverse" and Scene(ustar=2).direction == "forward"
+    assert Scene.from_dict({"direction": "reverse", "ustar": 0}).direction == "reverse"
+    assert Scene(ustar=-2).flow_sign == -1.0 and Scene().flow_sign == 1.0
+
+
+@pytest.mark.parametrize("given, words", [
+    (dict(direction="reverse", ustar=-3), "negative ustar"),
+    (dict(direction="forward", ustar=-3), "negative ustar"),
+    (dict(direction="backward"), "direction must be one of forward, reverse")])
+def test_contradictory_or_unknown_direction_is_refused(given, words):
+    with pytest.raises(ValueError, match=words):
+        Scene.from_dict(given)
+
+
+def test_direction_in_a_scene_file_and_on_the_command_line(tmp_path):
+    from fsicas.cli import build_parser
+    from fsicas.cli.scene_options import scene_from_args
+    path = tmp_path / "s.toml"
+    path.write_text('ustar = 4.0\ndirection = "reverse"\n')
+    parse = lambda *argv: scene_from_args(build_parser().parse_args(["steady", *argv]))
+    assert parse("--scene", str(path)).ustar == -4.0
+    assert parse("--scene", str(path), "--direction", "forward").ustar == 4.0
+    assert parse("--ustar", "2", "--direction", "reverse").ustar == -2.0
+    with pytest.raises(ValueError, match="negative ustar"):
+        parse("--ustar=-2", "--direction", "reverse")
+
+
+def test_physical_flow_carries_its_sign():
+    from fsicas.physical import load_physical, parse_flow
+    palate = load_physical("soft_palate")
+    forward = palate.scene(parse_flow("20L/min"))
+    assert palate.scene(parse_flow("-20L/min")).ustar == pytest.approx(-forward.ustar, rel=1e-14)
+    assert palate.scene(parse_flow("20L/min"), direction="reverse").ustar == \
+        pytest.approx(-forward.ustar, rel=1e-14)
+    with pytest.raises(ValueError, match="negative and a direction"):
+        palate.scene(parse_flow("-20L/min"), direction="reverse")
+    with pytest.raises(ValueError, match="nonzero"):
+        parse_flow("0L/min")
+
+
+# -- the flow alone: head losses by direction, mirror identity ---------------------------
+def _upstream_march(H, dH, Q, mstar, f, k0, kl, pl=0.0):
+    """Steady bulk flow through a rigid channel of height H(x) with the flow rate Q < 0
+    (entering at x = 1): the pressure marched by an ODE solver from the upstream end,
+    where the fluid leaves the reservoir PL through the opening of loss KL,
+    p(1) = PL - M*/2 (u^2 + KL u^2), along p' = -M* (u u' + f u|u|/H), u = Q/H, to the
+    root, where it leaves through the opening of loss K0 into the reservoir
+    P0 = p(0) + M*/2 (u^2 - K0 u^2). Returns P0 - PL."""
+    u = lambda x: Q / H(x)
+    rhs = lambda x, p: [-mstar * (u(x) * (-Q * dH(x) / H(x) ** 2) + f * u(x) * abs(u(x)) / H(x))]
+    u1 = u(1.0)
+    p1 = pl - mstar / 2 * (u1**2 + kl * u1**2)
+    sol = solve_ivp(rhs, (1.0, 0.0), [p1], method="DOP853", rtol=1e-13, atol=1e-14)
+    u0 = u(0.0)
+    p0 = sol.y[0, -1] + mstar / 2 * (u0**2 - k0 * u0**2)
+    return p0 - pl
+
+
+def _rigid_channel(h_root, h_tip, k0, kl, ustar, **kw):
+    """A symmetric channel whose beam is held straight (q = 0, r = 0)."""
+    wall = Profile.linear(h_root / 2, h_tip / 2)
+    return Scene(hstar=h_root, channel1=wall, channel2=wall, k0=k0, kl=kl, ustar=ustar,
+                 modes=4, mstar=0.7, friction=0.14, **kw)
+
+
+def _model_pressure_drop(scene):
+    """Δp that makes the model's flow rows steady with the beam straight and Q from U*:
+    the rows are Δp/M* + (the rest), so Δp = -M* (row at Δp = 0)."""
+    model = build_model(scene)
+    x = np.r_[np.zeros(2 * scene.modes), [scene.ustar * scene.hstar / 2] * 2]
+    rows = np.asarray(model.rhs(x, model.parameters(scene, 0.0))).ravel()[-2:]
+    return -scene.mstar * rows, x
+
+
+def test_reversed_flow_head_losses_against_an_upstream_march():
+    """Reversed flow (U* < 0): the model's Δp equals the pressure marched from the
+    tip, with KL the loss of the fluid entering at the tip and K0 that of the fluid
+    leaving at the root (the u|u| terms of Eq. 6 with its sign terms)."""
+    scene = _rigid_channel(0.1, 0.06, k0=0.8, kl=0.35, ustar=-3.0)
+    H = lambda x: 0.05 - 0.02 * x                      # one channel: half the gap
+    dp = _upstream_march(H, lambda x: -0.02 + 0 * x, scene.ustar * 0.05, scene.mstar,
+                            scene.friction, scene.k0, scene.kl)
+    model_dp, _ = _model_pressure_drop(scene)
+    assert dp < 0
+    np.testing.assert_allclose(model_dp, dp, rtol=1e-11)
+
+
+def test_mirror_identity_of_the_flow_alone():
+    """A reversed channel is the mirrored forward channel (x -> 1 - x) with K0 and KL
+    exchanged: opposite pressure drops, mirrored pressure fields, the same losses."""
+    rev = _rigid_channel(0.1, 0.06, k0=0.8, kl=0.35, ustar=-3.0)
+    fwd = _rigid_channel(0.06, 0.1, k0=0.35, kl=0.8, ustar=3.0 * 0.1 / 0.06)
+    dp_rev, x_rev = _model_pressure_drop(rev)
+    dp_fwd, x_fwd = _model_pressure_drop(fwd)
+    np.testing.assert_allclose(dp_rev, -dp_fwd, rtol=1e-12)
+    s = np.linspace(0.0, 1.0, 2001)
+    p_rev = flow_fields(rev, x_rev, 0 * x_rev, dp_rev[0], s).p      # PL = 0, P0 = Δp
+    p_fwd = flow_fields(fwd, x_fwd, 0 * x_fwd, dp_fwd[0], s).p
+    # upstream reservoir at 0 in both: p_rev - PL_rev = p_fwd(1 - x) - P0_fwd
+    np.testing.assert_allclose(p_rev, p_fwd[:, ::-1] - dp_fwd[0], atol=1e-9 * abs(dp_fwd[0]))
+    # the same losses: singular K0 u0|u0| + KL u1|u1| (the rows' loss terms) are equal
+    u_rev, u_fwd = x_rev[-1] / 0.1, x_fwd[-1] / 0.06
+    loss_rev = rev.k0 * u_rev * abs(u_rev) + rev.kl * (x_rev[-1] / 0.06) * abs(x_rev[-1] / 0.06)
+    loss_fwd = fwd.k0 * u_fwd * abs(u_fwd) + fwd.kl * (x_fwd[-1] / 0.1) * abs(x_fwd[-1] / 0.1)
+    assert loss_rev == pytest.approx(-loss_fwd, rel=1e-14)
+
+
+# -- the steady state under reversed flow ------------------------------------------------
+def _steady_bvp(scene):
+    """Steady state of the flexible beam in a straight channel by collocation of the
+    beam-flow boundary-value problem (scipy solve_bvp), no modes: state (y, y', y'',
+    y''', p1, p2), unknowns (Q1, Q2, Δp); y'''' = p2 - p1 with h_c = H_c + s_c y,
+    p_c' = -M* (u_c u_c' + f u_c|u_c|/h_c), Eq. 6 at both ends (P0 = Δp, PL = 0)."""
+    H = [w(0.0) for w in scene.walls]
+    m, f, k0, kl = scene.mstar, scene.friction, scene.k0, scene.kl
+    signs = (-1.0, 1.0)
+
+    def rhs(x, z, par):
+        out = [z[1], z[2], z[3], z[5] - z[4]]
+        for c, s in enumerate(signs):
+            h, u = H[c] + s * z[0], par[c] / (H[c] + s * z[0])
+            out.append(-m * (u * (-par[c] * s * z[1] / h**2) + f * u * np.abs(u) / h))
+        return np.vstack(out)
+
+    def bc(za, zb, par):
+        res = [za[0], za[1], zb[2], zb[3], par[0] + par[1] - scene.ustar * scene.hstar]
+        for c, s in enumerate(signs):
+            u0, u1 = par[c] / (H[c] + s * za[0]), par[c] / (H[c] + s * zb[0])
+            res.append(za[4 + c] - (par[2] - m / 2 * (u0**2 + k0 * u0 * abs(u0))))
+            res.append(zb[4 + c] - (0.0 - m / 2 * (u1**2 - kl * u1 * abs(u1))))
+        return np.array(res)
+
+    x = np.linspace(0, 1, 201)
+    dp0 = scene.mstar * scene.ustar * abs(scene.ustar) * ((k0 + kl) / 2 + 2 * f / scene.hstar)
+    z0 = np.zeros((6, x.size))
+    z0[4] = z0[5] = dp0 * (1 - x)
+    par0 = [scene.ustar * H[0], scene.ustar * H[1], dp0]
+    sol = solve_bvp(rhs, bc, x, z0, p=par0, tol=1e-10, max_nodes=100000)
+    assert sol.status == 0, sol.message
+    return sol
+
+
+def test_steady_state_under_reversed_flow_against_a_collocated_bvp():
+    """An asymmetric straight channel, U* = -4: the modal steady state (N = 16) against
+    the collocated beam-flow BVP (tip deflection, Δp, Q1 to the modal truncation)."""
+    scene = Scene(hstar=0.1, channel1=Profile.constant(0.055), channel2=Profile.constant(0.045),
+                  mstar=1.0, ustar=-4.0, k0=0.6, kl=1.0, modes=16)
+    model = build_model(scene)
+    st = steady_state(scene, model)
+    sol = _steady_bvp(scene)
+    tip = float(model.deflection(st.x, [1.0])[0])
+    assert st.pressure_drop < 0 and np.all(st.Q < 0)
+    assert abs(tip - sol.sol(1.0)[0]) < 1e-5 * abs(tip)
+    assert st.pressure_drop == pytest.approx(sol.p[2], rel=1e-6)
+    assert st.Q[0] == pytest.approx(sol.p[0], rel=1e-6)
