@@ -37,7 +37,7 @@ def add_onset_command(sub) -> None:
 def _search_bound(args, reference: float | None) -> float:
     if args.ustar_max is not None:
         return args.ustar_max
-    return min(max(USTAR_MAX, 1.5 * (reference or 0.0)), MAX_ABS_USTAR)
+    return min(max(USTAR_MAX, 1.5 * abs(reference or 0.0)), MAX_ABS_USTAR)
 
 
 def _cmd_onset(args) -> dict:

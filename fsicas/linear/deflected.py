@@ -19,7 +19,7 @@ import continuation as C
 
 from ..model.assembly import Model
 from ..scene import Scene
-from .adapter import PI, PI_SCALE
+from .adapter import PI, PI_SCALE, pi_interval
 from .divergence import DivergencePoint
 from .hopf import PI_MARGIN, flutter_problem
 
@@ -50,24 +50,24 @@ def deflected_branch(scene: Scene, model: Model, onset: DivergencePoint, ustar_m
                      amplitude: float = 1e-3) -> DeflectedBranch:
     """The deflected branch born at ``onset`` (a symmetry-breaking divergence located on
     the steady branch, as :func:`fsicas.linear.hopf.critical_velocity` returns it),
-    continued in Π up to about U* = ``ustar_max`` (Π ∝ U*² with a margin; points above
-    are dropped)."""
+    continued in Π up to about the speed |U*| = ``ustar_max`` (Π ∝ U*|U*| with a margin;
+    points above are dropped; Π < 0 for reversed flow)."""
     if onset.kind != "divergence" or not onset.symmetry_breaking or onset.point is None:
         raise ValueError("deflected_branch needs a symmetry-breaking divergence located on "
                          "the steady branch (critical_velocity's onset of kind 'divergence')")
-    problem = flutter_problem(scene, model, min(0.2, onset.ustar / 2))
+    problem = flutter_problem(scene, model, min(0.2, abs(onset.ustar) / 2))
     start = C.equilibrium_from_bp(problem, onset.point, amplitude=amplitude)
     pi_bp = onset.pressure_drop / (onset.mstar * PI_SCALE)
     pi_max = PI_MARGIN * pi_bp * (ustar_max / onset.ustar) ** 2
-    settings = C.ContinuationSettings(ds=pi_max / 600, ds_max=pi_max / 150,
-                                      ds_min=1e-10 * pi_max, max_steps=600,
-                                      bounds={PI: (0.0, pi_max)})
+    size = abs(pi_max)
+    settings = C.ContinuationSettings(ds=size / 600, ds_max=size / 150, ds_min=1e-10 * size,
+                                      max_steps=600, bounds={PI: pi_interval(0.0, pi_max)})
     n = model.n_modes
     side = np.asarray(start.X0[n:2 * n]) - np.asarray(onset.x[n:2 * n])     # the q it leaves along
     mirror = C.Event("mirror", lambda problem, X: float(side @ X[n:2 * n]), terminal=True)
     branch = C.continuation(start, settings=settings, events=(mirror,))
     ustar = branch.x[:, -2:].sum(axis=1) / scene.hstar
-    keep = ustar <= ustar_max
+    keep = np.abs(ustar) <= ustar_max
     if branch.status == "event":      # its end is the straight state at the other branch point
         keep[-1] = False
     tip = np.array([float(model.deflection(x, [1.0])[0]) for x in branch.x[keep]])

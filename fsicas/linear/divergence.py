@@ -113,19 +113,21 @@ def real_rate(scene: Scene, model: Model, ustar: float) -> tuple[float, object]:
 
 
 def divergence_at(scene: Scene, model: Model, ustar_guess: float) -> DivergencePoint | None:
-    """The divergence of ``scene`` (at its M*) near ``ustar_guess``: the sign change of
-    the real eigenvalue nearest 0 along the steady states in U*, bracketed within
-    :data:`BRACKETS` of the guess and solved by Brent's method to round-off; None when
-    no sign change is bracketed (or no steady state is found there)."""
+    """The divergence of ``scene`` (at its M*) near ``ustar_guess`` (signed: < 0 for
+    reversed flow): the sign change of the real eigenvalue nearest 0 along the steady
+    states in U*, bracketed within :data:`BRACKETS` of the guess and solved by Brent's
+    method to round-off; None when no sign change is bracketed (or no steady state is
+    found there)."""
     rate = lambda u: real_rate(scene, model, u)[0]
+    size = abs(ustar_guess)
     try:
         for half in BRACKETS:
-            lo, hi = ustar_guess * (1 - half), ustar_guess * (1 + half)
+            lo, hi = sorted((ustar_guess * (1 - half), ustar_guess * (1 + half)))
             if np.sign(rate(lo)) != np.sign(rate(hi)):
-                u = brentq(rate, lo, hi, xtol=XTOL * ustar_guess, rtol=XTOL)
+                u = brentq(rate, lo, hi, xtol=XTOL * size, rtol=XTOL)
                 st = real_rate(scene, model, u)[1]
                 return _point(model, scene, st.x, st.p, st.pressure_drop, None,
-                              XTOL * (ustar_guess + abs(u)))
+                              XTOL * (size + abs(u)))
     except SteadyStateError:
         return None
     return None
