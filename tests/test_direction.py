@@ -3,7 +3,7 @@ the head losses of reversed flow against independent integrations of the steady
 bulk-flow equations, the mirror identity of the flow alone."""
 import numpy as np
 import pytest
-from scipy.integrate import solve_bvp, solve_ivp
+from scipy.integrate import solve_bvp, solve_ivp, trapezoid
 
 from fsicas.model.assembly import build_model
 from fsicas.model.fields import flow_fields
@@ -172,3 +172,138 @@ def test_steady_state_under_reversed_flow_against_a_collocated_bvp():
     assert abs(tip - sol.sol(1.0)[0]) < 1e-5 * abs(tip)
     assert st.pressure_drop == pytest.approx(sol.p[2], rel=1e-6)
     assert st.Q[0] == pytest.approx(sol.p[0], rel=1e-6)
+
+
+# -- stability under reversed flow -------------------------------------------------------
+def _unstable_count(model, scene, ustar):
+    from fsicas.linear.stability import eigenvalues
+    lam = eigenvalues(model, steady_state(scene.replace(ustar=ustar), model))
+    return int(np.sum(lam.real > 0)), float(lam[0].real)
+
+
+@pytest.fixture(scope="module")
+def reversed_cantilever():
+    scene = Scene(mstar=1.0, ustar=-1.0, modes=8)
+    return scene, build_model(scene)
+
+
+def test_reversed_onset_against_a_direct_eigenvalue_scan(reversed_cantilever):
+    """The onset of expiration (U* < 0) against the growth rate of the steady states
+    scanned over U* < 0 without continuation: the first U* where an eigenvalue has a
+    positive real part, bracketed on the scan and solved by Brent's method."""
+    from scipy.optimize import brentq
+    from fsicas.linear.hopf import critical_velocity
+    scene, model = reversed_cantilever
+    onset = critical_velocity(scene, model, ustar_max=10.0)
+    grid = -np.linspace(0.05, 2.0, 40)
+    rates = [_unstable_count(model, scene, u)[1] for u in grid]
+    k = int(np.argmax(np.array(rates) > 0))
+    assert k > 0
+    ustar = brentq(lambda u: _unstable_count(model, scene, u)[1], grid[k], grid[k - 1],
+                   xtol=1e-13, rtol=1e-13)
+    assert onset.kind == "divergence" and onset.ustar < 0 and onset.pressure_drop < 0
+    assert onset.ustar == pytest.approx(ustar, rel=1e-9)
+
+
+def test_reversed_onsets_change_the_unstable_count_of_the_scan(reversed_cantilever):
+    """Every onset of the reversed branch up to |U*| = 12 is where the count of unstable
+    eigenvalues of the scanned steady states changes (by 1 at a divergence, 2 at a Hopf
+    point), and the count is constant between them."""
+    from fsicas.linear.hopf import onset_points
+    scene, model = reversed_cantilever
+    points = onset_points(scene, model, ustar_max=12.0)
+    assert [p.kind for p in points][:2] == ["divergence", "flutter"]
+    edges = [0.0] + [abs(p.ustar) for p in points] + [12.0]
+    count = 0
+    for p, lo, hi in zip(points, edges[:-2], edges[2:]):
+        before = _unstable_count(model, scene, p.ustar * (1 - 1e-7))[0]
+        after = _unstable_count(model, scene, p.ustar * (1 + 1e-7))[0]
+        assert before == count and abs(after - before) == (1 if p.kind == "divergence" else 2)
+        middle = -(abs(p.ustar) + hi) / 2
+        assert _unstable_count(model, scene, middle)[0] == after
+        count = after
+
+
+def test_reversed_divergence_pressure_is_independent_of_mstar(reversed_cantilever):
+    """A divergence is a loss of static stability, and the steady equations hold M* and
+    U* only as M* u^2, fixed by Δp: Δp_c is the same at every M* and U*_c ∝ M*^-1/2
+    (a scaling law, not the code's own numbers)."""
+    from fsicas.linear.hopf import critical_velocity
+    scene, model = reversed_cantilever
+    a = critical_velocity(scene, model, ustar_max=10.0)
+    b = critical_velocity(scene.replace(mstar=0.1), model, ustar_max=10.0)
+    assert b.kind == a.kind == "divergence"
+    assert b.pressure_drop == pytest.approx(a.pressure_drop, rel=1e-9)
+    assert b.ustar == pytest.approx(a.ustar * np.sqrt(10.0), rel=1e-9)
+
+
+# -- a breath through zero flow ----------------------------------------------------------
+def test_tidal_schedule_goes_through_zero_flow():
+    from fsicas.timedomain.breathing import PressureSchedule
+    s = PressureSchedule.tidal(2.0, 0.5, period=4.0)
+    t = np.array([0.0, 1.0, 2.0, 3.0, 4.0, 5.0])
+    np.testing.assert_allclose(s.ustar_at(t), [0.0, 2.0, 0.0, -0.5, 0.0, 2.0], atol=1e-14)
+    assert s.reference_ustar == 2.0
+    assert PressureSchedule.tidal(0.0, 0.5, 1.0).reference_ustar == -0.5
+    with pytest.raises(ValueError, match="tidal breath"):
+        PressureSchedule.tidal(-1.0, 0.5, 1.0)
+
+
+def test_breath_through_zero_flow_against_the_flow_ode():
+    """Inspiration then expiration in a straight symmetric channel: the beam stays at
+    rest and each channel's flow obeys the scalar ODE of its flow row,
+    Q' = h k (U|U| - u|u|), u = Q/h, k = (K0 + KL)/2 + f/h (the schedule's Δp is the
+    steady one of U(t)); the integrated Q1 + Q2 (IDAS, rtol 1e-9) through both reversals
+    against DOP853 on that ODE (rtol 1e-12), and the volume through the channel over
+    the breath, to the integrator's tolerance."""
+    from fsicas.timedomain.breathing import PressureSchedule
+    from fsicas.timedomain.integrators import Settings, simulate
+    scene = Scene(mstar=1.0, ustar=2.0, modes=6, k0=0.3, kl=1.0)
+    model = build_model(scene)
+    period, h = 4.0, scene.hstar / 2
+    schedule = PressureSchedule.tidal(2.0, 0.4, period)      # below the reversed divergence
+    traj = simulate(model, steady_state(scene, model), 1.5 * period, schedule=schedule,
+                    perturbation=0.0, settings=Settings(rtol=1e-9, atol=1e-12, dt_out=1e-2))
+    assert traj.status == "success"
+    k = (scene.k0 + scene.kl) / 2 + scene.friction / h
+    U = schedule.ustar_at
+    ode = solve_ivp(lambda t, Q: h * k * (U(t) * abs(U(t)) - (Q / h) * abs(Q / h)),
+                    (0.0, traj.t[-1]), [scene.ustar * h], method="DOP853", rtol=1e-12,
+                    atol=1e-15, t_eval=traj.t, max_step=0.01)
+    total = traj.x[:, -2:].sum(axis=1)
+    assert total.min() < 0 < total.max()                     # it went through zero twice
+    assert np.max(np.abs(traj.x[:, :2 * scene.modes])) < 1e-6 * h   # at rest (round-off)
+    np.testing.assert_allclose(total, 2 * ode.y[0], atol=1e-7 * np.max(np.abs(total)))
+    assert trapezoid(total, traj.t) == pytest.approx(2 * trapezoid(ode.y[0], traj.t), rel=1e-7)
+
+
+def test_breath_through_zero_flow_with_a_moving_beam_and_its_quadrature_estimate():
+    """Whole breaths through an asymmetric channel with the beam moving: the run goes
+    through every reversal (IDAS's step control copes with the C^1 u|u|), its quadrature
+    estimate includes the samples around each reversal of the inlet flow, and there the
+    estimate (F on 2K nodes against K) is within a factor 2 of the error against 8K
+    nodes (the flow reverses inside the channel: algebraic convergence)."""
+    from fsicas.model.accuracy import quadrature_error, relative_error
+    from fsicas.timedomain.breathing import PressureSchedule
+    from fsicas.timedomain.run import _spread, run_case
+    scene = Scene(mstar=1.0, ustar=3.0, modes=6, zeta=0.01, channel1=Profile.constant(0.055),
+                  channel2=Profile.constant(0.045))
+    run = run_case(scene, 8.0, schedule=PressureSchedule.tidal(3.0, 1.0, 4.0),
+                   perturbation=0.05, stop_early=False)
+    traj, model = run.trajectory, run.model
+    assert run.status == "success"
+    total = traj.x[:, -2:].sum(axis=1)
+    assert len(np.flatnonzero(np.diff(np.sign(total)))) == 3    # in, out, in again
+    flips = np.flatnonzero(np.any(np.diff(np.sign(traj.x[:, -2:]), axis=0) != 0, axis=1))
+    sampled = _spread(traj.x)
+    assert all(any(np.array_equal(traj.x[k], row) for row in sampled) for k in flips)
+    fine = build_model(model.scene.replace(quad_nodes=8 * model.scene.n_quad))
+    rhs = lambda m, x, p: np.asarray(m.rhs(x, p)).ravel()
+    ratios = []
+    for k in np.r_[flips, flips + 1]:
+        p = traj.p.copy()
+        p[model.index("pressure_drop")] = traj.pressure_drop[k]
+        error = relative_error(rhs(fine, traj.x[k], p), rhs(model, traj.x[k], p))
+        if error > 1e-14:                                   # above round-off
+            ratios.append(quadrature_error(model, traj.x[k], p) / error)
+    assert ratios and 0.5 < min(ratios) and max(ratios) < 2.0

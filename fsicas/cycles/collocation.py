@@ -40,6 +40,7 @@ import numpy as np
 
 import continuation as C
 
+from ..checks import require_forward
 from ..linear.adapter import PI, flutter_field, pi_of
 from ..linear.hopf import CriticalVelocityError, HopfPoint, first_hopf, flutter_problem
 from ..model.accuracy import QUADRATURE_TOL, adequate_model
@@ -206,6 +207,7 @@ def continue_cycles(scene: Scene, model: Model | None = None, *, ustar_max: floa
                     ) -> CycleRun:
     """:func:`cycle_branch` as a :class:`CycleRun` (the start of the curves of cycles in
     (M*, U*), :mod:`fsicas.cycles.curves`)."""
+    require_forward(scene, "the limit-cycle branch (lco)")
     model = model or build_model(scene)
     hopf = hopf or first_hopf(scene, model, ustar_max=ustar_max)
     if hopf is None:
