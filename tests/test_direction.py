@@ -307,3 +307,22 @@ def test_breath_through_zero_flow_with_a_moving_beam_and_its_quadrature_estimate
         if error > 1e-14:                                   # above round-off
             ratios.append(quadrature_error(model, traj.x[k], p) / error)
     assert ratios and 0.5 < min(ratios) and max(ratios) < 2.0
+
+
+def test_reversed_pitchfork_is_subcritical_and_its_deflected_states_end_at_the_wall(
+        reversed_cantilever):
+    """Past the reversed divergence the deflected steady states turn back to lower
+    speeds, unstable (a subcritical pitchfork), and end where the tip reaches the
+    contact layer: |y(1)| = H*/2 - eps there, every state steady (|F| at round-off)."""
+    from fsicas.linear.deflected import deflected_branch
+    from fsicas.linear.hopf import critical_velocity
+    scene, model = reversed_cantilever
+    onset = critical_velocity(scene, model, ustar_max=10.0)
+    branch = deflected_branch(scene, model, onset, ustar_max=10.0)
+    assert branch.status == "wall" and not branch.stable.any()
+    assert np.all(np.abs(branch.ustar) < abs(onset.ustar))
+    assert abs(branch.tip_deflection[-1]) == pytest.approx(scene.hstar / 2 - scene.contact_gap,
+                                                            rel=1e-8)
+    for x, dp in zip(branch.states, branch.pressure_drop):
+        residual = np.asarray(model.rhs(x, model.parameters(scene, dp))).ravel()
+        assert np.max(np.abs(residual)) < 1e-8 * max(1.0, np.max(np.abs(x)))

@@ -7,7 +7,9 @@ of each other (``R x``). One of them is continued in Π from the branch point
 eigenvalues of ``F_x v = λ M v``); the other is its mirror, with the same U*, stability
 and the opposite deflection. The continuation ends where the deflection changes sign (an
 event: the branch has come back to the straight state, at the other end of a window of
-divergence, and would go on along its mirror) or at the U* bound.
+divergence, and would go on along its mirror), where the tip reaches the wall's contact
+layer (status "wall": the gap h_c(1) = eps, beyond which the flow model closes the
+channel; the reversed cantilever's deflected states run there) or at the U* bound.
 """
 from __future__ import annotations
 
@@ -31,7 +33,8 @@ class DeflectedBranch:
     """One deflected branch: ``ustar``, ``tip_deflection`` (y(1) in units of L, the sign
     of one side; the mirror branch has the opposite), ``stable``, ``pressure_drop`` and
     the ``states`` along it, in the order continued from the branch point;
-    ``status``/``message`` of the continuation."""
+    ``status``/``message`` of the continuation ("wall": ended where the tip reaches the
+    wall's contact layer)."""
 
     ustar: np.ndarray
     tip_deflection: np.ndarray
@@ -65,12 +68,24 @@ def deflected_branch(scene: Scene, model: Model, onset: DivergencePoint, ustar_m
     n = model.n_modes
     side = np.asarray(start.X0[n:2 * n]) - np.asarray(onset.x[n:2 * n])     # the q it leaves along
     mirror = C.Event("mirror", lambda problem, X: float(side @ X[n:2 * n]), terminal=True)
-    branch = C.continuation(start, settings=settings, events=(mirror,))
+    branch = C.continuation(start, settings=settings, events=(mirror, _wall(scene, model)))
     ustar = branch.x[:, -2:].sum(axis=1) / scene.hstar
     keep = np.abs(ustar) <= ustar_max
-    if branch.status == "event":      # its end is the straight state at the other branch point
+    status = branch.status
+    if status == "event" and branch.special_points[-1].kind == "wall":
+        status = "wall"
+    elif status == "event":      # its end is the straight state at the other branch point
         keep[-1] = False
     tip = np.array([float(model.deflection(x, [1.0])[0]) for x in branch.x[keep]])
     dp = branch.par(PI)[keep] * PI_SCALE * scene.mstar
-    return DeflectedBranch(ustar[keep], tip, branch.n_unstable[keep] == 0, branch.status,
+    return DeflectedBranch(ustar[keep], tip, branch.n_unstable[keep] == 0, status,
                            branch.message, dp, branch.x[keep])
+
+
+def _wall(scene: Scene, model: Model) -> C.Event:
+    """The terminal event where the tip's narrower gap ``min_c (H_c(1) + s_c y(1))``
+    reaches the contact layer eps."""
+    n, phi = model.n_modes, model.tip.phi[:, 1]
+    heights = [float(w(1.0)) for w in scene.walls]
+    gap = lambda y: min(heights[0] - y, heights[1] + y) - scene.contact_gap
+    return C.Event("wall", lambda problem, X: float(gap(phi @ X[n:2 * n])), terminal=True)
