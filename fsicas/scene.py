@@ -85,9 +85,12 @@ def min_quad_nodes(n_modes: int) -> int:
 class Scene:
     """One configuration of the beam–channel system.
 
-    mstar: mass ratio rho_f L / (rho_s e) > 0.     ustar: mean inlet velocity (Q1+Q2)/H*.
+    mstar: mass ratio rho_f L / (rho_s e) > 0.     ustar: mean velocity (Q1+Q2)/H* at x = 0,
+    signed (< 0: reversed flow, from the tip to the root; :attr:`direction`).
     hstar: total gap at the inlet (H1(0)+H2(0))/L.  friction: Fanning coefficient f >= 0.
-    k0, kl: singular head losses at inlet and outlet. zeta: modal damping (scalar or per mode).
+    k0, kl: singular head losses of the openings at x = 0 and x = 1 (the inlet and outlet
+    of forward flow; the outlet and inlet of reversed flow, docs/model.md).
+    zeta: modal damping (scalar or per mode).
     modes: N.  quad_nodes: Gauss–Legendre nodes (default 2N+20, at least 2N).
     channel1/channel2: wall profiles (default: straight, hstar/2 each).
     thickness: beam thickness e(x)/e(0) (default uniform); a non-uniform beam uses the

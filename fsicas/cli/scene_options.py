@@ -33,11 +33,14 @@ SCENE_OPTIONS = {
 #: What each scene option means (the defaults are those of :class:`fsicas.Scene`).
 SCENE_HELP = {
     "mstar": "mass ratio M* = rho_f L / (rho_s e), in (0, 1e6]",
-    "ustar": "mean inlet velocity U* = U0 T / L, |U*| <= 1e4 (negative: reversed flow)",
+    "ustar": "mean velocity U* = U0 T / L at the root, |U*| <= 1e4 (negative: reversed "
+             "flow; with --direction, the speed |U*|)",
     "hstar": "total inlet gap H* = (H1(0) + H2(0)) / L, > 0",
     "friction": "Fanning friction coefficient f, >= 0",
-    "k0": "singular head loss at the inlet, >= 0",
-    "kl": "singular head loss at the outlet, >= 0",
+    "k0": "singular head loss of the opening at the root x = 0 (the inlet of forward flow, "
+          "the outlet of reversed flow), >= 0",
+    "kl": "singular head loss of the opening at the tip x = 1 (the outlet of forward flow, "
+          "the inlet of reversed flow), >= 0",
     "zeta": "modal damping ratio, >= 0: one for every mode, or one per mode (z1,z2,...,zN)",
     "modes": "number of beam modes N, in [1, 200]; onset, boundary: also auto (N doubled "
              "from 10 until the onsets move by less than 1e-2 with twice the modes)",
