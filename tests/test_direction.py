@@ -124,6 +124,42 @@ def test_mirror_identity_of_the_flow_alone():
     assert loss_rev == pytest.approx(-loss_fwd, rel=1e-14)
 
 
+
+def test_reversed_flow_satisfies_the_pdes_and_both_boundary_conditions():
+    """On non-equilibrium states of reversed flow (Q < 0, Δp < 0, the beam moving) the
+    fields rebuilt by the independent route (cumulative Simpson on 8001 points) and
+    advanced by DOP853 (rtol 1e-13) satisfy continuity and momentum (4) by central
+    differences in x and t, and Eq. 6 with its sign terms at both openings to round-off."""
+    scene = Scene(mstar=2.0, ustar=-4.0, modes=4, k0=0.3, kl=0.8, zeta=0.02,
+                  channel1=Profile.linear(0.05, 0.035),
+                  channel2=Profile.table([0.0, 0.5, 1.0], [0.05, 0.06, 0.045]))
+    model = build_model(scene)
+    rng = np.random.default_rng(3)
+    decay = 1.0 / np.arange(1, 5) ** 2
+    x0 = np.r_[0.05 * rng.normal(size=4) * decay, 1e-3 * rng.normal(size=4) * decay,
+               -np.array([0.2, 0.15])]
+    dp, dt, grid = -30.0, 2e-5, np.linspace(0.0, 1.0, 8001)
+    p = model.parameters(pressure_drop=dp)
+    rhs = lambda t, z: model.xdot(z, p)
+    states = [x0 if t == 0 else solve_ivp(rhs, (0.0, t), x0, method="DOP853", rtol=1e-13,
+                                          atol=1e-15).y[:, -1] for t in (-dt, 0.0, dt)]
+    before, now, after = (flow_fields(scene, z, model.xdot(z, p), dp, grid) for z in states)
+    grad = lambda a: np.gradient(a, grid, edge_order=2)
+    assert np.all(now.u < 0)
+    for c in range(2):
+        h, u, pc = now.h[c], now.u[c], now.p[c]
+        h_t = (after.h[c] - before.h[c]) / (2 * dt)
+        flux_t = (after.h[c] * after.u[c] - before.h[c] * before.u[c]) / (2 * dt)
+        momentum = scene.mstar * (flux_t + grad(h * u**2) + scene.friction * u * abs(u)) \
+            + h * grad(pc)
+        scale = np.max(np.abs(h * grad(pc)))
+        assert np.max(np.abs(h_t + grad(h * u))) < 1e-5 * max(np.max(np.abs(h_t)), 1e-3)
+        assert np.max(np.abs(momentum)) < 1e-5 * scale
+        u0, u1 = u[0], u[-1]      # leaving at the root through K0, entering at the tip through KL
+        assert pc[0] == pytest.approx(dp - scene.mstar / 2 * (1 - scene.k0) * u0**2, rel=1e-13)
+        assert pc[-1] == pytest.approx(-scene.mstar / 2 * (1 + scene.kl) * u1**2, rel=1e-11,
+                                       abs=1e-11 * scale)
+
 # -- the steady state under reversed flow ------------------------------------------------
 def _steady_bvp(scene):
     """Steady state of the flexible beam in a straight channel by collocation of the
@@ -326,3 +362,34 @@ def test_reversed_pitchfork_is_subcritical_and_its_deflected_states_end_at_the_w
     for x, dp in zip(branch.states, branch.pressure_drop):
         residual = np.asarray(model.rhs(x, model.parameters(scene, dp))).ravel()
         assert np.max(np.abs(residual)) < 1e-8 * max(1.0, np.max(np.abs(x)))
+
+
+def test_reversed_boundary_is_the_divergence_scaling_law(reversed_cantilever):
+    """The boundary U*_c(M*) of reversed flow over two decades: divergence everywhere
+    (no switch), negative, on the law U*_c ∝ M*^-1/2 of a static loss of stability
+    through the onset at M* = 1 checked against the eigenvalue scan above."""
+    from fsicas.linear.boundary import stability_boundary
+    from fsicas.linear.hopf import critical_velocity
+    scene, model = reversed_cantilever
+    mstars = np.array([0.1, 0.5, 2.0, 10.0])
+    boundary = stability_boundary(scene, mstars, model, ustar_max=10.0)
+    u1 = critical_velocity(scene, model, ustar_max=10.0).ustar
+    assert not boundary.switches and not boundary.warnings
+    for p in boundary.points:
+        assert p.kind == "divergence" and p.refined and not p.missed
+        assert p.ustar_crit == pytest.approx(u1 / np.sqrt(p.mstar), rel=1e-9)
+
+
+def test_physical_margin_of_a_reversed_onset_is_on_the_magnitudes():
+    """An expiration of 1 L/min below a reversed onset of -1.5 L/min keeps a margin of
+    +0.5 L/min and does not reach the onset; one of 2 L/min does."""
+    from fsicas.physical import load_physical, parse_flow
+    from fsicas.physical_report import onset_json
+    scales = load_physical("soft_palate").scene(parse_flow("-1L/min")).scales
+    u = lambda l_min: l_min / scales.l_per_min(1.0)
+    onset = {"ustar_crit": u(-1.5), "mstar": 0.1, "omega": 0.0, "freq_ratio": 0.0,
+             "pressure_drop": -1.0, "criticality": None}
+    calm = onset_json(scales, onset, u(-1.0), 40.0)
+    assert calm["margin_flow_l_min"] == pytest.approx(0.5, rel=1e-12)
+    assert calm["flutters_at_reference"] is False
+    assert onset_json(scales, onset, u(-2.0), 40.0)["flutters_at_reference"] is True
