@@ -57,7 +57,7 @@ GROUPS = {
     "direction": "the flow's direction: `--direction sideways`; a sign given twice (`--direction "
                  "reverse --ustar -2`, `--physical soft_palate --flow=-20L/min --direction "
                  "reverse`); reversed flow where only forward flow is computed (`lco`, "
-                 "`grazing`); `simulate --schedule tidal --direction reverse`, "
+                 "`grazing`, `design`, `design --target-flow=-30L/min`); `simulate --schedule tidal --direction reverse`, "
                  "`--expiration-peak` without `--schedule tidal`",
     "scene files": "scene files: missing, a folder, invalid TOML, not UTF-8, nested thousands "
                    "deep, an unknown key, `zeta = \"abc\"`, `direction = \"up\"`, "
@@ -145,6 +145,9 @@ _OPTIONS = {
          "negative and a direction"),
         (("lco", "--direction", "reverse"), "forward flow only"),
         (("grazing", "--direction", "reverse"), "forward flow only"),
+        (("design", "--physical", "soft_palate", "--direction", "reverse"), "forward flow only"),
+        (("design", "--physical", "soft_palate", "--target-flow=-30L/min", "--vary", "E"),
+         "--target-flow must be > 0"),
         ((*_SIM, "--schedule", "tidal", "--direction", "reverse"), "tidal"),
         ((*_SIM, "--expiration-peak", "1"), "--expiration-peak")],
     "sizes": [
