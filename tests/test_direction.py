@@ -393,3 +393,21 @@ def test_physical_margin_of_a_reversed_onset_is_on_the_magnitudes():
     assert calm["margin_flow_l_min"] == pytest.approx(0.5, rel=1e-12)
     assert calm["flutters_at_reference"] is False
     assert onset_json(scales, onset, u(-2.0), 40.0)["flutters_at_reference"] is True
+
+
+def test_reversed_flutter_cycles_close_under_an_independent_integration():
+    """A narrow-loss channel (f = 0.02) flutters first under reversed flow, subcritically
+    (l1 > 0): its cycle branch runs back to lower speeds, and its cycles, integrated over
+    their period by DOP853 from their own state (no collocation), return to it."""
+    from fsicas.cycles.collocation import CycleSettings, cycle_branch
+    scene = Scene(ustar=-1.0, mstar=1.0, modes=6, friction=0.02)
+    model = build_model(scene)
+    branch = cycle_branch(scene, model, ustar_max=1.0, settings=CycleSettings(max_points=13))
+    hopf = branch.hopf
+    assert hopf["kind"] == "flutter" and hopf["ustar_crit"] < 0 and hopf["l1"] > 0
+    assert all(hopf["ustar_crit"] < pt.ustar < 0 for pt in branch.points)
+    for pt in (branch.points[0], branch.points[-1]):
+        p = model.parameters(scene, pt.pressure_drop)
+        sol = solve_ivp(lambda t, z: model.xdot(z, p), (0.0, pt.period), pt.state,
+                        method="DOP853", rtol=1e-11, atol=1e-13)
+        assert np.max(np.abs(sol.y[:, -1] - pt.state)) < 1e-6 * np.max(np.abs(sol.y))

@@ -56,8 +56,8 @@ GROUPS = {
              "2000 x 2000 points; `map --t-end 1e12`",
     "direction": "the flow's direction: `--direction sideways`; a sign given twice (`--direction "
                  "reverse --ustar -2`, `--physical soft_palate --flow=-20L/min --direction "
-                 "reverse`); reversed flow where only forward flow is computed (`lco`, "
-                 "`grazing`, `design`, `design --target-flow=-30L/min`); `simulate --schedule tidal --direction reverse`, "
+                 "reverse`); reversed flow where only forward flow is computed (`grazing`, "
+                 "`design`, `design --target-flow=-30L/min`); `simulate --schedule tidal --direction reverse`, "
                  "`--expiration-peak` without `--schedule tidal`",
     "scene files": "scene files: missing, a folder, invalid TOML, not UTF-8, nested thousands "
                    "deep, an unknown key, `zeta = \"abc\"`, `direction = \"up\"`, "
@@ -143,7 +143,6 @@ _OPTIONS = {
         (("steady", "--direction", "reverse", "--ustar", "-2"), "negative ustar"),
         (("onset", "--physical", "soft_palate", "--flow=-20L/min", "--direction", "reverse"),
          "negative and a direction"),
-        (("lco", "--direction", "reverse"), "forward flow only"),
         (("grazing", "--direction", "reverse"), "forward flow only"),
         (("design", "--physical", "soft_palate", "--direction", "reverse"), "forward flow only"),
         (("design", "--physical", "soft_palate", "--target-flow=-30L/min", "--vary", "E"),
