@@ -223,14 +223,20 @@ def reversed_cantilever():
     return scene, build_model(scene)
 
 
-def test_reversed_onset_against_a_direct_eigenvalue_scan(reversed_cantilever):
+@pytest.mark.parametrize("hstar", [0.1, 0.05])
+def test_reversed_onset_against_a_direct_eigenvalue_scan(reversed_cantilever, hstar):
     """The onset of expiration (U* < 0) against the growth rate of the steady states
     scanned over U* < 0 without continuation: the first U* where an eigenvalue has a
-    positive real part, bracketed on the scan and solved by Brent's method."""
+    positive real part, bracketed on the scan and solved by Brent's method. At H* = 0.05
+    the steady state is unstable only for |U*| in (0.2385, 1.5788) below the first Hopf
+    point (1.853): a window the search must not step over."""
     from scipy.optimize import brentq
     from fsicas.linear.hopf import critical_velocity
     scene, model = reversed_cantilever
-    onset = critical_velocity(scene, model, ustar_max=10.0)
+    if hstar != scene.hstar:
+        scene = scene.replace(hstar=hstar)
+        model = build_model(scene)
+    onset = critical_velocity(scene, model, ustar_max=40.0)
     grid = -np.linspace(0.05, 2.0, 40)
     rates = [_unstable_count(model, scene, u)[1] for u in grid]
     k = int(np.argmax(np.array(rates) > 0))
@@ -411,3 +417,19 @@ def test_reversed_flutter_cycles_close_under_an_independent_integration():
         sol = solve_ivp(lambda t, z: model.xdot(z, p), (0.0, pt.period), pt.state,
                         method="DOP853", rtol=1e-11, atol=1e-13)
         assert np.max(np.abs(sol.y[:, -1] - pt.state)) < 1e-6 * np.max(np.abs(sol.y))
+
+
+def test_a_curve_of_one_point_has_no_piece_and_the_envelope_keeps_the_others():
+    """A divergence curve that could not be followed (one point) has no segment and no
+    piece, so the pieces of the curves stacked after it stay aligned with their segments
+    (the reversed boundary at f = 0.02 picked a wrong piece before)."""
+    from fsicas.linear.boundary import _next_piece
+    from fsicas.linear.curves import Envelope, OnsetCurve
+    one = OnsetCurve(0, np.array([10.0]), np.array([-1.6]), np.zeros(1), np.ones(1, int),
+                     "failed", first_piece=3, kind="divergence")
+    two = OnsetCurve(1, np.array([50.0, 200.0]), np.array([-0.5, -0.3]), np.array([1.0, 2.0]),
+                     np.ones(2, int), "bound", first_piece=4)
+    assert one.pieces.size == 0 and _next_piece([one]) == 4 and _next_piece([one, two]) == 5
+    u, w, piece = Envelope([one, two]).lowest(2.0)
+    t = (2.0 - np.log10(50.0)) / (np.log10(200.0) - np.log10(50.0))
+    assert piece == 4 and u == pytest.approx(-0.5 + 0.2 * t, rel=1e-14)

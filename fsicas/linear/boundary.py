@@ -249,7 +249,7 @@ def _add_curves(scene, model, curves, found, window, ceiling, cut) -> None:
     for points in found:
         for h in points:
             if abs(h.ustar) <= ceiling and not any(_on_curve(scene, model, c, h) for c in curves):
-                first = curves[-1].pieces[-1] + 1 if curves else 0
+                first = _next_piece(curves)
                 if h.kind == "divergence":
                     curves.append(trace_divergence_curve(scene, model, h, len(curves), window,
                                                          ceiling, first, check))
@@ -257,6 +257,13 @@ def _add_curves(scene, model, curves, found, window, ceiling, cut) -> None:
                 stop = None if check is None else lambda: _hopf_stop(check(), scene.hstar)
                 curves.append(trace_hopf_curve(scene, model, h, len(curves), window, ceiling,
                                                first, stop))
+
+
+def _next_piece(curves) -> int:
+    """The first piece id past every traced curve's (one of a single point has no piece
+    but keeps its id)."""
+    return max(((int(c.pieces.max()) if c.pieces.size else c.first_piece) + 1
+                for c in curves), default=0)
 
 
 def _envelope_check(envelope: Envelope, headroom: float):

@@ -73,6 +73,8 @@ class OnsetCurve:
     @cached_property
     def _pieces(self) -> np.ndarray:
         step = np.sign(np.diff(np.log10(self.mstar)))
+        if not step.size:        # a curve of one point has no segment (and no piece)
+            return np.zeros(0, dtype=int)
         turns = np.concatenate([[0], np.cumsum(step[1:] * step[:-1] < 0)])
         return self.first_piece + turns
 

@@ -123,15 +123,22 @@ def flutter_problem(scene: Scene, model: Model, ustar_start: float) -> C.Equilib
 
 
 def _settings(pi_start: float, pi_max: float, max_steps: int = 1000,
-              stop_at: tuple = (), pi_stop: float | None = None) -> C.ContinuationSettings:
+              stop_at: tuple = (), pi_stop: float | None = None,
+              low_start: bool = False) -> C.ContinuationSettings:
     """Steps of at most pi_max/150 in Π (≈ U*^2): a pocket of stability between two Hopf
     points closer than one step would leave the unstable count unchanged and be missed,
     and two Hopf points in one step (near a crossing of Hopf curves) would be confused.
     The branch ends at ``pi_stop`` (default ``pi_max``); it runs towards negative Π
-    when ``pi_max`` < 0 (reversed flow)."""
+    when ``pi_max`` < 0 (reversed flow). With ``low_start`` (reversed flow, whose onsets
+    lie at speeds ∝ M*^-1/2 from |U*| = 0.01 on) the first step is at most ``|pi_start|``:
+    a first step of ``pi_max/600`` leapt over a whole window of divergence (M* = 1,
+    H* = 0.05: unstable for |U*| in (0.2385, 1.5788), the step went from 0.01 to 3.77);
+    from there the steps grow by the library's step control, limited by the eigenvalues'
+    approach to the axis."""
     ds_max = abs(pi_max) / 150
     stop = pi_max if pi_stop is None or abs(pi_stop) >= abs(pi_max) else pi_stop
-    return C.ContinuationSettings(ds=ds_max / 4, ds_min=1e-10 * abs(pi_max), ds_max=ds_max,
+    ds = min(ds_max / 4, max(abs(pi_start), 1e-9 * abs(pi_max))) if low_start else ds_max / 4
+    return C.ContinuationSettings(ds=ds, ds_min=1e-10 * abs(pi_max), ds_max=ds_max,
                                   max_steps=max_steps, bounds={PI: pi_interval(0.0, stop)},
                                   locate_tol=1e-12, stop_at=stop_at,
                                   direction=1 if pi_max > 0 else -1)
@@ -183,8 +190,9 @@ def steady_branch(scene: Scene, model: Model, ustar_max: float, ustar_start: flo
     pi_max = _pi_bound(scene, model, ustar_max, problem.X0[-1], ustar_start)
     pi_stop = None if ustar_stop is None or ustar_stop >= ustar_max else \
         _pi_bound(scene, model, ustar_stop, problem.X0[-1], ustar_start)
-    branch = C.continuation(problem, settings=_settings(problem.X0[-1], pi_max, stop_at=stop_at,
-                                                        pi_stop=pi_stop))
+    branch = C.continuation(problem, settings=_settings(
+        problem.X0[-1], pi_max, stop_at=stop_at, pi_stop=pi_stop,
+        low_start=scene.direction == "reverse"))
     if branch.n_unstable is not None and len(branch.n_unstable) and branch.n_unstable[0] > 0:
         raise CriticalVelocityError(
             f"the steady state is already unstable at U* = {scene.flow_sign * ustar_start:g} "
