@@ -24,6 +24,15 @@ def require(ok: bool, message: str) -> None:
         raise ValueError(message)
 
 
+def require_forward(scene, analysis: str) -> None:
+    """ValueError for a scene of reversed flow (U* < 0) given to ``analysis``, which
+    follows the flow from the root to the tip only (docs/model.md, "Reversed flow")."""
+    require(scene.direction == "forward",
+            f"{analysis} is computed for forward flow only (root to tip, U* >= 0), and the "
+            f"scene has reversed flow (U* = {scene.ustar:g}): for reversed flow use steady, "
+            "eig, onset, boundary, lco (without contact) or simulate")
+
+
 def finite_number(name: str, value) -> float:
     """``value`` as a float; ValueError naming ``name`` unless it is a finite real number
     (booleans are refused)."""

@@ -143,8 +143,9 @@ class Flow:
 
 
 def parse_flow(text, option: str = "--flow") -> Flow:
-    """``20L/min``, ``3.3e-4m^3/s`` (volume flow) or ``1.2m/s`` (velocity), > 0;
-    ValueError naming ``option`` otherwise."""
+    """``20L/min``, ``3.3e-4m^3/s`` (volume flow) or ``1.2m/s`` (velocity), != 0 and
+    signed (< 0: from the tip to the root, expiration); ValueError naming ``option``
+    otherwise."""
     hint = "a velocity (e.g. 1.2m/s) or a volume flow (e.g. 20L/min, 3.3e-4m^3/s)"
     if not isinstance(text, str) or not text.strip():
         raise ValueError(f"{option} must be {hint}, got {text!r}")
@@ -152,8 +153,9 @@ def parse_flow(text, option: str = "--flow") -> Flow:
     for kind, unit in (("velocity", "m/s"), ("volume", "m^3/s")):
         if q.check(unit):
             value = float(q.to(unit).magnitude)
-            if not value > 0:
-                raise ValueError(f"{option} must be > 0, got {text!r}")
+            if not value != 0:
+                raise ValueError(f"{option} must be nonzero (negative: reversed flow), got "
+                                 f"{text!r}")
             return Flow(text.strip(), kind, value)
     unit = "no unit" if q.dimensionless else f"units of {q.dimensionality}"
     raise ValueError(f"{option} {text!r} has {unit}: give {hint}")
@@ -288,7 +290,7 @@ class Physical:
         if flow is None:
             raise ValueError(f"{self.source}: the friction is taken from the viscosity at the "
                              "airflow: give --flow (e.g. --flow 20L/min) or flow = ... in [physical]")
-        re = v["rho_f"] * self.velocity(flow) * (self.gap / 2) / v["viscosity"]
+        re = v["rho_f"] * abs(self.velocity(flow)) * (self.gap / 2) / v["viscosity"]
         if not re > 0:
             raise ValueError(f"{self.source}: the friction is taken from the viscosity at the "
                              "airflow, and the airflow is zero: give a flow > 0")
@@ -340,6 +342,9 @@ def _explain(err: Exception, flow: Flow | None) -> str:
     text = str(err)
     if text.startswith("ustar") and flow is not None:
         return f"the airflow {flow.text} gives a U* out of range ({text}): give a smaller --flow"
+    if text.startswith("direction") and flow is not None:
+        return (f"the airflow {flow.text} is negative and a direction is given: give the "
+                "flow's magnitude with the direction, or a signed flow alone")
     if text.startswith("mstar"):
         return f"the mass ratio M* = rho_f L / (rho_s e) derived from the input: {text}"
     return text

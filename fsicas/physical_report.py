@@ -152,7 +152,8 @@ def onset_json(sc: Scales, hopf: dict | None, reference_ustar: float | None,
     """The onset in physical units, and its margin to the reference (breathing) flow:
     ``margin_flow_l_min`` = onset - reference (> 0: the reference flow is below the onset),
     ``margin_ratio`` = onset / reference; ``flutters_at_reference``: reference >= onset
-    (False when no onset was found below ``ustar_max`` and the reference lies below it)."""
+    (False when no onset was found below ``ustar_max`` and the reference lies below it);
+    for reversed flow (negative flows) the same on their magnitudes."""
     if hopf is None:
         out = {**flow_json(sc, None, "onset_"), "frequency_hz": None, "pressure_drop_pa": None,
                "criticality": None}
@@ -165,9 +166,11 @@ def onset_json(sc: Scales, hopf: dict | None, reference_ustar: float | None,
     if reference_ustar is None:
         return out
     if hopf is None:
-        out["flutters_at_reference"] = False if reference_ustar < ustar_max else None
+        out["flutters_at_reference"] = False if abs(reference_ustar) < ustar_max else None
         return out
     uc = hopf["ustar_crit"]
-    out.update(margin_flow_l_min=sc.l_per_min(uc) - sc.l_per_min(reference_ustar),
-               margin_ratio=uc / reference_ustar, flutters_at_reference=reference_ustar >= uc)
+    sign = 1.0 if uc >= 0 else -1.0
+    out.update(margin_flow_l_min=sign * (sc.l_per_min(uc) - sc.l_per_min(reference_ustar)),
+               margin_ratio=uc / reference_ustar,
+               flutters_at_reference=sign * reference_ustar >= sign * uc)
     return out

@@ -7,6 +7,7 @@ Units and symbols are those of :mod:`fsicas.units`. Every field is checked in
 from __future__ import annotations
 
 import dataclasses
+import math
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -15,8 +16,9 @@ from .checks import finite_number, read_toml, require
 from .profile import Profile
 from .units import MAX_BEAM_RATIO, THIN_BEAM_RATIO, Scales, thick_beam_message
 
-__all__ = ["Scene", "load_scene", "PARAMETER_FIELDS", "MODEL_PARAMETERS", "CONTACT_PARAMETERS",
-           "STRUCTURE_FIELDS", "BEAM_ENDS", "check_ends"]
+__all__ = ["Scene", "load_scene", "DIRECTIONS", "directed_ustar", "PARAMETER_FIELDS",
+           "MODEL_PARAMETERS", "CONTACT_PARAMETERS", "STRUCTURE_FIELDS", "BEAM_ENDS",
+           "check_ends"]
 
 
 def default_quad_nodes(n_modes: int) -> int:
@@ -54,6 +56,24 @@ def check_ends(ends) -> str:
 _TIMOSHENKO_FIELDS = ("beam", "slenderness", "poisson", "shear_coefficient")
 _DEFAULTS = dict(beam=EULER_BERNOULLI, slenderness=None, poisson=0.3, shear_coefficient=None)
 
+#: Directions of the flow (docs/model.md, "Reversed flow"): "forward" from the clamped
+#: root (x = 0) to the tip, U* >= 0; "reverse" from the tip to the root, U* < 0
+#: (expiration for the palate, the inverted cantilever).
+FORWARD, REVERSE = "forward", "reverse"
+DIRECTIONS = (FORWARD, REVERSE)
+
+
+def directed_ustar(ustar: float, direction: str) -> float:
+    """The signed U* of the speed ``ustar`` >= 0 in ``direction`` ("reverse" gives -ustar,
+    -0.0 at rest). ValueError for an unknown direction, or a negative ``ustar`` given
+    with a direction (the sign would be said twice)."""
+    require(direction in DIRECTIONS, f"direction must be one of {', '.join(DIRECTIONS)}, "
+            f"got {direction!r}")
+    require(finite_number("ustar", ustar) >= 0, f"direction = {direction!r} is given with a "
+            f"negative ustar ({ustar}): with a direction give the speed |U*| >= 0, or a signed "
+            "ustar (negative: reversed flow) and no direction")
+    return -float(ustar) if direction == REVERSE else float(ustar)
+
 
 #: The Scene fields that are parameters: numeric inputs of a model, which serves every value
 #: of them (U* through the pressure drop it sets). ``MODEL_PARAMETERS`` are the model's
@@ -75,9 +95,12 @@ def min_quad_nodes(n_modes: int) -> int:
 class Scene:
     """One configuration of the beam–channel system.
 
-    mstar: mass ratio rho_f L / (rho_s e) > 0.     ustar: mean inlet velocity (Q1+Q2)/H*.
+    mstar: mass ratio rho_f L / (rho_s e) > 0.     ustar: mean velocity (Q1+Q2)/H* at x = 0,
+    signed (< 0: reversed flow, from the tip to the root; :attr:`direction`).
     hstar: total gap at the inlet (H1(0)+H2(0))/L.  friction: Fanning coefficient f >= 0.
-    k0, kl: singular head losses at inlet and outlet. zeta: modal damping (scalar or per mode).
+    k0, kl: singular head losses of the openings at x = 0 and x = 1 (the inlet and outlet
+    of forward flow; the outlet and inlet of reversed flow, docs/model.md).
+    zeta: modal damping (scalar or per mode).
     modes: N.  quad_nodes: Gauss–Legendre nodes (default 2N+20, at least 2N).
     channel1/channel2: wall profiles (default: straight, hstar/2 each).
     thickness: beam thickness e(x)/e(0) (default uniform); a non-uniform beam uses the
@@ -150,6 +173,16 @@ class Scene:
         return (self.channel1 or half, self.channel2 or half)
 
     @property
+    def direction(self) -> str:
+        """"forward" (U* >= 0) or "reverse" (U* < 0, and U* = -0.0: at rest, reversed)."""
+        return REVERSE if math.copysign(1.0, self.ustar) < 0 else FORWARD
+
+    @property
+    def flow_sign(self) -> float:
+        """+1 for forward flow, -1 for reverse (:attr:`direction`)."""
+        return -1.0 if self.direction == REVERSE else 1.0
+
+    @property
     def zeta_modes(self) -> np.ndarray:
         """Damping ratio of each mode, shape (N,)."""
         return np.broadcast_to(np.asarray(self.zeta, dtype=float), (self.modes,)).copy()
@@ -189,12 +222,17 @@ class Scene:
     # -- construction --------------------------------------------------------------
     @classmethod
     def from_dict(cls, d: dict) -> "Scene":
-        """Build from a mapping (e.g. a TOML document); unknown keys are an error."""
+        """Build from a mapping (e.g. a TOML document); unknown keys are an error.
+        ``direction`` ("forward" or "reverse") sets the sign of the speed ``ustar``
+        (:func:`directed_ustar`)."""
         names = {f.name for f in dataclasses.fields(cls)} - {"scales"}
-        unknown = set(d) - names
+        unknown = set(d) - names - {"direction"}
         if unknown:
-            raise ValueError(f"unknown scene keys {sorted(unknown)}; allowed: {sorted(names)}")
+            raise ValueError(f"unknown scene keys {sorted(unknown)}; allowed: "
+                             f"{sorted(names | {'direction'})}")
         kw = dict(d)
+        if "direction" in kw:
+            kw["ustar"] = directed_ustar(kw.get("ustar", cls.ustar), kw.pop("direction"))
         for name in ("channel1", "channel2", "thickness"):
             if isinstance(kw.get(name), dict):
                 kw[name] = Profile.from_dict(kw[name], name)
@@ -209,7 +247,8 @@ class Scene:
         ``M* = rho_f L / (rho_s e)``, ``U* = U0 T / L``, ``H* = (H1 + H2) / L``.
         H1, H2 are the wall distances at the inlet; other fields pass through. A beam with
         e/L >= 0.1 (not thin) gets the Timoshenko modes unless ``beam`` is given; with
-        them slenderness = e/L and poisson = nu (derived: do not pass them).
+        them slenderness = e/L and poisson = nu (derived: do not pass them). U0 carries
+        the flow's sign (< 0: from the tip to the root), or ``direction`` sets it.
         """
         H2 = H1 if H2 is None else H2
         scales = Scales.from_physical(rho_s=rho_s, E=E, nu=nu, e=e, L=L, b=b, rho_f=rho_f,
@@ -218,7 +257,11 @@ class Scene:
             if key in nondimensional:
                 raise ValueError(f"{key} is derived from the physical values; do not pass it")
         nondimensional.update(_physical_beam(nondimensional.pop("beam", None), nu, e, L))
-        return cls(mstar=rho_f * L / (rho_s * e), ustar=U0 * scales.time / L,
+        ustar = U0 * scales.time / L
+        if nondimensional.get("direction") is not None:
+            ustar = directed_ustar(ustar, nondimensional["direction"])
+        nondimensional.pop("direction", None)
+        return cls(mstar=rho_f * L / (rho_s * e), ustar=ustar,
                    hstar=(H1 + H2) / L, channel1=Profile.constant(H1 / L),
                    channel2=Profile.constant(H2 / L), scales=scales, **nondimensional)
 

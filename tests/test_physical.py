@@ -119,7 +119,7 @@ def test_flow_units_are_read(text, kind, si):
     assert flow.kind == kind and flow.value == pytest.approx(si, rel=1e-12)
 
 
-@pytest.mark.parametrize("text", ["20kg", "abc", "20", "", "-1m/s", "0 L/min", "nan m/s", "3 Pa",
+@pytest.mark.parametrize("text", ["20kg", "abc", "20", "", "0 L/min", "nan m/s", "3 Pa",
                                   "m/s", "(", "1 (m/s", "[1,2] m/s"])
 def test_bad_flow_units_name_the_option(text):
     with pytest.raises(ValueError, match="--flow"):

@@ -54,8 +54,14 @@ GROUPS = {
     "sizes": "sizes that cannot fit: `simulate --dt-out 1e-9`, `--t-end 1e12 --full`, "
              "`--breath-period 1e-300`; `lco --ntst 100000`, `--impact-ntst 100000`; a map of "
              "2000 x 2000 points; `map --t-end 1e12`",
+    "direction": "the flow's direction: `--direction sideways`; a sign given twice (`--direction "
+                 "reverse --ustar -2`, `--physical soft_palate --flow=-20L/min --direction "
+                 "reverse`); reversed flow where only forward flow is computed (`grazing`, "
+                 "`design`, `design --target-flow=-30L/min`); `simulate --schedule tidal --direction reverse`, "
+                 "`--expiration-peak` without `--schedule tidal`",
     "scene files": "scene files: missing, a folder, invalid TOML, not UTF-8, nested thousands "
-                   "deep, an unknown key, `zeta = \"abc\"`, `modes = 1e30`, `contact = \"yes\"`, "
+                   "deep, an unknown key, `zeta = \"abc\"`, `direction = \"up\"`, "
+                   "`direction = \"reverse\"` with `ustar = -3`, `modes = 1e30`, `contact = \"yes\"`, "
                    "`ends = \"free-free\"`, "
                    "a list or a nested list where a number belongs (`mstar = [[1]]`)",
     "physical input": "physical input: `E = \"3 * 10**400 Pa\"`, `L = \"1e300 m\"`, `--flow "
@@ -135,6 +141,17 @@ _OPTIONS = {
         (("sound", "--physical", "soft_palate", "--duration", "1e-300"), "--duration"),
         (("diagram", "--depth", "9"), "--depth"), (("diagram", "--ntst", "0"), "--ntst"),
         (("diagram", "--mstar", "0:1:3"), "--mstar"), (("diagram", "--contact"), "contact")],
+    "direction": [
+        (("steady", "--direction", "sideways"), "--direction"),
+        (("steady", "--direction", "reverse", "--ustar", "-2"), "negative ustar"),
+        (("onset", "--physical", "soft_palate", "--flow=-20L/min", "--direction", "reverse"),
+         "negative and a direction"),
+        (("grazing", "--direction", "reverse"), "forward flow only"),
+        (("design", "--physical", "soft_palate", "--direction", "reverse"), "forward flow only"),
+        (("design", "--physical", "soft_palate", "--target-flow=-30L/min", "--vary", "E"),
+         "--target-flow must be > 0"),
+        ((*_SIM, "--schedule", "tidal", "--direction", "reverse"), "tidal"),
+        ((*_SIM, "--expiration-peak", "1"), "--expiration-peak")],
     "sizes": [
         (("simulate", "--mstar", "1", "--ustar", "6", "--dt-out", "1e-9", "--t-end", "10"),
          "GiB"),
@@ -157,7 +174,8 @@ def _file_cases():
              "modes = 99999999999999999999": "modes", "modes = 1e30": "modes",
              'contact = "yes"': "contact", 'ends = "free-free"': "ends", "mstar = [1, 2]": "mstar", "mstar = [[1]]": "mstar",
              "zeta = [[[0.1]]]": "zeta", "modes = [[3]]": "modes", "hstar = {a = 1}": "hstar",
-             "a = " + "[" * 5000 + "]" * 5000: "nested too deeply"}
+             "a = " + "[" * 5000 + "]" * 5000: "nested too deeply",
+             'direction = "up"': "direction", 'direction = "reverse"\nustar = -3': "negative ustar"}
     cases = [Case("scene files", ("steady", "--scene", "s.toml"), named, (("s.toml", text),))
              for text, named in texts.items()]
     return cases + [

@@ -54,6 +54,9 @@ def _check(args):
     if args.target_flow is None:
         return given[0], None
     target = parse_flow(args.target_flow, "--target-flow")
+    if target.value < 0:
+        raise ValueError(f"--target-flow must be > 0, got {args.target_flow!r}: the design "
+                         "query lifts the onset of forward flow (inspiration)")
     parse_vary(args.vary, given[0])                    # names the allowed parameters
     try:
         given[0].scene(target)

@@ -90,7 +90,7 @@ UNITS = {
 _COMMON = {"physical": _PHYSICAL, "warnings": _WARNINGS, "wall_time": _WALL}
 _ALIASES = {"cycles": "lco"}
 #: Options that are fields of the scene (in ``meta.scene``, not repeated in its settings).
-_SCENE_FIELDS = frozenset({*SCENE_OPTIONS, "contact"})
+_SCENE_FIELDS = frozenset({*SCENE_OPTIONS, "contact", "direction"})
 #: Parsed arguments that are not settings of the command.
 _NOT_SETTINGS = frozenset({"command", "run", "human", "json", "quiet", "verbose", "reporter",
                            "argv", "meta_scene", "meta_settings"})

@@ -37,7 +37,7 @@ def add_onset_command(sub) -> None:
 def _search_bound(args, reference: float | None) -> float:
     if args.ustar_max is not None:
         return args.ustar_max
-    return min(max(USTAR_MAX, 1.5 * (reference or 0.0)), MAX_ABS_USTAR)
+    return min(max(USTAR_MAX, 1.5 * abs(reference or 0.0)), MAX_ABS_USTAR)
 
 
 def _cmd_onset(args) -> dict:
@@ -109,7 +109,8 @@ def _print_deflected(branch: dict | None) -> None:
     verdict = "stable" if all(stable) else f"unstable at {stable.count(False)} of {len(u)} points"
     print(f"  deflected steady states (a mirror pair) for U* in [{min(u):.6g}, {max(u):.6g}]: "
           f"{verdict}; largest tip deflection {max(map(abs, branch['tip_deflection'])):.4g} L"
-          + (" (they end at a second branch point)" if branch["status"] == "event" else ""))
+          + (" (they end at a second branch point)" if branch["status"] == "event" else "")
+          + (" (they end where the tip reaches the wall)" if branch["status"] == "wall" else ""))
 
 
 def _print_physical_onset(result: dict, ph: dict) -> None:

@@ -6,7 +6,7 @@ from __future__ import annotations
 import argparse
 
 from ..physical import Flow, Physical, load_physical, parse_flow, preset_names
-from ..scene import MAX_ABS_USTAR, Scene, load_scene
+from ..scene import DIRECTIONS, MAX_ABS_USTAR, Scene, load_scene
 
 __all__ = ["check_ustar_max", "SCENE_OPTIONS", "BEAM_OPTIONS", "add_scene_options", "add_beam_options", "beam_fields",
            "scene_values",
@@ -33,11 +33,14 @@ SCENE_OPTIONS = {
 #: What each scene option means (the defaults are those of :class:`fsicas.Scene`).
 SCENE_HELP = {
     "mstar": "mass ratio M* = rho_f L / (rho_s e), in (0, 1e6]",
-    "ustar": "mean inlet velocity U* = U0 T / L, |U*| <= 1e4 (negative: reversed flow)",
+    "ustar": "mean velocity U* = U0 T / L at the root, |U*| <= 1e4 (negative: reversed "
+             "flow; with --direction, the speed |U*|)",
     "hstar": "total inlet gap H* = (H1(0) + H2(0)) / L, > 0",
     "friction": "Fanning friction coefficient f, >= 0",
-    "k0": "singular head loss at the inlet, >= 0",
-    "kl": "singular head loss at the outlet, >= 0",
+    "k0": "singular head loss of the opening at the root x = 0 (the inlet of forward flow, "
+          "the outlet of reversed flow), >= 0",
+    "kl": "singular head loss of the opening at the tip x = 1 (the outlet of forward flow, "
+          "the inlet of reversed flow), >= 0",
     "zeta": "modal damping ratio, >= 0: one for every mode, or one per mode (z1,z2,...,zN)",
     "modes": "number of beam modes N, in [1, 200]; onset, boundary: also auto (N doubled "
              "from 10 until the onsets move by less than 1e-2 with twice the modes)",
@@ -73,6 +76,10 @@ def add_scene_options(parser: argparse.ArgumentParser, mstar: bool = True) -> No
             group.add_argument("--" + name.replace("_", "-"), dest=name, type=kind, default=None,
                                metavar=name.upper(),
                                help=f"{SCENE_HELP[name]} (default {shown})")
+    group.add_argument("--direction", choices=DIRECTIONS, default=None,
+                       help="flow direction: forward (root to tip, default) or reverse (tip "
+                       "to root, expiration: the sign of U* and of --flow; with it give "
+                       "their magnitude)")
     group.add_argument("--contact", dest="contact", action=argparse.BooleanOptionalAction,
                        default=None, help="regularized wall impact on or off (default off)")
     add_beam_options(group)
@@ -105,7 +112,8 @@ def _add_physical_options(parser: argparse.ArgumentParser) -> None:
 
 def scene_values(args: argparse.Namespace) -> dict:
     """The nondimensional Scene fields given as options (a physical input's overrides)."""
-    values = {k: getattr(args, k, None) for k in (*SCENE_OPTIONS, *BEAM_OPTIONS, "contact")}
+    values = {k: getattr(args, k, None)
+              for k in (*SCENE_OPTIONS, *BEAM_OPTIONS, "contact", "direction")}
     return {k: v for k, v in values.items() if v is not None}
 
 
@@ -141,7 +149,7 @@ def scene_from_args(args: argparse.Namespace, need_flow: bool = False) -> Scene:
     values = scene_values(args)
     if args.scene:
         return load_scene(args.scene, **values)
-    return Scene(**values)
+    return Scene.from_dict(values)
 
 
 

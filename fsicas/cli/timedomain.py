@@ -33,11 +33,16 @@ def add_time_commands(sub) -> None:
     p.add_argument("--dt-out", type=float, default=1e-3, help="output sampling step")
     p.add_argument("--perturbation", type=float, default=1e-2,
                    help="initial modal displacement, as a fraction of H*/2 (docs/simulate.md)")
-    p.add_argument("--schedule", default="constant", choices=["constant", "ramp", "breath"],
-                   help="inlet flow in time: constant, a ramp from --ustar-start, or breaths")
+    p.add_argument("--schedule", default="constant",
+                   choices=["constant", "ramp", "breath", "tidal"],
+                   help="inlet flow in time: constant, a ramp from --ustar-start, "
+                   "inspirations (breath), or whole breaths through zero flow (tidal: up to "
+                   "U*, then down to -(--expiration-peak))")
     p.add_argument("--ustar-start", type=float, default=0.0, help="ramp: initial U*")
     p.add_argument("--ramp-time", type=float, default=1.0, help="ramp: duration")
-    p.add_argument("--breath-period", type=float, default=1.0, help="breath: period")
+    p.add_argument("--breath-period", type=float, default=1.0, help="breath, tidal: period")
+    p.add_argument("--expiration-peak", type=float, default=None,
+                   help="tidal: the expiration's peak speed |U*| >= 0 (default: U*)")
     p.add_argument("--full", action="store_true", help="run to --t-end (no early stop)")
     p.add_argument("--plot", metavar="FILE", help="figure of the run (and FILE_cycle if settled)")
     p.set_defaults(run=_cmd_simulate)
@@ -62,6 +67,9 @@ def _add_map_command(sub) -> None:
 
 
 def _schedule(args, scene):
+    if args.expiration_peak is not None and args.schedule != "tidal":
+        raise ValueError("--expiration-peak is the peak of a tidal breath: give it with "
+                         "--schedule tidal")
     for option, value in (("ramp-time", args.ramp_time), ("breath-period", args.breath_period)):
         if args.schedule in option and not value > 0:
             raise ValueError(f"--{option} must be > 0, got {value}")
@@ -72,6 +80,13 @@ def _schedule(args, scene):
         return PressureSchedule.ramp(args.ustar_start, scene.ustar, args.ramp_time)
     if args.schedule == "breath":
         return PressureSchedule.breath(scene.ustar, args.breath_period)
+    if args.schedule == "tidal":
+        if scene.direction == "reverse":
+            raise ValueError("--schedule tidal breathes in, then out: give the inspiration's "
+                             "peak as U* >= 0 (no --direction reverse) and the expiration's "
+                             "as --expiration-peak")
+        peak = scene.ustar if args.expiration_peak is None else args.expiration_peak
+        return PressureSchedule.tidal(scene.ustar, peak, args.breath_period)
     return None
 
 

@@ -21,6 +21,7 @@ import numpy as np
 
 import continuation as C
 
+from ..checks import require_forward
 from ..linear.adapter import pi_of
 from ..linear.codim2 import CodimTwoPoint, codim_two_points
 from ..linear.hopf import first_onset
@@ -54,6 +55,7 @@ def fold_curves_from_bautin(scene: Scene, model: Model | None = None, *,
     window, on the Hopf curve through the flutter onset at ``mstar_onset``; ``epsilon``:
     the predictor's distance along the Hopf curve in (Π, log10 M*); ``cycles``: the
     collocation mesh (``ntst``, ``ncol``), ``adapt_every``."""
+    require_forward(scene, "the fold curves of cycles")
     return _switched(scene, model, "gh", mstar_onset, epsilon, settings, cycles, ustar_max)
 
 
@@ -66,6 +68,7 @@ def torus_curves_from_double_hopf(scene: Scene, model: Model | None = None, *,
     """The torus curves of the cycles born on the Hopf curve through the onset at
     ``mstar_onset`` at its double Hopf points on the boundary (as
     :func:`fold_curves_from_bautin`)."""
+    require_forward(scene, "the torus curves")
     return _switched(scene, model, "hh", mstar_onset, epsilon, settings, cycles, ustar_max)
 
 

@@ -9,6 +9,7 @@ import numpy as np
 
 import continuation as C
 
+from ..checks import require_forward
 from ..model.assembly import Model, build_model
 from ..scene import Scene
 from .impacting_collocation import (CollocatedImpactBranch, CollocatedImpactPoint,
@@ -33,6 +34,7 @@ def period_doubled_branch(scene: Scene, point: "CollocatedImpactPoint", *,
     multiplier -1 (``continuation.cycle_from_pd``: 2 NTST intervals, the PD cycle's mesh
     run through twice) and is continued towards larger amplitude, in either direction
     of U* as the branch bends (the PD is super- or subcritical)."""
+    require_forward(scene, "the period-doubled branch")
     return _switched(scene, point, "pd", model, amplitude, (ustar_min, ustar_max), settings)
 
 
@@ -51,6 +53,7 @@ def symmetry_broken_branch(scene: Scene, point: "CollocatedImpactPoint", *,
     scaled to a largest nodal change of ``amplitude``; at 1e-2 the stiff contact law
     already throws the guess out of Newton's reach) and is continued towards larger
     amplitude."""
+    require_forward(scene, "the symmetry-broken branch")
     return _switched(scene, point, "bp", model, amplitude, (ustar_min, ustar_max), settings)
 
 

@@ -40,7 +40,7 @@ import numpy as np
 
 import continuation as C
 
-from ..linear.adapter import PI, flutter_field, pi_of
+from ..linear.adapter import PI, flutter_field, pi_interval, pi_of
 from ..linear.hopf import CriticalVelocityError, HopfPoint, first_hopf, flutter_problem
 from ..model.accuracy import QUADRATURE_TOL, adequate_model
 from ..model.assembly import Model, build_model
@@ -229,7 +229,7 @@ START_RETRIES = 5
 def _continued(scene: Scene, model: Model, hopf: HopfPoint, dp: float,
                settings: CycleSettings, ustar_max: float) -> CycleRun:
     """The branch from the Hopf point, started at the offset ``dp`` of Π from it."""
-    problem = C.cycle_from_hopf(flutter_problem(scene, model, min(0.2, hopf.ustar / 2)),
+    problem = C.cycle_from_hopf(flutter_problem(scene, model, min(0.2, abs(hopf.ustar) / 2)),
                                 hopf.point, dp=dp, settings=settings.collocation)
     gauge = ProfileGauge(model, hopf.x, scene.contact_gap, settings.quadrature_tol)
     if settings.quadrature_tol is not None:
@@ -247,11 +247,13 @@ def _continued(scene: Scene, model: Model, hopf: HopfPoint, dp: float,
 
 
 def _steps(problem, scene, model, ustar_max, settings) -> C.ContinuationSettings:
-    """Arclength steps in Π up to ``ustar_max``; folds detected from the tangent (no
-    multipliers in the library's monitor: the gauge computes them once per point)."""
+    """Arclength steps in Π up to the speed ``ustar_max`` (Π < 0 for reversed flow); folds
+    detected from the tangent (no multipliers in the library's monitor: the gauge
+    computes them once per point)."""
     return C.ContinuationSettings(
         ds=settings.ds, ds_min=1e-9, ds_max=settings.ds_max, direction=problem.hopf_direction,
-        max_steps=settings.max_points - 1, bounds={PI: (0.0, pi_of(scene, model, ustar_max))},
+        max_steps=settings.max_points - 1,
+        bounds={PI: pi_interval(0.0, pi_of(scene, model, scene.flow_sign * ustar_max))},
         newton=C.NewtonSettings(tol=settings.tol), compute_eigenvalues=False)
 
 

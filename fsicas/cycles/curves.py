@@ -31,6 +31,7 @@ import numpy as np
 
 import continuation as C
 
+from ..checks import require_forward
 from ..linear.adapter import LOG_M, PI, pi_of
 from ..linear.hopf import CriticalVelocityError
 from ..model.assembly import Model
@@ -242,6 +243,7 @@ def cycle_curves(scene: Scene, seeds, *, settings: CurveSettings = CurveSettings
     seeds in ``workers`` processes; a curve whose seed lies on a curve of an earlier seed
     is the same curve and kept once. ``progress(text)`` is told of each finished seed (its
     count, and an estimate of the time left)."""
+    require_forward(scene, "the curves of cycles (grazing, folds)")
     start = time.perf_counter()
     jobs = [(scene.replace(mstar=float(m)), settings, cycles, ustar_max) for m in seeds]
     found = {"grazing": [], "fold": []}
@@ -311,6 +313,7 @@ def grazing_curve(scene: Scene, model: Model | None = None, *,
     """The grazing curve through the first contact of the cycle branch at ``scene.mstar``
     (``run``: that branch's :class:`CycleRun` if already computed), for U* below
     ``ustar_max``. Raises ValueError when the branch reaches no contact there."""
+    require_forward(scene, "the grazing curve")
     run = run or continue_cycles(scene, model, ustar_max=ustar_max, settings=cycles)
     contacts = [sp for sp in run.branch.special("contact") if sp.status == "converged"]
     if not contacts:
@@ -329,6 +332,7 @@ def fold_curves(scene: Scene, model: Model | None = None, *,
     (none when flutter there is supercritical and the branch does not fold), each fold
     refined by Newton on its minimally extended system first (a fold that is not refined
     starts no curve)."""
+    require_forward(scene, "the fold curves of cycles")
     run = run or continue_cycles(scene, model, ustar_max=ustar_max, settings=cycles)
     return _fold_curves(run, settings, _pi_max(scene, run, ustar_max))[0]
 

@@ -44,6 +44,7 @@ import numpy as np
 
 import continuation as C
 
+from ..checks import require_forward
 from ..linear.adapter import PI, TIME_SCALE, field_parameters, flutter_field, pi_range
 from ..model.accuracy import IMPACT_QUADRATURE_TOL
 from ..model.assembly import Model, build_model
@@ -160,6 +161,7 @@ def shooting_branch(scene: Scene, state, period: float, pressure_drop: float, *,
     penalty law acts). ``direction`` = +1 continues towards larger Δp (U*). The
     shooting route of :func:`fsicas.cycles.impacting_cycles`, which says where starts
     come from."""
+    require_forward(scene, "the impacting cycles by shooting")
     start = time.perf_counter()
     if not scene.contact:
         raise ValueError("impacting cycles by shooting need scene.contact = True (the impact "

@@ -36,6 +36,7 @@ import scipy.interpolate
 
 import continuation as C
 
+from ..checks import require_forward
 from ..linear.adapter import PI, TIME_SCALE, field_parameters, flutter_field, pi_range
 from ..linear.steady import steady_state
 from ..model.accuracy import IMPACT_QUADRATURE_TOL
@@ -187,6 +188,7 @@ def impacting_collocation_problem(scene: Scene, state, period: float, pressure_d
     (units of T) at ``pressure_drop`` on ``scene`` (contact on), with the start mesh
     equidistributed on one integrated period. Raises RuntimeError if that integration
     fails (e.g. the gap closes)."""
+    require_forward(scene, "the impacting cycles by collocation")
     model = model or build_model(scene)
     vf = flutter_field(model)
     params = field_parameters(vf, model, steady_state(scene, model), scene, pressure_drop)
@@ -211,6 +213,7 @@ def collocation_branch(scene: Scene, state, period: float, pressure_drop: float,
     ``contact_smoothing`` > 0). ``direction`` = +1 continues towards larger Δp (U*).
     The collocation route of :func:`fsicas.cycles.impacting_cycles`; the arguments are
     those of :func:`fsicas.cycles.impacting.shooting_branch`."""
+    require_forward(scene, "the impacting cycles by collocation")
     start = time.perf_counter()
     check_smooth(scene)
     model = model or build_model(scene)

@@ -24,6 +24,7 @@ from typing import Literal
 
 import numpy as np
 
+from ..checks import require_forward
 from ..model.assembly import Model
 from ..scene import Scene
 from .collocation import CycleBranch, CycleSettings, cycle_branch
@@ -85,6 +86,7 @@ def impacting_cycles(scene: Scene, start=None, *, method: ImpactMethod = "colloc
     Raises ValueError for a scene without the contact law the route needs, settings of
     the other route, or contact-free cycles that do not reach the wall below
     ``ustar_max`` or have none ``min_gap_ratio`` eps clear of it."""
+    require_forward(scene, "the impacting cycles")
     kind, route = _route(method, settings)
     if method == "collocation":
         check_smooth(scene)
@@ -104,6 +106,7 @@ def impacting_start(scene: Scene, start=None, *, ustar_max: float = 12.0,
     """``(scene, cycle)``: where :func:`impacting_cycles` starts from ``start`` (module
     docstring): ``scene`` at the U* of the last contact-free cycle ``min_gap_ratio`` eps
     clear of the wall and that cycle, or ``scene`` and ``start`` as given for one cycle."""
+    require_forward(scene, "the impacting cycles")
     if start is None:
         start = cycle_branch(scene.replace(contact=False), ustar_max=ustar_max,
                              settings=cycle_settings)

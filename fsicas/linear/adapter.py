@@ -6,7 +6,7 @@ The library's pseudo-arclength steps mix all unknowns in one length, so the whol
     Π = kinematic_pressure_drop = Δp / (M* PI_SCALE)     (≈ 3.3 U*^2 / PI_SCALE, whatever M*)
     log10_mstar = log10 M*
 
-(then the model's remaining parameters, in order), and time is measured in units of
+(then the model's remaining parameters, in order; Π < 0 for reversed flow, U* < 0), and time is measured in units of
 T / TIME_SCALE, i.e. the adapted field is ``(TIME_SCALE M(x, p)) xdot = F(x, p)``, so that
 Hopf frequencies (20–600 in units of 1/T) and kappa = omega^2 are O(1). The first Lyapunov
 coefficient l1 is invariant under that time scaling.
@@ -25,7 +25,8 @@ from ..scene import Scene
 from .steady import SteadyState, SteadyStateError, steady_state
 
 __all__ = ["PI", "LOG_M", "PI_SCALE", "TIME_SCALE", "reparametrized_field", "flutter_field",
-           "pi_of", "pi_range", "field_parameters", "steady_ustar", "dense"]
+           "pi_of", "pi_range", "pi_interval", "speed", "field_parameters", "steady_ustar",
+           "dense"]
 
 PI, LOG_M = "kinematic_pressure_drop", "log10_mstar"
 PI_SCALE, TIME_SCALE = 100.0, 100.0
@@ -125,6 +126,20 @@ def pi_range(scene: Scene, model: Model, ustar_min: float, ustar_max: float
     ``ustar_min`` is 0) and ``ustar_max``: where a continuation in Π stops."""
     return pi_of(scene, model, ustar_min) if ustar_min > 0 else 0.0, \
         pi_of(scene, model, ustar_max)
+
+
+def pi_interval(a: float, b: float) -> tuple[float, float]:
+    """The bounds of a continuation in Π between ``a`` and ``b`` in increasing order
+    (Π < 0 for reversed flow)."""
+    return min(a, b), max(a, b)
+
+
+def speed(scene: Scene, x) -> float | np.ndarray:
+    """The speed ``|U*| = sign (Q1 + Q2)/H*`` of a state (or of rows of states) of
+    ``scene``'s direction (sign -1 for reversed flow): the analyses search and compare
+    speeds, and report the signed U*."""
+    u = np.asarray(x, dtype=float)[..., -2:].sum(axis=-1) * (scene.flow_sign / scene.hstar)
+    return float(u) if np.ndim(u) == 0 else u
 
 
 def field_parameters(vf: C.VectorField, model: Model, steady: SteadyState, scene: Scene,

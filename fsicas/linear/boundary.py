@@ -16,6 +16,9 @@ Hopf curves (flutter) and divergence curves (a real eigenvalue crosses zero).
    (U* jumps). Its position is bisected on the traced curves (linear between exact Hopf
    points), about 1 % in M*. (Bisection with one-parameter onsets was tried and is not
    reliable: near a crossing two Hopf points fall into one continuation step.)
+
+For reversed flow (U* < 0) every U* of the result is negative; lowest, ``ustar_max``
+and the ceiling are speeds |U*|.
 """
 from __future__ import annotations
 
@@ -186,7 +189,8 @@ def _unstable_below(scene, model, curves, lo: float, hi: float, ceiling: float) 
     bad = np.zeros(grid.size, dtype=bool)
     for k, lm in enumerate(grid):
         lowest = envelope.lowest(lm)
-        at = scene.replace(mstar=float(10 ** lm), ustar=0.99 * (lowest[0] if lowest else ceiling))
+        at = scene.replace(mstar=float(10 ** lm),
+                           ustar=0.99 * (lowest[0] if lowest else scene.flow_sign * ceiling))
         try:
             bad[k] = eigenvalues(model, steady_state(at, model))[0].real > 0
         except SteadyStateError:
@@ -224,7 +228,7 @@ def _seed_points(scene, model, seeds, ustar_max, headroom):
         for i in todo:
             found[i] = (1.05 * ceiling, search(i, 1.05 * ceiling))
             if found[i][1]:
-                onsets.setdefault(i, found[i][1][0].ustar)
+                onsets.setdefault(i, abs(found[i][1][0].ustar))
             elif i not in onsets and 1.05 * ceiling < ustar_max:   # its onset is higher
                 _note_onset(onsets, i, first(i))
     if not onsets:
@@ -234,7 +238,7 @@ def _seed_points(scene, model, seeds, ustar_max, headroom):
 
 def _note_onset(onsets: dict, i: int, points) -> None:
     if points and points[0] is not None:
-        onsets[i] = points[0].ustar
+        onsets[i] = abs(points[0].ustar)
 
 
 def _add_curves(scene, model, curves, found, window, ceiling, cut) -> None:
@@ -244,8 +248,8 @@ def _add_curves(scene, model, curves, found, window, ceiling, cut) -> None:
     check = None if cut is None else lambda: _envelope_check(envelope, cut)
     for points in found:
         for h in points:
-            if h.ustar <= ceiling and not any(_on_curve(scene, model, c, h) for c in curves):
-                first = curves[-1].pieces[-1] + 1 if curves else 0
+            if abs(h.ustar) <= ceiling and not any(_on_curve(scene, model, c, h) for c in curves):
+                first = _next_piece(curves)
                 if h.kind == "divergence":
                     curves.append(trace_divergence_curve(scene, model, h, len(curves), window,
                                                          ceiling, first, check))
@@ -255,6 +259,13 @@ def _add_curves(scene, model, curves, found, window, ceiling, cut) -> None:
                                                first, stop))
 
 
+def _next_piece(curves) -> int:
+    """The first piece id past every traced curve's (one of a single point has no piece
+    but keeps its id)."""
+    return max(((int(c.pieces.max()) if c.pieces.size else c.first_piece) + 1
+                for c in curves), default=0)
+
+
 def _envelope_check(envelope: Envelope, headroom: float):
     """``check(ustar, log10_mstar)`` of one half of a curve: true (a message) when the
     half rises (U* increasing) above ``headroom`` times the lowest curve traced before at
@@ -262,11 +273,12 @@ def _envelope_check(envelope: Envelope, headroom: float):
     last = []
 
     def check(u: float, log_m: float):
+        u = abs(u)
         rising, last[:] = bool(last) and u > last[0], [u]
         if not rising:
             return False
         us, _ = envelope.crossings(log_m)
-        return bool(us.size) and u > headroom * us.min() and \
+        return bool(us.size) and u > headroom * np.abs(us).min() and \
             f"rose above {headroom:g} x the lowest traced curve"
 
     return check
@@ -290,12 +302,12 @@ def _on_curve(scene, model, curve: OnsetCurve, h: Onset, rtol: float = 0.1) -> b
     ``rtol`` in U* and frequency (the curve's interpolation: ~1 % off between samples,
     more near a fold) whose exact onset (:func:`onset_on_curve`) is h to 1e-6."""
     log_m = math.log10(h.mstar)
-    near = [k for u, w, k in curve.crossings(log_m) if abs(u - h.ustar) <= rtol * h.ustar
+    near = [k for u, w, k in curve.crossings(log_m) if abs(u - h.ustar) <= rtol * abs(h.ustar)
             and abs(w - h.omega) <= rtol * max(h.omega, 1e-300)]
     if curve.kind != h.kind or not near:
         return False
     exact = (onset_on_curve(scene, model, curve, k, log_m) for k in near)
-    return any(e is not None and abs(e.ustar - h.ustar) <= 1e-6 * h.ustar for e in exact)
+    return any(e is not None and abs(e.ustar - h.ustar) <= 1e-6 * abs(h.ustar) for e in exact)
 
 
 def _boundary_point(scene, model, curves, mstar, refine) -> BoundaryPoint:

@@ -7,6 +7,9 @@
   real eigenvalue nearest 0 (:func:`fsicas.linear.divergence.divergence_at`), from the
   log-log extrapolation of the last two. It ends where none is bracketed near the
   extrapolation (two divergences merge: the window of divergence closes).
+
+The curves carry the signed U* (< 0 for reversed flow); lowest means the smallest speed
+|U*|, and ``ustar_max`` is a speed.
 """
 from __future__ import annotations
 
@@ -19,7 +22,7 @@ import continuation as C
 
 from ..model.assembly import Model
 from ..scene import Scene
-from .adapter import LOG_M, PI, PI_SCALE, TIME_SCALE, flutter_field
+from .adapter import LOG_M, PI, PI_SCALE, TIME_SCALE, flutter_field, pi_interval
 from .divergence import DivergencePoint, divergence_at
 from .hopf import HopfPoint, Onset, dominant_mode, flutter_problem, hopf_point_from
 
@@ -70,6 +73,8 @@ class OnsetCurve:
     @cached_property
     def _pieces(self) -> np.ndarray:
         step = np.sign(np.diff(np.log10(self.mstar)))
+        if not step.size:        # a curve of one point has no segment (and no piece)
+            return np.zeros(0, dtype=int)
         turns = np.concatenate([[0], np.cumsum(step[1:] * step[:-1] < 0)])
         return self.first_piece + turns
 
@@ -101,7 +106,8 @@ def trace_hopf_curve(scene: Scene, model: Model, h: HopfPoint, index: int, windo
     for direction in (-1, 1):
         settings = C.ContinuationSettings(
             ds=0.05, ds_min=1e-8, ds_max=0.3, max_steps=300, direction=direction,
-            bounds={LOG_M: window, PI: (0.0, pi_max)}, detect=False, compute_eigenvalues=False,
+            bounds={LOG_M: window, PI: pi_interval(0.0, pi_max)}, detect=False,
+            compute_eigenvalues=False,
             newton=C.NewtonSettings(tol=1e-8))   # curve points only guide; points are refined
         branch = C.continuation(C.HopfCurveProblem.from_point(problem, h.point, LOG_M),
                                 settings=settings, record=_mode_recorder(model),
@@ -173,16 +179,16 @@ def _divergence_half(scene, model, d, direction, window, ustar_max, check):
             return points, "bound", ""
         step = direction * DIVERGENCE_STEP
         nxt = min(lm[-1] + step, edge) if direction > 0 else max(lm[-1] + step, edge)
-        u = np.log([p.ustar for p in points[-2:]])
+        u = np.log([abs(p.ustar) for p in points[-2:]])
         slope = (u[-1] - u[0]) / (lm[-1] - lm[0]) if len(points) > 1 else 0.0
-        guess = float(np.exp(u[-1] + slope * (nxt - lm[-1])))
+        guess = scene.flow_sign * float(np.exp(u[-1] + slope * (nxt - lm[-1])))
         p = divergence_at(scene.replace(mstar=float(10 ** nxt)), model, guess)
         if p is None:
             return points, "failed", (f"no divergence bracketed near U* = {guess:.6g} at "
                                       f"M* = {10 ** nxt:.6g}")
         points.append(p)
         why = check(p.ustar, nxt) if check else False
-        if p.ustar > ustar_max or why:
+        if abs(p.ustar) > ustar_max or why:
             return points, "stopped", why or ""
 
 
@@ -235,10 +241,10 @@ class Envelope:
         return ua[i] + t * (ub[i] - ua[i]), wa[i] + t * (wb[i] - wa[i])
 
     def lowest(self, log_m: float):
-        """(U*, omega, piece) of the lowest crossing at log_m (the first of equal ones),
-        or None."""
+        """(U*, omega, piece) of the lowest crossing at log_m (smallest |U*|, the first of
+        equal ones), or None."""
         u, w = self.crossings(log_m)
         if not u.size:
             return None
-        k = int(np.argmin(u))
+        k = int(np.argmin(np.abs(u)))
         return float(u[k]), float(w[k]), int(self._pieces[self._at(log_m)[0][k]])

@@ -113,13 +113,14 @@ def real_rate(scene: Scene, model: Model, ustar: float) -> tuple[float, object]:
 
 
 def divergence_at(scene: Scene, model: Model, ustar_guess: float) -> DivergencePoint | None:
-    """The divergence of ``scene`` (at its M*) near ``ustar_guess``: the sign change of
-    the real eigenvalue nearest 0 along the steady states in U*, bracketed within
-    :data:`BRACKETS` of the guess and solved by Brent's method to round-off; None when
-    no sign change is bracketed (or no steady state is found there)."""
+    """The divergence of ``scene`` (at its M*) near ``ustar_guess`` (signed: < 0 for
+    reversed flow): the sign change of the real eigenvalue nearest 0 along the steady
+    states in U*, bracketed within :data:`BRACKETS` of the guess and solved by Brent's
+    method to round-off; None when no sign change is bracketed (or no steady state is
+    found there)."""
     for half in BRACKETS:
         point = divergence_between(scene, model, ustar_guess * (1 - half),
-                                   ustar_guess * (1 + half), scale=ustar_guess)
+                                   ustar_guess * (1 + half), scale=abs(ustar_guess))
         if point is not None:
             return point
     return None
@@ -127,11 +128,12 @@ def divergence_at(scene: Scene, model: Model, ustar_guess: float) -> DivergenceP
 
 def divergence_between(scene: Scene, model: Model, lo: float, hi: float,
                        scale: float | None = None) -> DivergencePoint | None:
-    """The divergence of ``scene`` with U* in [lo, hi]: the sign change there of the
-    real eigenvalue nearest 0 along the steady states, solved by Brent's method to
-    :data:`XTOL` relative to ``scale`` (default hi); None when its signs at lo and hi
-    agree (or a steady state is not found)."""
-    scale = hi if scale is None else scale
+    """The divergence of ``scene`` with U* between ``lo`` and ``hi`` (either order, either
+    sign): the sign change there of the real eigenvalue nearest 0 along the steady states,
+    solved by Brent's method to :data:`XTOL` relative to ``scale`` (default the larger
+    speed); None when its signs at the two ends agree (or a steady state is not found)."""
+    lo, hi = sorted((lo, hi))
+    scale = max(abs(lo), abs(hi)) if scale is None else scale
     rate = lambda u: real_rate(scene, model, u)[0]
     try:
         if np.sign(rate(lo)) == np.sign(rate(hi)):

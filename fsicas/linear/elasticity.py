@@ -25,6 +25,7 @@ from dataclasses import dataclass, field
 from .hopf import HopfPoint
 from .onset import onset_at_own_flow
 from .sensitivity import onset_sensitivity
+from ..checks import require_forward
 from ..model.assembly import Model, build_model
 from ..physical import KEYS, MEANING, Flow, Physical
 from ..scene import TIMOSHENKO, Scene
@@ -182,6 +183,7 @@ def physical_onset(physical: Physical, overrides: dict, ustar_max, model: Model 
     onset's own friction. ``model`` is reused when it has the scene's structure.
     DesignError when there is no onset below ``ustar_max``."""
     scene = physical_scene(physical, None, overrides)
+    require_forward(scene, "the design query (the snoring onset's sensitivities)")
     if model is None or not _fits(model, scene):
         model = build_model(scene)
     viscous = viscous_friction(physical, overrides)

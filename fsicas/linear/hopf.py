@@ -8,6 +8,10 @@ steady branch is continued in Π from a small U*; each Hopf point found is locat
 library (Newton on the Hopf system), with its first Lyapunov coefficient l1 (< 0:
 supercritical, a small stable cycle is born; > 0: subcritical, a jump to large amplitude
 with hysteresis). The curves of onsets in (M*, U*) are in :mod:`fsicas.linear.curves`.
+
+Reversed flow (U* < 0, ``Scene.direction`` "reverse") is searched the same way towards
+negative U* and Π: ``ustar_start``, ``ustar_max`` and ``ustar_stop`` are speeds |U*| in
+the scene's direction, and the onsets found carry the signed U*.
 """
 from __future__ import annotations
 
@@ -22,7 +26,8 @@ import continuation as C
 
 from ..model.assembly import Model, build_model
 from ..scene import Scene
-from .adapter import LOG_M, PI, PI_SCALE, TIME_SCALE, dense, flutter_field, pi_of
+from .adapter import (LOG_M, PI, PI_SCALE, TIME_SCALE, dense, flutter_field, pi_interval, pi_of,
+                      speed)
 from .divergence import (DIVERGENCE_KINDS, DivergencePoint, divergence_between,
                          divergence_point_from)
 from .stability import generalized_eigen
@@ -32,7 +37,7 @@ from .steady import SteadyStateError, steady_state
 __all__ = ["Criticality", "HopfPoint", "Onset", "CriticalVelocityError", "ModalTruncationWarning",
            "flutter_problem", "steady_branch", "hopf_points", "first_hopf", "critical_velocity",
            "first_onset", "onset_points",
-           "ONSET_KINDS", "dominant_mode", "hopf_point_from", "eigenvector_q"]
+           "ONSET_KINDS", "USTAR_START", "dominant_mode", "hopf_point_from", "eigenvector_q"]
 
 #: Sign of the first Lyapunov coefficient at a Hopf point: l1 < 0 "supercritical" (a small
 #: stable cycle is born), l1 > 0 "subcritical" (a jump to large amplitude, hysteresis).
@@ -107,8 +112,9 @@ Onset = HopfPoint | DivergencePoint
 
 
 def flutter_problem(scene: Scene, model: Model, ustar_start: float) -> C.EquilibriumProblem:
-    """Equilibrium problem in Π from the steady state at ``ustar_start``."""
-    st = steady_state(scene.replace(ustar=ustar_start), model)
+    """Equilibrium problem in Π from the steady state at the speed ``ustar_start`` in
+    ``scene``'s direction."""
+    st = steady_state(scene.replace(ustar=scene.flow_sign * ustar_start), model)
     vf = flutter_field(model)
     names = vf.par_names
     values = dict(zip(model.parameter_names, st.p))
@@ -118,16 +124,25 @@ def flutter_problem(scene: Scene, model: Model, ustar_start: float) -> C.Equilib
 
 
 def _settings(pi_start: float, pi_max: float, max_steps: int = 1000,
-              stop_at: tuple = (), pi_stop: float | None = None) -> C.ContinuationSettings:
+              stop_at: tuple = (), pi_stop: float | None = None,
+              low_start: bool = False) -> C.ContinuationSettings:
     """Steps of at most pi_max/150 in Π (≈ U*^2): a pocket of stability between two Hopf
     points closer than one step would leave the unstable count unchanged and be missed,
     and two Hopf points in one step (near a crossing of Hopf curves) would be confused.
-    The branch ends at ``pi_stop`` (default ``pi_max``)."""
-    ds_max = pi_max / 150
-    stop = pi_max if pi_stop is None else min(pi_stop, pi_max)
-    return C.ContinuationSettings(ds=ds_max / 4, ds_min=1e-10 * pi_max, ds_max=ds_max,
-                                  max_steps=max_steps, bounds={PI: (0.0, stop)},
-                                  locate_tol=1e-12, stop_at=stop_at)
+    The branch ends at ``pi_stop`` (default ``pi_max``); it runs towards negative Π
+    when ``pi_max`` < 0 (reversed flow). With ``low_start`` (reversed flow, whose onsets
+    lie at speeds ∝ M*^-1/2 from |U*| = 0.01 on) the first step is at most ``|pi_start|``:
+    a first step of ``pi_max/600`` leapt over a whole window of divergence (M* = 1,
+    H* = 0.05: unstable for |U*| in (0.2385, 1.5788), the step went from 0.01 to 3.77);
+    from there the steps grow by the library's step control, limited by the eigenvalues'
+    approach to the axis."""
+    ds_max = abs(pi_max) / 150
+    stop = pi_max if pi_stop is None or abs(pi_stop) >= abs(pi_max) else pi_stop
+    ds = min(ds_max / 4, max(abs(pi_start), 1e-9 * abs(pi_max))) if low_start else ds_max / 4
+    return C.ContinuationSettings(ds=ds, ds_min=1e-10 * abs(pi_max), ds_max=ds_max,
+                                  max_steps=max_steps, bounds={PI: pi_interval(0.0, stop)},
+                                  locate_tol=1e-12, stop_at=stop_at,
+                                  direction=1 if pi_max > 0 else -1)
 
 
 def dominant_mode(model: Model, q_part: np.ndarray) -> int:
@@ -158,36 +173,45 @@ def eigenvector_q(model: Model, x, params, omega) -> np.ndarray:
     return vec[n:2 * n, k]
 
 
-def steady_branch(scene: Scene, model: Model, ustar_max: float, ustar_start: float = 0.2, *,
+def steady_branch(scene: Scene, model: Model, ustar_max: float, ustar_start: float | None = None, *,
                   stop_at: tuple = (), ustar_stop: float | None = None) -> C.Branch:
     """The steady branch continued in Π from ``ustar_start`` towards ``ustar_max`` (its
     special points located), ended at ``ustar_stop`` (< ustar_max, with the steps of
-    ``ustar_max``) or past the first special point of a kind in ``stop_at``.
+    ``ustar_max``) or past the first special point of a kind in ``stop_at``; the three
+    are speeds |U*| in ``scene``'s direction (``ustar_start`` None: :data:`USTAR_START`).
 
     The Π bound is the steady state's at ``ustar_max``; where no steady state is found
     there (the branch may fold or be lost above the onset), it is extrapolated as
     ``Π ∝ U*^2`` from the start, with a margin, and points above ``ustar_max`` are not
     used by the callers. CriticalVelocityError when the start is already unstable."""
+    ustar_start = USTAR_START[scene.direction] if ustar_start is None else ustar_start
     if not 0 < ustar_start < ustar_max:
         raise ValueError(f"need 0 < ustar_start < ustar_max, got {ustar_start}, {ustar_max}")
     problem = flutter_problem(scene, model, ustar_start)
     pi_max = _pi_bound(scene, model, ustar_max, problem.X0[-1], ustar_start)
     pi_stop = None if ustar_stop is None or ustar_stop >= ustar_max else \
         _pi_bound(scene, model, ustar_stop, problem.X0[-1], ustar_start)
-    branch = C.continuation(problem, settings=_settings(problem.X0[-1], pi_max, stop_at=stop_at,
-                                                        pi_stop=pi_stop))
+    branch = C.continuation(problem, settings=_settings(
+        problem.X0[-1], pi_max, stop_at=stop_at, pi_stop=pi_stop,
+        low_start=scene.direction == "reverse"))
     if branch.n_unstable is not None and len(branch.n_unstable) and branch.n_unstable[0] > 0:
         raise CriticalVelocityError(
-            f"the steady state is already unstable at U* = {ustar_start:g} (M* = {scene.mstar:g}); "
-            "lower ustar_start")
+            f"the steady state is already unstable at U* = {scene.flow_sign * ustar_start:g} "
+            f"(M* = {scene.mstar:g}); lower ustar_start")
     return branch
 
 
+#: The speed |U*| where the steady branch starts, below the first onset, by direction.
+#: Reversed flow loses stability by divergence at a pressure drop independent of M*, so
+#: at speeds ∝ M*^-1/2 (|U*| = 0.14 at M* = 10 in the paper's channel): it starts lower.
+USTAR_START = {"forward": 0.2, "reverse": 0.01}
+
+
 def _pi_bound(scene: Scene, model: Model, ustar: float, pi_start: float, ustar_start: float) -> float:
-    """Π at ``ustar``: the steady state's, or (none found there) the margin
+    """Π at the speed ``ustar``: the steady state's, or (none found there) the margin
     :data:`PI_MARGIN` times ``pi_start (ustar / ustar_start)^2``."""
     try:
-        return pi_of(scene, model, ustar)
+        return pi_of(scene, model, scene.flow_sign * ustar)
     except SteadyStateError:
         return PI_MARGIN * pi_start * (ustar / ustar_start) ** 2
 
@@ -199,13 +223,13 @@ PI_MARGIN = 1.5
 def _lost(scene: Scene, branch: C.Branch, ustar_max: float) -> None:
     """CriticalVelocityError when the branch was lost (the corrector failed) below
     ``ustar_max``."""
-    if branch.status == "failed" and branch.x[-1, -2:].sum() / scene.hstar < ustar_max:
+    if branch.status == "failed" and speed(scene, branch.x[-1]) < ustar_max:
         raise CriticalVelocityError(f"steady branch lost at M* = {scene.mstar:g}, U* = "
                                     f"{branch.x[-1, -2:].sum() / scene.hstar:.6g}: {branch.message}")
 
 
 def hopf_points(scene: Scene, model: Model | None = None, ustar_max: float = 40.0,
-                ustar_start: float = 0.2, *, first_only: bool = False,
+                ustar_start: float | None = None, *, first_only: bool = False,
                 ustar_stop: float | None = None) -> list[HopfPoint]:
     """All Hopf points of the steady branch for U* in (ustar_start, ustar_max), in order;
     with ``first_only`` the branch ends at the step past the first one (and the list
@@ -216,14 +240,14 @@ def hopf_points(scene: Scene, model: Model | None = None, ustar_max: float = 40.
     branch = steady_branch(scene, model, ustar_max, ustar_start,
                            stop_at=("hopf",) if first_only else (), ustar_stop=ustar_stop)
     points = [hopf_point_from(model, scene, h) for h in branch.special("hopf")]
-    points = [h for h in points if h.ustar <= ustar_max]
+    points = [h for h in points if abs(h.ustar) <= ustar_max]
     if not (first_only and points):
         _lost(scene, branch, ustar_max)
     return points
 
 
 def first_hopf(scene: Scene, model: Model | None = None, ustar_max: float = 40.0,
-               ustar_start: float = 0.2) -> HopfPoint | None:
+               ustar_start: float | None = None) -> HopfPoint | None:
     """The first Hopf point of the steady branch below ``ustar_max`` (None if none),
     whether or not the steady state lost its stability statically before it."""
     points = hopf_points(scene, model, ustar_max, ustar_start, first_only=True)
@@ -235,7 +259,7 @@ ONSET_KINDS = ("hopf", *DIVERGENCE_KINDS)
 
 
 def critical_velocity(scene: Scene, model: Model | None = None, ustar_max: float = 40.0,
-                      ustar_start: float = 0.2) -> Onset | None:
+                      ustar_start: float | None = None) -> Onset | None:
     """The onset: the first loss of stability of the steady branch below ``ustar_max``,
     whatever its kind (``.kind``): a Hopf point (``"flutter"``, a :class:`HopfPoint`) or a
     real eigenvalue crossing zero (``"divergence"``, a :class:`DivergencePoint`); None
@@ -251,7 +275,7 @@ def critical_velocity(scene: Scene, model: Model | None = None, ustar_max: float
 
 
 def first_onset(scene: Scene, model: Model | None = None, ustar_max: float = 40.0,
-                ustar_start: float = 0.2) -> Onset | None:
+                ustar_start: float | None = None) -> Onset | None:
     """:func:`critical_velocity` without the truncation warning.
 
     The branch stops past its first special point; where that one leaves the branch
@@ -263,8 +287,8 @@ def first_onset(scene: Scene, model: Model | None = None, ustar_max: float = 40.
         onset = _first_loss(model, scene, branch)
         if onset is not None or branch.status != "stopped":
             break
-        start = float(branch.x[-1, -2:].sum() / scene.hstar)
-    if onset is not None and onset.ustar > ustar_max:
+        start = speed(scene, branch.x[-1])
+    if onset is not None and abs(onset.ustar) > ustar_max:
         onset = None
     if onset is None:
         _lost(scene, branch, ustar_max)
@@ -291,7 +315,7 @@ RELOCATE = 0.99
 
 
 def onset_points(scene: Scene, model: Model | None = None, ustar_max: float = 40.0,
-                 ustar_start: float = 0.2, *, ustar_stop: float | None = None) -> list[Onset]:
+                 ustar_start: float | None = None, *, ustar_stop: float | None = None) -> list[Onset]:
     """Every Hopf point and every located divergence of the steady branch for U* in
     (ustar_start, ustar_max), in order of U* (``ustar_stop`` as in :func:`hopf_points`):
     where the branch loses or regains stability, or an unstable one changes."""
@@ -300,7 +324,7 @@ def onset_points(scene: Scene, model: Model | None = None, ustar_max: float = 40
     points = [_onset_from(model, scene, p) for p in branch.special_points
               if p.kind == "hopf" or (p.kind in DIVERGENCE_KINDS and p.status == "converged")]
     _lost(scene, branch, ustar_max)
-    return sorted((p for p in points if p.ustar <= ustar_max), key=lambda p: p.ustar)
+    return sorted((p for p in points if abs(p.ustar) <= ustar_max), key=lambda p: abs(p.ustar))
 
 
 def _onset_from(model: Model, scene: Scene, point) -> Onset:
@@ -330,7 +354,7 @@ def _first_loss(model: Model, scene: Scene, branch: C.Branch) -> Onset | None:
             f"{branch.x[step - 1, -2:].sum() / scene.hstar:.6g} and "
             f"{branch.x[step, -2:].sum() / scene.hstar:.6g} (M* = {scene.mstar:g}) but no "
             "Hopf, branch or fold point was located there")
-    first = min(found, key=lambda p: p.x[-2:].sum())
+    first = min(found, key=lambda p: speed(scene, p.x))
     if first.kind in DIVERGENCE_KINDS and first.status != "converged":
         # the library's location failed: the divergence lies between the two steps
         lo, hi = (float(branch.x[k, -2:].sum() / scene.hstar) for k in (step - 1, step))

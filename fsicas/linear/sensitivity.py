@@ -143,7 +143,7 @@ def _relocated(scene: Scene, hopf: HopfPoint) -> tuple[float, float]:
     """``(U*_c, omega_c)`` of the Hopf point near ``hopf`` on ``scene``'s own model, by
     Newton on the Hopf system from the steady state at the old onset."""
     model = build_model(scene)
-    problem = flutter_problem(scene, model, ustar_start=hopf.ustar)
+    problem = flutter_problem(scene, model, ustar_start=abs(hopf.ustar))
     point = C.hopf_point(problem, problem.X0[:-1], hopf.omega / TIME_SCALE)
     if point.status != "converged":
         raise RuntimeError(f"the onset could not be relocated at {scene}: {point.message}")

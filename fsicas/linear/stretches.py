@@ -79,7 +79,7 @@ def _lowest_on_curves(boundary, lo: float, hi: float, pieces: set) -> np.ndarray
     for m in grid[(grid > lo) & (grid < hi)]:
         found = [x for c in boundary.curves for x in c.crossings(math.log10(m)) if x[2] in pieces]
         if found:
-            u, w, _ = min(found)
+            u, w, _ = min(found, key=lambda c: abs(c[0]))
             rows.append((m, u, w))
     return np.array(rows).reshape(-1, 3)
 

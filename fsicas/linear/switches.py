@@ -81,7 +81,7 @@ def _cell_switches(envelope, piece: int, end: int, lo: float, hi: float) -> list
         lo, hi_k = _switch_bracket(envelope, piece, lo, hi)
         ua, wa, _ = envelope.lowest(lo)
         ub, wb, above = envelope.lowest(hi_k)
-        if abs(ua - ub) > 1e-2 * ub or abs(wa - wb) > 1e-2 * max(wa, wb):
+        if abs(ua - ub) > 1e-2 * abs(ub) or abs(wa - wb) > 1e-2 * max(wa, wb):
             out.append(ModeSwitch(float(10 ** (0.5 * (lo + hi_k))), float(ua), float(ub),
                                   piece, above, float(wa), float(wb)))
         if above == end:
@@ -134,7 +134,7 @@ def locate_switch(scene, model, curves, switch):
     try:
         if _same_branch(scene, model, curves, switch):
             return None
-        if abs(switch.ustar_below - switch.ustar_above) <= 1e-6 * switch.ustar_above:
+        if abs(switch.ustar_below - switch.ustar_above) <= 1e-6 * abs(switch.ustar_above):
             return _crossing(scene, model, curves, switch)
         return _fold(scene, model, curves, switch)
     except (ValueError, RuntimeError):
@@ -148,7 +148,7 @@ def _same_branch(scene, model, curves, switch) -> bool:
                               for piece in (switch.branch_below, switch.branch_above))
     except ValueError:
         return False
-    return abs(ua - ub) <= 1e-8 * ub and abs(wa - wb) <= 1e-8 * max(wa, wb, 1.0)
+    return abs(ua - ub) <= 1e-8 * abs(ub) and abs(wa - wb) <= 1e-8 * max(wa, wb, 1.0)
 
 
 def _curve_of(curves, piece):
@@ -218,7 +218,7 @@ def _beyond(scene, model, curves, lm: float, sign: float) -> tuple[int, float, f
     found = [x for c in curves for x in c.crossings(past)]
     if not found:
         raise ValueError("no curve past the fold")
-    piece = min(found)[2]
+    piece = min(found, key=lambda c: abs(c[0]))[2]
     try:
         return (piece, *_onset(scene, model, curves, piece, lm))
     except ValueError:

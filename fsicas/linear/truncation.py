@@ -53,7 +53,7 @@ def truncation_error(scene: Scene, model: Model, onset) -> float:
     fine = finer_model(model)
     at = scene.replace(modes=fine.scene.modes, quad_nodes=None)
     ustar = _relocated(at, fine, onset, scene.modes)
-    return abs(onset.ustar - ustar) / ustar if ustar else math.nan
+    return abs(onset.ustar - ustar) / abs(ustar) if ustar else math.nan
 
 
 def _relocated(scene: Scene, fine: Model, onset, modes: int) -> float | None:

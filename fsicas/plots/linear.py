@@ -53,8 +53,16 @@ def mode_color(mode: int | None, fallback: int = 0) -> str:
 
 def _scene_words(scene) -> str:
     zeta = f"{scene.zeta:g}" if np.isscalar(scene.zeta) else "per mode"
+    flow = (f", reversed flow ($U^* < 0$), $K_0$ = {scene.k0:g}, $K_L$ = {scene.kl:g}"
+            if scene.direction == "reverse" else "")
     return (fr"$H^*$ = {scene.hstar:g}, $f$ = {scene.friction:g}, $\zeta$ = {zeta}, "
-            f"$N$ = {scene.modes}")
+            f"$N$ = {scene.modes}{flow}")
+
+
+def _ustar_limits(u: np.ndarray, margin: float = 1.25) -> tuple[float, float]:
+    """From 0 to ``margin`` times the U* farthest from 0 (below 0 for reversed flow)."""
+    far = float(u[np.argmax(np.abs(u))]) if u.size else 1.0
+    return (0.0, margin * far) if far >= 0 else (margin * far, 0.0)
 
 
 @styled
@@ -70,7 +78,7 @@ def plot_boundary(boundary: StabilityBoundary, path=None):
     _onset_panels(left, mid, boundary, lines)
     _criticality_panel(crit, onsets(boundary))
     u = np.concatenate([line.ustar for line in lines]) if lines else np.ones(1)
-    left.set(xscale="log", xlabel=MSTAR, ylabel=USTAR_C, ylim=(0, 1.25 * u.max()),
+    left.set(xscale="log", xlabel=MSTAR, ylabel=USTAR_C, ylim=_ustar_limits(u),
              title="stability boundary")
     mid.set(xscale="log", xlabel=MSTAR, ylabel=RATIO, title="frequency at onset")
     fig.legend(*_legend_entries(left), loc="outside right upper")
@@ -227,7 +235,8 @@ def plot_boundary_variants(curves: dict, path=None):
             left.plot([s.mstar] * 2, [s.ustar_below, s.ustar_above], ":", color=color, lw=0.7)
             right.plot([s.mstar] * 2, [s.omega_below / w1, s.omega_above / w1], ":", color=color,
                        lw=0.7)
-    left.set(xscale="log", xlabel=MSTAR, ylabel=USTAR_C, ylim=(0, None),
+    reverse = any(b.scene.direction == "reverse" for b in curves.values())
+    left.set(xscale="log", xlabel=MSTAR, ylabel=USTAR_C, ylim=(None, 0) if reverse else (0, None),
              title="effect of damping and confinement")
     right.set(xscale="log", xlabel=MSTAR, ylabel=RATIO, title="frequency at onset")
     fig.legend(*left.get_legend_handles_labels(), loc="outside right upper")

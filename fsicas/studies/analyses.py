@@ -43,7 +43,7 @@ def study_point(study: Study, index: int) -> dict:
 def _scene(study: Study, point: dict) -> tuple[Scene, Physical | None, Flow | None]:
     """The point's scene (and its physical input and airflow, for a physical study)."""
     if study.physical is None:
-        return Scene(**{**study.scene, **point}), None, None
+        return Scene.from_dict({**study.scene, **point}), None, None
     physical = with_values(load_physical(study.physical),
                            {k: v for k, v in point.items() if k != "flow"})
     flow = parse_flow(point["flow"]) if "flow" in point else physical.flow

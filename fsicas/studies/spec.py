@@ -61,8 +61,9 @@ DISTRIBUTIONS = {"uniform": ("low", "high"), "loguniform": ("low", "high"),
                  "normal": ("mean", "std"), "lognormal": ("median", "sigma")}
 _SCENE_FIELDS = ("mstar", "ustar", "hstar", "friction", "k0", "kl", "zeta", "modes",
                  "quad_nodes", "contact", "contact_stiffness", "contact_eps")
-#: The fixed [scene] keys of a study: its parameters' fields and the beam's ends.
-_FIXED_FIELDS = _SCENE_FIELDS + ("ends",)
+#: The fixed [scene] keys of a study: its parameters' fields, the beam's ends and the
+#: flow's direction.
+_FIXED_FIELDS = _SCENE_FIELDS + ("ends", "direction")
 
 
 @dataclass(frozen=True)
@@ -139,12 +140,13 @@ def _check_points(analysis: str, points: list, scene: dict, label: str) -> None:
         values = sorted({p[key] for p in points})
         for value in values if len(values) <= 100 else (values[0], values[-1]):
             try:
-                Scene(**{**scene, key: value})
+                Scene.from_dict({**scene, key: value})
             except (ValueError, TypeError) as err:
                 raise ValueError(f"{label}: {key} = {value!r}: {err}") from None
-    if analysis != "onset" and "ustar" not in points[0] and not scene.get("ustar", 0) > 0:
+    if analysis != "onset" and "ustar" not in points[0] and not scene.get("ustar", 0) != 0:
         raise ValueError(f"{label}: the {analysis} analysis integrates in time at a flow: give "
-                         "ustar > 0 in [grid], [sample] or [scene] (or flow, with physical = ...)")
+                         "ustar > 0 (< 0: reversed flow) in [grid], [sample] or [scene] (or "
+                         "flow, with physical = ...)")
 
 
 def _check_run_size(points: list, scene: dict, settings: dict, label: str) -> None:
@@ -178,7 +180,7 @@ def _check_values(analysis: str, physical, scene: dict, settings: dict, label: s
         except ValueError as err:
             raise ValueError(f"{label}: [settings] {err}") from None
     try:
-        Scene(**scene)
+        Scene.from_dict(scene)
     except (ValueError, TypeError) as err:
         raise ValueError(f"{label}: [scene] {err}") from None
 

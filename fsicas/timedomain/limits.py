@@ -24,7 +24,7 @@ def check_size(n_state: int, t_end: float, dt_out: float, schedule: PressureSche
             f"t_end / dt_out = {samples:.3g} samples of {n_state} states would take "
             f"{size / 2 ** 30:.3g} GiB (at most {MAX_TRAJECTORY_BYTES / 2 ** 30:g} GiB): raise "
             f"dt_out (--dt-out) or shorten t_end (--t-end)")
-    if schedule.kind == "breath":
+    if schedule.kind in ("breath", "tidal"):
         require(schedule.period >= SAMPLES_PER_BREATH * dt_out,
                 f"the breath period {schedule.period:g} is shorter than {SAMPLES_PER_BREATH} "
                 f"output samples of dt_out = {dt_out:g}: give a breath period of at "

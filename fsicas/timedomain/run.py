@@ -202,8 +202,14 @@ def sensitive_states(run: Run) -> np.ndarray | None:
 
 
 def _spread(x: np.ndarray) -> np.ndarray:
-    """At most :data:`QUADRATURE_SAMPLES` rows of ``x`` spread over it, the last among them."""
-    return x[np.unique(np.linspace(0, len(x) - 1, min(len(x), QUADRATURE_SAMPLES)).astype(int))]
+    """At most :data:`QUADRATURE_SAMPLES` rows of ``x`` spread over it, the last among them,
+    and the two samples around each of the first :data:`QUADRATURE_SAMPLES` reversals of a
+    channel's inlet flow (a breath through zero flow): there the flow reverses inside the
+    channel, u|u| is only C^1 and the flow integrals converge slowest (docs/model.md)."""
+    spread = np.linspace(0, len(x) - 1, min(len(x), QUADRATURE_SAMPLES)).astype(int)
+    flips = np.flatnonzero(np.any(np.diff(np.sign(x[:, -2:]), axis=0) != 0, axis=1))
+    flips = flips[:QUADRATURE_SAMPLES]
+    return x[np.unique(np.r_[spread, flips, flips + 1])]
 
 
 def _run_once(scene: Scene, model: Model, *, t_end: float, settings: Settings,
