@@ -137,6 +137,7 @@ def test_crossing_switch_is_a_double_hopf_point():
         assert abs(lam.real) < 1e-7 * abs(lam) and abs(lam.imag - omega) < 1e-6 * omega
 
 
+@pytest.mark.slow     # 47 s: 400 refined M*; test_stability checks the sampling at 9 s
 def test_onset_is_continuous_in_mstar_except_at_the_switches():
     """A dense boundary (400 M* in [0.01, 100], N = 10, each point refined): across a
     fold switch U*_c jumps by at least the switch's jump (the folding branch also rises

@@ -132,6 +132,7 @@ def test_damping_from_zero_has_a_per_unit_derivative(palate):
     assert s.flow_per_unit == pytest.approx(one_sided, rel=1e-5)
 
 
+@pytest.mark.slow     # 36 s: the fixed point recomputed per elasticity
 def test_viscous_friction_fixed_point_is_differentiated():
     """With a viscosity the friction follows the onset's own Reynolds number: the
     elasticities include that loop (checked against the fixed point recomputed)."""
