@@ -78,3 +78,40 @@ def period3_impacting_run():
     y = model.tip_deflection(x[t > t[-1] - period])
     return SimpleNamespace(scene=scene, model=model, run=run, state=state, period=period,
                            swings=swings, amplitude=(y.max() - y.min()) / 2)
+
+
+@pytest.fixture(scope="session")
+def channel_pde_check():
+    """``check(scene, model, x0, dp) -> [(h, u, p, scale)]`` per channel: the fields of the
+    formal solution (cumulative Simpson on 8001 points) at t - dt, t, t + dt of a tight
+    DOP853 integration (rtol 1e-13) of ``M xdot = F`` from ``x0`` at the pressure drop
+    ``dp``, checked here to satisfy continuity and momentum by central differences in x
+    and t (1e-5); the caller checks the end pressures (``p`` at x = 0 and 1, ``scale`` the
+    size of ``h dp/dx``)."""
+    import numpy as np
+    import scipy.integrate
+    from fsicas import flow_fields
+
+    def check(scene, model, x0, dp, dt=2e-5):
+        p = model.parameters(pressure_drop=dp)
+        grid = np.linspace(0.0, 1.0, 8001)
+        states = [x0 if t == 0.0 else scipy.integrate.solve_ivp(
+            lambda _, z: model.xdot(z, p), (0.0, t), x0, method="DOP853", rtol=1e-13,
+            atol=1e-15).y[:, -1] for t in (-dt, 0.0, dt)]
+        before, now, after = (flow_fields(scene, z, model.xdot(z, p), dp, grid)
+                              for z in states)
+        grad = lambda a: np.gradient(a, grid, edge_order=2)
+        out = []
+        for c in range(2):
+            h, u, pc = now.h[c], now.u[c], now.p[c]
+            h_t = (after.h[c] - before.h[c]) / (2 * dt)
+            flux_t = (after.h[c] * after.u[c] - before.h[c] * before.u[c]) / (2 * dt)
+            momentum = scene.mstar * (flux_t + grad(h * u**2) + scene.friction * u * abs(u)) \
+                + h * grad(pc)
+            scale = np.max(np.abs(h * grad(pc)))
+            assert np.max(np.abs(h_t + grad(h * u))) < 1e-5 * max(np.max(np.abs(h_t)), 1e-3)
+            assert np.max(np.abs(momentum)) < 1e-5 * scale
+            out.append((h, u, pc, scale))
+        return out
+
+    return check
