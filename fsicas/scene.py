@@ -381,3 +381,8 @@ def _validate(s: Scene) -> None:
     require(0 <= finite_number("contact_smoothing", s.contact_smoothing) <= 1,
              f"contact_smoothing (width / eps) must lie in [0, 1], got {s.contact_smoothing}")
     _validate_beam(s)
+    require(s.contact_smoothing == 0 or s.ends == CLAMPED_FREE,
+            f"contact_smoothing > 0 (the smoothed impact law of the impacting cycles) needs "
+            f"ends = {CLAMPED_FREE!r}, got {s.ends!r}: its rule is graded towards the free "
+            "tip, and a beam held at both ends touches the walls inside the span; use the "
+            "exact law (contact_smoothing = 0) in a time integration")

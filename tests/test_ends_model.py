@@ -296,3 +296,13 @@ def test_energy_balance_and_flow_conservation_of_a_growing_flutter(ends):
     assert eb.relative_residual < 1e-6 and run.quadrature_error < 1e-6
     out = outlet_flow_rates(tr)
     assert np.allclose(out.sum(axis=1), tr.x[:, -2:].sum(axis=1), rtol=1e-13, atol=0)
+
+
+@pytest.mark.parametrize("ends", ["clamped-clamped", "pinned-pinned", "clamped-pinned"])
+def test_the_smoothed_impact_law_is_refused_with_both_ends_held(ends):
+    """The smoothed law's rule is graded towards a free tip: a held beam, which touches
+    the walls inside the span, is refused it (and so the impacting cycles, which need it)
+    with the reason, while the exact law (time integration) stays open to it."""
+    with pytest.raises(ValueError, match="contact_smoothing > 0 .* needs ends = 'clamped-free'"):
+        Scene(ends=ends, contact=True, contact_smoothing=0.1)
+    assert Scene(ends=ends, contact=True).contact_smoothing == 0.0
