@@ -59,13 +59,16 @@ class Condition:
         none pinned)."""
         return mu
 
-    def tests(self, problem, X) -> dict:
-        """The condition's own smooth codimension-two test functions (default none)."""
-        return {}
+    #: the names of the condition's own smooth codimension-two test functions
+    test_names: tuple = ()
 
-    def tests_names(self) -> tuple:
-        """The names of :meth:`tests`."""
-        return ()
+    def test(self, problem, X, name: str) -> float:
+        """The value of the test function ``name`` (one of :attr:`test_names`) at ``X``."""
+        raise ValueError(f"{type(self).__name__} has no test {name!r}")
+
+    def tests(self, problem, X) -> dict:
+        """All of the condition's own test functions at ``X``."""
+        return {name: self.test(problem, X, name) for name in self.test_names}
 
     def bind(self, problem: CycleProblem, X) -> "Condition":
         """The condition ready for ``problem`` at ``X`` (borders set); default: itself."""
@@ -176,18 +179,16 @@ class CycleFold(_Bordered):
     """Fold of cycles (LPC): ``G_(U, T)`` singular."""
 
     crossings = ("r1", "lppd", "lpns")
-
-    def tests_names(self) -> tuple:
-        return ("cpc",)
+    test_names = ("cpc",)
 
     def rest(self, problem, X, mu) -> np.ndarray:
         return np.delete(mu, np.argmin(np.abs(mu - 1.0)))
 
-    def tests(self, problem, X) -> dict:
+    def test(self, problem, X, name: str) -> float:
         """``cpc``: ``a = w^T G_YY[v, v]`` with the bordered ``v, w`` (unit borders), zero
         at a cusp of cycles."""
         v, w, _ = self._solved(problem, X)
-        return {"cpc": normal_forms.fold_coefficient(problem, X, v, w)}
+        return normal_forms.fold_coefficient(problem, X, v, w)
 
     def matrix(self, problem, J) -> sp.csc_matrix:
         return J[:, : J.shape[0]]
@@ -201,15 +202,13 @@ class PeriodDoubling(_Bordered):
     ``u_(NTST, 0) = -u_(0, 0)``) singular, i.e. a Floquet multiplier at -1."""
 
     crossings = ("lppd", "r2", "pdns")
+    test_names = ("gpd",)
 
-    def tests_names(self) -> tuple:
-        return ("gpd",)
-
-    def tests(self, problem, X) -> dict:
+    def test(self, problem, X, name: str) -> float:
         """``gpd``: the doubled cycles' cubic coefficient ``c``, zero at a generalized
         period doubling (``normal_forms``)."""
         v, w, _ = self._solved(problem, X)
-        return {"gpd": normal_forms.flip_coefficient(problem, X, v, w)}
+        return normal_forms.flip_coefficient(problem, X, v, w)
 
     def rest(self, problem, X, mu) -> np.ndarray:
         return np.delete(mu, np.argmin(np.abs(mu + 1.0)))
@@ -236,9 +235,7 @@ class NeimarkSacker(Condition):
     circle, upper half-plane)."""
 
     crossings = ("lpns", "pdns", "nsns")
-
-    def tests_names(self) -> tuple:
-        return ("r3", "r4", "ch")
+    test_names = ("r3", "r4", "ch")
 
     def __init__(self, multiplier: complex | None = None):
         self.multiplier = None if multiplier is None else complex(multiplier)
@@ -294,17 +291,16 @@ class NeimarkSacker(Condition):
         second[first] = np.inf
         return np.delete(mu, [first, int(np.argmin(second))])
 
-    def tests(self, problem, X) -> dict:
+    def test(self, problem, X, name: str) -> float:
         """``r3``, ``r4``: ``cos theta + 1/2`` and ``cos theta`` of ``mu = |mu| e^{i
         theta}``, zero at the 1:3 and 1:4 resonances; ``ch``: the first Lyapunov
         coefficient of the torus bifurcation, zero at a Chenciner point
-        (``normal_forms``)."""
+        (``normal_forms``; only it costs Jacobians)."""
         mu, v, w, _ = self._root(problem, X)
-        c = mu.real / abs(mu)
-        J = problem.cycle_jacobian(X)
-        ch = normal_forms.torus_coefficient(problem, X, mu, v, w,
-                                            lambda nu: _twisted(problem, J, nu)[0])
-        return {"r3": c + 0.5, "r4": c, "ch": ch}
+        if name == "ch":
+            return normal_forms.torus_coefficient(
+                problem, X, mu, v, w, lambda J, nu: _twisted(problem, J, nu)[0])
+        return mu.real / abs(mu) + (0.5 if name == "r3" else 0.0)
 
     def gradient(self, problem, X) -> np.ndarray:
         mu, v, w, g_mu = self._root(problem, X)

@@ -124,7 +124,7 @@ class CycleCurveProblem(CycleProblem):
 
     def events(self, a: PointInfo, b: PointInfo) -> list:
         plus, minus, pair = self.condition.crossings
-        own = [k for k in ("fold", *self.condition.tests_names())
+        own = [k for k in ("fold", *self.condition.test_names)
                if k in a.tests and k in b.tests and a.tests[k] * b.tests[k] < 0]
         real = [k for k in (plus, minus) if k in a.counts and k in b.counts
                 and (a.counts[k] - b.counts[k]) % 2]
@@ -141,7 +141,7 @@ class CycleCurveProblem(CycleProblem):
             return lambda X, tau, lu: floquet.crossing(self.rest(X), target)
         if kind == pair:
             return lambda X, tau, lu: floquet.nearest_complex_modulus(self.rest(X)) - 1.0
-        return lambda X, tau, lu: self.condition.tests(self, X)[kind]
+        return lambda X, tau, lu: self.condition.test(self, X, kind)
 
     def describe(self, kind, X, tau, settings) -> Description:
         """The point, its period, mesh and unknowns; at a crossing the multiplier of the
@@ -163,7 +163,7 @@ class CycleCurveProblem(CycleProblem):
             found.data.update({"multiplier_re": float(np.real(m)),
                                "multiplier_im": float(np.imag(m))})
         if kind == "cpc":
-            found.data["coefficient"] = self.condition.tests(self, X)["cpc"]
+            found.data["coefficient"] = self.condition.test(self, X, "cpc")
         return found
 
 

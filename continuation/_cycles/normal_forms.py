@@ -43,7 +43,7 @@ STEP = 1e-3
 def fold_coefficient(problem, X, v, w) -> float:
     """``a = w^T G_YY[v, v] / (|v|^2 |w|)`` (``v`` over ``Y = (U, T)``)."""
     d = _padded(v, len(X))
-    H, _ = _differences(problem, X, d, second=False)
+    H, _ = _differences(problem, X, d, None)
     return float(w @ (H @ d)) / (np.linalg.norm(v) ** 2 * np.linalg.norm(w))
 
 
@@ -53,12 +53,12 @@ def flip_coefficient(problem, X, v, w) -> float:
     rows = problem.n_nodes * problem.vf.n
     last = _last_rows(problem, rows + 1)
     d1, d2 = twisted_directions(problem, v, -1.0, len(X))
-    (H1, K1), (H2, K2) = (_differences(problem, X, d) for d in (d1, d2))
+    J = problem.cycle_jacobian(X)
+    (H1, K1), (H2, K2) = (_differences(problem, X, d, J) for d in (d1, d2))
     B = np.where(last, H2 @ d2, H1 @ d1)
     C = np.where(last, K2 @ d2, K1 @ d1)
-    A = problem.cycle_jacobian(X)[:, : rows + 1].tocsc()          # G_Y, periodic
-    h2 = spla.spsolve(A, -B)
-    He, _ = _differences(problem, X, _padded(h2, len(X)), second=False)
+    h2 = spla.spsolve(J[:, : rows + 1].tocsc(), -B)              # G_Y, periodic
+    He, _ = _differences(problem, X, _padded(h2, len(X)), None)
     Bh = np.where(last, He @ d2, He @ d1)
     c = w @ (C + 3.0 * Bh)[:rows]
     return float(c) / (np.linalg.norm(v) ** 3 * np.linalg.norm(w))
@@ -67,29 +67,30 @@ def flip_coefficient(problem, X, v, w) -> float:
 def torus_coefficient(problem, X, mu, v, w, twisted_matrix) -> float:
     """The first Lyapunov coefficient ``Re(conj(mu) c / s) / |v|^2`` of the torus pair
     ``mu`` (module doc); ``v`` over ``U``, ``w`` its transposed adjoint,
-    ``twisted_matrix(nu)`` the collocation ``G_U`` with the wrap ``u(1) = nu u(0)``."""
+    ``twisted_matrix(J, nu)`` the collocation ``G_U`` of the Jacobian ``J`` with the wrap
+    ``u(1) = nu u(0)``."""
     rows, size = problem.n_nodes * problem.vf.n, len(X)
     last = _last_rows(problem, rows + 1)
     blocks = [twisted_directions(problem, v, mu, size),          # (rows but last, last)
               twisted_directions(problem, np.conj(v), np.conj(mu), size)]
     (v1, v2), (c1, c2) = blocks
-    H1, K1 = _complex_differences(problem, X, v1)
-    H2, K2 = _complex_differences(problem, X, v2)
+    J = problem.cycle_jacobian(X)
+    H1, K1 = _complex_differences(problem, X, v1, J)
+    H2, K2 = _complex_differences(problem, X, v2, J)
     B_vc = np.real(np.where(last, H2 @ c2, H1 @ c1))              # G_UU[v, conj v]
     B_vv = np.where(last, H2 @ v2, H1 @ v1)
     C = np.where(last, K2 @ c2, K1 @ c1)                          # G_UUU[v, v, conj v]
-    A = problem.cycle_jacobian(X)[:, : rows + 1].tocsc()
-    h11 = spla.spsolve(A, -B_vc)
-    h20 = spla.spsolve(twisted_matrix(mu ** 2).tocsc(), -B_vv[:rows])
-    H11, _ = _differences(problem, X, _padded(h11, size), second=False)
+    h11 = spla.spsolve(J[:, : rows + 1].tocsc(), -B_vc)
+    h20 = spla.spsolve(twisted_matrix(J, mu ** 2).tocsc(), -B_vv[:rows])
+    H11, _ = _differences(problem, X, _padded(h11, size), None)
     B_h11 = np.where(last, H11 @ v2, H11 @ v1)
     d1, d2 = twisted_directions(problem, h20, mu ** 2, size)
-    G1, _ = _complex_differences(problem, X, d1, second=False)
-    G2, _ = _complex_differences(problem, X, d2, second=False)
+    G1, _ = _complex_differences(problem, X, d1, None)
+    G2, _ = _complex_differences(problem, X, d2, None)
     B_h20 = np.where(last, G2 @ c2, G1 @ c1)
     c = w @ (C + 2.0 * B_h11 + B_h20)[:rows]
     last_u, wrap = last[:rows], np.arange(rows) < problem.vf.n
-    s = w[last_u] @ (twisted_matrix(1.0)[last_u][:, wrap] @ v[wrap])
+    s = w[last_u] @ (twisted_matrix(J, 1.0)[last_u][:, wrap] @ v[wrap])
     return float(np.real(np.conj(mu) * c / s)) / np.linalg.norm(v) ** 2
 
 
@@ -107,28 +108,28 @@ def _last_rows(problem, size: int) -> np.ndarray:
     return (index >= rows - problem.vf.n * problem.ncol) & (index < rows)
 
 
-def _differences(problem, X, d, second: bool = True) -> tuple:
-    """``(D_d J, D2_d J)`` of ``J = problem.cycle_jacobian`` at ``X`` along ``d``
-    (``D2`` None unless ``second``)."""
+def _differences(problem, X, d, J0) -> tuple:
+    """``(D_d J, D2_d J)`` of ``J = problem.cycle_jacobian`` at ``X`` along ``d``;
+    ``J0``: ``J(X)``, or None for ``D_d J`` alone (``D2`` None)."""
     h = STEP * (1.0 + np.max(np.abs(X))) / max(np.max(np.abs(d)), 1e-300)
     J = {j: problem.cycle_jacobian(X + j * h * d) for j in (-2, -1, 1, 2)}
     H = (8 * (J[1] - J[-1]) - (J[2] - J[-2])) / (12 * h)
-    if not second:
+    if J0 is None:
         return H, None
-    K = (16 * (J[1] + J[-1]) - (J[2] + J[-2]) - 30 * problem.cycle_jacobian(X)) / (12 * h ** 2)
+    K = (16 * (J[1] + J[-1]) - (J[2] + J[-2]) - 30 * J0) / (12 * h ** 2)
     return H, K
 
 
-def _complex_differences(problem, X, d, second: bool = True) -> tuple:
+def _complex_differences(problem, X, d, J0) -> tuple:
     """:func:`_differences` along a complex ``d`` (module doc)."""
     a, b = np.real(d), np.imag(d)
-    Ha, Ka = _differences(problem, X, a, second)
+    Ha, Ka = _differences(problem, X, a, J0)
     if not np.any(b):
         return Ha, Ka
-    Hb, Kb = _differences(problem, X, b, second)
-    if not second:
+    Hb, Kb = _differences(problem, X, b, J0)
+    if J0 is None:
         return Ha + 1j * Hb, None
-    Kab = _differences(problem, X, a + b)[1]
+    Kab = _differences(problem, X, a + b, J0)[1]
     return Ha + 1j * Hb, Ka - Kb + 1j * (Kab - Ka - Kb)
 
 
