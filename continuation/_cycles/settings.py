@@ -38,8 +38,7 @@ class CollocationSettings:
     condensed transfer matrices: every multiplier accurate relative to its own size,
     whatever their spread; see ``docs/continuation.md``), 'pencil' (QZ of their
     block-cyclic pencil), 'product' (eigenvalues of their product: multipliers below
-    about 1e-16 times the largest are lost) or 'auto' (default: 'schur'; pencil_max is
-    kept for callers and no longer used).
+    about 1e-16 times the largest are lost) or 'auto' (default: 'schur').
     unstable_tol : a non-trivial multiplier counts as unstable when
     ``|mu| > 1 + unstable_tol``. adapt_every : re-mesh (equidistribution of
     the error indicator) after every ``adapt_every`` accepted points; 0 = never.
@@ -63,7 +62,6 @@ class CollocationSettings:
     ntst: int = 20
     ncol: int = 4
     floquet: str = "auto"
-    pencil_max: int = 500
     unstable_tol: float = 1e-8
     adapt_every: int = 0
     jacobian: str = "blocks"
@@ -71,7 +69,7 @@ class CollocationSettings:
     linear_solver: str = "auto"
 
     def __post_init__(self):
-        positive_int(self, "ntst", "ncol", "pencil_max")
+        positive_int(self, "ntst", "ncol")
         if self.linear_solver not in ("auto", "condensed", "sparse"):
             raise ValueError("CollocationSettings.linear_solver must be 'auto', 'condensed' "
                              f"or 'sparse', got {self.linear_solver!r}")
