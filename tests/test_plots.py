@@ -429,3 +429,24 @@ def test_fig4_marks_the_generalized_hopf_points_and_their_fold_curves(boundary6)
     assert mark.get_xydata().tolist() == [[3.5, 0.3]]
     fig = plot_map(result, linear=boundary, switched=switched)
     assert "fold of cycles" in [t.get_text() for t in fig.legends[0].get_texts()]
+
+
+def test_a_long_title_breaks_into_lines_that_fit_a_one_panel_figure():
+    from fsicas.plots.backend import styled, subplots, suptitle
+    text = (r"complex mode shapes at the marked points of Fig. 2 ($H^*$ = 0.1, $f$ = 0.14, "
+            r"$\zeta$ = 0, $N$ = 10, $K_L$ = 1)")
+
+    @styled
+    def draw():
+        fig, _ = subplots(1, 1, figsize=(2.3, 2.2))
+        return fig, suptitle(fig, text)
+    fig, title = draw()
+    lines = title.get_text().split("\n")
+    assert len(lines) >= 3
+    assert " ".join(lines) == text                          # every word kept, in order
+    assert not any(line.endswith(("=", "$f$")) for line in lines)   # "a = b" not split
+    renderer = fig.canvas.get_renderer()
+    for line in lines:                                      # each line alone fits the figure
+        title.set_text(line)
+        assert title.get_window_extent(renderer).width <= fig.bbox.width
+    matplotlib.pyplot.close(fig)

@@ -16,11 +16,12 @@ written in the format its file name says (``.png``, ``.pdf``, ``.svg``, ...).
 from __future__ import annotations
 
 import functools
+import re
 from pathlib import Path
 
 from ..timedomain.outcome import OUTCOME_WORDS, outcome_words   # for titles and legends
 
-__all__ = ["FILE_BACKEND", "PALETTE", "OUTCOME_WORDS", "NONDIM", "probe_label", "pyplot", "select_file_backend",
+__all__ = ["FILE_BACKEND", "PALETTE", "OUTCOME_WORDS", "NONDIM", "probe_label", "pyplot", "select_file_backend", "suptitle",
            "styled", "subplots", "finish", "outcome_words"]
 
 #: The backend the command line uses to write figure files (no display needed).
@@ -109,6 +110,24 @@ def subplots(nrows: int = 1, ncols: int = 1, **kwargs):
     kwargs.setdefault("layout", "constrained")
     kwargs.setdefault("squeeze", False)
     return pyplot().subplots(nrows, ncols, **kwargs)
+
+
+def suptitle(fig, text: str):
+    """``fig.suptitle(text)``, broken into lines at the spaces outside ``$...$`` and
+    ``a = b`` wherever a line would be wider than the figure (a one-panel figure keeps its
+    whole title)."""
+    title = fig.suptitle(text)
+    renderer, width = fig.canvas.get_renderer(), 0.98 * fig.bbox.width
+    lines = [""]
+    words = re.findall(r"(?:\$[^$]*\$|[^ $])+", text.replace(" = ", "\0=\0"))
+    for word in (w.replace("\0", " ") for w in words):      # "a = 1" stays on one line
+        title.set_text(f"{lines[-1]} {word}".strip())
+        if lines[-1] and title.get_window_extent(renderer).width > width:
+            lines.append(word)
+        else:
+            lines[-1] = f"{lines[-1]} {word}".strip()
+    title.set_text("\n".join(lines))
+    return title
 
 
 def finish(fig, path=None):

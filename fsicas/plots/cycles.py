@@ -5,7 +5,7 @@ import numpy as np
 
 from ..cycles.curves import lowest_ustar
 from ..linear.stretches import boundary_function
-from .backend import NONDIM, PALETTE, finish, styled, subplots
+from .backend import NONDIM, PALETTE, finish, styled, subplots, suptitle
 from .linear import draw_boundary
 
 __all__ = ["plot_branch", "plot_curves", "draw_curves", "mark_cases"]
@@ -39,7 +39,7 @@ def plot_branch(branch, path=None):
         ax.set(xlabel=f"flow velocity $U^*$ {NONDIM}", ylabel=label)
     s = branch.scene
     zeta = f"{s.zeta:g}" if np.isscalar(s.zeta) else "per mode"
-    fig.suptitle(fr"limit cycles at $M^*$ = {s.mstar:g}, $N$ = {s.modes}, $\zeta$ = {zeta}: "
+    suptitle(fig, fr"limit cycles at $M^*$ = {s.mstar:g}, $N$ = {s.modes}, $\zeta$ = {zeta}: "
                  + _ENDS[branch.status])
     handles, labels = axes[0][0].get_legend_handles_labels()
     if handles:

@@ -30,7 +30,7 @@ from ..model.contact import reference_force
 from ..model.patch import contact_intervals, penetration
 from ..timedomain.returns import poincare_returns
 from .backend import (NONDIM, PALETTE, finish, outcome_words, probe_label, pyplot, styled,
-                      subplots)
+                      subplots, suptitle)
 
 __all__ = ["CycleView", "cycle_view", "cycle_window", "return_period", "tip_spectrum",
            "first_contact", "plot_cycle", "plot_cycles"]
@@ -206,7 +206,7 @@ def plot_cycle(run, path=None, snapshots: int = 24):
     fig, ax = subplots(3, 3, figsize=(10.5, 7.8))
     panels = dict(zip(ROWS, ax.flat))
     _draw_case(panels, view, colorbar=True, titles=True)
-    fig.suptitle(view.title)
+    suptitle(fig, view.title)
     return finish(fig, path)
 
 
@@ -229,7 +229,7 @@ def plot_cycles(runs, path=None, labels=None, snapshots: int = 24):
                 row.get_legend().remove()
     first = views[0] if views else None
     if first is not None:
-        fig.suptitle(f"impacting cycles at $M^*$ = {first.mstar:g}, $N$ = {first.modes}, "
+        suptitle(fig, f"impacting cycles at $M^*$ = {first.mstar:g}, $N$ = {first.modes}, "
                      f"{first.law}\nFigs. 6 (snapshots), 7 ($r_n$, $Q_c$), 8 (tip, "
                      "walls dashed; spectrum; RMS), 9 (force, its first contact zoomed)")
     return finish(fig, path)

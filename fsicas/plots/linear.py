@@ -21,7 +21,7 @@ from ..linear.boundary import StabilityBoundary
 from ..linear.stretches import BranchLine, branch_lines, marked_points, omega_1, onsets
 from ..linear.stability import linear_stability
 from ..model.assembly import Model
-from .backend import NONDIM, PALETTE, finish, styled, subplots
+from .backend import NONDIM, PALETTE, finish, styled, subplots, suptitle
 
 __all__ = ["draw_boundary", "mode_color", "plot_boundary", "plot_mode_shapes",
            "plot_eigenvalues", "plot_boundary_variants"]
@@ -82,7 +82,7 @@ def plot_boundary(boundary: StabilityBoundary, path=None):
              title="stability boundary")
     mid.set(xscale="log", xlabel=MSTAR, ylabel=RATIO, title="frequency at onset")
     fig.legend(*_legend_entries(left), loc="outside right upper")
-    fig.suptitle(_scene_words(boundary.scene))
+    suptitle(fig, _scene_words(boundary.scene))
     return finish(fig, path)
 
 
@@ -172,7 +172,7 @@ def plot_mode_shapes(boundary: StabilityBoundary, model: Model, path=None, colum
         row[0].set_ylabel(fr"$y/\max|y|$ {NONDIM}")
     axes[0][0].set(ylim=(-1.15, 1.15), xlim=(0, 1))
     fig.legend(*axes[0][0].get_legend_handles_labels(), loc="outside lower center", ncols=3)
-    fig.suptitle(f"complex mode shapes at the marked points of Fig. 2 ({_scene_words(boundary.scene)})")
+    suptitle(fig, f"complex mode shapes at the marked points of Fig. 2 ({_scene_words(boundary.scene)})")
     return finish(fig, path)
 
 
