@@ -57,8 +57,8 @@ GROUPS = {
              "2000 x 2000 points; `map --t-end 1e12`",
     "direction": "the flow's direction: `--direction sideways`; a sign given twice (`--direction "
                  "reverse --ustar -2`, `map --direction reverse --ustar -5:-1:3`, `--physical soft_palate --flow=-20L/min --direction "
-                 "reverse`); reversed flow where only forward flow is computed (`grazing`, "
-                 "`design`, `design --target-flow=-30L/min`); `simulate --schedule tidal --direction reverse`, "
+                 "reverse`, `design --direction reverse --target-flow=-30L/min`); reversed flow where "
+                 "only forward flow is computed (`grazing`); `simulate --schedule tidal --direction reverse`, "
                  "`--expiration-peak` without `--schedule tidal`",
     "scene files": "scene files: missing, a folder, invalid TOML, not UTF-8, nested thousands "
                    "deep, an unknown key, `zeta = \"abc\"`, `direction = \"up\"`, "
@@ -149,9 +149,8 @@ _OPTIONS = {
         (("onset", "--physical", "soft_palate", "--flow=-20L/min", "--direction", "reverse"),
          "negative and a direction"),
         (("grazing", "--direction", "reverse"), "forward flow only"),
-        (("design", "--physical", "soft_palate", "--direction", "reverse"), "forward flow only"),
-        (("design", "--physical", "soft_palate", "--target-flow=-30L/min", "--vary", "E"),
-         "--target-flow must be > 0"),
+        (("design", "--physical", "soft_palate", "--direction", "reverse",
+          "--target-flow=-30L/min", "--vary", "E"), "negative and a direction"),
         ((*_SIM, "--schedule", "tidal", "--direction", "reverse"), "tidal"),
         ((*_SIM, "--expiration-peak", "1"), "--expiration-peak")],
     "sizes": [
