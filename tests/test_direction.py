@@ -266,6 +266,42 @@ def test_reversed_divergence_pressure_is_independent_of_mstar(reversed_cantileve
     assert b.ustar == pytest.approx(a.ustar * np.sqrt(10.0), rel=1e-9)
 
 
+@pytest.mark.parametrize("mstar", [1e4, 1e6])
+def test_reversed_divergence_below_a_hundredth_at_large_mass_ratios(reversed_cantilever, mstar):
+    """At M* = 1e4 and 1e6 the reversed divergence lies at |U*| = 0.0045 and 0.00045,
+    below the start |U*| = 0.01 of M* <= 1: the search starts at 0.01 / sqrt(M*). Δp_c
+    is that of M* = 1 (the scaling law) and the unstable count of the steady states
+    steps from 0 to 1 there (direct eigenvalues, no continuation)."""
+    from fsicas.linear.hopf import critical_velocity
+    scene, model = reversed_cantilever
+    a = critical_velocity(scene, model, ustar_max=10.0)
+    b = critical_velocity(scene.replace(mstar=mstar), model, ustar_max=10.0)
+    assert b.kind == "divergence" and abs(b.ustar) < 0.01
+    assert b.pressure_drop == pytest.approx(a.pressure_drop, rel=1e-9)
+    heavy = scene.replace(mstar=mstar)
+    assert [_unstable_count(model, heavy, b.ustar * f)[0] for f in (1 - 1e-6, 1 + 1e-6)] == [0, 1]
+
+
+def test_a_reversed_divergence_solved_between_steps_is_located_again():
+    """K0 = 1, KL = 0.5, M* = 0.1: the library locates no divergence in the step where
+    the reversed branch loses stability; it is solved between the steps and located
+    again from 1 % below its speed (a signed start was refused). Against the first sign
+    change of the largest growth rate of steady states scanned without continuation."""
+    from scipy.optimize import brentq
+    from fsicas.linear.hopf import critical_velocity
+    scene = Scene(mstar=0.1, ustar=-1.0, hstar=0.1, friction=0.14, k0=1.0, kl=0.5,
+                  zeta=0.01, modes=6)
+    model = build_model(scene)
+    onset = critical_velocity(scene, model, ustar_max=20.0)
+    grid = -np.linspace(0.05, 2.0, 40)
+    rates = np.array([_unstable_count(model, scene, u)[1] for u in grid])
+    k = int(np.argmax(rates > 0))
+    assert k > 0
+    ustar = brentq(lambda u: _unstable_count(model, scene, u)[1], grid[k], grid[k - 1],
+                   xtol=1e-13, rtol=1e-13)
+    assert onset.kind == "divergence" and onset.ustar == pytest.approx(ustar, rel=1e-9)
+
+
 # -- a breath through zero flow ----------------------------------------------------------
 def test_tidal_schedule_goes_through_zero_flow():
     from fsicas.timedomain.breathing import PressureSchedule
