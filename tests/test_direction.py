@@ -302,6 +302,26 @@ def test_a_reversed_divergence_solved_between_steps_is_located_again():
     assert onset.kind == "divergence" and onset.ustar == pytest.approx(ustar, rel=1e-9)
 
 
+def test_a_fold_far_below_the_search_bound_is_found_on_finer_steps():
+    """An asymmetric channel (H1 = 0.55 H*, K0 = KL = 0.5, M* = 1): the reversed branch
+    folds at |U*| = 0.37, where the steps of a search up to 40 jumped across the fold onto
+    another branch (stability lost with no special point located). The repeated search
+    on finer steps returns the fold: a real eigenvalue of the Jacobian at its state is
+    zero (direct eigenvalues), and the steady state 1 % below it is stable."""
+    from fsicas.linear.hopf import critical_velocity
+    from fsicas.linear.stability import generalized_eigen
+    scene = Scene(mstar=1.0, ustar=-1.0, hstar=0.1, friction=0.14, k0=0.5, kl=0.5, modes=8,
+                  channel1=Profile.constant(0.055), channel2=Profile.constant(0.045))
+    model = build_model(scene)
+    onset = critical_velocity(scene, model, ustar_max=40.0)
+    assert onset.kind == "divergence" and onset.bifurcation == "fold" and onset.ustar < 0
+    p = model.parameters(scene.replace(ustar=onset.ustar), pressure_drop=onset.pressure_drop)
+    lam, _ = generalized_eigen(model.jac_rhs(onset.x, p), model.mass(onset.x, p))
+    real = lam[np.abs(lam.imag) <= 1e-9 * np.abs(lam)].real
+    assert np.min(np.abs(real)) < 1e-6 * np.max(np.abs(lam))
+    assert _unstable_count(model, scene, 0.99 * onset.ustar)[0] == 0
+
+
 # -- a breath through zero flow ----------------------------------------------------------
 def test_tidal_schedule_goes_through_zero_flow():
     from fsicas.timedomain.breathing import PressureSchedule

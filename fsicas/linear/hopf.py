@@ -288,8 +288,31 @@ def first_onset(scene: Scene, model: Model | None = None, ustar_max: float = 40.
     """:func:`critical_velocity` without the truncation warning.
 
     The branch stops past its first special point; where that one leaves the branch
-    stable (a branch point rejected on re-evaluation can), the search goes on from there."""
+    stable (a branch point rejected on re-evaluation can), the search goes on from there.
+    Where stability is lost in a step with no special point located (the step, of
+    ``ustar_max``'s size, jumped across a fold onto another branch: a reversed onset far
+    below ``ustar_max`` in an asymmetric channel), the search is repeated with the bound
+    (and so the steps) cut to :data:`REFINE` times the speed at that step's end."""
     model = model or build_model(scene)
+    bound = ustar_max
+    for attempt in range(REFINEMENTS + 1):
+        try:
+            return _first_onset(scene, model, bound, ustar_start)
+        except CriticalVelocityError as err:
+            end = getattr(err, "speed", None)
+            if attempt == REFINEMENTS or end is None or REFINE * end >= bound:
+                raise
+            bound = REFINE * end
+
+
+#: The bound of a repeated onset search over the speed where the first one lost its
+#: stability without a located special point, and the repetitions at most.
+REFINE, REFINEMENTS = 1.5, 3
+
+
+def _first_onset(scene: Scene, model: Model, ustar_max: float, ustar_start: float | None
+                 ) -> Onset | None:
+    """:func:`first_onset` on the steps of ``ustar_max``."""
     start = ustar_start
     for _ in range(MAX_RESTARTS):
         branch = steady_branch(scene, model, ustar_max, start, stop_at=ONSET_KINDS)
@@ -359,11 +382,13 @@ def _first_loss(model: Model, scene: Scene, branch: C.Branch) -> Onset | None:
     step = int(unstable[0])
     found = [p for p in branch.special_points if p.index == step and p.kind in ONSET_KINDS]
     if not found:
-        raise CriticalVelocityError(
+        err = CriticalVelocityError(
             f"the steady state loses its stability between U* = "
             f"{branch.x[step - 1, -2:].sum() / scene.hstar:.6g} and "
             f"{branch.x[step, -2:].sum() / scene.hstar:.6g} (M* = {scene.mstar:g}) but no "
             "Hopf, branch or fold point was located there")
+        err.speed = max(speed(scene, branch.x[step - 1]), speed(scene, branch.x[step]))
+        raise err
     first = min(found, key=lambda p: speed(scene, p.x))
     if first.kind in DIVERGENCE_KINDS and first.status != "converged":
         # the library's location failed: the divergence lies between the two steps
