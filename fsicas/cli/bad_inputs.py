@@ -57,8 +57,7 @@ GROUPS = {
              "2000 x 2000 points; `map --t-end 1e12`",
     "direction": "the flow's direction: `--direction sideways`; a sign given twice (`--direction "
                  "reverse --ustar -2`, `map --direction reverse --ustar -5:-1:3`, `--physical soft_palate --flow=-20L/min --direction "
-                 "reverse`, `design --direction reverse --target-flow=-30L/min`); reversed flow where "
-                 "only forward flow is computed (`grazing`); `simulate --schedule tidal --direction reverse`, "
+                 "reverse`, `design --direction reverse --target-flow=-30L/min`); `simulate --schedule tidal --direction reverse`, "
                  "`--expiration-peak` without `--schedule tidal`",
     "scene files": "scene files: missing, a folder, invalid TOML, not UTF-8, nested thousands "
                    "deep, an unknown key, `zeta = \"abc\"`, `direction = \"up\"`, "
@@ -148,7 +147,6 @@ _OPTIONS = {
         (("map", "--direction", "reverse", "--ustar", "-5:-1:3"), "negative ustar"),
         (("onset", "--physical", "soft_palate", "--flow=-20L/min", "--direction", "reverse"),
          "negative and a direction"),
-        (("grazing", "--direction", "reverse"), "forward flow only"),
         (("design", "--physical", "soft_palate", "--direction", "reverse",
           "--target-flow=-30L/min", "--vary", "E"), "negative and a direction"),
         ((*_SIM, "--schedule", "tidal", "--direction", "reverse"), "tidal"),
