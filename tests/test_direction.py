@@ -266,6 +266,62 @@ def test_reversed_divergence_pressure_is_independent_of_mstar(reversed_cantileve
     assert b.ustar == pytest.approx(a.ustar * np.sqrt(10.0), rel=1e-9)
 
 
+@pytest.mark.parametrize("mstar", [1e4, 1e6])
+def test_reversed_divergence_below_a_hundredth_at_large_mass_ratios(reversed_cantilever, mstar):
+    """At M* = 1e4 and 1e6 the reversed divergence lies at |U*| = 0.0045 and 0.00045,
+    below the start |U*| = 0.01 of M* <= 1: the search starts at 0.01 / sqrt(M*). Δp_c
+    is that of M* = 1 (the scaling law) and the unstable count of the steady states
+    steps from 0 to 1 there (direct eigenvalues, no continuation)."""
+    from fsicas.linear.hopf import critical_velocity
+    scene, model = reversed_cantilever
+    a = critical_velocity(scene, model, ustar_max=10.0)
+    b = critical_velocity(scene.replace(mstar=mstar), model, ustar_max=10.0)
+    assert b.kind == "divergence" and abs(b.ustar) < 0.01
+    assert b.pressure_drop == pytest.approx(a.pressure_drop, rel=1e-9)
+    heavy = scene.replace(mstar=mstar)
+    assert [_unstable_count(model, heavy, b.ustar * f)[0] for f in (1 - 1e-6, 1 + 1e-6)] == [0, 1]
+
+
+def test_a_reversed_divergence_solved_between_steps_is_located_again():
+    """K0 = 1, KL = 0.5, M* = 0.1: the library locates no divergence in the step where
+    the reversed branch loses stability; it is solved between the steps and located
+    again from 1 % below its speed (a signed start was refused). Against the first sign
+    change of the largest growth rate of steady states scanned without continuation."""
+    from scipy.optimize import brentq
+    from fsicas.linear.hopf import critical_velocity
+    scene = Scene(mstar=0.1, ustar=-1.0, hstar=0.1, friction=0.14, k0=1.0, kl=0.5,
+                  zeta=0.01, modes=6)
+    model = build_model(scene)
+    onset = critical_velocity(scene, model, ustar_max=20.0)
+    grid = -np.linspace(0.05, 2.0, 40)
+    rates = np.array([_unstable_count(model, scene, u)[1] for u in grid])
+    k = int(np.argmax(rates > 0))
+    assert k > 0
+    ustar = brentq(lambda u: _unstable_count(model, scene, u)[1], grid[k], grid[k - 1],
+                   xtol=1e-13, rtol=1e-13)
+    assert onset.kind == "divergence" and onset.ustar == pytest.approx(ustar, rel=1e-9)
+
+
+def test_a_fold_far_below_the_search_bound_is_found_on_finer_steps():
+    """An asymmetric channel (H1 = 0.55 H*, K0 = KL = 0.5, M* = 1): the reversed branch
+    folds at |U*| = 0.37, where the steps of a search up to 40 jumped across the fold onto
+    another branch (stability lost with no special point located). The repeated search
+    on finer steps returns the fold: a real eigenvalue of the Jacobian at its state is
+    zero (direct eigenvalues), and the steady state 1 % below it is stable."""
+    from fsicas.linear.hopf import critical_velocity
+    from fsicas.linear.stability import generalized_eigen
+    scene = Scene(mstar=1.0, ustar=-1.0, hstar=0.1, friction=0.14, k0=0.5, kl=0.5, modes=8,
+                  channel1=Profile.constant(0.055), channel2=Profile.constant(0.045))
+    model = build_model(scene)
+    onset = critical_velocity(scene, model, ustar_max=40.0)
+    assert onset.kind == "divergence" and onset.bifurcation == "fold" and onset.ustar < 0
+    p = model.parameters(scene.replace(ustar=onset.ustar), pressure_drop=onset.pressure_drop)
+    lam, _ = generalized_eigen(model.jac_rhs(onset.x, p), model.mass(onset.x, p))
+    real = lam[np.abs(lam.imag) <= 1e-9 * np.abs(lam)].real
+    assert np.min(np.abs(real)) < 1e-6 * np.max(np.abs(lam))
+    assert _unstable_count(model, scene, 0.99 * onset.ustar)[0] == 0
+
+
 # -- a breath through zero flow ----------------------------------------------------------
 def test_tidal_schedule_goes_through_zero_flow():
     from fsicas.timedomain.breathing import PressureSchedule

@@ -206,3 +206,41 @@ def test_results_file_records_what_wrote_it_without_comparing_it_on_resume(tmp_p
     with ResultsFile(path, header, {"fsicas": "9.9", "created": "2027-01-01T00:00:00+00:00"}) as f:
         assert f.records == [{"ustar": 1.0}]
     assert read_records(path)[0] == header
+
+
+def test_reversed_map_matches_separate_simulate_runs(tmp_path, capsys):
+    """``fsicas map --direction reverse``: each point of a tiny reversed grid (M* = 1,
+    below and above the reversed onset, divergence at U* = -0.45) has the outcome and
+    first-contact time of a separate ``fsicas simulate --direction reverse`` run (its own
+    integrator tolerances), the boundary is the reversed onset of ``onset``, the plot is
+    written, and the results file is refused by a forward map of the same points."""
+    common = ["--mstar", "1", "--modes", "6", "--t-end", "30"]
+    out_file = tmp_path / "rev.jsonl"
+    code = main(["map", "--direction", "reverse", "--ustar", "0.3,0.8", *common, "--workers", "1",
+                 "--out", str(out_file), "--plot", str(tmp_path / "rev.png"), "--json"])
+    mapped = json.loads(capsys.readouterr().out)
+    assert code == 0 and mapped["grid"]["ustar"] == [-0.3, -0.8]
+    assert mapped["scene"]["direction"] == "reverse" and (tmp_path / "rev.png").exists()
+    points = {p["ustar"]: p for p in load_points(out_file).values()}
+    scene = ["--hstar", "0.1", "--friction", "0.14", "--k0", "0", "--kl", "1", "--zeta", "0.01"]
+    for speed in (0.3, 0.8):
+        assert main(["simulate", "--direction", "reverse", "--ustar", str(speed), *scene,
+                     *common, "--json"]) == 0
+        alone = json.loads(capsys.readouterr().out)
+        assert points[-speed]["outcome"] == alone["outcome"]
+        if alone["outcome"] == "contact":
+            assert points[-speed]["first_contact_time"] == pytest.approx(
+                alone["first_contact_time"], rel=1e-3)
+    assert {p["outcome"] for p in points.values()} == {"decay", "contact"}
+    assert main(["onset", "--direction", "reverse", *scene, "--mstar", "1", "--modes", "6",
+                 "--json"]) == 0
+    onset = json.loads(capsys.readouterr().out)
+    assert mapped["boundary"]["ustar_crit"][0] == pytest.approx(onset["ustar_crit"], rel=1e-6)
+    assert -0.8 < onset["ustar_crit"] < -0.3
+    with pytest.raises(ValueError, match="direction"):
+        impact_map([0.3, 0.8], [1.0], out_file, scene=SCENE, t_end=30.0, workers=1)
+
+
+def test_map_refuses_a_grid_of_both_directions():
+    with pytest.raises(ValueError, match="one direction"):
+        impact_map([-1.0, 1.0], [1.0], "unused.jsonl")

@@ -44,7 +44,8 @@ GROUPS = {
                 "0, -1e-3; `--perturbation 40`; `--ramp-time 0`; `--breath-period -1`; "
                 "`--ustar-start 1e308`",
     "grids": "`boundary`, `map`: grids that are empty, malformed, not finite, negative on a log "
-             "scale, too long, or repeat a value (`--ustar 4,5,4`, `--mstar 1:1:3`); "
+             "scale, too long, or repeat a value (`--ustar 4,5,4`, `--mstar 1:1:3`); a map "
+             "of both directions (`--ustar -1:1:3`); "
              "`--ustar-max` 0 or -5; no pressure losses at all",
     "other options": "`map`, `lco`, `modes`, `grazing`, `sound`, `design`, `diagram`: "
                      "`--workers` 0 or beyond the cores without `--oversubscribe`, `--t-end 0`, `--max-points 0`, "
@@ -55,9 +56,8 @@ GROUPS = {
              "`--breath-period 1e-300`; `lco --ntst 100000`, `--impact-ntst 100000`; a map of "
              "2000 x 2000 points; `map --t-end 1e12`",
     "direction": "the flow's direction: `--direction sideways`; a sign given twice (`--direction "
-                 "reverse --ustar -2`, `--physical soft_palate --flow=-20L/min --direction "
-                 "reverse`); reversed flow where only forward flow is computed (`grazing`, "
-                 "`design`, `design --target-flow=-30L/min`); `simulate --schedule tidal --direction reverse`, "
+                 "reverse --ustar -2`, `map --direction reverse --ustar -5:-1:3`, `--physical soft_palate --flow=-20L/min --direction "
+                 "reverse`, `design --direction reverse --target-flow=-30L/min`); `simulate --schedule tidal --direction reverse`, "
                  "`--expiration-peak` without `--schedule tidal`",
     "scene files": "scene files: missing, a folder, invalid TOML, not UTF-8, nested thousands "
                    "deep, an unknown key, `zeta = \"abc\"`, `direction = \"up\"`, "
@@ -120,7 +120,7 @@ _OPTIONS = {
          "pressure drop"),
         (("boundary", "--mstar", "0.5,0.5"), "--mstar repeats 0.5")] + [
         (("map", "--ustar", v), "ustar") for v in ("4:14", "4:14:0", "nan")] + [
-        (("map", "--ustar", "-5:-1:3"), "U*"), (("map", "--mstar", "0:1:3"), "mstar"),
+        (("map", "--ustar", "-1:1:3"), "one direction"), (("map", "--mstar", "0:1:3"), "mstar"),
         (("map", "--ustar", "4,5,4"), "--ustar repeats 4"),
         (("map", "--mstar", "1:1:3"), "--mstar repeats 1")],
     "other options": [
@@ -144,12 +144,11 @@ _OPTIONS = {
     "direction": [
         (("steady", "--direction", "sideways"), "--direction"),
         (("steady", "--direction", "reverse", "--ustar", "-2"), "negative ustar"),
+        (("map", "--direction", "reverse", "--ustar", "-5:-1:3"), "negative ustar"),
         (("onset", "--physical", "soft_palate", "--flow=-20L/min", "--direction", "reverse"),
          "negative and a direction"),
-        (("grazing", "--direction", "reverse"), "forward flow only"),
-        (("design", "--physical", "soft_palate", "--direction", "reverse"), "forward flow only"),
-        (("design", "--physical", "soft_palate", "--target-flow=-30L/min", "--vary", "E"),
-         "--target-flow must be > 0"),
+        (("design", "--physical", "soft_palate", "--direction", "reverse",
+          "--target-flow=-30L/min", "--vary", "E"), "negative and a direction"),
         ((*_SIM, "--schedule", "tidal", "--direction", "reverse"), "tidal"),
         ((*_SIM, "--expiration-peak", "1"), "--expiration-peak")],
     "sizes": [

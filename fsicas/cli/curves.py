@@ -6,7 +6,6 @@ Registered by :func:`add_curve_command` from :func:`fsicas.cli.build_parser`.
 """
 from __future__ import annotations
 
-from ..checks import require_forward
 from ..cycles.collocation import CycleSettings
 from ..cycles.curves import CurveSettings, curve_seeds, cycle_curves
 from ..linear.boundary import stability_boundary
@@ -46,7 +45,6 @@ def add_curve_command(sub) -> None:
 
 def _cmd_grazing(args) -> dict:
     scene = scene_from_args(args)
-    require_forward(scene, "the curves of cycles (grazing, folds)")
     if scene.contact:
         raise ValueError("the curves are of contact-free cycles: drop --contact")
     check_workers(args.workers, args.oversubscribe)

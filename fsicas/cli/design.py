@@ -9,7 +9,7 @@ from __future__ import annotations
 
 from ..linear.design import ALIASES, DESIGN_MAX_FACTOR, design_for_flow, parse_vary
 from ..linear.elasticity import palate_sensitivity
-from ..physical import parse_flow
+from ..physical import Flow, parse_flow
 from .meta import cli_meta, record
 from .scene_options import add_scene_options, physical_from_args, scene_values
 
@@ -33,7 +33,9 @@ def add_design_command(sub) -> None:
                        "needs --physical")
     add_scene_options(p)
     p.add_argument("--target-flow", metavar="FLOW", help="lift the onset to this airflow "
-                   "(e.g. 30L/min, the patient's peak inspiratory flow); with --vary")
+                   "(e.g. 30L/min, the patient's peak inspiratory flow; negative, or its "
+                   "magnitude with --direction reverse: an expiratory flow, whose magnitude "
+                   "the onset's is lifted to); with --vary")
     p.add_argument("--vary", metavar="NAME[=W],...", help="the parameter to change: a "
                    "[physical] key (E, e, L, rho_s, zeta, gap, H1, H2, b, ...) or "
                    f"{', '.join(ALIASES)}; or a weighted combination moved together, "
@@ -54,9 +56,14 @@ def _check(args):
     if args.target_flow is None:
         return given[0], None
     target = parse_flow(args.target_flow, "--target-flow")
+    if target.value < 0 and args.direction is not None:
+        raise ValueError(f"--target-flow {args.target_flow} is negative and a direction is "
+                         "given: give the flow's magnitude with --direction, or a signed "
+                         "flow alone (negative: expiration)")
     if target.value < 0:
-        raise ValueError(f"--target-flow must be > 0, got {args.target_flow!r}: the design "
-                         "query lifts the onset of forward flow (inspiration)")
+        args.direction = "reverse"                 # the signed target says the direction
+    elif args.direction == "reverse":
+        target = Flow(f"-{target.text}", target.kind, -target.value)
     parse_vary(args.vary, given[0])                    # names the allowed parameters
     try:
         given[0].scene(target)
@@ -84,14 +91,15 @@ def _print_design(result: dict) -> None:
     """The onset, the elasticities (largest first) and the design, in sentences."""
     print(f"{result['source']}: {result['description']}" if result["description"]
           else result["source"])
-    print(f"  flutter onset at {result['onset_flow_l_min']:.4g} L/min, "
+    print(f"  {result['kind']} onset at {result['onset_flow_l_min']:.4g} L/min, "
           f"{result['frequency_hz']:.4g} Hz (mode {result['dominant_mode']})")
     print("  a 1 % change of      moves the onset airflow by   and its frequency by")
     rows = sorted(result["sensitivities"].items(), key=lambda kv: -abs(kv[1]["flow_elasticity"]))
     for name, s in rows:
         per = "" if s["value"] else f"   (per unit: {s['flow_per_unit']:+.4g} / unit of {name})"
+        w = s["frequency_elasticity"]
         print(f"    {name:<8} {s['meaning']:<28} {s['flow_elasticity']:+8.3f} %"
-              f"{s['frequency_elasticity']:+14.3f} %{per}")
+              + (f"{w:+14.3f} %" if w is not None else f"{'-':>14}  ") + per)
     _print_plan(result["design"])
     for note in dict.fromkeys(result.get("warnings", [])):
         print(f"warning: {note}")

@@ -8,7 +8,8 @@ import argparse
 from ..physical import Flow, Physical, load_physical, parse_flow, preset_names
 from ..scene import DIRECTIONS, MAX_ABS_USTAR, Scene, load_scene
 
-__all__ = ["check_ustar_max", "SCENE_OPTIONS", "BEAM_OPTIONS", "add_scene_options", "add_beam_options", "beam_fields",
+__all__ = ["check_ustar_max", "SCENE_OPTIONS", "BEAM_OPTIONS", "add_scene_options", "add_beam_options",
+           "add_direction_option", "beam_fields",
            "scene_values",
            "scene_from_args", "physical_from_args"]
 
@@ -76,15 +77,20 @@ def add_scene_options(parser: argparse.ArgumentParser, mstar: bool = True) -> No
             group.add_argument("--" + name.replace("_", "-"), dest=name, type=kind, default=None,
                                metavar=name.upper(),
                                help=f"{SCENE_HELP[name]} (default {shown})")
-    group.add_argument("--direction", choices=DIRECTIONS, default=None,
-                       help="flow direction: forward (root to tip, default) or reverse (tip "
-                       "to root, expiration: the sign of U* and of --flow; with it give "
-                       "their magnitude)")
+    add_direction_option(group)
     group.add_argument("--contact", dest="contact", action=argparse.BooleanOptionalAction,
                        default=None, help="regularized wall impact on or off (default off)")
     add_beam_options(group)
     _add_physical_options(parser)
     parser.add_argument("--json", action="store_true", help="print one JSON object on stdout")
+
+
+def add_direction_option(group, what: str = "U* and of --flow") -> None:
+    """``--direction forward|reverse``: the sign of the speeds ``what`` given."""
+    group.add_argument("--direction", choices=DIRECTIONS, default=None,
+                       help="flow direction: forward (root to tip, default) or reverse (tip "
+                       f"to root, expiration: the sign of {what}; with it give "
+                       "their magnitude)")
 
 
 def add_beam_options(group) -> None:

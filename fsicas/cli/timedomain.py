@@ -5,18 +5,21 @@ contract (keys) is in ``docs/simulate.md``.
 """
 from __future__ import annotations
 
+import numpy as np
+
 from ..physical_report import add_physical
 from ..plots.timedomain import plot_cycle, plot_map, plot_run
 from ..timedomain.breathing import PressureSchedule
-from ..timedomain.impact_map import MAP_SCENE, impact_map
+from ..timedomain.impact_map import MAP_SCENE, directed, impact_map
 from ..timedomain.integrators import Settings
 from ..timedomain.run import run_case
-from ..scene import MAX_ABS_USTAR
+from ..scene import MAX_ABS_USTAR, directed_ustar
 from ..workers import OVERSUBSCRIBE_HELP, check_workers, dask_executor
 from .meta import record
 from .progress import reporter
 from .ranges import parse_range
-from .scene_options import add_beam_options, add_scene_options, beam_fields, scene_from_args
+from .scene_options import (add_beam_options, add_direction_option, add_scene_options, beam_fields,
+                            scene_from_args)
 
 __all__ = ["add_time_commands"]
 
@@ -51,7 +54,10 @@ def add_time_commands(sub) -> None:
 
 def _add_map_command(sub) -> None:
     p = sub.add_parser("map", help="impact-boundary map in (U*, M*) (paper Fig. 4)")
-    p.add_argument("--ustar", default="4:14:11", metavar="LO:HI:COUNT", help="U* grid (linear)")
+    p.add_argument("--ustar", default="4:14:11", metavar="LO:HI:COUNT",
+                   help="U* grid (linear), all of one sign (negative: reversed flow; with "
+                   "--direction, the speeds |U*|)")
+    add_direction_option(p, "the --ustar grid")
     p.add_argument("--mstar", default="0.1:10:7", metavar="LO:HI:COUNT", help="M* grid (log)")
     p.add_argument("--modes", type=int, default=10, help="number of beam modes N")
     p.add_argument("--t-end", type=float, default=30.0, help="final time of each run (units of T)")
@@ -113,8 +119,10 @@ def _cmd_simulate(args) -> dict:
 def _cmd_map(args) -> dict:
     check_workers(args.workers, args.oversubscribe)
     ustars = parse_range(args.ustar, "ustar", log=False)
+    if args.direction is not None:
+        ustars = np.array([directed_ustar(u, args.direction) for u in ustars])
     mstars = parse_range(args.mstar, "mstar", log=True)
-    scene = MAP_SCENE.replace(modes=args.modes, **beam_fields(args))
+    scene = directed(MAP_SCENE, ustars).replace(modes=args.modes, **beam_fields(args))
     record(args, scene, ustar_values=ustars, mstar_values=mstars)
     reporter(args).stage(f"impact map: {ustars.size * mstars.size} points, t_end = "
                          f"{args.t_end:g}, into {args.out}")

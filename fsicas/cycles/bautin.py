@@ -55,7 +55,7 @@ def fold_curves_from_bautin(scene: Scene, model: Model | None = None, *,
     window, on the Hopf curve through the flutter onset at ``mstar_onset``; ``epsilon``:
     the predictor's distance along the Hopf curve in (Π, log10 M*); ``cycles``: the
     collocation mesh (``ntst``, ``ncol``), ``adapt_every``."""
-    require_forward(scene, "the fold curves of cycles")
+    require_forward(scene, "the fold curves of cycles from generalized Hopf points")
     return _switched(scene, model, "gh", mstar_onset, epsilon, settings, cycles, ustar_max)
 
 
@@ -95,7 +95,7 @@ def switched_curves(scene: Scene, model: Model, points, *, epsilon: float,
         switch, curve_kind = {"gh": (C.lpc_from_gh, "fold"), "hh": (C.ns_from_hh, "ns")}[point.kind]
         gauge = ProfileGauge(model, point.point.x, scene.contact_gap, settings.quadrature_tol)
         start = switch(point.curve, point.point, epsilon=epsilon, settings=cycles.collocation)
-        pi_max = pi_of(scene.replace(mstar=point.mstar), model, ustar_max)
+        pi_max = pi_of(scene.replace(mstar=point.mstar), model, scene.flow_sign * ustar_max)
         out.append(SwitchedCurve(point, trace_curve(gauge, start, start.X0, curve_kind, settings,
                                                      pi_max)))
     return out

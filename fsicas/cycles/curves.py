@@ -31,8 +31,7 @@ import numpy as np
 
 import continuation as C
 
-from ..checks import require_forward
-from ..linear.adapter import LOG_M, PI, pi_of
+from ..linear.adapter import LOG_M, PI, pi_interval, pi_of
 from ..linear.hopf import CriticalVelocityError
 from ..model.assembly import Model
 from ..scene import Scene
@@ -197,18 +196,20 @@ def crossings(curve: CycleCurve, mstar) -> np.ndarray:
 
 
 def lowest_ustar(curves: list, mstar, floor=None) -> np.ndarray:
-    """At each ``mstar``, the lowest U* where one of ``curves`` crosses it (linear in
-    log M* between curve points), only counting crossings at or above ``floor`` (an
-    array like ``mstar``); NaN where none."""
+    """At each ``mstar``, the lowest speed |U*| where one of ``curves`` crosses it (linear
+    in log M* between curve points; returned signed, < 0 for curves of reversed flow),
+    only counting crossings at or above the speed of ``floor`` (an array like ``mstar``);
+    NaN where none."""
+    sign = -1.0 if any(np.any(c.column("ustar") < 0) for c in curves) else 1.0
     size = np.atleast_1d(np.asarray(mstar)).size
-    floor = np.full(size, -np.inf) if floor is None else np.asarray(floor, dtype=float)
+    floor = np.full(size, -np.inf) if floor is None else sign * np.asarray(floor, dtype=float)
     out = np.full(size, np.inf)
     for curve in curves:
         index, value = crossings(curve, mstar).T
-        index = index.astype(int)
+        index, value = index.astype(int), sign * value
         keep = value >= floor[index]
         np.minimum.at(out, index[keep], value[keep])
-    return np.where(np.isfinite(out), out, np.nan)
+    return sign * np.where(np.isfinite(out), out, np.nan)
 
 
 def expected_outcomes(curves: CurveMap, hopf, ustar, mstar) -> list:
@@ -217,14 +218,17 @@ def expected_outcomes(curves: CurveMap, hopf, ustar, mstar) -> list:
     (``hopf(mstar) -> U*_c``), "bistable" between a fold-of-cycles curve and it (the
     steady state and a large cycle both stable: either outcome), "lco" from it to the
     lowest grazing curve above it, "contact" from there on, "unknown" above the boundary
-    where no grazing curve crosses the M*."""
+    where no grazing curve crosses the M*. Below, above, lowest: in speed |U*| (the
+    ``ustar`` of reversed flow are all <= 0)."""
     u, m = np.asarray(ustar, dtype=float), np.asarray(mstar, dtype=float)
+    sign = -1.0 if np.any(u < 0) else 1.0
     critical = hopf(m)
-    fold = lowest_ustar(curves.fold, m)
-    grazing = lowest_ustar(curves.grazing, m, floor=critical)
+    fold = sign * lowest_ustar(curves.fold, m)
+    grazing = sign * lowest_ustar(curves.grazing, m, floor=critical)
     return ["decay" if uk < ck and not fk <= uk else "bistable" if uk < ck else
             "unknown" if np.isnan(gk) else "lco" if uk < gk else "contact"
-            for uk, ck, fk, gk in zip(u, critical, fold, grazing)]
+            for uk, ck, fk, gk in zip(sign * u, sign * np.asarray(critical, dtype=float),
+                                      fold, grazing)]
 
 
 def curve_seeds(switches, mstar_min: float, mstar_max: float) -> list:
@@ -243,7 +247,6 @@ def cycle_curves(scene: Scene, seeds, *, settings: CurveSettings = CurveSettings
     seeds in ``workers`` processes; a curve whose seed lies on a curve of an earlier seed
     is the same curve and kept once. ``progress(text)`` is told of each finished seed (its
     count, and an estimate of the time left)."""
-    require_forward(scene, "the curves of cycles (grazing, folds)")
     start = time.perf_counter()
     jobs = [(scene.replace(mstar=float(m)), settings, cycles, ustar_max) for m in seeds]
     found = {"grazing": [], "fold": []}
@@ -303,7 +306,7 @@ def _point(sp) -> CurvePoint:
 def _traced(curves: list, point: CurvePoint, rtol: float = 5e-3) -> bool:
     """Whether ``point`` (M*, U*) lies on one of ``curves`` (:func:`crossings`)."""
     return any(np.any(np.abs(crossings(c, point.mstar)[:, 1] - point.ustar)
-                      <= rtol * point.ustar) for c in curves)
+                      <= rtol * abs(point.ustar)) for c in curves)
 
 
 def grazing_curve(scene: Scene, model: Model | None = None, *,
@@ -313,7 +316,6 @@ def grazing_curve(scene: Scene, model: Model | None = None, *,
     """The grazing curve through the first contact of the cycle branch at ``scene.mstar``
     (``run``: that branch's :class:`CycleRun` if already computed), for U* below
     ``ustar_max``. Raises ValueError when the branch reaches no contact there."""
-    require_forward(scene, "the grazing curve")
     run = run or continue_cycles(scene, model, ustar_max=ustar_max, settings=cycles)
     contacts = [sp for sp in run.branch.special("contact") if sp.status == "converged"]
     if not contacts:
@@ -332,25 +334,24 @@ def fold_curves(scene: Scene, model: Model | None = None, *,
     (none when flutter there is supercritical and the branch does not fold), each fold
     refined by Newton on its minimally extended system first (a fold that is not refined
     starts no curve)."""
-    require_forward(scene, "the fold curves of cycles")
     run = run or continue_cycles(scene, model, ustar_max=ustar_max, settings=cycles)
     return _fold_curves(run, settings, _pi_max(scene, run, ustar_max))[0]
 
 
 def _pi_max(scene: Scene, run: CycleRun, ustar_max: float) -> float:
-    """Π of U* = ``ustar_max`` for ``scene`` at the run's M* (Π ≈ 3.3 U*² / 100 at any M*:
-    the bound of the curves in U*), on the run's last model (its quadrature possibly
-    refined)."""
+    """Π of the speed |U*| = ``ustar_max`` in ``scene``'s direction at the run's M*
+    (Π ≈ ±3.3 U*² / 100 at any M*, < 0 for reversed flow: the bound of the curves in
+    U*), on the run's last model (its quadrature possibly refined)."""
     model = run.gauge.model
     return pi_of(scene.replace(mstar=run.hopf.mstar, quad_nodes=model.scene.n_quad), model,
-                 ustar_max)
+                 scene.flow_sign * ustar_max)
 
 
 def trace_curve(base: ProfileGauge, problem, X, kind: CurveKind, settings: CurveSettings,
                 pi_max: float) -> CycleCurve:
     """Continue the curve of ``kind`` through the cycle ``X`` of ``problem`` both ways,
-    inside the M* window and below Π = ``pi_max``, measured by a gauge like ``base`` (its
-    model, steady state and eps)."""
+    inside the M* window and between Π = 0 and ``pi_max`` (< 0 for reversed flow),
+    measured by a gauge like ``base`` (its model, steady state and eps)."""
     start = time.perf_counter()
     gauge = ProfileGauge(base.model, base.x_eq, base.eps, settings.quadrature_tol)
     condition = {"grazing": gauge.grazing_condition, "fold": C.CycleFold,
@@ -373,7 +374,7 @@ def _steps(settings: CurveSettings, direction: int, pi_max: float) -> C.Continua
     window = (math.log10(settings.mstar_min), math.log10(settings.mstar_max))
     return C.ContinuationSettings(
         ds=settings.ds, ds_min=1e-9, ds_max=settings.ds_max, direction=direction,
-        max_steps=settings.max_points - 1, bounds={LOG_M: window, PI: (0.0, pi_max)},
+        max_steps=settings.max_points - 1, bounds={LOG_M: window, PI: pi_interval(0.0, pi_max)},
         newton=C.NewtonSettings(tol=settings.tol), compute_eigenvalues=False)
 
 

@@ -24,7 +24,7 @@ import continuation as C
 
 from ..model.assembly import Model
 from ..scene import Scene
-from .adapter import LOG_M, PI, TIME_SCALE
+from .adapter import LOG_M, PI, TIME_SCALE, pi_interval
 from .hopf import HopfPoint, first_onset, flutter_problem
 
 __all__ = ["CodimTwoPoint", "codim_two_points", "ON_BOUNDARY_RTOL"]
@@ -72,7 +72,7 @@ def codim_two_points(scene: Scene, model: Model, hopf: HopfPoint, window,
     for direction in (-1, 1):
         settings = C.ContinuationSettings(
             ds=0.02, ds_min=1e-8, ds_max=0.05, max_steps=400, direction=direction,
-            bounds={LOG_M: tuple(window), PI: (0.0, _pi_bound(hopf, ustar_max))},
+            bounds={LOG_M: tuple(window), PI: pi_interval(0.0, _pi_bound(hopf, ustar_max))},
             compute_eigenvalues="hh" in kinds)
         curve = C.HopfCurveProblem.from_point(problem, hopf.point, LOG_M)
         branch = C.continuation(curve, settings=settings)
@@ -82,7 +82,8 @@ def codim_two_points(scene: Scene, model: Model, hopf: HopfPoint, window,
 
 
 def _pi_bound(hopf: HopfPoint, ustar_max: float) -> float:
-    """Π at U* = ``ustar_max`` (Π ∝ U*²) with a margin."""
+    """Π at the speed |U*| = ``ustar_max`` (Π ∝ U*|U*|, < 0 for reversed flow) with a
+    margin."""
     return 1.5 * hopf.point.params[PI] * (ustar_max / hopf.ustar) ** 2
 
 
@@ -91,7 +92,7 @@ def _point(scene, model, curve, point, ustar_max) -> CodimTwoPoint:
     ustar = float(point.x[-2:].sum() / scene.hstar)
     onset = first_onset(scene.replace(mstar=mstar), model, ustar_max)
     on = onset is not None and onset.kind == "flutter" and \
-        abs(onset.ustar - ustar) <= ON_BOUNDARY_RTOL * ustar
+        abs(onset.ustar - ustar) <= ON_BOUNDARY_RTOL * abs(ustar)
     data = {k: v for k, v in point.data.items() if k not in ("bracket", "kappa", "omega")}
     return CodimTwoPoint(point.kind, mstar, ustar, float(point.data["omega"] * TIME_SCALE),
                          bool(on), data, curve, point)

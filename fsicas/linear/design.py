@@ -16,6 +16,11 @@ its weight.
 
 The answer is verified by the eigenvalues of the steady state at the design: stable at
 99.5 % of the target flow, unstable at 100.5 %.
+
+Reversed flow (expiration, U* < 0): the target flow carries the sign of the onset's
+direction (negative), "raising" the onset means that its airflow's magnitude |Q_c| grows
+to |target| (the elasticities d ln Q_c / d ln theta = d ln |Q_c| / d ln theta say
+which way), and the verification is at 99.5 % and 100.5 % of |Q_c| in that direction.
 """
 from __future__ import annotations
 
@@ -160,24 +165,28 @@ def with_values(physical: Physical, values: dict) -> Physical:
 def design_for_flow(physical: Physical, target: Flow, vary, *, ustar_max: float = USTAR_MAX,
                     base: PalateSensitivity | None = None, **overrides) -> Design:
     """The smallest change of ``vary`` (:func:`parse_vary`) that raises the onset airflow
-    of ``physical`` to ``target`` (module doc); ``overrides``: nondimensional Scene fields
-    (modes, ...); ``base``: :func:`palate_sensitivity` of ``physical`` with them, if
+    of ``physical`` to ``target`` (module doc; its magnitude, for reversed flow: then
+    ``target`` < 0 and ``direction="reverse"``); ``overrides``: nondimensional Scene
+    fields (modes, direction, ...); ``base``: :func:`palate_sensitivity` of ``physical`` with them, if
     already computed. Verified by the eigenvalues at the design."""
     weights = parse_vary(vary, physical)
     q_target = target.value if target.kind == "volume" else \
         target.value * physical.values["b"] * physical.gap
     base = base or palate_sensitivity(physical, ustar_max=ustar_max, **overrides)
+    overrides = {**overrides, "direction": base.scene.direction}
+    _check_direction(q_target, base)
     start = {k: physical.values[k] if k in physical.values else getattr(physical, k)
              for k in weights}
-    if base.onset_flow >= q_target:
+    if abs(base.onset_flow) >= abs(q_target):
         return _design(physical, weights, start, start, base, base, q_target, overrides, 0,
-                       "the onset is already above the target: no change needed")
+                       "the onset is already at or beyond the target (|Q_c| >= |target|): "
+                       "no change needed")
     path = _Path(physical, weights, start, base, q_target, ustar_max, overrides)
     with warnings.catch_warnings():      # the search's trial palates: only the design's count
         warnings.simplefilter("ignore", PhysicalValidityWarning)
         lo, hi = path.bracket()
-        s = brentq(lambda s: path.onset(s) - q_target, lo, hi, xtol=1e-13 * max(abs(hi), 1e-6),
-                   rtol=1e-12)
+        s = brentq(lambda s: abs(path.onset(s)) - abs(q_target), lo, hi,
+                   xtol=1e-13 * max(abs(hi), 1e-6), rtol=1e-12)
     after = path.values(s)
     designed = with_values(physical, after)
     with warnings.catch_warnings(record=True) as caught:   # each of the designed palate's
@@ -192,6 +201,15 @@ def design_for_flow(physical: Physical, target: Flow, vary, *, ustar_max: float 
     return replace(design, warnings=tuple(message for _, message in said))
 
 
+def _check_direction(q_target: float, base: PalateSensitivity) -> None:
+    """ValueError unless the target flow has the direction of the onset's scene."""
+    if q_target * base.scene.flow_sign <= 0:
+        raise ValueError(f"the target flow {q_target * 60e3:.4g} L/min is not in the direction "
+                         f"of the onset ({base.scene.direction} flow, {base.onset_flow * 60e3:.4g} "
+                         "L/min): a target of reversed flow (expiration) is negative, with the "
+                         "scene's direction reverse")
+
+
 class _Path:
     """The parameters along the search variable ``s``, and the onset airflow there (its
     model reused while the structure is the same); counts the onsets computed."""
@@ -202,6 +220,11 @@ class _Path:
         self.q_target, self.ustar_max, self.overrides = q_target, ustar_max, overrides
         self.model, self.evaluations = None, 0
         self.linear = list(weights) == ["zeta"]            # a damping ratio, maybe 0
+        missing = [k for k in weights if k not in base.parameters]
+        if missing:
+            raise DesignError(f"{', '.join(missing)}: the onset is a symmetry-breaking "
+                              "divergence, which unequal heights unfold (not differentiable in "
+                              "one height alone): vary gap (both heights together)")
         rate = sum(w * (base.parameters[k].flow_per_unit if self.linear
                         else base.parameters[k].flow) for k, w in weights.items())
         if rate == 0.0:
@@ -239,7 +262,9 @@ class _Path:
         return scene.scales.m3_per_s(hopf.ustar)
 
     def ustar_of(self, physical: Physical) -> float:
-        return physical_scene(physical, Flow.of("volume", self.q_target), self.overrides).ustar
+        """|U*| of the target flow on ``physical``."""
+        flow = Flow.of("volume", abs(self.q_target))      # its sign: overrides' direction
+        return abs(physical_scene(physical, flow, self.overrides).ustar)
 
     def bracket(self) -> tuple[float, float]:
         """The step of ``s`` in which the onset passes the target (DesignError if none)."""
@@ -258,7 +283,7 @@ class _Path:
             except (DesignError, ValueError) as err:
                 raise DesignError(f"the search left the model's range before the onset "
                                   f"reached the target ({self._say(s)}: {err})") from None
-            if q >= self.q_target:
+            if abs(q) >= abs(self.q_target):
                 return (lo, s) if lo <= s else (s, lo)
             lo, q_lo = s, q
 
@@ -270,7 +295,7 @@ def _design(physical, weights, before, after, base, designed, q_target, override
             evaluations, note="") -> Design:
     """The Design, with its verification by eigenvalues at the designed parameters."""
     ph = with_values(physical, after)
-    scenes = [physical_scene(ph, Flow.of("volume", factor * designed.onset_flow),
+    scenes = [physical_scene(ph, Flow.of("volume", factor * abs(designed.onset_flow)),
                              overrides) for factor in (1 - VERIFY_MARGIN, 1 + VERIFY_MARGIN)]
     model = build_model(scenes[0])                 # the two differ in the flow only
     checks = [linear_stability(scene, model).stable for scene in scenes]

@@ -34,7 +34,7 @@ from .stability import generalized_eigen
 from .truncation import truncation_error, truncation_warning
 from .steady import SteadyStateError, steady_state
 
-__all__ = ["Criticality", "HopfPoint", "Onset", "CriticalVelocityError", "ModalTruncationWarning",
+__all__ = ["start_speed", "Criticality", "HopfPoint", "Onset", "CriticalVelocityError", "ModalTruncationWarning",
            "flutter_problem", "steady_branch", "hopf_points", "first_hopf", "critical_velocity",
            "first_onset", "onset_points",
            "ONSET_KINDS", "USTAR_START", "dominant_mode", "hopf_point_from", "eigenvector_q"]
@@ -178,13 +178,13 @@ def steady_branch(scene: Scene, model: Model, ustar_max: float, ustar_start: flo
     """The steady branch continued in Π from ``ustar_start`` towards ``ustar_max`` (its
     special points located), ended at ``ustar_stop`` (< ustar_max, with the steps of
     ``ustar_max``) or past the first special point of a kind in ``stop_at``; the three
-    are speeds |U*| in ``scene``'s direction (``ustar_start`` None: :data:`USTAR_START`).
+    are speeds |U*| in ``scene``'s direction (``ustar_start`` None: :func:`start_speed`).
 
     The Π bound is the steady state's at ``ustar_max``; where no steady state is found
     there (the branch may fold or be lost above the onset), it is extrapolated as
     ``Π ∝ U*^2`` from the start, with a margin, and points above ``ustar_max`` are not
     used by the callers. CriticalVelocityError when the start is already unstable."""
-    ustar_start = USTAR_START[scene.direction] if ustar_start is None else ustar_start
+    ustar_start = start_speed(scene) if ustar_start is None else ustar_start
     if not 0 < ustar_start < ustar_max:
         raise ValueError(f"need 0 < ustar_start < ustar_max, got {ustar_start}, {ustar_max}")
     problem = flutter_problem(scene, model, ustar_start)
@@ -203,8 +203,17 @@ def steady_branch(scene: Scene, model: Model, ustar_max: float, ustar_start: flo
 
 #: The speed |U*| where the steady branch starts, below the first onset, by direction.
 #: Reversed flow loses stability by divergence at a pressure drop independent of M*, so
-#: at speeds ∝ M*^-1/2 (|U*| = 0.14 at M* = 10 in the paper's channel): it starts lower.
+#: at speeds ∝ M*^-1/2 (|U*| = 0.14 at M* = 10 in the paper's channel): it starts lower,
+#: and above M* = 1 lower still (:func:`start_speed`).
 USTAR_START = {"forward": 0.2, "reverse": 0.01}
+
+
+def start_speed(scene: Scene) -> float:
+    """The speed |U*| the steady branch starts from: :data:`USTAR_START`, for reversed
+    flow divided by sqrt(M*) above M* = 1 (the same pressure drop M* U*^2 as at M* = 1:
+    at M* = 1e4 the paper's channel diverges at |U*| = 0.0045, below 0.01)."""
+    start = USTAR_START[scene.direction]
+    return start / math.sqrt(max(1.0, scene.mstar)) if scene.direction == "reverse" else start
 
 
 def _pi_bound(scene: Scene, model: Model, ustar: float, pi_start: float, ustar_start: float) -> float:
@@ -279,8 +288,31 @@ def first_onset(scene: Scene, model: Model | None = None, ustar_max: float = 40.
     """:func:`critical_velocity` without the truncation warning.
 
     The branch stops past its first special point; where that one leaves the branch
-    stable (a branch point rejected on re-evaluation can), the search goes on from there."""
+    stable (a branch point rejected on re-evaluation can), the search goes on from there.
+    Where stability is lost in a step with no special point located (the step, of
+    ``ustar_max``'s size, jumped across a fold onto another branch: a reversed onset far
+    below ``ustar_max`` in an asymmetric channel), the search is repeated with the bound
+    (and so the steps) cut to :data:`REFINE` times the speed at that step's end."""
     model = model or build_model(scene)
+    bound = ustar_max
+    for attempt in range(REFINEMENTS + 1):
+        try:
+            return _first_onset(scene, model, bound, ustar_start)
+        except CriticalVelocityError as err:
+            end = getattr(err, "speed", None)
+            if attempt == REFINEMENTS or end is None or REFINE * end >= bound:
+                raise
+            bound = REFINE * end
+
+
+#: The bound of a repeated onset search over the speed where the first one lost its
+#: stability without a located special point, and the repetitions at most.
+REFINE, REFINEMENTS = 1.5, 3
+
+
+def _first_onset(scene: Scene, model: Model, ustar_max: float, ustar_start: float | None
+                 ) -> Onset | None:
+    """:func:`first_onset` on the steps of ``ustar_max``."""
     start = ustar_start
     for _ in range(MAX_RESTARTS):
         branch = steady_branch(scene, model, ustar_max, start, stop_at=ONSET_KINDS)
@@ -302,7 +334,8 @@ def _relocated(scene: Scene, model: Model, onset: DivergencePoint, ustar_max: fl
     """A divergence solved between two steps (:func:`_first_loss`) located again by the
     library from 1 % below it, so that it carries its point of the steady branch (the
     start of the deflected branches); the solved one if that fails."""
-    branch = steady_branch(scene, model, ustar_max, RELOCATE * onset.ustar, stop_at=ONSET_KINDS)
+    branch = steady_branch(scene, model, ustar_max, RELOCATE * abs(onset.ustar),
+                           stop_at=ONSET_KINDS)
     for point in branch.special_points:
         if point.kind in DIVERGENCE_KINDS and point.status == "converged" and \
                 abs(point.x[-2:].sum() / scene.hstar / onset.ustar - 1) < 1e-8:
@@ -349,11 +382,13 @@ def _first_loss(model: Model, scene: Scene, branch: C.Branch) -> Onset | None:
     step = int(unstable[0])
     found = [p for p in branch.special_points if p.index == step and p.kind in ONSET_KINDS]
     if not found:
-        raise CriticalVelocityError(
+        err = CriticalVelocityError(
             f"the steady state loses its stability between U* = "
             f"{branch.x[step - 1, -2:].sum() / scene.hstar:.6g} and "
             f"{branch.x[step, -2:].sum() / scene.hstar:.6g} (M* = {scene.mstar:g}) but no "
             "Hopf, branch or fold point was located there")
+        err.speed = max(speed(scene, branch.x[step - 1]), speed(scene, branch.x[step]))
+        raise err
     first = min(found, key=lambda p: speed(scene, p.x))
     if first.kind in DIVERGENCE_KINDS and first.status != "converged":
         # the library's location failed: the divergence lies between the two steps

@@ -18,6 +18,14 @@ about 1e-13, so the error is about 1e-8).
 
 The derivatives hold for the Hopf point given, i.e. along its mode: where the first
 onset switches to another mode (the boundary's switches), it is not differentiable.
+
+A static divergence (a real eigenvalue crossing zero; the usual onset of reversed flow)
+has no frequency: :func:`divergence_sensitivity` gives ``d ln |U*_c| / d q`` alone, by
+differences of the divergence relocated (Brent on the real eigenvalue nearest 0 to
+round-off, :func:`fsicas.linear.divergence.divergence_at`; a fold of the steady branch,
+as in asymmetric channels, by the continuation) on perturbed scenes: central
+with the relative step ``FD_STEP``, or one-sided of second order with the step
+``FD_STEP`` from a value 0 (k0, kl, zeta).
 """
 from __future__ import annotations
 
@@ -33,9 +41,11 @@ from ..model.assembly import Model, build_model
 from ..profile import Profile
 from ..scene import CONTACT_PARAMETERS, MODEL_PARAMETERS, TIMOSHENKO, Scene
 from .adapter import LOG_M, PI, TIME_SCALE
-from .hopf import HopfPoint, flutter_problem
+from .divergence import DivergencePoint, divergence_at
+from .hopf import HopfPoint, first_onset, flutter_problem
 
-__all__ = ["OnsetSensitivity", "onset_sensitivity", "EXACT", "BY_DIFFERENCES", "FD_STEP"]
+__all__ = ["OnsetSensitivity", "onset_sensitivity", "divergence_sensitivity", "EXACT",
+           "BY_DIFFERENCES", "FD_STEP"]
 
 #: Parameters differentiated exactly (implicit-function theorem) and by differences.
 EXACT = tuple(n for n in MODEL_PARAMETERS if n not in CONTACT_PARAMETERS)
@@ -49,7 +59,8 @@ class OnsetSensitivity:
     """``d ln U*_c / d q`` and ``d ln omega_c / d q`` for the scene's parameters ``q``:
     ``mstar``, ``friction``, ``k0``, ``kl``, ``zeta`` (added to every mode's), ``h1``,
     ``h2`` (the channel heights H1/L, H2/L) and, for a Timoshenko beam, ``slenderness``
-    and ``poisson``. An elasticity is ``q * d ln U*_c / d q``."""
+    and ``poisson``. An elasticity is ``q * d ln U*_c / d q``. A divergence (``omega`` =
+    0) has no ``d_ln_omega`` (empty)."""
 
     ustar: float
     omega: float
@@ -57,10 +68,11 @@ class OnsetSensitivity:
     d_ln_omega: dict
     values: dict
 
-    def elasticity(self, name: str) -> tuple[float, float]:
-        """``(d ln U*_c / d ln q, d ln omega_c / d ln q)`` at the scene's value of q."""
-        value = self.values[name]
-        return value * self.d_ln_ustar[name], value * self.d_ln_omega[name]
+    def elasticity(self, name: str) -> tuple[float, float | None]:
+        """``(d ln U*_c / d ln q, d ln omega_c / d ln q)`` at the scene's value of q (the
+        second None for a divergence)."""
+        value, dw = self.values[name], self.d_ln_omega.get(name)
+        return value * self.d_ln_ustar[name], None if dw is None else value * dw
 
     def to_json(self) -> dict:
         return {"ustar_crit": self.ustar, "omega": self.omega,
@@ -72,16 +84,55 @@ def onset_sensitivity(scene: Scene, model: Model, hopf: HopfPoint) -> OnsetSensi
     """The derivatives of the onset ``hopf`` of ``scene`` (located on ``model``)."""
     model.require_structure(scene)
     du, dw = _exact(scene, model, hopf)
+    values = _values(scene)
+    for name in values:
+        if name in BY_DIFFERENCES:
+            du[name], dw[name] = _difference(scene, hopf, name, values[name])
+    return OnsetSensitivity(hopf.ustar, hopf.omega, du, dw, values)
+
+
+def divergence_sensitivity(scene: Scene, model: Model, onset: DivergencePoint
+                           ) -> OnsetSensitivity:
+    """``d ln |U*_c| / d q`` of the static divergence ``onset`` of ``scene`` (located on
+    ``model``), by differences of relocated divergences (module doc); no frequency. At a
+    symmetry-breaking divergence (a pitchfork of a symmetric channel) unequal heights
+    unfold the pitchfork and U*_c is not differentiable in H1 or H2 alone: ``gap`` (both
+    heights together, H1/L = H2/L) replaces ``h1`` and ``h2``."""
+    model.require_structure(scene)
+    values = _values(scene)
+    if onset.symmetry_breaking:       # a pitchfork: H1 != H2 unfolds it, d/dh1 undefined
+        h = values.pop("h1")
+        values.pop("h2")
+        values["gap"] = h
+    du = {name: _divergence_slope(scene, model, onset, name, value)
+          for name, value in values.items()}
+    return OnsetSensitivity(onset.ustar, 0.0, du, {}, values)
+
+
+def _values(scene: Scene) -> dict:
+    """The scene's value of each parameter differentiated (zeta: the modes' mean)."""
     h1, h2 = _heights(scene)
     values = {"mstar": scene.mstar, "friction": scene.friction, "k0": scene.k0,
               "kl": scene.kl, "zeta": float(np.mean(scene.zeta_modes)), "h1": h1, "h2": h2}
-    structural = [("h1", h1), ("h2", h2)]
     if scene.beam == TIMOSHENKO:
-        structural += [("slenderness", scene.slenderness), ("poisson", scene.poisson)]
         values.update(slenderness=scene.slenderness, poisson=scene.poisson)
-    for name, value in structural:
-        du[name], dw[name] = _difference(scene, hopf, name, value)
-    return OnsetSensitivity(hopf.ustar, hopf.omega, du, dw, values)
+    return values
+
+
+def _divergence_slope(scene: Scene, model: Model, onset: DivergencePoint, name: str,
+                      value: float) -> float:
+    """``d ln |U*_c| / d q`` at ``q = value``: central differences, or from 0 one-sided
+    ``(-3 g(0) + 4 g(h) - g(2h)) / (2h)`` (second order)."""
+    h = FD_STEP * value if value else FD_STEP
+    steps = (1, -1) if value else (1, 2)
+    ln_u = []
+    for k in steps:
+        perturbed = _perturbed(scene, name, value + k * h)
+        on = model if name not in (*BY_DIFFERENCES, "gap") else build_model(perturbed)
+        ln_u.append(math.log(abs(_divergence_near(perturbed, on, onset.ustar))))
+    if value:
+        return (ln_u[0] - ln_u[1]) / (2 * h)
+    return (-3 * math.log(abs(onset.ustar)) + 4 * ln_u[0] - ln_u[1]) / (2 * h)
 
 
 def _exact(scene: Scene, model: Model, hopf: HopfPoint) -> tuple[dict, dict]:
@@ -122,13 +173,31 @@ def _heights(scene: Scene) -> tuple[float, float]:
 
 
 def _perturbed(scene: Scene, name: str, value: float) -> Scene:
-    """``scene`` with the structural parameter ``name`` set to ``value``."""
-    if name in ("h1", "h2"):
+    """``scene`` with the parameter ``name`` set to ``value`` (zeta: every mode's damping
+    moved by the same amount, to the mean ``value``; gap: both heights H1/L = H2/L)."""
+    if name == "zeta":
+        shift = value - float(np.mean(scene.zeta_modes))
+        return scene.replace(zeta=tuple(float(z) + shift for z in scene.zeta_modes))
+    if name in ("h1", "h2", "gap"):
         h1, h2 = _heights(scene)
-        h1, h2 = (value, h2) if name == "h1" else (h1, value)
+        h1, h2 = (value, value) if name == "gap" else (value, h2) if name == "h1" else (h1, value)
         return scene.replace(hstar=h1 + h2, channel1=Profile.constant(h1),
                              channel2=Profile.constant(h2))
     return scene.replace(**{name: value})
+
+
+def _divergence_near(scene: Scene, model: Model, ustar: float) -> float:
+    """U* of the divergence of ``scene`` near ``ustar``: a crossing of the straight
+    branch by Brent's method (:func:`divergence_at`), else (a fold of the branch, past
+    which there is no steady state to bracket with) the first onset located by the
+    continuation; RuntimeError if neither is within 1 %."""
+    point = divergence_at(scene, model, ustar)
+    if point is None:
+        point = first_onset(scene, model, 1.5 * abs(ustar))
+    if point is None or point.kind != "divergence" or abs(point.ustar / ustar - 1) > 0.01:
+        raise RuntimeError(f"the divergence near U* = {ustar:.6g} could not be relocated at "
+                           f"{scene}")
+    return point.ustar
 
 
 def _difference(scene: Scene, hopf: HopfPoint, name: str, value: float) -> tuple[float, float]:

@@ -92,8 +92,9 @@ def plot_map(result, path=None, linear=None, curves=None, cases=(), switched=())
     scene = result.scene
     if scene is not None:
         zeta = f"{scene.zeta:g}" if np.isscalar(scene.zeta) else "per mode"
+        flow = ", reversed flow ($U^* < 0$)" if scene.direction == "reverse" else ""
         ax.set_title(fr"$H^*$ = {scene.hstar:g}, $f$ = {scene.friction:g}, $\zeta$ = {zeta}, "
-                     f"$N$ = {scene.modes}")
+                     f"$N$ = {scene.modes}{flow}")
     fig.legend(*ax.get_legend_handles_labels(), loc="outside right upper")   # off the points
     return finish(fig, path)
 
@@ -110,7 +111,8 @@ def _map_limits(ax, points) -> None:
 
 
 def _sampled_boundary(ax, boundary: dict) -> None:
-    """The map's boundary samples, lines broken at frequency jumps."""
+    """The map's boundary samples, lines broken at frequency jumps and where divergence
+    (omega = 0) and flutter meet."""
     rows = [(u, m, w) for u, m, w in zip(boundary["ustar_crit"], boundary["mstar"],
                                          boundary.get("omega", [None] * len(boundary["mstar"])))
             if u is not None]
@@ -120,7 +122,9 @@ def _sampled_boundary(ax, boundary: dict) -> None:
     pieces, current = [], [rows[0]]
     for prev, row in zip(rows[:-1], rows[1:]):
         w0, w1 = prev[2], row[2]
-        if w0 and w1 and max(w0, w1) / min(w0, w1) > _FREQUENCY_JUMP:
+        if w0 is not None and w1 is not None and (
+                (w0 == 0) != (w1 == 0)          # divergence (omega = 0) beside flutter
+                or (w0 and w1 and max(w0, w1) / min(w0, w1) > _FREQUENCY_JUMP)):
             pieces.append(current)
             current = []
         current.append(row)

@@ -12,12 +12,20 @@ finished point is appended at once as one JSON line to the results file
 against a second run on the same file, a torn last line repaired), so an interrupted map
 resumes where it stopped: points already in the file are skipped, and a file written
 with another scene, t_end or settings is refused. Local worker processes end with the
-map's process, also when it is killed. The linear stability boundary ``U*_c(M*)`` is the first Hopf point of the steady branch.
+map's process, also when it is killed. The linear stability boundary ``U*_c(M*)`` is the first
+loss of stability of the steady branch.
+
+A map has one direction of flow: its U* are all >= 0 (forward) or all <= 0 (reversed
+flow, from the tip to the root; docs/model.md "Reversed flow"). A reversed map's points
+are runs of the reversed scene, its boundary is searched towards negative U*, and its
+results file says ``direction = "reverse"`` in its header (so a forward file is never
+resumed by a reversed map nor the other way round).
 """
 from __future__ import annotations
 
 import contextlib
 import dataclasses
+import math
 import time
 from concurrent.futures import Executor
 from dataclasses import dataclass
@@ -39,7 +47,8 @@ from .breathing import PressureSchedule
 from .integrators import Settings
 from .limits import check_size
 
-__all__ = ["MAP_SCENE", "MapOutcome", "MapResult", "impact_map", "stability_boundary", "load_points"]
+__all__ = ["MAP_SCENE", "MapOutcome", "MapResult", "impact_map", "stability_boundary", "load_points",
+           "directed"]
 
 MAP_SCENE = Scene(mstar=1.0, ustar=5.0, hstar=0.1, friction=0.14, k0=0.0, kl=1.0, zeta=0.01,
                   modes=10)
@@ -95,6 +104,8 @@ def map_header(scene: Scene, t_end: float, settings: Settings, criteria: Criteri
     """Everything a map point depends on but its (U*, M*): the results file's header."""
     fields = {k: v for k, v in scene.replace(contact=False).to_dict().items()
               if k not in ("ustar", "mstar")}
+    if scene.direction == "reverse":       # forward headers stay those of every forward map
+        fields["direction"] = "reverse"
     return {"format": "fsicas-map-1", "scene": fields, "t_end": float(t_end),
             "settings": dataclasses.asdict(settings), "criteria": dataclasses.asdict(criteria),
             "quadrature_tol": "auto"}
@@ -119,9 +130,11 @@ def _grid(ustars, mstars, t_end) -> tuple[np.ndarray, np.ndarray]:
         raise ValueError("ustars and mstars must not be empty")
     if not (np.all(mstars > 0) and np.all(np.isfinite(ustars))):
         raise ValueError("mstars must be > 0 and ustars finite")
-    if not np.max(ustars) > 0:
-        raise ValueError("ustars: at least one U* must be > 0 (the map's linear boundary is "
-                         "searched up to 1.5 x the largest U*)")
+    if not (np.any(ustars != 0) and (np.all(ustars >= 0) or np.all(ustars <= 0))):
+        raise ValueError("ustars: a map has one direction of flow: all U* >= 0 (forward) or "
+                         "all U* <= 0 (reversed flow), at least one nonzero (the map's linear "
+                         f"boundary is searched up to 1.5 x the largest |U*|); got {ustars.tolist()}: "
+                         "map each direction into its own results file")
     if not t_end > 0:
         raise ValueError(f"t_end must be > 0, got {t_end}")
     return ustars, mstars
@@ -132,8 +145,8 @@ def impact_map(ustars, mstars, path, *, scene: Scene = MAP_SCENE, t_end: float =
                workers: int | None = None, executor: Executor | None = None,
                progress=None) -> MapResult:
     """Classify every (U*, M*) of the grid; results appended to ``path`` (JSON lines).
-
-    ``workers``: local processes (default: the local cores), unless ``executor`` (any
+    ``ustars``: signed U*, all of one sign (< 0: a reversed map); ``scene``: the other
+    fields (its U* and M* are those of the grid). ``workers``: local processes (default: the local cores), unless ``executor`` (any
     ``concurrent.futures.Executor``, e.g. ``dask.distributed.Client(...).get_executor()``)
     is given, which is used as it is and not shut down. ``progress(done, total)`` is
     called after each point.
@@ -146,7 +159,7 @@ def impact_map(ustars, mstars, path, *, scene: Scene = MAP_SCENE, t_end: float =
         raise ValueError(f"workers must be an integer >= 1 (or None: the local cores), got {workers!r}")
     start = time.perf_counter()
     criteria = Criteria(stop_on_contact=True)
-    base = scene.replace(contact=False)
+    base = directed(scene, ustars).replace(contact=False)
     header = map_header(base, t_end, settings, criteria)
     with ResultsFile(path, header, provenance(), fields=RECORD_FIELDS) as out, \
             contextlib.ExitStack() as stack:
@@ -168,13 +181,21 @@ def impact_map(ustars, mstars, path, *, scene: Scene = MAP_SCENE, t_end: float =
                      {"ustar": ustars.tolist(), "mstar": mstars.tolist()})
 
 
+def directed(scene: Scene, ustars) -> Scene:
+    """``scene`` with the direction of the map's U* grid (``ustars``, of one sign): its
+    speed |U*| kept, its sign that of the grid."""
+    sign = -1.0 if np.any(np.asarray(ustars) < 0) else 1.0
+    return scene.replace(ustar=math.copysign(abs(scene.ustar), sign))
+
+
 def stability_boundary(scene: Scene, mstars, ustars) -> dict:
-    """Critical U* per M* of the contact-free model: the first Hopf point of the steady
-    branch (:func:`fsicas.linear.hopf.critical_velocity`), searched up to 1.5 x the largest U*
-    of the map."""
-    base = scene.replace(contact=False)
+    """Critical U* per M* of the contact-free model: the onset of the steady branch
+    (:func:`fsicas.linear.hopf.critical_velocity`: a Hopf point, or divergence), searched
+    in the direction of the map's U* (``ustars``, of one sign) up to 1.5 x their largest
+    |U*|; signed (< 0 for a reversed map)."""
+    base = directed(scene, ustars).replace(contact=False)
     model = build_model(base)
-    u_max = 1.5 * float(np.max(ustars))
+    u_max = 1.5 * float(np.max(np.abs(ustars)))
     out = {"mstar": [], "ustar_crit": [], "omega": []}
     for m in mstars:
         h = critical_velocity(base.replace(mstar=float(m)), model, ustar_max=u_max)
