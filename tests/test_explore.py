@@ -369,6 +369,58 @@ def test_a_scene_file_loads_as_the_cli_reads_it_and_a_bad_one_is_refused(page, s
         linear_stability(read.scene(read.flow)).eigenvalues[0].real, rel=1e-5)
 
 
+def test_a_loaded_file_is_in_the_address_and_the_preset_menu_names_it(page, server, browser,
+                                                                      tmp_path):
+    """The address holds a loaded file's values (not its path): reopened in a new tab,
+    with the file gone, it shows the file's scene as ``load_scene`` / ``load_physical``
+    read it; the menu shows the preset a physical file is, else "from file"."""
+    _open(page, server)
+    mine = tmp_path / "mine.toml"                  # k0 and the per-mode zeta: not boxes
+    mine.write_text("mstar = 2.0\nustar = 3.0\nk0 = 0.5\nmodes = 4\n"
+                    "zeta = [0.01, 0.02, 0.03, 0.04]\n")
+    scene = load_scene(mine)
+    _load(page, mine)
+    assert page.get_by_label("physical preset").input_value() == "from file"
+    page.wait_for_function("() => location.search.includes('scene=')")
+    url = page.url
+    assert str(tmp_path) not in url and "scenefile=mine.toml" in url
+    mine.unlink()
+    other = browser.new_page()
+    try:
+        other.goto(url)
+        other.wait_for_function(f"() => ({FIND})(document, 'scene-file')?.textContent"
+                                ".includes('from the address')", timeout=30000)
+        assert _text(other, "command") == "fsicas eig --scene mine.toml --json"
+        assert _number(other, "growth-rate") == pytest.approx(
+            linear_stability(scene).eigenvalues[0].real, rel=1e-5)
+    finally:
+        other.close()
+    same = tmp_path / "same.toml"                  # a physical file of the preset's values
+    same.write_text('preset = "soft_palate"\n[physical]\n')
+    _load(page, same)
+    page.wait_for_function(f"() => ({FIND})(document, 'scene-file').textContent"
+                           ".includes('same.toml')")
+    assert page.get_by_label("physical preset").input_value() == "soft_palate"
+    assert "the preset soft_palate" in _text(page, "scene-file")
+    changed = tmp_path / "palate.toml"
+    changed.write_text('preset = "soft_palate"\n[physical]\nE = "4 kPa"\nflow = "25 L/min"\n')
+    _load(page, changed)
+    read = load_physical(str(changed))
+    assert page.get_by_label("physical preset").input_value() == "from file"
+    page.wait_for_function("() => location.search.includes('scenefile=palate.toml')")
+    url = page.url
+    other = browser.new_page()
+    try:
+        other.goto(url)
+        other.wait_for_function(f"() => ({FIND})(document, 'scene-file')?.textContent"
+                                ".includes('from the address')", timeout=30000)
+        assert other.locator("[data-testid=phys-E]").input_value() == "4 kPa"
+        assert _number(other, "growth-rate") == pytest.approx(
+            linear_stability(read.scene(read.flow)).eigenvalues[0].real, rel=1e-5)
+    finally:
+        other.close()
+
+
 def test_the_densities_poisson_ratio_and_viscosity_are_physical_inputs_too(page, server):
     _open(page, server)
     page.get_by_label("physical preset").select_option("harvester")
