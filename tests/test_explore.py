@@ -201,6 +201,54 @@ def test_the_state_is_in_the_url_and_the_map_click_moves_the_point(page, server)
     assert 0.3 < mstar < 30 and mstar != 2.0
 
 
+#: The (start, end) of the boundary map's U* axis as the browser fitted it.
+MAP_RANGE = """() => { const plot = [...Bokeh.documents[0]._all_models.values()].find(
+  m => m.title?.text?.startsWith?.("stability boundary"));
+  return [plot.y_range.start, plot.y_range.end]; }"""
+
+
+def _map_range(page, low: float, high: float) -> tuple:
+    """The map's U* axis once it lies within [low, high] (the browser fits it after the
+    data arrive)."""
+    page.wait_for_function(f"() => {{ const [a, b] = ({MAP_RANGE})(); "
+                           f"return a >= {low} && b <= {high} && a < b; }}", timeout=60000)
+    return tuple(page.evaluate(MAP_RANGE))
+
+
+def test_the_map_axis_follows_the_current_point_up_and_down(page, server):
+    """Without a boundary the map's U* axis is fitted to the current point: it grows
+    with U* and shrinks back."""
+    _open(page, server, ustar=30)
+    start, end = _map_range(page, 20, 40)
+    assert start <= 30 <= end
+    _set(page, "ustar", "3")
+    start, end = _map_range(page, 0, 5)
+    assert start <= 3 <= end
+
+
+@pytest.mark.slow
+def test_the_map_axis_shrinks_when_the_boundary_moves_down(page, server):
+    """The U* axis fitted to each new boundary (``boundary_view`` of the scene called
+    directly): it shrinks when the boundary moves down."""
+    from fsicas.explore.compute import boundary_view
+    tops, ends = {}, []
+    for hstar in ("0.1", "0.2"):
+        if hstar == "0.1":
+            _open(page, server, ustar=2, modes=4)
+        else:
+            _set(page, "hstar", hstar)
+        points = boundary_view(Scene(ustar=2.0, modes=4, hstar=float(hstar)))["points"]
+        tops[hstar] = max(p["ustar_crit"] for p in points if p.get("ustar_crit"))
+        page.get_by_role("button", name="compute the map").click()
+        page.wait_for_function(f"() => ({FIND})(document, 'boundary-status').textContent"
+                               " === 'done'", timeout=120000)
+        start, end = _map_range(page, 0, 1.3 * tops[hstar])
+        assert end >= tops[hstar] and start <= 2.0
+        ends.append(end)
+    assert tops["0.2"] < 0.9 * tops["0.1"]                 # the boundary moved down
+    assert ends[1] < ends[0]                               # and the axis with it
+
+
 def test_instant_tier_latency_in_the_browser(page, server):
     """From a change of U* to the redrawn growth rate (N = 10); printed, not asserted."""
     _open(page, server)

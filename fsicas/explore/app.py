@@ -323,6 +323,7 @@ class Explorer:
             self.background.text = readout("boundary-status",
                                              f"computing… {value:.0f} s", "boundary map")
         elif status == "idle":
+            self.map.update([])                  # no other scene's boundary on the map
             self.background.text = readout("boundary-status", "not computed (tens of seconds "
                                              "at N = 10, in the background)", "boundary map")
         else:
