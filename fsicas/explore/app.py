@@ -10,7 +10,7 @@ import panel as pn
 import param
 
 from ..physical import Physical, load_physical, preset_names
-from ..scene import Scene
+from ..scene import BEAM_ENDS, DIRECTIONS, Scene
 from .background import RunPanel
 from .cycles import CyclePanel
 from .curves import CurvePanel
@@ -21,7 +21,7 @@ from .figures import BoundaryMap, ModeShape, RootLocus
 from .jobs import Jobs
 from .reproduce import SceneFile, command_line, python_lines
 from .readouts import instant_html, onset_html
-from .widgets import NumberBox, held, markup, readout
+from .widgets import ChoiceBox, NumberBox, held, markup, readout
 
 __all__ = ["Explorer", "RESULTS"]
 
@@ -41,7 +41,7 @@ class LoadedFile(param.Parameterized):
 
 def _key(scene: Scene, *drop: str) -> str:
     """The cache key of ``scene`` without the fields ``drop``."""
-    d = scene.to_dict()
+    d = {**scene.to_dict(), "direction": scene.direction}    # ustar dropped: its sign kept
     for name in drop:
         d.pop(name, None)
     return repr(sorted(d.items()))
@@ -70,7 +70,11 @@ class Explorer:
         self.scene = self.base
         self.boxes = {k: NumberBox(value=input_text(getattr(self.base, k)), label=label, testid=k)
                       for k, (label, _) in INPUTS.items()}
-        self.boxes["modes"].testid = "modes"
+        self.boxes["ustar"].value = input_text(abs(self.base.ustar))    # the speed |U*|
+        self.ends = ChoiceBox(value=self.base.ends, options=list(BEAM_ENDS), label="beam ends",
+                              testid="ends")
+        self.direction = ChoiceBox(value=self.base.direction, options=list(DIRECTIONS),
+                                   label="flow direction", testid="direction")
         self.physical = {k: NumberBox(label=label, testid=f"phys-{k}", visible=False)
                          for k, label in PHYSICAL_INPUTS.items()}
         self._show_physical()
@@ -98,7 +102,8 @@ class Explorer:
         self.address.param.watch(self._from_address, "data")
         for box in self.physical.values():
             box.param.watch(self._physical_changed, "value")
-        self.beam.param.watch(self._changed, "value")
+        for menu in (self.beam, self.ends, self.direction):
+            menu.param.watch(self._changed, "value")
         self.slenderness.param.watch(self._changed, "value")
         from bokeh.events import Tap
         self.map.figure.on_event(Tap, self._tapped)
@@ -124,7 +129,9 @@ class Explorer:
                 pn.state.location.sync(box, {"value": name})
             for name, box in self.boxes.items():
                 pn.state.location.sync(box, {"value": name})
-            pn.state.location.sync(self.beam, {"value": "beam"})
+            for name, menu in (("beam", self.beam), ("ends", self.ends),
+                               ("direction", self.direction)):
+                pn.state.location.sync(menu, {"value": name})
             pn.state.location.sync(self.slenderness, {"value": "slenderness"})
         pn.state.add_periodic_callback(self.poll, period=POLL_MS)
         frames = pn.state.add_periodic_callback(self._frame, period=FRAME_MS, start=False)
@@ -227,7 +234,9 @@ class Explorer:
         self.base, self.holding = base, True
         for name, box in self.boxes.items():
             box.value = input_text(getattr(self.base, name))
-        self.beam.value = self.base.beam
+        self.boxes["ustar"].value = input_text(abs(self.base.ustar))
+        self.beam.value, self.ends.value = self.base.beam, self.base.ends
+        self.direction.value = self.base.direction
         self.slenderness.value = input_text(self.base.slenderness)
         self.holding = False
         self.refresh()
@@ -239,7 +248,10 @@ class Explorer:
     def _tapped(self, event) -> None:
         if event.x is not None and event.y is not None and event.x > 0:
             self.boxes["mstar"].value = f"{event.x:.4g}"
-            self.boxes["ustar"].value = f"{event.y:.4g}"
+            self.holding = True                           # one refresh, both set
+            self.direction.value = DIRECTIONS[1] if event.y < 0 else DIRECTIONS[0]
+            self.holding = False
+            self.boxes["ustar"].value = f"{abs(event.y):.4g}"
 
     @held
     def _cancel(self, kind: str) -> None:
@@ -260,7 +272,8 @@ class Explorer:
         library's message in the error line (False: the last valid view stays)."""
         try:
             texts = {k: b.value for k, b in self.boxes.items()}
-            texts.update(beam=self.beam.value, slenderness=self.slenderness.value)
+            texts.update(beam=self.beam.value, slenderness=self.slenderness.value,
+                         ends=self.ends.value, direction=self.direction.value)
             scene = scene_of(self.base, texts)
             view = instant_view(scene)
         except ValueError as err:
@@ -353,7 +366,8 @@ class Explorer:
     def page(self) -> pn.viewable.Viewable:
         inputs = pn.Column("### Inputs", self.presets, "scene file (TOML)", self.upload,
                            self.loaded, *self.physical.values(),
-                           *self.boxes.values(), self.beam, self.slenderness, self.error,
+                           *self.boxes.values(), self.direction, self.beam, self.slenderness,
+                           self.ends, self.error,
                            width=260)
         instant = pn.Column("### Now", self.readouts, self.animate,
                             pn.pane.Bokeh(self.shape.figure), pn.pane.Bokeh(self.locus.figure))

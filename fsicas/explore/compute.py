@@ -16,7 +16,7 @@ from ..cycles.impacting_routes import impacting_cycles, through_contact_law
 from ..linear import critical_velocity, linear_stability, stability_boundary
 from .. import strict_json
 from ..physical import KEYS, Physical, load_physical, parse_flow
-from ..scene import Scene
+from ..scene import Scene, directed_ustar
 from ..timedomain.run import run_case, sweep_model
 from ..timedomain.sound import AUDIO_RATE, cycle_sound, line_spectrum
 
@@ -70,8 +70,13 @@ def input_text(value) -> str:
 
 def scene_of(base: Scene, texts: dict) -> Scene:
     """``base`` with the page's inputs (field -> text; ``beam`` and ``slenderness``, empty
-    for none, together) applied; the library's ValueError for values it refuses."""
+    for none, together; ``ends``; ``direction`` with the speed |U*| in ``ustar``,
+    ``directed_ustar``) applied; the library's ValueError for values it refuses."""
     values = {k: _value(k, texts[k]) for k in INPUTS if k in texts}
+    if "direction" in texts and "ustar" in values:     # the box holds the speed |U*|
+        values["ustar"] = directed_ustar(values["ustar"], texts["direction"])
+    if "ends" in texts:
+        values["ends"] = texts["ends"]
     if "beam" in texts:
         text = str(texts.get("slenderness", "")).strip()
         values["beam"] = texts["beam"]

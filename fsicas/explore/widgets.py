@@ -10,7 +10,7 @@ from panel.io import hold
 from panel.custom import JSComponent
 from panel.reactive import ReactiveHTML
 
-__all__ = ["Markup", "NumberBox", "held", "markup", "readout"]
+__all__ = ["ChoiceBox", "Markup", "NumberBox", "held", "markup", "readout"]
 
 
 class NumberBox(ReactiveHTML):
@@ -30,6 +30,25 @@ class NumberBox(ReactiveHTML):
     def _box_change(self, event) -> None:
         self.value = str(event.data["target"]["value"])
 
+
+
+class ChoiceBox(ReactiveHTML):
+    """A labelled menu of ``options`` whose ``value`` is sent on change, as
+    :class:`NumberBox` (the ``<select>`` carries ``data-testid``)."""
+
+    value = param.String(default="")
+    options = param.List(default=[])
+    label = param.String(default="")
+    testid = param.String(default="")
+
+    _template = ('<label class="box">{{ label }} <select id="box" data-testid="{{ testid }}" '
+                 'value="${value}">{% for option in options %}<option value="{{ option }}">'
+                 '{{ option }}</option>{% endfor %}</select></label>')
+    _dom_events = {"box": {"change": False}}
+    _stylesheets = [":host { margin: 2px 6px; } select { font: inherit; }"]
+
+    def _box_change(self, event) -> None:
+        self.value = str(event.data["target"]["value"])
 
 
 def readout(testid: str, text: str, label: str = "", tag: str = "span") -> str:
