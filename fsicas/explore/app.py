@@ -59,10 +59,6 @@ class Explorer:
         self.presets = pn.widgets.Select(name="physical preset", value=preset or NO_PRESET,
                                          options=[NO_PRESET, *preset_names()], width=200)
         self.holding = False
-        self.beam = pn.widgets.Select(name="beam", value=self.base.beam,
-                                      options=["euler-bernoulli", "timoshenko"], width=200)
-        self.slenderness = NumberBox(value=input_text(self.base.slenderness), label="e/L",
-                                     testid="slenderness")
         self.upload = pn.widgets.FileInput(accept=".toml", multiple=False, width=220)
         self.loaded = markup(readout("scene-file", ""))
         self.address = LoadedFile()
@@ -71,10 +67,7 @@ class Explorer:
         self.boxes = {k: NumberBox(value=input_text(getattr(self.base, k)), label=label, testid=k)
                       for k, (label, _) in INPUTS.items()}
         self.boxes["ustar"].value = input_text(abs(self.base.ustar))    # the speed |U*|
-        self.ends = ChoiceBox(value=self.base.ends, options=list(BEAM_ENDS), label="beam ends",
-                              testid="ends")
-        self.direction = ChoiceBox(value=self.base.direction, options=list(DIRECTIONS),
-                                   label="flow direction", testid="direction")
+        self._menus()
         self.physical = {k: NumberBox(label=label, testid=f"phys-{k}", visible=False)
                          for k, label in PHYSICAL_INPUTS.items()}
         self._show_physical()
@@ -92,6 +85,17 @@ class Explorer:
         self.download = pn.widgets.FileDownload(callback=self._export, filename="fsicas_explore.json",
                                                 label="export the view (JSON)", width=220)
         self._wire()
+
+    def _menus(self) -> None:
+        """The beam, its e/L and ends, and the flow direction, from the scene's."""
+        self.beam = pn.widgets.Select(name="beam", value=self.base.beam,
+                                      options=["euler-bernoulli", "timoshenko"], width=200)
+        self.slenderness = NumberBox(value=input_text(self.base.slenderness), label="e/L",
+                                     testid="slenderness")
+        self.ends = ChoiceBox(value=self.base.ends, options=list(BEAM_ENDS), label="beam ends",
+                              testid="ends")
+        self.direction = ChoiceBox(value=self.base.direction, options=list(DIRECTIONS),
+                                   label="flow direction", testid="direction")
 
     # -- wiring ---------------------------------------------------------------------
     def _wire(self) -> None:
