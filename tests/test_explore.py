@@ -621,6 +621,22 @@ def test_the_snore_plays_with_its_spectrum_of_the_library(page, server):
 
 
 @pytest.mark.slow
+@pytest.mark.slow
+def test_a_physical_run_without_a_cycle_says_why_it_has_no_snore(page, server):
+    """The soft palate at its default airflow reaches the wall (``run_case`` called
+    directly): no audio, and the page says why (no settled cycle to loop)."""
+    page.goto(server + "?preset=soft_palate")
+    page.locator("[data-testid=command]").wait_for(timeout=30000)
+    page.get_by_role("button", name="time run").click()
+    page.locator("[data-testid=run-outcome]").wait_for(timeout=120000)
+    read = load_physical("soft_palate")
+    outcome = run_case(read.scene(read.flow), 20.0).to_json()["outcome"]
+    assert _text(page, "run-outcome") == outcome == "contact"
+    assert _text(page, "sound-none").startswith(
+        "none: the run's outcome is contact, not a settled cycle to loop.")
+    assert page.locator("audio").count() == 0 or not page.locator("audio").is_visible()
+
+
 def test_the_snore_python_lines_give_the_page_snore(page, server):
     """The Python lines the page shows under the snore, run here, give its spectrum and
     pitch."""
