@@ -250,12 +250,14 @@ class Explorer:
         self.error.text = readout("error", str(err))
 
     def _tapped(self, event) -> None:
+        """A click on the map: its (M*, U*) the point (a negative U*: reversed flow)."""
         if event.x is not None and event.y is not None and event.x > 0:
+            self.holding = True                           # all three set, one refresh
             self.boxes["mstar"].value = f"{event.x:.4g}"
-            self.holding = True                           # one refresh, both set
             self.direction.value = DIRECTIONS[1] if event.y < 0 else DIRECTIONS[0]
-            self.holding = False
             self.boxes["ustar"].value = f"{abs(event.y):.4g}"
+            self.holding = False
+            self.refresh()
 
     @held
     def _cancel(self, kind: str) -> None:
