@@ -148,6 +148,71 @@ def test_the_page_shows_the_library_eigen_analysis_and_an_independent_eig(page, 
     assert shot.stat().st_size > 10_000
 
 
+def _choose(page, testid: str, option: str) -> None:
+    """Choose ``option`` in the menu ``testid`` and wait until the page has answered."""
+    state = f"() => ['command', 'error'].map(i => ({FIND})(document, i).textContent).join('|')"
+    old = page.evaluate(state)
+    page.locator(f"[data-testid={testid}]").select_option(option)
+    page.wait_for_function(f"old => ({state})() !== old", arg=old)
+
+
+def _top_eigenvalue(scene: Scene) -> complex:
+    """The least stable eigenvalue of ``scene`` by ``scipy.linalg.eig`` of M^-1 dF/dx at
+    the library's steady state (not the library's eigen-solver)."""
+    model = build_model(scene)
+    steady = linear_stability(scene).steady
+    J = np.array(model.jac_rhs(steady.x, steady.p))
+    M = np.array(model.mass(steady.x, steady.p))
+    lam = scipy.linalg.eig(np.linalg.solve(M, J), right=False)
+    return lam[np.argmax(lam.real)]
+
+
+def test_the_beam_ends_and_the_flow_direction_are_inputs(page, server):
+    """Every beam end and both directions: the readouts are the eigenvalues of
+    M^-1 dF/dx (scipy), the onset the library's; the address and the command carry them."""
+    _open(page, server, ustar=3, modes=4)
+    _choose(page, "direction", "reverse")
+    scene = Scene(ustar=-3.0, modes=4)
+    top = _top_eigenvalue(scene)
+    assert _number(page, "growth-rate") == pytest.approx(top.real, rel=1e-5)
+    assert "--ustar -3 " in _text(page, "command")
+    page.wait_for_function("() => location.search.includes('direction=reverse')")
+    for ends in ("clamped-clamped", "pinned-pinned", "clamped-pinned"):
+        _choose(page, "ends", ends)
+        scene = Scene(ustar=-3.0, modes=4, ends=ends)
+        top = _top_eigenvalue(scene)
+        assert _number(page, "growth-rate") == pytest.approx(top.real, rel=1e-5)
+        assert _number(page, "frequency") == pytest.approx(abs(top.imag), rel=1e-5)
+        assert f"--ends {ends} " in _text(page, "command")
+    onset = critical_velocity(scene)
+    page.wait_for_function(f"u => Math.abs(parseFloat(({FIND})(document, 'onset-ustar')"
+                           f"?.textContent) - u) < 1e-4 * Math.abs(u)", arg=onset.ustar,
+                           timeout=20000)
+    assert _number(page, "onset-ustar") == pytest.approx(onset.ustar, rel=1e-5)
+    _choose(page, "direction", "forward")
+    assert _number(page, "growth-rate") == pytest.approx(
+        _top_eigenvalue(scene.replace(ustar=3.0)).real, rel=1e-5)
+    _set(page, "ustar", "-2")                                  # the sign said twice
+    with pytest.raises(ValueError) as refused:
+        Scene.from_dict({"ustar": -2.0, "direction": "forward"})
+    assert _text(page, "error") == str(refused.value)
+
+
+def test_an_analysis_refusing_the_configuration_shows_its_message(page, server):
+    """The grazing and fold curves refuse reversed flow: the page shows the library's
+    message (curves_view called directly), not a traceback."""
+    from fsicas.explore.compute import curves_view
+    _open(page, server, ustar=3, modes=4)
+    _choose(page, "direction", "reverse")
+    with pytest.raises(ValueError) as refused:
+        curves_view(Scene(ustar=-3.0, modes=4), 40)
+    page.get_by_role("button", name="grazing and fold curves").click()
+    status = f"() => ({FIND})(document, 'curves-status').textContent"
+    page.wait_for_function(f"{status}.startsWith('error')", timeout=60000)
+    assert _text(page, "curves-status") == f"error: {refused.value}"
+    assert "Traceback" not in _text(page, "curves-status")
+
+
 def test_stability_flips_at_the_onset_the_library_reports(page, server):
     onset = critical_velocity(Scene())
     _open(page, server, ustar=0.98 * onset.ustar)
@@ -199,6 +264,54 @@ def test_the_state_is_in_the_url_and_the_map_click_moves_the_point(page, server)
     page.wait_for_function("() => location.search.indexOf('mstar=2&') < 0")
     mstar = float(page.url.split("mstar=")[1].split("&")[0])
     assert 0.3 < mstar < 30 and mstar != 2.0
+
+
+#: The (start, end) of the boundary map's U* axis as the browser fitted it.
+MAP_RANGE = """() => { const plot = [...Bokeh.documents[0]._all_models.values()].find(
+  m => m.title?.text?.startsWith?.("stability boundary"));
+  return [plot.y_range.start, plot.y_range.end]; }"""
+
+
+def _map_range(page, low: float, high: float) -> tuple:
+    """The map's U* axis once it lies within [low, high] (the browser fits it after the
+    data arrive)."""
+    page.wait_for_function(f"() => {{ const [a, b] = ({MAP_RANGE})(); "
+                           f"return a >= {low} && b <= {high} && a < b; }}", timeout=60000)
+    return tuple(page.evaluate(MAP_RANGE))
+
+
+def test_the_map_axis_follows_the_current_point_up_and_down(page, server):
+    """Without a boundary the map's U* axis is fitted to the current point: it grows
+    with U* and shrinks back."""
+    _open(page, server, ustar=30)
+    start, end = _map_range(page, 20, 40)
+    assert start <= 30 <= end
+    _set(page, "ustar", "3")
+    start, end = _map_range(page, 0, 5)
+    assert start <= 3 <= end
+
+
+@pytest.mark.slow
+def test_the_map_axis_shrinks_when_the_boundary_moves_down(page, server):
+    """The U* axis fitted to each new boundary (``boundary_view`` of the scene called
+    directly): it shrinks when the boundary moves down."""
+    from fsicas.explore.compute import boundary_view
+    tops, ends = {}, []
+    for hstar in ("0.1", "0.2"):
+        if hstar == "0.1":
+            _open(page, server, ustar=2, modes=4)
+        else:
+            _set(page, "hstar", hstar)
+        points = boundary_view(Scene(ustar=2.0, modes=4, hstar=float(hstar)))["points"]
+        tops[hstar] = max(p["ustar_crit"] for p in points if p.get("ustar_crit"))
+        page.get_by_role("button", name="compute the map").click()
+        page.wait_for_function(f"() => ({FIND})(document, 'boundary-status').textContent"
+                               " === 'done'", timeout=120000)
+        start, end = _map_range(page, 0, 1.3 * tops[hstar])
+        assert end >= tops[hstar] and start <= 2.0
+        ends.append(end)
+    assert tops["0.2"] < 0.9 * tops["0.1"]                 # the boundary moved down
+    assert ends[1] < ends[0]                               # and the axis with it
 
 
 def test_instant_tier_latency_in_the_browser(page, server):
@@ -369,6 +482,58 @@ def test_a_scene_file_loads_as_the_cli_reads_it_and_a_bad_one_is_refused(page, s
         linear_stability(read.scene(read.flow)).eigenvalues[0].real, rel=1e-5)
 
 
+def test_a_loaded_file_is_in_the_address_and_the_preset_menu_names_it(page, server, browser,
+                                                                      tmp_path):
+    """The address holds a loaded file's values (not its path): reopened in a new tab,
+    with the file gone, it shows the file's scene as ``load_scene`` / ``load_physical``
+    read it; the menu shows the preset a physical file is, else "from file"."""
+    _open(page, server)
+    mine = tmp_path / "mine.toml"                  # k0 and the per-mode zeta: not boxes
+    mine.write_text("mstar = 2.0\nustar = 3.0\nk0 = 0.5\nmodes = 4\n"
+                    "zeta = [0.01, 0.02, 0.03, 0.04]\n")
+    scene = load_scene(mine)
+    _load(page, mine)
+    assert page.get_by_label("physical preset").input_value() == "from file"
+    page.wait_for_function("() => location.search.includes('scene=')")
+    url = page.url
+    assert str(tmp_path) not in url and "scenefile=mine.toml" in url
+    mine.unlink()
+    other = browser.new_page()
+    try:
+        other.goto(url)
+        other.wait_for_function(f"() => ({FIND})(document, 'scene-file')?.textContent"
+                                ".includes('from the address')", timeout=30000)
+        assert _text(other, "command") == "fsicas eig --scene mine.toml --json"
+        assert _number(other, "growth-rate") == pytest.approx(
+            linear_stability(scene).eigenvalues[0].real, rel=1e-5)
+    finally:
+        other.close()
+    same = tmp_path / "same.toml"                  # a physical file of the preset's values
+    same.write_text('preset = "soft_palate"\n[physical]\n')
+    _load(page, same)
+    page.wait_for_function(f"() => ({FIND})(document, 'scene-file').textContent"
+                           ".includes('same.toml')")
+    assert page.get_by_label("physical preset").input_value() == "soft_palate"
+    assert "the preset soft_palate" in _text(page, "scene-file")
+    changed = tmp_path / "palate.toml"
+    changed.write_text('preset = "soft_palate"\n[physical]\nE = "4 kPa"\nflow = "25 L/min"\n')
+    _load(page, changed)
+    read = load_physical(str(changed))
+    assert page.get_by_label("physical preset").input_value() == "from file"
+    page.wait_for_function("() => location.search.includes('scenefile=palate.toml')")
+    url = page.url
+    other = browser.new_page()
+    try:
+        other.goto(url)
+        other.wait_for_function(f"() => ({FIND})(document, 'scene-file')?.textContent"
+                                ".includes('from the address')", timeout=30000)
+        assert other.locator("[data-testid=phys-E]").input_value() == "4 kPa"
+        assert _number(other, "growth-rate") == pytest.approx(
+            linear_stability(read.scene(read.flow)).eigenvalues[0].real, rel=1e-5)
+    finally:
+        other.close()
+
+
 def test_the_densities_poisson_ratio_and_viscosity_are_physical_inputs_too(page, server):
     _open(page, server)
     page.get_by_label("physical preset").select_option("harvester")
@@ -456,6 +621,22 @@ def test_the_snore_plays_with_its_spectrum_of_the_library(page, server):
 
 
 @pytest.mark.slow
+@pytest.mark.slow
+def test_a_physical_run_without_a_cycle_says_why_it_has_no_snore(page, server):
+    """The soft palate at its default airflow reaches the wall (``run_case`` called
+    directly): no audio, and the page says why (no settled cycle to loop)."""
+    page.goto(server + "?preset=soft_palate")
+    page.locator("[data-testid=command]").wait_for(timeout=30000)
+    page.get_by_role("button", name="time run").click()
+    page.locator("[data-testid=run-outcome]").wait_for(timeout=120000)
+    read = load_physical("soft_palate")
+    outcome = run_case(read.scene(read.flow), 20.0).to_json()["outcome"]
+    assert _text(page, "run-outcome") == outcome == "contact"
+    assert _text(page, "sound-none").startswith(
+        "none: the run's outcome is contact, not a settled cycle to loop.")
+    assert page.locator("audio").count() == 0 or not page.locator("audio").is_visible()
+
+
 def test_the_snore_python_lines_give_the_page_snore(page, server):
     """The Python lines the page shows under the snore, run here, give its spectrum and
     pitch."""
@@ -554,7 +735,7 @@ def test_the_heavy_jobs_refuse_a_bad_count_and_cancel(page, server, ask, testid,
     assert _text(page, testid) == f"error: the {what} must be an integer, got 'many'"
     ask(page, "0")
     page.wait_for_function(f"{status}.includes('[1,')")
-    assert _text(page, testid) == f"error: ValueError: the {what} must be an integer in [1, 1000], got 0"
+    assert _text(page, testid) == f"error: the {what} must be an integer in [1, 1000], got 0"
     ask(page, "10")
     page.wait_for_function(f"{status}.startsWith('computing')")
     cancel = "cancel cycles" if testid == "lco-status" else "cancel curves"

@@ -10,35 +10,38 @@ import panel as pn
 import param
 
 from ..physical import Physical, load_physical, preset_names
-from ..scene import Scene
+from ..scene import BEAM_ENDS, DIRECTIONS, Scene
 from .background import RunPanel
 from .cycles import CyclePanel
 from .curves import CurvePanel
 from .compute import (INPUTS, PHYSICAL_INPUTS, boundary_view, export, input_text, instant_view,
-                      onset_view, physical_scene, physical_texts, preset_scene,
-                      read_scene_file, scene_of)
+                      onset_view, physical_scene, physical_texts, preset_scene, scene_of)
+from .files import decode_file, encode_file, matching_preset, read_scene_file
 from .figures import BoundaryMap, ModeShape, RootLocus
 from .jobs import Jobs
 from .reproduce import SceneFile, command_line, python_lines
-from .widgets import NumberBox, held, markup, readout
+from .readouts import instant_html, onset_html
+from .widgets import ChoiceBox, NumberBox, held, markup, readout
 
 __all__ = ["Explorer", "RESULTS"]
 
 #: Finished onsets and boundaries of this server, by (kind, scene): shared by sessions.
 RESULTS: dict = {}
 POLL_MS, FRAME_MS = 150, 100
-NO_PRESET = "none (nondimensional)"
+NO_PRESET, FROM_FILE = "none (nondimensional)", "from file"
 
 
-def _fmt(value, digits: int = 4, unit: str = "") -> str:
-    if value is None or (isinstance(value, float) and not math.isfinite(value)):
-        return "—"
-    return f"{value:.{digits}g}{unit}"
+class LoadedFile(param.Parameterized):
+    """The scene file loaded on the page, in its address: its name (``scenefile``) and
+    its values (``scene``, :func:`encode_file`), not its path."""
+
+    filename = param.String(default="")
+    data = param.String(default="")
 
 
 def _key(scene: Scene, *drop: str) -> str:
     """The cache key of ``scene`` without the fields ``drop``."""
-    d = scene.to_dict()
+    d = {**scene.to_dict(), "direction": scene.direction}    # ustar dropped: its sign kept
     for name in drop:
         d.pop(name, None)
     return repr(sorted(d.items()))
@@ -56,17 +59,15 @@ class Explorer:
         self.presets = pn.widgets.Select(name="physical preset", value=preset or NO_PRESET,
                                          options=[NO_PRESET, *preset_names()], width=200)
         self.holding = False
-        self.beam = pn.widgets.Select(name="beam", value=self.base.beam,
-                                      options=["euler-bernoulli", "timoshenko"], width=200)
-        self.slenderness = NumberBox(value=input_text(self.base.slenderness), label="e/L",
-                                     testid="slenderness")
         self.upload = pn.widgets.FileInput(accept=".toml", multiple=False, width=220)
         self.loaded = markup(readout("scene-file", ""))
+        self.address = LoadedFile()
         self.jobs = Jobs(RESULTS)
         self.scene = self.base
         self.boxes = {k: NumberBox(value=input_text(getattr(self.base, k)), label=label, testid=k)
                       for k, (label, _) in INPUTS.items()}
-        self.boxes["modes"].testid = "modes"
+        self.boxes["ustar"].value = input_text(abs(self.base.ustar))    # the speed |U*|
+        self._menus()
         self.physical = {k: NumberBox(label=label, testid=f"phys-{k}", visible=False)
                          for k, label in PHYSICAL_INPUTS.items()}
         self._show_physical()
@@ -85,15 +86,28 @@ class Explorer:
                                                 label="export the view (JSON)", width=220)
         self._wire()
 
+    def _menus(self) -> None:
+        """The beam, its e/L and ends, and the flow direction, from the scene's."""
+        self.beam = pn.widgets.Select(name="beam", value=self.base.beam,
+                                      options=["euler-bernoulli", "timoshenko"], width=200)
+        self.slenderness = NumberBox(value=input_text(self.base.slenderness), label="e/L",
+                                     testid="slenderness")
+        self.ends = ChoiceBox(value=self.base.ends, options=list(BEAM_ENDS), label="beam ends",
+                              testid="ends")
+        self.direction = ChoiceBox(value=self.base.direction, options=list(DIRECTIONS),
+                                   label="flow direction", testid="direction")
+
     # -- wiring ---------------------------------------------------------------------
     def _wire(self) -> None:
         for box in self.boxes.values():
             box.param.watch(self._changed, "value")
         self.presets.param.watch(self._preset, "value")
         self.upload.param.watch(self._uploaded, "value")
+        self.address.param.watch(self._from_address, "data")
         for box in self.physical.values():
             box.param.watch(self._physical_changed, "value")
-        self.beam.param.watch(self._changed, "value")
+        for menu in (self.beam, self.ends, self.direction):
+            menu.param.watch(self._changed, "value")
         self.slenderness.param.watch(self._changed, "value")
         from bokeh.events import Tap
         self.map.figure.on_event(Tap, self._tapped)
@@ -112,13 +126,16 @@ class Explorer:
 
     def start(self) -> None:
         """Once the page is served: URL sync, polling of the jobs, the animation."""
-        if pn.state.location is not None:
-            pn.state.location.sync(self.presets, {"value": "preset"})     # before the boxes
+        if pn.state.location is not None:                   # the file first, then the boxes
+            pn.state.location.sync(self.address, {"filename": "scenefile", "data": "scene"})
+            pn.state.location.sync(self.presets, {"value": "preset"})
             for name, box in self.physical.items():
                 pn.state.location.sync(box, {"value": name})
             for name, box in self.boxes.items():
                 pn.state.location.sync(box, {"value": name})
-            pn.state.location.sync(self.beam, {"value": "beam"})
+            for name, menu in (("beam", self.beam), ("ends", self.ends),
+                               ("direction", self.direction)):
+                pn.state.location.sync(menu, {"value": name})
             pn.state.location.sync(self.slenderness, {"value": "slenderness"})
         pn.state.add_periodic_callback(self.poll, period=POLL_MS)
         frames = pn.state.add_periodic_callback(self._frame, period=FRAME_MS, start=False)
@@ -132,9 +149,11 @@ class Explorer:
     def _preset(self, event) -> None:
         """Start again from the preset's scene (or the default one): every box at once,
         the preset's physical inputs shown as its file writes them."""
-        if self.holding:
+        if self.holding or event.new == FROM_FILE:
             return
         self.source = None if event.new == NO_PRESET else load_physical(event.new)
+        self.presets.options = [NO_PRESET, *preset_names()]
+        self.address.param.update(filename="", data="")
         self._start_from(Scene() if self.source is None else physical_scene(self.source), None)
 
     def _uploaded(self, event) -> None:
@@ -150,13 +169,41 @@ class Explorer:
         self.upload.clear()                      # here and in the browser's file input
         try:
             read = read_scene_file(name, event.new)
+        except ValueError as err:
+            return self._refuse(err)
+        self._load(name, read, "")
+
+    def _from_address(self, event) -> None:
+        """The scene file of the address (its values, :func:`decode_file`), as loaded."""
+        if self.holding or not event.new:
+            return
+        name = self.address.filename or "scene.toml"
+        try:
+            read = decode_file(name, event.new)
+        except ValueError as err:
+            return self._refuse(err)
+        self._load(name, read, ", from the address")
+
+    def _load(self, name: str, read: Scene | Physical, how: str) -> None:
+        """The file ``name`` read as ``read`` as the page's scene: the preset menu shows
+        the preset it is (a physical file of a preset's values) or "from file", the
+        address its values."""
+        try:
             base = physical_scene(read) if isinstance(read, Physical) else read
         except ValueError as err:
             return self._refuse(err)
+        preset = matching_preset(read) if isinstance(read, Physical) else None
         kind = "physical file" if isinstance(read, Physical) else "scene file"
+        if preset is not None:
+            kind += f": the preset {preset}"
         self.source = read if isinstance(read, Physical) else None
-        self.holding, self.presets.value = True, NO_PRESET
-        self._start_from(base, None if self.source else SceneFile(name, base), f"{name} ({kind})")
+        self.holding = True
+        self.presets.options = [NO_PRESET, *preset_names(), FROM_FILE]
+        self.presets.value = preset or FROM_FILE
+        self.address.param.update(filename="" if preset else name,
+                                  data="" if preset else encode_file(read))
+        self._start_from(base, None if self.source else SceneFile(name, base),
+                         f"{name} ({kind}{how})")
 
     def _start_from(self, base: Scene, file: SceneFile | None, loaded: str = "") -> None:
         """``base`` as the page's scene, its physical inputs shown, ``file`` the scene
@@ -191,7 +238,9 @@ class Explorer:
         self.base, self.holding = base, True
         for name, box in self.boxes.items():
             box.value = input_text(getattr(self.base, name))
-        self.beam.value = self.base.beam
+        self.boxes["ustar"].value = input_text(abs(self.base.ustar))
+        self.beam.value, self.ends.value = self.base.beam, self.base.ends
+        self.direction.value = self.base.direction
         self.slenderness.value = input_text(self.base.slenderness)
         self.holding = False
         self.refresh()
@@ -201,9 +250,14 @@ class Explorer:
         self.error.text = readout("error", str(err))
 
     def _tapped(self, event) -> None:
+        """A click on the map: its (M*, U*) the point (a negative U*: reversed flow)."""
         if event.x is not None and event.y is not None and event.x > 0:
+            self.holding = True                           # all three set, one refresh
             self.boxes["mstar"].value = f"{event.x:.4g}"
-            self.boxes["ustar"].value = f"{event.y:.4g}"
+            self.direction.value = DIRECTIONS[1] if event.y < 0 else DIRECTIONS[0]
+            self.boxes["ustar"].value = f"{abs(event.y):.4g}"
+            self.holding = False
+            self.refresh()
 
     @held
     def _cancel(self, kind: str) -> None:
@@ -224,7 +278,8 @@ class Explorer:
         library's message in the error line (False: the last valid view stays)."""
         try:
             texts = {k: b.value for k, b in self.boxes.items()}
-            texts.update(beam=self.beam.value, slenderness=self.slenderness.value)
+            texts.update(beam=self.beam.value, slenderness=self.slenderness.value,
+                         ends=self.ends.value, direction=self.direction.value)
             scene = scene_of(self.base, texts)
             view = instant_view(scene)
         except ValueError as err:
@@ -232,7 +287,7 @@ class Explorer:
             return False
         self.error.text = readout("error", "")
         self.scene, self.view = scene, view
-        self.readouts.text = self._instant_html(view)
+        self.readouts.text = instant_html(view)
         return True
 
     @held
@@ -257,22 +312,6 @@ class Explorer:
         decade = math.floor(math.log10(self.scene.mstar))
         return _key(self.scene, "ustar", "mstar") + str(decade)
 
-    @staticmethod
-    def _instant_html(view: dict) -> str:
-        hz = "" if view["hz"] is None else f" ({_fmt(view['hz'], 4, ' Hz')})"
-        flow = ("" if view["l_per_min"] is None else
-                "<br>" + readout("flow", _fmt(view["l_per_min"], 4, " L/min"), "airflow"))
-        lines = [readout("stability", "stable" if view["stable"] else "unstable", "steady state"),
-                 readout("growth-rate", _fmt(view["growth_rate"], 6), "growth rate σ"),
-                 readout("frequency", _fmt(view["omega"], 6), "frequency ω") + hz,
-                 readout("freq-ratio", _fmt(view["freq_ratio"]), "ω/ω₁"),
-                 readout("pressure-drop", _fmt(view["pressure_drop"]), "pressure drop Δp"),
-                 readout("tip", _fmt(view["tip"]), "static tip deflection"
-                         if view["x_ref"] == 1.0 else f"static deflection at x = {view['x_ref']:.3g} L")
-                 + flow]
-        lines += [readout("warning", w) for w in view["warnings"]]
-        return "<br>".join(lines)
-
     def _ask(self, kind: str, key: str, target, scene: Scene) -> None:
         result = self.jobs.start((kind, key), target, scene)
         if result is not None:
@@ -295,7 +334,7 @@ class Explorer:
 
     def _show(self, kind: str, status: str, value) -> None:
         if kind == "onset":
-            self.onset.text = self._onset_html(status, value)
+            self.onset.text = onset_html(status, value)
         elif status == "done":
             self.map.update(value["points"])
             self.background.text = readout("boundary-status", "done", "boundary map")
@@ -303,29 +342,11 @@ class Explorer:
             self.background.text = readout("boundary-status",
                                              f"computing… {value:.0f} s", "boundary map")
         elif status == "idle":
+            self.map.update([])                  # no other scene's boundary on the map
             self.background.text = readout("boundary-status", "not computed (tens of seconds "
                                              "at N = 10, in the background)", "boundary map")
         else:
             self.background.text = readout("boundary-status", f"failed: {value}")
-
-    def _onset_html(self, status: str, value) -> str:
-        if status == "running":
-            return readout("onset-kind", "computing…", "onset")
-        if status == "error":
-            return readout("onset-kind", "failed", "onset") + f": {value}"
-        if value["kind"] == "none":
-            return readout("onset-kind", "none", "onset") + " (stable up to U* = 40)"
-        units = [_fmt(value.get(k), 4, u) for k, u in (("l_per_min", " L/min"), ("hz", " Hz"),
-                                                       ("pa", " Pa")) if k in value]
-        lines = [readout("onset-kind", value["kind"], "onset"),
-                 readout("onset-ustar", _fmt(value["ustar_crit"], 6), "U*_c"),
-                 readout("onset-omega", _fmt(value.get("omega"), 5), "ω_c")]
-        if value["kind"] == "flutter":
-            lines += [readout("onset-l1", _fmt(value["l1"], 4), "l1"),
-                      readout("onset-criticality", value["criticality"], "criticality")]
-        if units:
-            lines.append("physical: " + ", ".join(units))
-        return "<br>".join(lines)
 
     def _export(self):
         """The JSON of the current view (:func:`export`) for the download button, with the
@@ -351,7 +372,8 @@ class Explorer:
     def page(self) -> pn.viewable.Viewable:
         inputs = pn.Column("### Inputs", self.presets, "scene file (TOML)", self.upload,
                            self.loaded, *self.physical.values(),
-                           *self.boxes.values(), self.beam, self.slenderness, self.error,
+                           *self.boxes.values(), self.direction, self.beam, self.slenderness,
+                           self.ends, self.error,
                            width=260)
         instant = pn.Column("### Now", self.readouts, self.animate,
                             pn.pane.Bokeh(self.shape.figure), pn.pane.Bokeh(self.locus.figure))

@@ -18,6 +18,16 @@ from .widgets import NumberBox, held, markup, readout
 __all__ = ["BackgroundPanel", "RunPanel"]
 
 
+#: Why a physical run has no snore on the page: only a settled cycle is looped, and the
+#: impacting motion past the wall is neither settled nor quick (docs/sound.md).
+NO_SOUND = "none: the run's outcome is {outcome}, not a settled cycle to loop"
+NO_SOUND_WALL = (". Past the wall the palate needs the wall's contact law, and there the "
+                 "soft palate's preset bounces irregularly (outcome impacting_nonperiodic): "
+                 "no period to repeat. fsicas sound --physical PRESET sounds the last 2 s of "
+                 "such a run with its quadrature controlled (about 44 min for soft_palate at "
+                 "20 L/min on 2 shared cores)")
+
+
 def _fmt(value, unit: str = "") -> str:
     return "—" if value is None else f"{value:.4g}{unit}"
 
@@ -116,6 +126,10 @@ class RunPanel(BackgroundPanel):
             self.audio.object = (np.asarray(sound["pressure"]) / peak * 32767).astype(np.int16)
             self.spectrum.data = dict(sound["spectrum"])
             lines.append(readout("sound-python", self.lines, "the snore in Python", "pre"))
+        elif self.lines:                                  # a physical scene: why none
+            why = NO_SOUND.format(outcome=run["outcome"])
+            lines.append(readout("sound-none", why + (NO_SOUND_WALL if run["outcome"] == "contact"
+                                                      else ""), "snore"))
         self.audio.visible = self.spectrum_figure.visible = sound is not None
         self.status.text = "<br>".join(lines)
 

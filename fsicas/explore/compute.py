@@ -4,7 +4,6 @@ mode shape), the onset and the boundary, each as plain data for the page."""
 from __future__ import annotations
 
 import math
-import tempfile
 import warnings
 from pathlib import Path
 
@@ -17,13 +16,12 @@ from ..cycles.impacting_routes import impacting_cycles, through_contact_law
 from ..linear import critical_velocity, linear_stability, stability_boundary
 from .. import strict_json
 from ..physical import KEYS, Physical, load_physical, parse_flow
-from ..checks import read_toml
-from ..scene import Scene
+from ..scene import Scene, directed_ustar
 from ..timedomain.run import run_case, sweep_model
 from ..timedomain.sound import AUDIO_RATE, cycle_sound, line_spectrum
 
 __all__ = ["INPUTS", "PHYSICAL_INPUTS", "scene_of", "preset_scene", "physical_texts",
-           "physical_scene", "read_scene_file", "input_text", "instant_view", "onset_view",
+           "physical_scene", "input_text", "instant_view", "onset_view",
            "boundary_view", "boundary_grid", "boundary_range", "curves_view",
            "cycles_view", "impacting_view", "CYCLE_USTAR_MAX",
            "BOUNDARY_PER_DECADE", "run_view",
@@ -72,8 +70,13 @@ def input_text(value) -> str:
 
 def scene_of(base: Scene, texts: dict) -> Scene:
     """``base`` with the page's inputs (field -> text; ``beam`` and ``slenderness``, empty
-    for none, together) applied; the library's ValueError for values it refuses."""
+    for none, together; ``ends``; ``direction`` with the speed |U*| in ``ustar``,
+    ``directed_ustar``) applied; the library's ValueError for values it refuses."""
     values = {k: _value(k, texts[k]) for k in INPUTS if k in texts}
+    if "direction" in texts and "ustar" in values:     # the box holds the speed |U*|
+        values["ustar"] = directed_ustar(values["ustar"], texts["direction"])
+    if "ends" in texts:
+        values["ends"] = texts["ends"]
     if "beam" in texts:
         text = str(texts.get("slenderness", "")).strip()
         values["beam"] = texts["beam"]
@@ -118,25 +121,6 @@ def physical_scene(physical: Physical, texts: dict | None = None) -> Scene:
                                   physical.scene_fields)
     flow = parse_flow(texts["flow"], "airflow") if "flow" in texts else physical.flow
     return _default_walls(changed.scene(flow))
-
-
-def read_scene_file(name: str, data: bytes) -> Scene | Physical:
-    """The scene file ``name`` with the content ``data``, read by the library as the CLI
-    reads it: a file with a ``[physical]`` table (or ``preset = NAME``) as ``--physical
-    FILE.toml`` (``load_physical``), any other as ``--scene FILE.toml``
-    (``Scene.from_dict`` of ``read_toml``, as ``load_scene``); their ValueError, naming
-    the file by its name."""
-    name = Path(str(name)).name or "scene.toml"
-    with tempfile.TemporaryDirectory() as folder:
-        path = Path(folder) / name
-        path.write_bytes(data)
-        try:
-            doc = read_toml(path, "scene file")
-            if "physical" in doc or "preset" in doc:
-                return load_physical(str(path))
-            return Scene.from_dict(doc)
-        except ValueError as err:
-            raise ValueError(str(err).replace(folder + "/", "")) from None
 
 
 def _hz(scene: Scene, omega: float) -> float | None:

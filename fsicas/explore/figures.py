@@ -4,7 +4,8 @@ with a crosshair at the current point."""
 from __future__ import annotations
 
 import numpy as np
-from bokeh.models import ColumnDataSource, CustomAction, CustomJS, Range1d, SaveTool, Span
+from bokeh.models import (ColumnDataSource, CustomAction, CustomJS, DataRange1d, Range1d,
+                          SaveTool, Span)
 from bokeh.plotting import figure as bokeh_figure
 
 __all__ = ["figure", "RootLocus", "ModeShape", "BoundaryMap", "STABLE_COLOR", "UNSTABLE_COLOR",
@@ -109,25 +110,32 @@ class ModeShape:
 
 class BoundaryMap:
     """U*_c(M*) (log M*), flutter and divergence points, a crosshair at (M*, U*); the
-    grazing (black) and fold-of-cycles (dashed) curves where computed."""
+    grazing (black) and fold-of-cycles (dashed) curves where computed. Its U* axis is
+    fitted by the browser to what it draws (a ``DataRange1d`` of the boundary, the curves
+    and the current point): it grows and shrinks with each new boundary."""
 
     def __init__(self):
         self.source = ColumnDataSource({"mstar": [], "ustar": [], "color": []})
+        self.point = ColumnDataSource({"mstar": [1.0], "ustar": [5.0]})
         f = figure("boundary", title="stability boundary U*_c(M*) (click to move the point)",
                    x_axis_type="log", x_axis_label="M*", y_axis_label="U*",
-                   x_range=Range1d(0.1, 10.0), y_range=Range1d(0.0, 10.0), **_SIZE)
-        f.line("mstar", "ustar", source=self.source, color="gray")
-        f.scatter("mstar", "ustar", source=self.source, color="color", size=6)
+                   x_range=Range1d(0.1, 10.0), y_range=DataRange1d(range_padding=0.15),
+                   **_SIZE)
+        drawn = [f.line("mstar", "ustar", source=self.source, color="gray"),
+                 f.scatter("mstar", "ustar", source=self.source, color="color", size=6),
+                 f.scatter("mstar", "ustar", source=self.point, color=UNSTABLE_COLOR, size=8,
+                           marker="circle_cross", fill_alpha=0.0)]
         self.vertical = Span(location=1.0, dimension="height", line_color=UNSTABLE_COLOR)
         self.horizontal = Span(location=5.0, dimension="width", line_color=UNSTABLE_COLOR)
         f.add_layout(self.vertical)
         f.add_layout(self.horizontal)
         self.grazing = ColumnDataSource({"xs": [], "ys": []})
         self.fold = ColumnDataSource({"xs": [], "ys": []})
-        f.multi_line("xs", "ys", source=self.grazing, color="black", line_width=2,
-                     legend_label="grazing")
-        f.multi_line("xs", "ys", source=self.fold, color=FOLD_COLOR, line_width=2,
-                     line_dash="dashed", legend_label="fold of cycles")
+        drawn.append(f.multi_line("xs", "ys", source=self.grazing, color="black", line_width=2,
+                                  legend_label="grazing"))
+        drawn.append(f.multi_line("xs", "ys", source=self.fold, color=FOLD_COLOR, line_width=2,
+                                  line_dash="dashed", legend_label="fold of cycles"))
+        f.y_range.renderers = drawn
         f.legend.location, f.legend.visible = "top_left", False
         self.figure = f
 
@@ -136,12 +144,12 @@ class BoundaryMap:
         for source, curves in ((self.grazing, grazing), (self.fold, fold)):
             source.data = {"xs": [c["mstar"] for c in curves], "ys": [c["ustar"] for c in curves]}
         self.figure.legend.visible = bool(grazing or fold)
-        top = max((u for c in grazing + fold for u in c["ustar"]), default=0.0)
-        if top > self.figure.y_range.end:
-            self.figure.y_range.update(end=1.05 * top)
 
     def update(self, points: list[dict]) -> None:
+        """The boundary's ``points`` (none: the map cleared, its curves too)."""
         points = [p for p in points if p.get("ustar_crit") is not None]
+        if not points and not self.source.data["mstar"]:
+            return                                     # nothing drawn, nothing to send
         kinds = [p["kind"] for p in points]
         self.source.data = {"mstar": [p["mstar"] for p in points],
                             "ustar": [p["ustar_crit"] for p in points],
@@ -150,13 +158,12 @@ class BoundaryMap:
         if points:
             m = [p["mstar"] for p in points]
             self.figure.x_range.update(start=min(m), end=max(m))
-            top = max(p["ustar_crit"] for p in points)
-            self.figure.y_range.update(start=0.0, end=max(1.3 * top, self.horizontal.location * 1.1))
+        else:
+            self.curves([], [])
 
     def crosshair(self, mstar: float, ustar: float) -> None:
         self.vertical.location, self.horizontal.location = mstar, ustar
-        x, y = self.figure.x_range, self.figure.y_range
+        self.point.data = {"mstar": [mstar], "ustar": [ustar]}
+        x = self.figure.x_range
         if not x.start <= mstar <= x.end:
             x.update(start=mstar / 10, end=mstar * 10)
-        if not 0 <= ustar <= y.end:
-            y.update(start=min(0.0, 1.1 * ustar), end=max(y.end, 1.1 * ustar))

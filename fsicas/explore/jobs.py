@@ -13,13 +13,16 @@ __all__ = ["Job", "Jobs"]
 
 
 def _child(conn, target, args) -> None:
-    """Run ``target(*args)`` and send ``("done", result)`` or ``("error", message)``."""
+    """Run ``target(*args)`` and send ``("done", result)`` or ``("error", message)``: a
+    ValueError's message alone (the library refusing the scene, or a value), another
+    error's type and message (its traceback goes to the server's log, never the page)."""
     try:
         conn.send(("done", target(*args)))
-    except (ValueError, RuntimeError, ArithmeticError) as err:
+    except ValueError as err:
+        conn.send(("error", str(err)))
+    except Exception as err:                            # noqa: BLE001 - reported, logged
+        traceback.print_exc()
         conn.send(("error", f"{type(err).__name__}: {err}"))
-    except Exception:                                   # noqa: BLE001 - reported whole
-        conn.send(("error", traceback.format_exc(limit=3)))
     finally:
         conn.close()
 

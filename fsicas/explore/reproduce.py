@@ -35,13 +35,14 @@ def _values(scene: Scene, file: SceneFile | None) -> dict:
 
 def _beam(scene: Scene, file: SceneFile | None) -> dict:
     """The beam fields where the beam is not the default Euler-Bernoulli one (nor the
-    file's)."""
+    file's), and its ends where they are not the default clamped-free (nor the file's)."""
     reference = Scene() if file is None else file.scene
+    ends = {} if scene.ends == reference.ends else {"ends": scene.ends}
     if (scene.beam, scene.slenderness, scene.poisson) == (reference.beam, reference.slenderness,
                                                           reference.poisson):
-        return {}
+        return ends
     poisson = {} if scene.poisson == Scene().poisson else {"poisson": scene.poisson}
-    return {"beam": scene.beam, "slenderness": scene.slenderness, **poisson}
+    return {"beam": scene.beam, "slenderness": scene.slenderness, **poisson, **ends}
 
 
 def _option(value) -> str:
