@@ -198,14 +198,17 @@ def test_the_beam_ends_and_the_flow_direction_are_inputs(page, server):
     assert _text(page, "error") == str(refused.value)
 
 
-def test_an_analysis_refusing_the_configuration_shows_its_message(page, server):
-    """The grazing and fold curves refuse reversed flow: the page shows the library's
-    message (curves_view called directly), not a traceback."""
+def test_an_analysis_refusing_the_configuration_shows_its_message(page, server, tmp_path):
+    """The grazing and fold curves are of contact-free cycles and refuse a scene with the
+    contact law on (here from a scene file): the page shows the library's message
+    (curves_view called directly), not a traceback."""
     from fsicas.explore.compute import curves_view
     _open(page, server, ustar=3, modes=4)
-    _choose(page, "direction", "reverse")
+    touching = tmp_path / "touching.toml"
+    touching.write_text("ustar = 3.0\nmodes = 4\ncontact = true\n")
+    _load(page, touching)
     with pytest.raises(ValueError) as refused:
-        curves_view(Scene(ustar=-3.0, modes=4), 40)
+        curves_view(load_scene(touching), 40)
     page.get_by_role("button", name="grazing and fold curves").click()
     status = f"() => ({FIND})(document, 'curves-status').textContent"
     page.wait_for_function(f"{status}.startsWith('error')", timeout=60000)
