@@ -44,7 +44,7 @@ import numpy as np
 
 import continuation as C
 
-from ..checks import require
+from ..checks import finite_number, require
 from ..linear.adapter import PI, TIME_SCALE, field_parameters, flutter_field, speed_window
 from ..model.accuracy import IMPACT_QUADRATURE_TOL
 from ..model.assembly import Model, build_model
@@ -207,8 +207,7 @@ def shooting_settings(settings: ImpactSettings) -> C.ShootingSettings:
 def check_speeds(ustar_min: float, ustar_max: float) -> None:
     """ValueError unless ``0 <= ustar_min < ustar_max``: the bounds of an impacting
     branch are speeds |U*| (the scene's direction gives the sign of U*)."""
-    require(all(isinstance(u, (int, float)) and not isinstance(u, bool) and np.isfinite(u)
-                for u in (ustar_min, ustar_max)) and 0 <= ustar_min < ustar_max,
+    require(0 <= finite_number("ustar_min", ustar_min) < finite_number("ustar_max", ustar_max),
             "ustar_min and ustar_max are the speeds |U*| the impacting branch stays within "
             "(the scene's direction gives the sign of U*): 0 <= ustar_min < ustar_max, got "
             f"{ustar_min!r} and {ustar_max!r}")
