@@ -30,7 +30,8 @@ def require_forward(scene, analysis: str) -> None:
     require(scene.direction == "forward",
             f"{analysis} is computed for forward flow only (root to tip, U* >= 0), and the "
             f"scene has reversed flow (U* = {scene.ustar:g}): for reversed flow use steady, "
-            "eig, onset, boundary, design, lco (without contact), grazing, simulate or map")
+            "eig, onset, boundary, design, lco (also --through-contact: the impacting "
+            "cycles), grazing, simulate or map")
 
 
 def finite_number(name: str, value) -> float:

@@ -44,8 +44,8 @@ import numpy as np
 
 import continuation as C
 
-from ..checks import require_forward
-from ..linear.adapter import PI, TIME_SCALE, field_parameters, flutter_field, pi_range
+from ..checks import finite_number, require
+from ..linear.adapter import PI, TIME_SCALE, field_parameters, flutter_field, speed_window
 from ..model.accuracy import IMPACT_QUADRATURE_TOL
 from ..model.assembly import Model, build_model
 from ..scene import Scene
@@ -55,11 +55,11 @@ from .records import START_FAILED, BranchRecord, CycleMeasures, branch_end, chec
 
 __all__ = ["ImpactSettings", "ImpactPoint", "ImpactBranch", "shooting_branch",
            "cycle_from_trajectory", "pre_contact_start", "shooting_points", "shooting_settings",
-           "ImpactStatus"]
+           "ImpactStatus", "check_speeds"]
 
 ImpactStatus = Literal["bound", "max_points", "failed"]
-"""Why a shooting branch ended: U* left [ustar_min, ustar_max], the point budget, or a
-failure of the start integration or of the corrector (``message`` says why)."""
+"""Why a shooting branch ended: the speed |U*| left [ustar_min, ustar_max], the point
+budget, or a failure of the start integration or of the corrector (``message`` says why)."""
 
 
 @dataclass(frozen=True)
@@ -119,7 +119,7 @@ class ImpactPoint(CycleMeasures):
 @dataclass(frozen=True)
 class ImpactBranch(BranchRecord):
     """A branch of impacting cycles in U* from a start cycle, by either route
-    (:func:`fsicas.cycles.impacting_cycles`). ``status``: "bound" (U* left
+    (:func:`fsicas.cycles.impacting_cycles`). ``status``: "bound" (|U*| left
     [ustar_min, ustar_max]), "max_points" or "failed" (``message`` says why);
     ``special``: its located special cycles in the order met (the collocation route's,
     :class:`~fsicas.cycles.impacting_collocation.CollocatedImpactBranch`; shooting
@@ -158,10 +158,11 @@ def shooting_branch(scene: Scene, state, period: float, pressure_drop: float, *,
                     ) -> ImpactBranch:
     """Continue the cycle through ``state`` (phase 0) with ``period`` (units of T) at
     ``pressure_drop`` by multiple shooting in U*, on ``scene`` (contact on: the
-    penalty law acts). ``direction`` = +1 continues towards larger Δp (U*). The
-    shooting route of :func:`fsicas.cycles.impacting_cycles`, which says where starts
-    come from."""
-    require_forward(scene, "the impacting cycles by shooting")
+    penalty law acts), over the speeds |U*| in [``ustar_min``, ``ustar_max``] of the
+    scene's flow direction (reversed flow: U* < 0, Δp < 0). ``direction`` = +1 continues
+    towards larger speed |U*| (|Δp|). The shooting route of
+    :func:`fsicas.cycles.impacting_cycles`, which says where starts come from."""
+    check_speeds(ustar_min, ustar_max)
     start = time.perf_counter()
     if not scene.contact:
         raise ValueError("impacting cycles by shooting need scene.contact = True (the impact "
@@ -203,12 +204,22 @@ def shooting_settings(settings: ImpactSettings) -> C.ShootingSettings:
                               sensitivities=settings.sensitivities, threads=settings.threads)
 
 
+def check_speeds(ustar_min: float, ustar_max: float) -> None:
+    """ValueError unless ``0 <= ustar_min < ustar_max``: the bounds of an impacting
+    branch are speeds |U*| (the scene's direction gives the sign of U*)."""
+    require(0 <= finite_number("ustar_min", ustar_min) < finite_number("ustar_max", ustar_max),
+            "ustar_min and ustar_max are the speeds |U*| the impacting branch stays within "
+            "(the scene's direction gives the sign of U*): 0 <= ustar_min < ustar_max, got "
+            f"{ustar_min!r} and {ustar_max!r}")
+
+
 def _steps(scene, model, ustar_min, ustar_max, direction, settings) -> C.ContinuationSettings:
-    """Arclength steps in Π between the steady Π of ``ustar_min`` and ``ustar_max``."""
+    """Arclength steps in Π between the steady Π at the speeds ``ustar_min`` and
+    ``ustar_max``, ``direction`` towards larger (+1) or smaller speed (:func:`speed_window`)."""
+    bounds, pi_direction = speed_window(scene, model, ustar_min, ustar_max, direction)
     return C.ContinuationSettings(
-        ds=settings.ds, ds_min=1e-6, ds_max=settings.ds_max, direction=direction,
-        max_steps=max(settings.max_points - 1, 1),
-        bounds={PI: pi_range(scene, model, ustar_min, ustar_max)},
+        ds=settings.ds, ds_min=1e-6, ds_max=settings.ds_max, direction=pi_direction,
+        max_steps=max(settings.max_points - 1, 1), bounds={PI: bounds},
         newton=C.NewtonSettings(tol=settings.newton_tol, max_iter=8), detect=False)
 
 

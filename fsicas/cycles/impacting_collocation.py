@@ -36,14 +36,13 @@ import scipy.interpolate
 
 import continuation as C
 
-from ..checks import require_forward
-from ..linear.adapter import PI, TIME_SCALE, field_parameters, flutter_field, pi_range
+from ..linear.adapter import PI, TIME_SCALE, field_parameters, flutter_field, speed_window
 from ..linear.steady import steady_state
 from ..model.accuracy import IMPACT_QUADRATURE_TOL
 from ..model.assembly import Model, build_model
 from ..scene import Scene
 from .gauge import PolynomialGauge, quadrature_controlled
-from .impacting import ImpactBranch, ImpactPoint, shooting_points
+from .impacting import ImpactBranch, ImpactPoint, check_speeds, shooting_points
 from .records import START_FAILED, branch_end, check_settings
 
 __all__ = ["CollocationImpactSettings", "CollocatedImpactPoint", "CollocatedImpactBranch",
@@ -188,7 +187,6 @@ def impacting_collocation_problem(scene: Scene, state, period: float, pressure_d
     (units of T) at ``pressure_drop`` on ``scene`` (contact on), with the start mesh
     equidistributed on one integrated period. Raises RuntimeError if that integration
     fails (e.g. the gap closes)."""
-    require_forward(scene, "the impacting cycles by collocation")
     model = model or build_model(scene)
     vf = flutter_field(model)
     params = field_parameters(vf, model, steady_state(scene, model), scene, pressure_drop)
@@ -210,10 +208,11 @@ def collocation_branch(scene: Scene, state, period: float, pressure_drop: float,
                        ) -> CollocatedImpactBranch:
     """Continue the cycle through ``state`` (phase 0) with ``period`` (units of T) at
     ``pressure_drop`` by adaptive collocation in U* on ``scene`` (contact on, smoothed:
-    ``contact_smoothing`` > 0). ``direction`` = +1 continues towards larger Δp (U*).
-    The collocation route of :func:`fsicas.cycles.impacting_cycles`; the arguments are
-    those of :func:`fsicas.cycles.impacting.shooting_branch`."""
-    require_forward(scene, "the impacting cycles by collocation")
+    ``contact_smoothing`` > 0), over the speeds |U*| in [``ustar_min``, ``ustar_max``]
+    of the scene's flow direction. ``direction`` = +1 continues towards larger speed
+    |U*|. The collocation route of :func:`fsicas.cycles.impacting_cycles`; the arguments
+    are those of :func:`fsicas.cycles.impacting.shooting_branch`."""
+    check_speeds(ustar_min, ustar_max)
     start = time.perf_counter()
     check_smooth(scene)
     model = model or build_model(scene)
@@ -370,11 +369,13 @@ def _integrated_orbit(vf, x0, period, params, settings):
 
 
 def _steps(scene, model, ustar_min, ustar_max, direction, settings) -> C.ContinuationSettings:
-    """Arclength steps in Π between the steady Π of ``ustar_min`` and ``ustar_max``."""
+    """Arclength steps in Π between the steady Π at the speeds ``ustar_min`` and
+    ``ustar_max``, ``direction`` towards larger (+1) or smaller speed
+    (:func:`fsicas.linear.adapter.speed_window`)."""
+    bounds, pi_direction = speed_window(scene, model, ustar_min, ustar_max, direction)
     return C.ContinuationSettings(
-        ds=settings.ds, ds_min=1e-8, ds_max=settings.ds_max, direction=direction,
-        max_steps=max(settings.max_points - 1, 1),
-        bounds={PI: pi_range(scene, model, ustar_min, ustar_max)},
+        ds=settings.ds, ds_min=1e-8, ds_max=settings.ds_max, direction=pi_direction,
+        max_steps=max(settings.max_points - 1, 1), bounds={PI: bounds},
         newton=C.NewtonSettings(tol=settings.tol), compute_eigenvalues=settings.detect,
         detect=settings.detect, max_turn=settings.max_turn)
 

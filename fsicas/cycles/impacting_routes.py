@@ -24,11 +24,12 @@ from typing import Literal
 
 import numpy as np
 
-from ..checks import require_forward
+from ..checks import require
 from ..model.assembly import Model
 from ..scene import Scene
 from .collocation import CycleBranch, CycleSettings, cycle_branch
-from .impacting import ImpactBranch, ImpactSettings, pre_contact_start, shooting_branch
+from .impacting import (ImpactBranch, ImpactSettings, check_speeds, pre_contact_start,
+                        shooting_branch)
 from .impacting_collocation import CollocationImpactSettings, check_smooth, collocation_branch
 
 __all__ = ["ImpactMethod", "StartCycle", "impacting_cycles", "impacting_start",
@@ -77,16 +78,17 @@ def impacting_cycles(scene: Scene, start=None, *, method: ImpactMethod = "colloc
                      cycle_settings: CycleSettings = CycleSettings(),
                      min_gap_ratio: float = 3.0) -> ImpactBranch:
     """The impacting cycles of ``scene`` (``contact=True``; the collocation route also
-    needs ``contact_smoothing`` > 0) from ``start`` (module docstring) in U* within
-    [``ustar_min``, ``ustar_max``], by ``method``, with ``settings`` of that route (its
-    defaults where None). ``direction`` = +1 continues towards larger Δp (U*);
+    needs ``contact_smoothing`` > 0) from ``start`` (module docstring) with the speed
+    |U*| within [``ustar_min``, ``ustar_max``] (reversed flow, U* < 0: the same in
+    speed, the points report their signed U*), by ``method``, with ``settings`` of that
+    route (its defaults where None). ``direction`` = +1 continues towards larger |U*|;
     ``cycle_settings``: of the contact-free cycles where they are computed here;
     ``model``: ``build_model(scene)`` if already built (it does not depend on U*).
 
     Raises ValueError for a scene without the contact law the route needs, settings of
     the other route, or contact-free cycles that do not reach the wall below
     ``ustar_max`` or have none ``min_gap_ratio`` eps clear of it."""
-    require_forward(scene, "the impacting cycles")
+    check_speeds(ustar_min, ustar_max)
     kind, route = _route(method, settings)
     if method == "collocation":
         check_smooth(scene)
@@ -95,6 +97,10 @@ def impacting_cycles(scene: Scene, start=None, *, method: ImpactMethod = "colloc
                          "law)")
     scene, start = impacting_start(scene, start, ustar_max=ustar_max,
                                    cycle_settings=cycle_settings, min_gap_ratio=min_gap_ratio)
+    require(start.pressure_drop * scene.flow_sign >= 0, "the start cycle's pressure drop "
+            f"({start.pressure_drop:g}) has the sign of the other flow direction than the "
+            f"scene's ({scene.direction}, U* = {scene.ustar:g}): give a start of the scene's "
+            "direction (Δp < 0 for reversed flow)")
     return route(scene, start.state, start.period, start.pressure_drop,
                  model=model, ustar_min=ustar_min, ustar_max=ustar_max,
                  direction=direction, settings=kind() if settings is None else settings)
@@ -106,12 +112,12 @@ def impacting_start(scene: Scene, start=None, *, ustar_max: float = 12.0,
     """``(scene, cycle)``: where :func:`impacting_cycles` starts from ``start`` (module
     docstring): ``scene`` at the U* of the last contact-free cycle ``min_gap_ratio`` eps
     clear of the wall and that cycle, or ``scene`` and ``start`` as given for one cycle."""
-    require_forward(scene, "the impacting cycles")
     if start is None:
         start = cycle_branch(scene.replace(contact=False), ustar_max=ustar_max,
                              settings=cycle_settings)
         if start.contact is None:
-            raise ValueError(f"the contact-free cycles do not reach the wall below U* = "
+            raise ValueError(f"the contact-free cycles do not reach the wall below "
+                             f"{'|U*|' if scene.direction == 'reverse' else 'U*'} = "
                              f"{ustar_max:g}: raise ustar_max")
     if not isinstance(start, CycleBranch):
         return scene, start

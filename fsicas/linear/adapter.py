@@ -25,7 +25,7 @@ from ..scene import Scene
 from .steady import SteadyState, SteadyStateError, steady_state
 
 __all__ = ["PI", "LOG_M", "PI_SCALE", "TIME_SCALE", "reparametrized_field", "flutter_field",
-           "pi_of", "pi_range", "pi_interval", "speed", "field_parameters", "steady_ustar",
+           "pi_of", "speed_window", "pi_interval", "speed", "field_parameters", "steady_ustar",
            "dense"]
 
 PI, LOG_M = "kinematic_pressure_drop", "log10_mstar"
@@ -120,12 +120,18 @@ def pi_of(scene: Scene, model: Model, ustar: float) -> float:
     return pi
 
 
-def pi_range(scene: Scene, model: Model, ustar_min: float, ustar_max: float
-             ) -> tuple[float, float]:
-    """The bounds of Π between the steady states at ``ustar_min`` (Π = 0 where
-    ``ustar_min`` is 0) and ``ustar_max``: where a continuation in Π stops."""
-    return pi_of(scene, model, ustar_min) if ustar_min > 0 else 0.0, \
-        pi_of(scene, model, ustar_max)
+def speed_window(scene: Scene, model: Model, ustar_min: float, ustar_max: float,
+                 direction: int = 1) -> tuple[tuple[float, float], int]:
+    """``(bounds, pi_direction)`` of a continuation in Π over the speeds |U*| in
+    [``ustar_min``, ``ustar_max``] of ``scene``'s flow: the bounds between the steady Π
+    at U* = flow_sign ``ustar_min`` (Π = 0 where ``ustar_min`` is 0) and at U* =
+    flow_sign ``ustar_max``, in increasing order (:func:`pi_interval`; Π < 0 for
+    reversed flow), and the sign of the first change of Π that ``direction`` asks for
+    (+1: towards larger speed |U*|, -1: smaller), ``direction * flow_sign``: Π grows
+    with |U*| as sign(U*) U*^2, so towards larger speed Π decreases under reversed flow."""
+    sign = scene.flow_sign
+    low = pi_of(scene, model, sign * ustar_min) if ustar_min > 0 else 0.0
+    return pi_interval(low, pi_of(scene, model, sign * ustar_max)), int(direction * sign)
 
 
 def pi_interval(a: float, b: float) -> tuple[float, float]:
