@@ -27,11 +27,13 @@ towards x = 1 (:func:`fsicas.model.quadrature.tip_graded_gauss_legendre`). A bea
 both ends touches anywhere inside the span (not at the crest x_ref of its first mode: its
 flutter's crest is downstream, x = 0.77 for clamped-clamped at 1.1 U*_c), so its rule is
 accurate anywhere: :data:`SMOOTH_CELLS_PER_NODE` equal cells per flow node. Measured
-against the exact modal integral on the located patch (states pressed 0.3 eps into a wall
-anywhere, N = 10, smoothing 0.1): 400 cells (the default n_quad = 40) are within 3.2e-4
-of the largest load for clamped-clamped and 3.5e-4 for clamped-pinned, 800 within 1.2e-5
-and 3e-6, where cells graded symmetrically around x_ref with as many nodes were 0.13 and
-0.024 off, and the tip's rule 0.36 and 0.26 (``tests/test_ends_impacting.py``).
+against the exact modal integral on the located patch (five states pressed 0.3 eps into
+a wall inside the span, smoothing 0.1), relative to the largest load, at N = 10
+(n_quad = 40: 400 cells) / twice the nodes: 2.5e-5 / 4.7e-9 clamped-clamped, 3.4e-5 /
+1.2e-8 clamped-pinned, 1.0e-5 / 7.9e-9 pinned-pinned. Cells graded symmetrically
+towards x_ref (420 nodes) were 5e-3 to 6e-2 off where 210 equal cells were 1.8e-4 to
+1e-3, and the tip's rule (230 nodes) 0.36 to 0.71
+(``tests/test_ends_impacting.py``).
 
 The formulas work on NumPy arrays (states in rows, nodes in the last axis) and on CasADi
 symbols (a column of nodes) alike.
