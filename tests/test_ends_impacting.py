@@ -171,3 +171,63 @@ def test_graded_rule_integrates_polynomials_and_grades_towards_its_point(at):
 def test_graded_rule_refuses_a_point_outside_the_beam():
     with pytest.raises(ValueError, match="grading point must lie in"):
         graded_gauss_legendre(10, at=1.5)
+
+
+@pytest.fixture(scope="module")
+def clamped_branch():
+    """N = 4, zeta = 0.01, M* = 1, k* = 1e8, eps/H = 1e-2, smoothing 0.1: the impacting
+    branch of the clamped-clamped plate by collocation (14 points, about 5 min), from
+    its contact-free cycles (subcritical Hopf at U* = 13.049, fold at 12.964, first
+    contact at 13.408) on past that first contact."""
+    from fsicas.cycles.impacting_collocation import CollocationImpactSettings
+    from fsicas.cycles.impacting_routes import impacting_cycles
+    scene = held_scene("clamped-clamped", zeta=0.01).replace(modes=4)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        br = impacting_cycles(scene, ustar_max=25.0, settings=CollocationImpactSettings(
+            max_points=14, detect=False))
+    return scene, br
+
+
+@pytest.mark.slow
+def test_impacting_cycle_of_a_clamped_plate_against_independent_routes(clamped_branch):
+    """The last cycle of the branch (U* = 13.436, past the contact-free cycles' first
+    contact), on the model of its points' quadrature (n_quad = 112: the control refined
+    it), against an IDAS integration of one period from its state (rtol 1e-11, 40,000
+    outputs) and against multiple shooting from it. Measured there / at U* = 14.56 (30
+    points): the run returns to the state within 2.8e-5 / 4.7e-6 (an unstable cycle,
+    |mu| = 2.6), with the tip amplitude at x_ref to 5.6e-6 / 8.5e-7 and the minimal gap
+    along the span to 3.6e-4 / 4.3e-6 eps (a gap of 1.7 eps at a wall 100 eps away);
+    shooting finds the period to 1e-8 / 5.4e-7, the amplitude to 5.6e-7 / 1e-6, the gap
+    to 1e-4 / 1e-5 eps. The wall's load holds the plate 1 to 2 eps off the wall (the
+    smoothed law's tail) at x = 0.79, away from x_ref = 0.5 and both ends; no run
+    settles on an unstable cycle."""
+    from fsicas.cycles.impacting import ImpactSettings
+    from fsicas.cycles.impacting_routes import StartCycle, impacting_cycles
+    from fsicas.linear.steady import steady_state
+    from fsicas.timedomain.integrators import Settings, simulate
+    scene, br = clamped_branch
+    p = br.points[-1]
+    at = scene.replace(ustar=p.ustar, quad_nodes=p.quadrature_nodes)
+    model = build_model(at)
+    steady = steady_state(at, model)
+    traj = simulate(model, steady, p.period, x0=p.state, settings=Settings(
+        method="idas", rtol=1e-11, atol=1e-13, dt_out=p.period / 40000))
+    assert traj.status == "success" and p.ustar > 13.408 and not p.stable
+    x = traj.x
+    assert np.max(np.abs(x[-1] - p.state)) / np.max(np.abs(p.state)) < 1e-4
+    y = model.tip_deflection(x)
+    assert (y.max() - y.min()) / 2 == pytest.approx(p.tip_amplitude, rel=2e-5)
+    h = contact.gaps(model, x)
+    assert abs(h.min() / scene.contact_gap - p.gap_ratio) < 2e-3
+    assert 1.0 < p.gap_ratio < 2.0
+    assert 0.7 < contact.GAP_POINTS[np.unravel_index(np.argmin(h), h.shape)[2]] < 0.9
+    assert np.abs(contact.modal_load(model, x[np.argmin(h.min(axis=(1, 2)))], steady.p)).max() > 0
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        (q,) = impacting_cycles(at, StartCycle(p.state, p.period, steady.pressure_drop), model=model,
+                                method="shooting", settings=ImpactSettings(
+                                    max_points=1, quadrature_tol=None)).points
+    assert q.period == pytest.approx(p.period, rel=2e-6)
+    assert q.tip_amplitude == pytest.approx(p.tip_amplitude, rel=5e-6)
+    assert abs(q.gap_ratio - p.gap_ratio) < 1e-3 and not q.stable
