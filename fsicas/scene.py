@@ -324,11 +324,6 @@ def _validate_channel(s: Scene) -> None:
 def _validate_beam(s: Scene) -> None:
     """Beam theory, ends and parameters (docs/beam.md)."""
     check_ends(s.ends)
-    require(s.contact_smoothing == 0 or s.ends == CLAMPED_FREE,
-            f"contact_smoothing > 0 (the smoothed impact law of the impacting cycles) needs "
-            f"ends = {CLAMPED_FREE!r}, got {s.ends!r}: its rule is graded towards the free "
-            "tip, and a beam held at both ends touches the walls inside the span; use the "
-            "exact law (contact_smoothing = 0) in a time integration")
     require(s.beam in BEAM_THEORIES, f"beam must be one of {', '.join(BEAM_THEORIES)}, "
             f"got {s.beam!r}")
     require(0 <= finite_number("poisson", s.poisson) < 0.5,

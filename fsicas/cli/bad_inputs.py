@@ -159,7 +159,6 @@ _OPTIONS = {
           "--t-end", "1"), "--breath-period"),
         (("lco", "--mstar", "1", "--ntst", "100000"), "ntst must be at most"),
         (("lco", "--mstar", "1", "--through-contact", "--impact-ntst", "100000"), "ntst"),
-        (("lco", "--ends", "clamped-clamped", "--through-contact"), "contact_smoothing"),
         (("map", "--ustar", "1:10:2000", "--mstar", "1:10:2000"), "100,000"),
         (("map", "--ustar", "6", "--mstar", "1", "--t-end", "1e12"), "GiB")],
 }

@@ -99,8 +99,9 @@ def quadrature_rule(scene: Scene) -> tuple[np.ndarray, np.ndarray]:
 
 def contact_rule(scene: Scene) -> ImpactRule:
     """The rule of the impact load ``∫ f_contact phi_n``, finer with ``scene.n_quad``
-    (:mod:`.impact_rule`: the exact law's cell rule, 241 nodes at the default 40)."""
-    return impact_rule(scene.n_quad, scene.contact_smoothing)
+    (:mod:`.impact_rule`: the exact law's cell rule, 241 nodes at the default 40; the
+    smoothed law's graded towards the cantilever's tip, or uniform when both ends are held)."""
+    return impact_rule(scene.n_quad, scene.contact_smoothing, scene.ends == CLAMPED_FREE)
 
 
 @dataclass(frozen=True, eq=False)

@@ -9,7 +9,8 @@ from __future__ import annotations
 import numpy as np
 from numpy.polynomial.legendre import leggauss
 
-__all__ = ["gauss_legendre", "composite_gauss_legendre", "tip_graded_gauss_legendre"]
+__all__ = ["gauss_legendre", "composite_gauss_legendre", "tip_graded_gauss_legendre",
+           "graded_gauss_legendre"]
 
 
 def gauss_legendre(n_nodes: int) -> tuple[np.ndarray, np.ndarray]:
@@ -40,16 +41,30 @@ def tip_graded_gauss_legendre(n: int, points: int = 2) -> tuple[np.ndarray, np.n
     in a cell of about 4 l/n, and ``2/n`` away from it. For the kinked load
     ``max(0, eps - h) phi_n`` the error falls like n^-2: at n = 40 (230 nodes) 3e-4 of
     the peak modal load over an impacting cycle, at 80 (478) 7e-5, at 160 1.5e-5
-    (docs/simulate.md).
+    (docs/simulate.md). :func:`graded_gauss_legendre` at x = 1.
     """
+    return graded_gauss_legendre(n, points, at=1.0)
+
+
+def graded_gauss_legendre(n: int, points: int = 2, at: float = 1.0) -> tuple[np.ndarray, np.ndarray]:
+    """``points``-point Gauss–Legendre on cells graded towards the point ``at`` in [0, 1]
+    from both sides: a cell at distance d from it is ``max(0.01/n², min(4 d/n, 2/n))``
+    wide (:func:`tip_graded_gauss_legendre` is ``at = 1``, bit for bit)."""
     if int(n) != n or n < 1:
         raise ValueError(f"n must be a positive integer, got {n!r}")
+    if not 0.0 <= at <= 1.0:
+        raise ValueError(f"the grading point must lie in [0, 1], got {at!r}")
     smallest, growth, widest = 0.01 / n**2, 4.0 / n, 2.0 / n
-    ends, x = [1.0], 1.0
+    step = lambda d: min(widest, max(smallest, growth * d))
+    ends, x = [at], at
     while x > 0.0:
-        x = max(0.0, x - min(widest, max(smallest, growth * (1.0 - x))))
+        x = max(0.0, x - step(at - x))
         ends.append(x)
-    ends = np.array(ends[::-1])
+    ends, x = ends[::-1], at
+    while x < 1.0:
+        x = min(1.0, x + step(x - at))
+        ends.append(x)
+    ends = np.array(ends)
     xi, w = gauss_legendre(points)
     left, width = ends[:-1, None], np.diff(ends)[:, None]
     return (left + width * xi).ravel(), (width * w).ravel()
