@@ -476,3 +476,21 @@ def test_a_curve_of_one_point_has_no_piece_and_the_envelope_keeps_the_others():
     u, w, piece = Envelope([one, two]).lowest(2.0)
     t = (2.0 - np.log10(50.0)) / (np.log10(200.0) - np.log10(50.0))
     assert piece == 4 and u == pytest.approx(-0.5 + 0.2 * t, rel=1e-14)
+
+
+def test_the_cli_searches_a_reversed_onset_below_the_forward_start(run_cli, tmp_path):
+    """``--ustar-max`` of reversed flow may lie below the forward start |U*| = 0.2 (the
+    reversed search starts at 0.01 / sqrt(M*)): at M* = 1e4 with --ustar-max 0.1 the CLI
+    finds the divergence the library finds; below the reversed start it is refused."""
+    import json
+    from fsicas.linear.hopf import critical_velocity
+    argv = ["onset", "--direction", "reverse", "--mstar", "1e4", "--modes", "6", "--json"]
+    found = run_cli([*argv, "--ustar-max", "0.1"], tmp_path)
+    assert found.returncode == 0, found.stderr
+    onset = critical_velocity(Scene(mstar=1e4, ustar=-1.0, modes=6), ustar_max=0.1)
+    assert json.loads(found.stdout)["ustar_crit"] == pytest.approx(onset.ustar, rel=1e-9)
+    assert onset.kind == "divergence" and -0.01 < onset.ustar < 0
+    refused = run_cli([*argv, "--ustar-max", "0.005"], tmp_path)
+    assert refused.returncode == 2 and "--ustar-max must lie in (0.01," in json.loads(refused.stdout)["error"]
+    forward = run_cli(["onset", "--mstar", "1e4", "--ustar-max", "0.1"], tmp_path)
+    assert forward.returncode == 2 and "--ustar-max must lie in (0.2," in forward.stderr

@@ -160,10 +160,17 @@ def scene_from_args(args: argparse.Namespace, need_flow: bool = False) -> Scene:
 
 
 def check_ustar_max(args: argparse.Namespace) -> None:
-    """``--ustar-max`` (the U* up to which a command searches), when the command has it:
-    ValueError unless it lies in (0.2, MAX_ABS_USTAR] (the steady branch is followed from
-    U* = 0.2)."""
+    """``--ustar-max`` (the speed |U*| up to which a command searches), when the command
+    has it: ValueError unless it lies above the speed the steady branch starts from
+    (``fsicas.linear.hopf.USTAR_START``: 0.2, and 0.01 for reversed flow) and at most
+    MAX_ABS_USTAR."""
+    from ..linear.hopf import USTAR_START
     value = getattr(args, "ustar_max", None)
-    if value is not None and not 0.2 < value <= MAX_ABS_USTAR:
-        raise ValueError(f"--ustar-max must lie in (0.2, {MAX_ABS_USTAR:g}] (the search "
-                         f"starts at U* = 0.2), got {value}")
+    signed = (str(getattr(args, name, "") or "").strip() for name in ("ustar", "flow"))
+    reverse = getattr(args, "direction", None) == "reverse" or any(
+        text.startswith("-") for text in signed)
+    start = USTAR_START["reverse" if reverse else "forward"]
+    if value is not None and not start < value <= MAX_ABS_USTAR:
+        raise ValueError(f"--ustar-max must lie in ({start:g}, {MAX_ABS_USTAR:g}] (the search "
+                         f"starts at |U*| = {start:g}{' for reversed flow' if reverse else ''}), "
+                         f"got {value}")
