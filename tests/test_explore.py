@@ -506,7 +506,10 @@ def test_a_loaded_file_is_in_the_address_and_the_preset_menu_names_it(page, serv
         other.goto(url)
         other.wait_for_function(f"() => ({FIND})(document, 'scene-file')?.textContent"
                                 ".includes('from the address')", timeout=30000)
-        assert _text(other, "command") == "fsicas eig --scene mine.toml --json"
+        command = "fsicas eig --scene mine.toml --json"     # the label may come first
+        other.wait_for_function(f"c => ({FIND})(document, 'command').textContent === c",
+                                arg=command, timeout=30000)
+        assert _text(other, "command") == command
         assert _number(other, "growth-rate") == pytest.approx(
             linear_stability(scene).eigenvalues[0].real, rel=1e-5)
     finally:
