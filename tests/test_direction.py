@@ -494,3 +494,21 @@ def test_the_cli_searches_a_reversed_onset_below_the_forward_start(run_cli, tmp_
     assert refused.returncode == 2 and "--ustar-max must lie in (0.01," in json.loads(refused.stdout)["error"]
     forward = run_cli(["onset", "--mstar", "1e4", "--ustar-max", "0.1"], tmp_path)
     assert forward.returncode == 2 and "--ustar-max must lie in (0.2," in forward.stderr
+
+
+def test_a_reversed_boundary_survives_an_onset_curve_that_cannot_be_traced():
+    """f = 0.02, zeta = 0.01, N = 6: one Hopf point of the reversed boundary gives a curve
+    whose start does not converge (it raised a KeyError). The boundary says so in its
+    warnings, and each of its points is the onset the steady branch finds at that M*
+    (critical_velocity, no curves)."""
+    from fsicas.linear.boundary import stability_boundary
+    from fsicas.linear.hopf import critical_velocity
+    scene = Scene(ustar=-1.0, friction=0.02, modes=6, zeta=0.01)
+    model = build_model(scene)
+    boundary = stability_boundary(scene, np.geomspace(0.1, 10, 6), model)
+    failed = [c for c in boundary.curves if not c.mstar.size]
+    assert failed and all(c.status == "failed" for c in failed)
+    assert any("could not be traced" in w for w in boundary.warnings)
+    for p in boundary.points:
+        onset = critical_velocity(scene.replace(mstar=p.mstar), model)
+        assert p.kind == onset.kind and p.ustar_crit == pytest.approx(onset.ustar, rel=1e-6)

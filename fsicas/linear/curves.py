@@ -116,13 +116,13 @@ def trace_hopf_curve(scene: Scene, model: Model, h: HopfPoint, index: int, windo
             status, message = branch.status, branch.message
         halves.append(branch)
     lower, upper = halves
-    join = lambda a, b: np.concatenate([a[::-1], b[1:]])
+    join = lambda a, b: np.concatenate([a[::-1], b[1:] if len(a) else b])
     x, params = join(lower.x, upper.x), join(lower.params, upper.params)
-    kappa = join(lower.columns["kappa"], upper.columns["kappa"])
+    kappa = join(*(np.asarray(b.columns.get("kappa", ())) for b in halves))
     keep = kappa > 0           # neutral-saddle stretches are not Hopf points
     x, params, omega = x[keep], params[keep], np.sqrt(kappa[keep])
     names = lower.par_names
-    modes = join(lower.columns["mode"], upper.columns["mode"])[keep].astype(int)
+    modes = join(*(np.asarray(b.columns.get("mode", ())) for b in halves))[keep].astype(int)
     lm = params[:, names.index(LOG_M)]
     return OnsetCurve(index, 10 ** lm, x[:, -2:].sum(axis=1) / scene.hstar, omega * TIME_SCALE,
                      modes, status, int(first_piece), x, params, message)
