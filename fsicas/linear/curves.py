@@ -113,7 +113,8 @@ def trace_hopf_curve(scene: Scene, model: Model, h: HopfPoint, index: int, windo
                                 settings=settings, record=_mode_recorder(model),
                                 stop=make_stop() if make_stop else None)
         if branch.status not in ("bound", "stopped") and status == "bound":
-            status, message = branch.status, branch.message
+            status = branch.status
+            message = f"from M* = {h.mstar:.4g}, U* = {h.ustar:.5g}: {branch.message}"
         halves.append(branch)
     lower, upper = halves
     join = lambda a, b: np.concatenate([a[::-1], b[1:] if len(a) else b])
