@@ -153,11 +153,15 @@ def stability_boundary(scene: Scene, mstars, model: Model | None = None,
                     ceiling, cut)
         points = [_boundary_point(scene, model, curves, m, refine) for m in mstars]
     switches = located_switches(scene, model, curves, lo, hi)
-    untraced = [f"an onset curve could not be traced ({c.message}); the boundary points "
-                "rest on the other curves, each checked by the eigenvalues below it" for c in curves
-                if not c.mstar.size]
     return StabilityBoundary(scene, points, curves, switches, time.perf_counter() - start,
-                             _truncation_warnings(scene, points) + untraced)
+                             _truncation_warnings(scene, points) + _untraced(curves))
+
+
+def _untraced(curves) -> list:
+    """A warning for each onset curve that could not be traced (no points)."""
+    return [f"an onset curve could not be traced ({c.message}); the boundary points rest "
+            "on the other curves, each checked by the eigenvalues below it"
+            for c in curves if not c.mstar.size]
 
 
 def _truncation_warnings(scene: Scene, points) -> list:
