@@ -45,7 +45,11 @@ Criticality = Literal["supercritical", "subcritical"]
 
 
 class CriticalVelocityError(RuntimeError):
-    """The steady branch could not be followed or was unstable where it starts."""
+    """The steady branch could not be followed or was unstable where it starts; ``speed``:
+    |U*| by which stability was lost with no special point located (first_onset retries)."""
+    def __init__(self, message: str, speed: float | None = None):
+        super().__init__(message)
+        self.speed = speed
 
 
 class ModalTruncationWarning(UserWarning):
@@ -299,14 +303,12 @@ def first_onset(scene: Scene, model: Model | None = None, ustar_max: float = 40.
         try:
             return _first_onset(scene, model, bound, ustar_start)
         except CriticalVelocityError as err:
-            end = getattr(err, "speed", None)
-            if attempt == REFINEMENTS or end is None or REFINE * end >= bound:
+            if attempt == REFINEMENTS or err.speed is None or REFINE * err.speed >= bound:
                 raise
-            bound = REFINE * end
+            bound = REFINE * err.speed
 
 
-#: The bound of a repeated onset search over the speed where the first one lost its
-#: stability without a located special point, and the repetitions at most.
+#: A repeated onset search: its bound over the speed of the unlocated loss; repeats at most.
 REFINE, REFINEMENTS = 1.5, 3
 
 
@@ -382,13 +384,12 @@ def _first_loss(model: Model, scene: Scene, branch: C.Branch) -> Onset | None:
     step = int(unstable[0])
     found = [p for p in branch.special_points if p.index == step and p.kind in ONSET_KINDS]
     if not found:
-        err = CriticalVelocityError(
+        raise CriticalVelocityError(
             f"the steady state loses its stability between U* = "
             f"{branch.x[step - 1, -2:].sum() / scene.hstar:.6g} and "
             f"{branch.x[step, -2:].sum() / scene.hstar:.6g} (M* = {scene.mstar:g}) but no "
-            "Hopf, branch or fold point was located there")
-        err.speed = max(speed(scene, branch.x[step - 1]), speed(scene, branch.x[step]))
-        raise err
+            "Hopf, branch or fold point was located there",
+            speed=max(speed(scene, branch.x[step - 1]), speed(scene, branch.x[step])))
     first = min(found, key=lambda p: speed(scene, p.x))
     if first.kind in DIVERGENCE_KINDS and first.status != "converged":
         # the library's location failed: the divergence lies between the two steps
